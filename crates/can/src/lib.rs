@@ -1,0 +1,47 @@
+//! CAN frames, identifiers, caller-supplied time and the transmit sink.
+//!
+//! This crate is the vocabulary every sans-IO layer of drivebus speaks: a
+//! protocol machine takes a [`Frame`] and an [`Instant`] and emits frames into
+//! a [`TxSink`]. Nothing here reads a clock or touches I/O.
+#![cfg_attr(not(feature = "std"), no_std)]
+
+mod frame;
+mod time;
+
+pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
+pub use time::Instant;
+
+pub use core::time::Duration;
+
+/// Where a protocol machine puts the frames it wants sent.
+///
+/// Generic rather than `dyn` so the hot paths monomorphise and inline.
+pub trait TxSink {
+    /// Queue one frame for transmission.
+    fn send(&mut self, frame: Frame);
+}
+
+#[cfg(feature = "std")]
+impl TxSink for std::vec::Vec<Frame> {
+    #[inline]
+    fn send(&mut self, frame: Frame) {
+        self.push(frame);
+    }
+}
+
+impl<F: FnMut(Frame)> TxSink for F {
+    #[inline]
+    fn send(&mut self, frame: Frame) {
+        self(frame)
+    }
+}
+
+/// Earliest of two optional deadlines (`None` means "no deadline").
+#[inline]
+pub fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(if x <= y { x } else { y }),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}

@@ -1,0 +1,692 @@
+//! The object dictionary: objects, sub-objects, lookup and checked access.
+
+use crate::types::{check_len, compare_le};
+use crate::{Access, DataType, ObjectCode, PersistGroup, SdoAbort, Value};
+use alloc::borrow::Cow;
+use alloc::vec::Vec;
+use core::cmp::Ordering;
+
+/// A stable handle to one sub-object: positions in the dictionary, resolved
+/// once (e.g. when a PDO is mapped) so the frame path never searches.
+/// Valid until an object is inserted or removed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct EntryRef {
+    obj: u32,
+    sub: u32,
+}
+
+/// One sub-object (a VAR is an object with a single sub-object 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SubObject {
+    /// Sub-index.
+    pub sub: u8,
+    /// Parameter name (CiA 306 `ParameterName`).
+    pub name: Cow<'static, str>,
+    /// Data type.
+    pub data_type: DataType,
+    /// Access type.
+    pub access: Access,
+    /// May be mapped into a PDO (direction follows `access`).
+    pub pdo_mappable: bool,
+    /// Lowest allowed value (numeric types), little-endian.
+    pub low_limit: Option<Vec<u8>>,
+    /// Highest allowed value (numeric types), little-endian.
+    pub high_limit: Option<Vec<u8>>,
+    /// Value after reset / restore defaults, little-endian.
+    pub default: Vec<u8>,
+    /// Store/restore group for 1010h/1011h.
+    pub persist: PersistGroup,
+    /// Largest byte length a variable-size value may take (`None`: unbounded).
+    pub max_len: Option<usize>,
+    /// Reads and writes are routed through [`ObjectHooks`].
+    pub hooked: bool,
+    /// The DefaultValue text contained `$NODEID` (CiA 306): kept for EDS export.
+    pub node_id_relative: bool,
+    value: Vec<u8>,
+}
+
+impl SubObject {
+    /// A sub-object with its default value; persistence by index range is set
+    /// when it is inserted into an [`Object`].
+    pub fn new(
+        sub: u8,
+        name: impl Into<Cow<'static, str>>,
+        data_type: DataType,
+        access: Access,
+        default: Value,
+    ) -> SubObject {
+        let bytes = default.encode(data_type).unwrap_or_else(|_| match data_type.fixed_size() {
+            Some(n) => alloc::vec![0; n],
+            None => Vec::new(),
+        });
+        SubObject::from_bytes(sub, name, data_type, access, bytes)
+    }
+
+    /// A sub-object whose default is given as its raw encoding.
+    pub fn from_bytes(
+        sub: u8,
+        name: impl Into<Cow<'static, str>>,
+        data_type: DataType,
+        access: Access,
+        default: Vec<u8>,
+    ) -> SubObject {
+        SubObject {
+            sub,
+            name: name.into(),
+            data_type,
+            access,
+            pdo_mappable: false,
+            low_limit: None,
+            high_limit: None,
+            value: default.clone(),
+            default,
+            persist: PersistGroup::Volatile,
+            max_len: None,
+            hooked: false,
+            node_id_relative: false,
+        }
+    }
+
+    /// Mark PDO-mappable.
+    pub fn mappable(mut self) -> Self {
+        self.pdo_mappable = true;
+        self
+    }
+    /// Set numeric limits (inclusive).
+    pub fn limits(mut self, low: Value, high: Value) -> Self {
+        self.low_limit = low.encode(self.data_type).ok();
+        self.high_limit = high.encode(self.data_type).ok();
+        self
+    }
+    /// Route reads and writes through the hooks.
+    pub fn hooked(mut self) -> Self {
+        self.hooked = true;
+        self
+    }
+    /// Override the persistence group.
+    pub fn persist(mut self, group: PersistGroup) -> Self {
+        self.persist = group;
+        self
+    }
+    /// Bound the length of a variable-size value.
+    pub fn max_len(mut self, n: usize) -> Self {
+        self.max_len = Some(n);
+        self
+    }
+
+    /// The current value's encoding.
+    #[inline]
+    pub fn bytes(&self) -> &[u8] {
+        &self.value
+    }
+    /// The current value, decoded.
+    pub fn value(&self) -> Value {
+        Value::decode(self.data_type, &self.value).unwrap_or(Value::Bytes(self.value.clone()))
+    }
+    /// The default value, decoded.
+    pub fn default_value(&self) -> Value {
+        Value::decode(self.data_type, &self.default).unwrap_or(Value::Bytes(self.default.clone()))
+    }
+    /// Size in bits when mapped into a PDO (`None` for variable-size types).
+    pub fn bit_len(&self) -> Option<u32> {
+        self.data_type
+            .fixed_size()
+            .map(|n| if self.data_type == DataType::Boolean { 1 } else { 8 * n as u32 })
+    }
+    /// May be mapped into a TPDO.
+    pub fn tpdo_mappable(&self) -> bool {
+        self.pdo_mappable && self.access.readable()
+    }
+    /// May be mapped into an RPDO.
+    pub fn rpdo_mappable(&self) -> bool {
+        self.pdo_mappable && self.access.writable()
+    }
+
+    /// Check `data` against type, length and limits (no access check).
+    pub fn validate(&self, data: &[u8]) -> Result<(), SdoAbort> {
+        check_len(self.data_type, data.len())?;
+        if let Some(max) = self.max_len
+            && data.len() > max
+        {
+            return Err(SdoAbort::DATA_TOO_LONG);
+        }
+        if self.data_type == DataType::Boolean && data[0] > 1 {
+            return Err(SdoAbort::INVALID_VALUE);
+        }
+        if let Some(lo) = &self.low_limit
+            && compare_le(self.data_type, data, lo) == Some(Ordering::Less)
+        {
+            return Err(SdoAbort::VALUE_TOO_LOW);
+        }
+        if let Some(hi) = &self.high_limit
+            && compare_le(self.data_type, data, hi) == Some(Ordering::Greater)
+        {
+            return Err(SdoAbort::VALUE_TOO_HIGH);
+        }
+        Ok(())
+    }
+}
+
+/// One object: index, code, name and its sub-objects (sorted by sub-index).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// Index.
+    pub index: u16,
+    /// VAR, ARRAY, RECORD, DOMAIN ...
+    pub code: ObjectCode,
+    /// Object name.
+    pub name: Cow<'static, str>,
+    /// CiA 306 `ObjFlags`.
+    pub flags: u32,
+    subs: Vec<SubObject>,
+}
+
+impl Object {
+    /// A VAR object (single sub-object 0).
+    pub fn var(
+        index: u16,
+        name: impl Into<Cow<'static, str>>,
+        data_type: DataType,
+        access: Access,
+        default: Value,
+    ) -> Object {
+        let name = name.into();
+        let code = if data_type == DataType::Domain { ObjectCode::Domain } else { ObjectCode::Var };
+        Object::with_code(index, code, name.clone())
+            .with_sub(SubObject::new(0, name, data_type, access, default))
+    }
+
+    /// An empty object of the given code; add sub-objects with [`Object::with_sub`].
+    pub fn with_code(index: u16, code: ObjectCode, name: impl Into<Cow<'static, str>>) -> Object {
+        Object { index, code, name: name.into(), flags: 0, subs: Vec::new() }
+    }
+
+    /// A RECORD with sub 0 "Highest sub-index supported" (filled in as subs are added).
+    pub fn record(index: u16, name: impl Into<Cow<'static, str>>) -> Object {
+        Object::with_code(index, ObjectCode::Record, name).with_sub(SubObject::new(
+            0,
+            "Highest sub-index supported",
+            DataType::Unsigned8,
+            Access::Const,
+            Value::U8(0),
+        ))
+    }
+
+    /// An ARRAY of `n` elements of one type, sub 0 holding `n` (read-only).
+    pub fn array(
+        index: u16,
+        name: impl Into<Cow<'static, str>>,
+        data_type: DataType,
+        access: Access,
+        n: u8,
+        default: Value,
+    ) -> Object {
+        let name = name.into();
+        let mut o = Object::with_code(index, ObjectCode::Array, name.clone()).with_sub(SubObject::new(
+            0,
+            "Highest sub-index supported",
+            DataType::Unsigned8,
+            Access::Const,
+            Value::U8(n),
+        ));
+        for i in 1..=n {
+            o = o.with_sub(SubObject::new(
+                i,
+                alloc::format!("{name} {i}"),
+                data_type,
+                access,
+                default.clone(),
+            ));
+        }
+        o
+    }
+
+    /// Add (or replace) a sub-object. For RECORD/ARRAY objects whose sub 0 is
+    /// constant, sub 0 is kept equal to the highest sub-index.
+    pub fn with_sub(mut self, mut s: SubObject) -> Object {
+        if s.persist == PersistGroup::Volatile && s.access.writable() {
+            s.persist = PersistGroup::for_index(self.index);
+        }
+        match self.subs.binary_search_by_key(&s.sub, |x| x.sub) {
+            Ok(i) => self.subs[i] = s,
+            Err(i) => self.subs.insert(i, s),
+        }
+        let highest = self.subs.last().map_or(0, |x| x.sub);
+        if self.code != ObjectCode::Var
+            && self.code != ObjectCode::Domain
+            && let Some(s0) = self.subs.first_mut()
+            && s0.sub == 0
+            && s0.access == Access::Const
+            && s0.data_type == DataType::Unsigned8
+        {
+            s0.value = alloc::vec![highest];
+            s0.default = alloc::vec![highest];
+        }
+        self
+    }
+
+    /// Modify the most recently added sub-object (builder convenience).
+    pub fn last_sub_mut(&mut self) -> Option<&mut SubObject> {
+        self.subs.last_mut()
+    }
+
+    /// Sub-objects in sub-index order.
+    pub fn subs(&self) -> &[SubObject] {
+        &self.subs
+    }
+    /// Mutable sub-objects (the value is only changed through checked paths).
+    pub fn subs_mut(&mut self) -> &mut [SubObject] {
+        &mut self.subs
+    }
+    /// One sub-object.
+    pub fn get(&self, sub: u8) -> Option<&SubObject> {
+        self.subs.binary_search_by_key(&sub, |x| x.sub).ok().map(|i| &self.subs[i])
+    }
+}
+
+/// What a write hook decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WriteOutcome {
+    /// Store the written bytes as the new value.
+    Store,
+    /// The hook has applied the write itself (possibly storing other values).
+    Handled,
+}
+
+/// Application behaviour attached to hooked sub-objects.
+///
+/// Hooks live outside the dictionary and get it passed in, so a hook may
+/// read or update other entries (e.g. 1003h sub 0 clearing the history).
+pub trait ObjectHooks {
+    /// Before a hooked value is read (SDO upload, PDO sampling, export): may
+    /// refresh the stored value with [`ObjectDictionary::set_raw`], or refuse.
+    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
+        let _ = (od, index, sub);
+        Ok(())
+    }
+    /// Before a write to a hooked value is stored, after type, length and
+    /// limit checks passed. Return the abort to refuse it.
+    fn on_write(
+        &mut self,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<WriteOutcome, SdoAbort> {
+        let _ = (od, index, sub, data);
+        Ok(WriteOutcome::Store)
+    }
+}
+
+/// Hooks that do nothing: a dictionary of plain values.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoHooks;
+impl ObjectHooks for NoHooks {}
+
+impl<A: ObjectHooks, B: ObjectHooks> ObjectHooks for (A, B) {
+    /// The first hook set that does not answer `Store` decides; a refusal from either refuses.
+    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
+        self.0.on_read(od, index, sub)?;
+        self.1.on_read(od, index, sub)
+    }
+    fn on_write(
+        &mut self,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<WriteOutcome, SdoAbort> {
+        match self.0.on_write(od, index, sub, data)? {
+            WriteOutcome::Handled => Ok(WriteOutcome::Handled),
+            WriteOutcome::Store => self.1.on_write(od, index, sub, data),
+        }
+    }
+}
+
+/// A runtime-built object dictionary, objects sorted by index.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ObjectDictionary {
+    objects: Vec<Object>,
+    generation: u64,
+}
+
+impl ObjectDictionary {
+    /// An empty dictionary.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Insert or replace an object. Invalidates every [`EntryRef`].
+    pub fn insert(&mut self, obj: Object) {
+        match self.objects.binary_search_by_key(&obj.index, |o| o.index) {
+            Ok(i) => self.objects[i] = obj,
+            Err(i) => self.objects.insert(i, obj),
+        }
+        self.generation = self.generation.wrapping_add(1);
+    }
+
+    /// Remove an object. Invalidates every [`EntryRef`].
+    pub fn remove(&mut self, index: u16) -> Option<Object> {
+        let i = self.objects.binary_search_by_key(&index, |o| o.index).ok()?;
+        self.generation = self.generation.wrapping_add(1);
+        Some(self.objects.remove(i))
+    }
+
+    /// All objects in index order.
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+    /// One object.
+    pub fn object(&self, index: u16) -> Option<&Object> {
+        self.objects.binary_search_by_key(&index, |o| o.index).ok().map(|i| &self.objects[i])
+    }
+    /// One object, mutable (for builders; values change through checked paths).
+    pub fn object_mut(&mut self, index: u16) -> Option<&mut Object> {
+        self.objects.binary_search_by_key(&index, |o| o.index).ok().map(move |i| &mut self.objects[i])
+    }
+
+    /// Counter bumped by every change of a value or of the structure. Lets a
+    /// poller (change-of-state TPDOs) skip work when nothing was written.
+    #[inline]
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Resolve `(index, sub)`: `0602 0000` or `0609 0011` if absent.
+    #[inline]
+    pub fn find(&self, index: u16, sub: u8) -> Result<EntryRef, SdoAbort> {
+        let obj = self.objects.binary_search_by_key(&index, |o| o.index).map_err(|_| SdoAbort::NO_OBJECT)?;
+        let subs = &self.objects[obj].subs;
+        // Sub-objects are usually dense from 0: try the direct slot first.
+        let pos = match subs.get(sub as usize) {
+            Some(s) if s.sub == sub => sub as usize,
+            _ => subs.binary_search_by_key(&sub, |s| s.sub).map_err(|_| SdoAbort::NO_SUB_INDEX)?,
+        };
+        Ok(EntryRef { obj: obj as u32, sub: pos as u32 })
+    }
+
+    /// The sub-object behind a handle.
+    #[inline]
+    pub fn entry(&self, r: EntryRef) -> &SubObject {
+        &self.objects[r.obj as usize].subs[r.sub as usize]
+    }
+    /// The object index of a handle.
+    #[inline]
+    pub fn index_of(&self, r: EntryRef) -> (u16, u8) {
+        let o = &self.objects[r.obj as usize];
+        (o.index, o.subs[r.sub as usize].sub)
+    }
+    /// The sub-object at `(index, sub)`.
+    pub fn get(&self, index: u16, sub: u8) -> Option<&SubObject> {
+        self.find(index, sub).ok().map(|r| self.entry(r))
+    }
+    /// Mutable metadata of a sub-object (name, limits, access...). Use the
+    /// `set_*`/`write*` paths to change its value.
+    pub fn get_mut(&mut self, index: u16, sub: u8) -> Option<&mut SubObject> {
+        let r = self.find(index, sub).ok()?;
+        self.generation = self.generation.wrapping_add(1);
+        Some(&mut self.objects[r.obj as usize].subs[r.sub as usize])
+    }
+
+    /// The stored bytes behind a handle (no hook, no access check).
+    #[inline]
+    pub fn bytes(&self, r: EntryRef) -> &[u8] {
+        &self.entry(r).value
+    }
+
+    /// Overwrite the stored bytes without checks (the application pushing a
+    /// live value, a service updating its own object). The caller owns the
+    /// invariant that `data` is a valid encoding for the type.
+    #[inline]
+    pub fn set_raw(&mut self, r: EntryRef, data: &[u8]) {
+        let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
+        if v.as_slice() != data {
+            v.clear();
+            v.extend_from_slice(data);
+            self.generation = self.generation.wrapping_add(1);
+        }
+    }
+
+    /// Overwrite a fixed-size numeric value in place: no allocation, no
+    /// change of length. Panics in debug builds if the size differs.
+    #[inline]
+    pub fn set_le(&mut self, r: EntryRef, data: &[u8]) {
+        let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
+        debug_assert_eq!(v.len(), data.len());
+        if v.as_slice() != data {
+            let n = v.len().min(data.len());
+            v[..n].copy_from_slice(&data[..n]);
+            self.generation = self.generation.wrapping_add(1);
+        }
+    }
+
+    /// Typed read of a numeric value at `(index, sub)` (no hook).
+    pub fn get_value(&self, index: u16, sub: u8) -> Option<Value> {
+        self.get(index, sub).map(SubObject::value)
+    }
+    /// Unsigned read (zero-extended) of a numeric value (no hook).
+    pub fn get_u64(&self, index: u16, sub: u8) -> Option<u64> {
+        self.get(index, sub).map(|s| crate::types::le_u64(&s.value))
+    }
+    /// Signed read (sign-extended) of a numeric value (no hook).
+    pub fn get_i64(&self, index: u16, sub: u8) -> Option<i64> {
+        self.get(index, sub).map(|s| crate::types::le_i64(&s.value))
+    }
+    /// Unsigned 32-bit read (no hook).
+    pub fn get_u32(&self, index: u16, sub: u8) -> Option<u32> {
+        self.get_u64(index, sub).map(|v| v as u32)
+    }
+
+    /// Set a value from the device side (no access check, no hook), checking
+    /// type and encoding. Used by applications and services for their own objects.
+    pub fn set_value(&mut self, index: u16, sub: u8, value: &Value) -> Result<(), SdoAbort> {
+        let r = self.find(index, sub)?;
+        let dt = self.entry(r).data_type;
+        let bytes = value.encode(dt)?;
+        self.set_raw(r, &bytes);
+        Ok(())
+    }
+
+    /// SDO-style checked read: access, then the read hook, then the bytes.
+    pub fn read<H: ObjectHooks + ?Sized>(
+        &mut self,
+        hooks: &mut H,
+        index: u16,
+        sub: u8,
+    ) -> Result<&[u8], SdoAbort> {
+        let r = self.find(index, sub)?;
+        self.read_ref(hooks, r)?;
+        Ok(self.bytes(r))
+    }
+
+    /// Checked read through a resolved handle: access and read hook. The
+    /// bytes are then at [`ObjectDictionary::bytes`].
+    #[inline]
+    pub fn read_ref<H: ObjectHooks + ?Sized>(&mut self, hooks: &mut H, r: EntryRef) -> Result<(), SdoAbort> {
+        let e = self.entry(r);
+        if !e.access.readable() {
+            return Err(SdoAbort::READ_WRITE_ONLY);
+        }
+        if e.hooked {
+            let (index, sub) = self.index_of(r);
+            hooks.on_read(self, index, sub)?;
+        }
+        Ok(())
+    }
+
+    /// SDO-style checked write: access, type/length/limits, write hook, store.
+    pub fn write<H: ObjectHooks + ?Sized>(
+        &mut self,
+        hooks: &mut H,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<(), SdoAbort> {
+        let r = self.find(index, sub)?;
+        self.write_ref(hooks, r, data)
+    }
+
+    /// Checked write through a resolved handle.
+    #[inline]
+    pub fn write_ref<H: ObjectHooks + ?Sized>(
+        &mut self,
+        hooks: &mut H,
+        r: EntryRef,
+        data: &[u8],
+    ) -> Result<(), SdoAbort> {
+        let e = self.entry(r);
+        if !e.access.writable() {
+            return Err(SdoAbort::WRITE_READ_ONLY);
+        }
+        e.validate(data)?;
+        if e.hooked {
+            let (index, sub) = self.index_of(r);
+            if hooks.on_write(self, index, sub, data)? == WriteOutcome::Handled {
+                self.generation = self.generation.wrapping_add(1);
+                return Ok(());
+            }
+        }
+        self.set_raw(r, data);
+        Ok(())
+    }
+
+    /// Write by the local device or a PDO (no SDO access check, but type,
+    /// limits and hooks apply). RPDO writes use this after checking mapping.
+    pub fn write_local<H: ObjectHooks + ?Sized>(
+        &mut self,
+        hooks: &mut H,
+        r: EntryRef,
+        data: &[u8],
+    ) -> Result<(), SdoAbort> {
+        let e = self.entry(r);
+        e.validate(data)?;
+        if e.hooked {
+            let (index, sub) = self.index_of(r);
+            if hooks.on_write(self, index, sub, data)? == WriteOutcome::Handled {
+                self.generation = self.generation.wrapping_add(1);
+                return Ok(());
+            }
+        }
+        self.set_raw(r, data);
+        Ok(())
+    }
+
+    /// Reset every sub-object whose persistence group is in `groups` (or all
+    /// writable ones when `groups` is `None`) to its default value.
+    pub fn restore_defaults(&mut self, mut pred: impl FnMut(u16, &SubObject) -> bool) {
+        for o in &mut self.objects {
+            for s in &mut o.subs {
+                if pred(o.index, s) && s.value != s.default {
+                    s.value.clone_from(&s.default);
+                }
+            }
+        }
+        self.generation = self.generation.wrapping_add(1);
+    }
+
+    /// Every `(index, sub, bytes)` whose persistence group is `group` and whose
+    /// value differs from the default or is writable: what 1010h stores.
+    pub fn persistent_values(&self, group: PersistGroup) -> impl Iterator<Item = (u16, u8, &[u8])> + '_ {
+        self.objects.iter().flat_map(move |o| {
+            o.subs
+                .iter()
+                .filter(move |s| s.persist == group)
+                .map(move |s| (o.index, s.sub, s.value.as_slice()))
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn od() -> ObjectDictionary {
+        let mut od = ObjectDictionary::new();
+        od.insert(Object::var(
+            0x1000,
+            "Device type",
+            DataType::Unsigned32,
+            Access::Ro,
+            Value::U32(0x0002_0192),
+        ));
+        od.insert(
+            Object::var(0x2000, "Setpoint", DataType::Integer16, Access::Rw, Value::I16(0)).with_sub(
+                SubObject::new(0, "Setpoint", DataType::Integer16, Access::Rw, Value::I16(0))
+                    .limits(Value::I16(-100), Value::I16(100))
+                    .mappable(),
+            ),
+        );
+        od.insert(Object::var(0x2001, "Secret", DataType::Unsigned8, Access::Wo, Value::U8(0)));
+        od.insert(
+            Object::record(0x1018, "Identity")
+                .with_sub(SubObject::new(1, "Vendor-ID", DataType::Unsigned32, Access::Ro, Value::U32(0x9A)))
+                .with_sub(SubObject::new(4, "Serial", DataType::Unsigned32, Access::Ro, Value::U32(7))),
+        );
+        od
+    }
+
+    #[test]
+    fn lookup_aborts() {
+        let od = od();
+        assert_eq!(od.find(0x1001, 0), Err(SdoAbort::NO_OBJECT));
+        assert_eq!(od.find(0x1018, 2), Err(SdoAbort::NO_SUB_INDEX));
+        let r = od.find(0x1018, 4).unwrap();
+        assert_eq!(od.index_of(r), (0x1018, 4));
+        assert_eq!(od.get_u32(0x1018, 0), Some(4), "sub 0 tracks the highest sub-index");
+    }
+
+    #[test]
+    fn write_checks_in_order() {
+        let mut od = od();
+        let h = &mut NoHooks;
+        assert_eq!(od.write(h, 0x1000, 0, &[0; 4]), Err(SdoAbort::WRITE_READ_ONLY));
+        assert_eq!(od.read(h, 0x2001, 0).map(<[u8]>::to_vec), Err(SdoAbort::READ_WRITE_ONLY));
+        assert_eq!(od.write(h, 0x2000, 0, &[0; 4]), Err(SdoAbort::DATA_TOO_LONG));
+        assert_eq!(od.write(h, 0x2000, 0, &[0]), Err(SdoAbort::DATA_TOO_SHORT));
+        assert_eq!(od.write(h, 0x2000, 0, &101i16.to_le_bytes()), Err(SdoAbort::VALUE_TOO_HIGH));
+        assert_eq!(od.write(h, 0x2000, 0, &(-101i16).to_le_bytes()), Err(SdoAbort::VALUE_TOO_LOW));
+        let g = od.generation();
+        od.write(h, 0x2000, 0, &(-100i16).to_le_bytes()).unwrap();
+        assert!(od.generation() != g);
+        assert_eq!(od.get_i64(0x2000, 0), Some(-100));
+    }
+
+    struct Veto;
+    impl ObjectHooks for Veto {
+        fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
+            let r = od.find(index, sub)?;
+            od.set_raw(r, &42i16.to_le_bytes());
+            Ok(())
+        }
+        fn on_write(
+            &mut self,
+            _: &mut ObjectDictionary,
+            _: u16,
+            _: u8,
+            data: &[u8],
+        ) -> Result<WriteOutcome, SdoAbort> {
+            if data == 13i16.to_le_bytes() { Err(SdoAbort::DEVICE_STATE) } else { Ok(WriteOutcome::Store) }
+        }
+    }
+
+    #[test]
+    fn hooks_supply_and_veto() {
+        let mut od = od();
+        od.get_mut(0x2000, 0).unwrap().hooked = true;
+        assert_eq!(od.read(&mut Veto, 0x2000, 0).unwrap(), 42i16.to_le_bytes());
+        assert_eq!(od.write(&mut Veto, 0x2000, 0, &13i16.to_le_bytes()), Err(SdoAbort::DEVICE_STATE));
+        od.write(&mut Veto, 0x2000, 0, &12i16.to_le_bytes()).unwrap();
+        assert_eq!(od.get_i64(0x2000, 0), Some(12));
+    }
+
+    #[test]
+    fn restore_defaults_by_group() {
+        let mut od = od();
+        od.write(&mut NoHooks, 0x2000, 0, &5i16.to_le_bytes()).unwrap();
+        assert_eq!(od.get(0x2000, 0).unwrap().persist, PersistGroup::Manufacturer);
+        od.restore_defaults(|_, s| s.persist == PersistGroup::Communication);
+        assert_eq!(od.get_i64(0x2000, 0), Some(5));
+        od.restore_defaults(|_, s| s.persist == PersistGroup::Manufacturer);
+        assert_eq!(od.get_i64(0x2000, 0), Some(0));
+    }
+}
