@@ -344,10 +344,18 @@ impl<A: ObjectHooks, B: ObjectHooks> ObjectHooks for (A, B) {
 }
 
 /// A runtime-built object dictionary, objects sorted by index.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct ObjectDictionary {
     objects: Vec<Object>,
     generation: u64,
+}
+
+/// Two dictionaries are equal when their objects are; the change counter is
+/// bookkeeping, not content.
+impl PartialEq for ObjectDictionary {
+    fn eq(&self, other: &Self) -> bool {
+        self.objects == other.objects
+    }
 }
 
 impl ObjectDictionary {

@@ -1,0 +1,24 @@
+//! EDS and DCF files (CiA 306): read, write, check, and convert to and from
+//! a running object dictionary.
+//!
+//! ```
+//! let text = "[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x20192\n";
+//! let parsed = drivebus_eds::parse(text).unwrap();
+//! let od = drivebus_eds::to_od(&parsed.eds, 5).unwrap();
+//! assert_eq!(od.get_u32(0x1000, 0), Some(0x20192));
+//! ```
+
+mod check;
+mod convert;
+mod ini;
+mod model;
+mod read;
+mod value;
+mod write;
+
+pub use check::{Finding, Severity, check};
+pub use convert::{from_od, to_od};
+pub use model::{Commissioning, DeviceInfo, Diagnostic, Eds, EdsError, EdsObject, EdsVar};
+pub use read::{Parsed, parse};
+pub use value::{eval, format as format_value, is_node_relative};
+pub use write::write;

@@ -1,0 +1,125 @@
+//! Value texts of CiA 306 files: numbers in decimal, hex or octal, and
+//! `$NODEID` expressions such as `$NODEID+0x180`.
+
+use drivebus_od::{DataType, Value, parse_int};
+
+/// True if the text refers to the node-ID.
+pub fn is_node_relative(text: &str) -> bool {
+    text.to_ascii_uppercase().contains("$NODEID")
+}
+
+/// Evaluate a value text for `dt` with `node_id` substituted, returning the
+/// little-endian encoding. Integer expressions are sums and differences of
+/// numbers and `$NODEID`.
+pub fn eval(text: &str, dt: DataType, node_id: u8) -> Result<Vec<u8>, String> {
+    let t = text.trim();
+    if dt.num_kind().is_some() && !matches!(dt, DataType::Real32 | DataType::Real64) || is_node_relative(t) {
+        let v = eval_int(t, node_id)?;
+        let val = if v < 0 { Value::I64(v as i64) } else { Value::U64(v as u64) };
+        let val = if dt == DataType::Boolean { Value::Bool(v != 0) } else { val };
+        if v < i64::MIN as i128 || v > u64::MAX as i128 {
+            return Err(format!("{t:?} is out of range for {}", dt.name()));
+        }
+        return val.encode(dt).map_err(|_| format!("{t:?} is out of range for {}", dt.name()));
+    }
+    if matches!(dt, DataType::Domain) && t.is_empty() {
+        return Ok(Vec::new());
+    }
+    let v = Value::parse(dt, text).map_err(|e| e.to_string())?;
+    v.encode(dt).map_err(|e| format!("{t:?}: {e}"))
+}
+
+fn eval_int(t: &str, node_id: u8) -> Result<i128, String> {
+    if t.is_empty() {
+        return Err("empty number".into());
+    }
+    let mut total: i128 = 0;
+    let mut sign = 1i128;
+    let mut term = String::new();
+    let flush = |term: &mut String, sign: i128, total: &mut i128| -> Result<(), String> {
+        let s = term.trim();
+        if s.is_empty() {
+            return Err(format!("{t:?}: missing term"));
+        }
+        let v = if s.eq_ignore_ascii_case("$NODEID") {
+            node_id as i128
+        } else {
+            parse_int(s).ok_or_else(|| format!("{t:?} is not a number"))?
+        };
+        *total = total.checked_add(sign * v).ok_or_else(|| format!("{t:?} overflows"))?;
+        term.clear();
+        Ok(())
+    };
+    for (i, c) in t.char_indices() {
+        // A leading '-' belongs to the first number.
+        if (c == '+' || c == '-') && !(i == 0 && c == '-') {
+            flush(&mut term, sign, &mut total)?;
+            sign = if c == '-' { -1 } else { 1 };
+        } else {
+            term.push(c);
+        }
+    }
+    flush(&mut term, sign, &mut total)?;
+    Ok(total)
+}
+
+/// Write a value for a file: unsigned as `0x..` hex, signed in decimal,
+/// floats in shortest round-trip form, strings verbatim, octets in hex.
+pub fn format(dt: DataType, bytes: &[u8]) -> String {
+    match Value::decode(dt, bytes) {
+        Ok(Value::Bool(b)) => (b as u8).to_string(),
+        Ok(Value::U8(v)) => format!("0x{v:02X}"),
+        Ok(Value::U16(v)) => format!("0x{v:04X}"),
+        Ok(Value::U32(v)) => format!("0x{v:08X}"),
+        Ok(Value::U64(v)) => format!("0x{v:X}"),
+        Ok(Value::I8(v)) => v.to_string(),
+        Ok(Value::I16(v)) => v.to_string(),
+        Ok(Value::I32(v)) => v.to_string(),
+        Ok(Value::I64(v)) => v.to_string(),
+        Ok(Value::F32(v)) => format!("{v:?}"),
+        Ok(Value::F64(v)) => format!("{v:?}"),
+        Ok(Value::Str(s)) => s,
+        Ok(Value::Time { ms, days }) => format!("0x{:X}", ((days as u64) << 32) | ms as u64),
+        Ok(v @ Value::Unicode(_)) => v.to_string(),
+        Ok(Value::Bytes(_)) | Err(_) => hex(bytes),
+    }
+}
+
+fn hex(b: &[u8]) -> String {
+    b.iter().map(|x| format!("{x:02X}")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn node_id_expressions() {
+        assert_eq!(eval("$NODEID+0x180", DataType::Unsigned32, 5).unwrap(), 0x185u32.to_le_bytes());
+        assert_eq!(eval("0x180 + $nodeid", DataType::Unsigned32, 5).unwrap(), 0x185u32.to_le_bytes());
+        assert_eq!(eval("$NODEID", DataType::Unsigned8, 127).unwrap(), [127]);
+        assert_eq!(
+            eval("0x80000000+$NODEID", DataType::Unsigned32, 1).unwrap(),
+            0x8000_0001u32.to_le_bytes()
+        );
+        assert_eq!(eval("-5", DataType::Integer16, 1).unwrap(), (-5i16).to_le_bytes());
+        assert_eq!(eval("010", DataType::Unsigned8, 1).unwrap(), [8]);
+        assert!(eval("0x100", DataType::Unsigned8, 1).is_err());
+        assert!(eval("$NODEID+", DataType::Unsigned8, 1).is_err());
+        assert!(eval("abc", DataType::Unsigned8, 1).is_err());
+    }
+
+    #[test]
+    fn format_then_eval_is_identity() {
+        for (dt, b) in [
+            (DataType::Unsigned32, vec![1, 2, 3, 4]),
+            (DataType::Integer16, vec![0xFF, 0xFF]),
+            (DataType::Real32, 1.5f32.to_le_bytes().to_vec()),
+            (DataType::VisibleString, b"drive".to_vec()),
+            (DataType::OctetString, vec![0xAB, 0x01]),
+            (DataType::Unsigned48, vec![1, 2, 3, 4, 5, 6]),
+        ] {
+            assert_eq!(eval(&format(dt, &b), dt, 1).unwrap(), b, "{dt:?}");
+        }
+    }
+}

@@ -1,0 +1,297 @@
+//! Persistent parameter storage behind 1010h/1011h (CiA 301 §7.5.2.13/14).
+//!
+//! A group (communication, application, manufacturer) is stored as one
+//! self-checking image, so a torn or foreign file is detected instead of
+//! half-applied.
+
+use alloc::collections::BTreeMap;
+use alloc::vec::Vec;
+use core::fmt;
+use drivebus_od::{ObjectDictionary, PersistGroup};
+
+/// Where stored parameter images live.
+pub trait Storage {
+    /// Replace the stored image of `group`. Must be atomic: after a crash
+    /// either the old or the new image is found, never a mix.
+    fn save(&mut self, group: PersistGroup, image: &[u8]) -> Result<(), StorageError>;
+    /// The stored image of `group`, if any.
+    fn load(&mut self, group: PersistGroup) -> Result<Option<Vec<u8>>, StorageError>;
+    /// Forget the stored image of `group` (1011h: defaults after the next reset).
+    fn erase(&mut self, group: PersistGroup) -> Result<(), StorageError>;
+}
+
+/// A storage failure (reported to the SDO client as `0606 0000`).
+#[derive(Debug)]
+pub enum StorageError {
+    /// The medium failed.
+    #[cfg(feature = "std")]
+    Io(std::io::Error),
+    /// Storage is not available for this group.
+    Unsupported,
+}
+
+impl fmt::Display for StorageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            #[cfg(feature = "std")]
+            StorageError::Io(e) => write!(f, "storage I/O error: {e}"),
+            StorageError::Unsupported => f.write_str("storage not supported"),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for StorageError {}
+
+#[cfg(feature = "std")]
+impl From<std::io::Error> for StorageError {
+    fn from(e: std::io::Error) -> Self {
+        StorageError::Io(e)
+    }
+}
+
+/// Storage in memory (tests, `no_std` targets without flash driver).
+#[derive(Clone, Debug, Default)]
+pub struct MemoryStorage {
+    images: BTreeMap<u8, Vec<u8>>,
+}
+
+impl MemoryStorage {
+    /// Empty storage.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+impl Storage for MemoryStorage {
+    fn save(&mut self, group: PersistGroup, image: &[u8]) -> Result<(), StorageError> {
+        self.images.insert(group as u8, image.to_vec());
+        Ok(())
+    }
+    fn load(&mut self, group: PersistGroup) -> Result<Option<Vec<u8>>, StorageError> {
+        Ok(self.images.get(&(group as u8)).cloned())
+    }
+    fn erase(&mut self, group: PersistGroup) -> Result<(), StorageError> {
+        self.images.remove(&(group as u8));
+        Ok(())
+    }
+}
+
+const MAGIC: &[u8; 4] = b"DBPS";
+const VERSION: u8 = 1;
+const CRC: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_XMODEM);
+
+/// Serialise every sub-object of `group`: `DBPS`, version, group, count,
+/// then `(index u16, sub u8, len u32, bytes)` records, then a CRC-16.
+pub fn encode_image(od: &ObjectDictionary, group: PersistGroup) -> Vec<u8> {
+    let mut out = Vec::new();
+    out.extend_from_slice(MAGIC);
+    out.push(VERSION);
+    out.push(group as u8);
+    out.extend_from_slice(&[0; 4]);
+    let mut n: u32 = 0;
+    for (index, sub, bytes) in od.persistent_values(group) {
+        out.extend_from_slice(&index.to_le_bytes());
+        out.push(sub);
+        out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+        out.extend_from_slice(bytes);
+        n += 1;
+    }
+    out[6..10].copy_from_slice(&n.to_le_bytes());
+    let crc = CRC.checksum(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+/// Why a stored image was not applied.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ImageError {
+    /// Not an image of this format (byte offset of the mismatch).
+    BadHeader(usize),
+    /// The checksum does not match: torn write or corruption.
+    BadChecksum,
+    /// A record runs past the end (byte offset of the record).
+    Truncated(usize),
+    /// The image belongs to another group.
+    WrongGroup,
+}
+
+impl fmt::Display for ImageError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ImageError::BadHeader(o) => write!(f, "not a parameter image (offset {o})"),
+            ImageError::BadChecksum => f.write_str("parameter image checksum mismatch"),
+            ImageError::Truncated(o) => write!(f, "parameter image truncated at offset {o}"),
+            ImageError::WrongGroup => f.write_str("parameter image of another group"),
+        }
+    }
+}
+
+/// Apply a stored image to the dictionary. Entries that no longer exist or
+/// whose value no longer fits (type, limits) are skipped and counted: a
+/// firmware update must not brick a node. Returns `(applied, skipped)`.
+pub fn apply_image(
+    od: &mut ObjectDictionary,
+    group: PersistGroup,
+    image: &[u8],
+) -> Result<(usize, usize), ImageError> {
+    if image.len() < 12 || &image[..4] != MAGIC {
+        return Err(ImageError::BadHeader(0));
+    }
+    if image[4] != VERSION {
+        return Err(ImageError::BadHeader(4));
+    }
+    let (body, crc) = image.split_at(image.len() - 2);
+    if CRC.checksum(body) != u16::from_le_bytes([crc[0], crc[1]]) {
+        return Err(ImageError::BadChecksum);
+    }
+    if body[5] != group as u8 {
+        return Err(ImageError::WrongGroup);
+    }
+    let count = u32::from_le_bytes([body[6], body[7], body[8], body[9]]);
+    let mut at = 10;
+    let (mut applied, mut skipped) = (0, 0);
+    for _ in 0..count {
+        let head = body.get(at..at + 7).ok_or(ImageError::Truncated(at))?;
+        let index = u16::from_le_bytes([head[0], head[1]]);
+        let sub = head[2];
+        let len = u32::from_le_bytes([head[3], head[4], head[5], head[6]]) as usize;
+        let data = body.get(at + 7..at + 7 + len).ok_or(ImageError::Truncated(at))?;
+        at += 7 + len;
+        match od.find(index, sub) {
+            Ok(r) if od.entry(r).persist == group && od.entry(r).validate(data).is_ok() => {
+                od.set_raw(r, data);
+                applied += 1;
+            }
+            _ => skipped += 1,
+        }
+    }
+    if at != body.len() {
+        return Err(ImageError::Truncated(at));
+    }
+    Ok((applied, skipped))
+}
+
+/// Parameter images in files, one per group, replaced atomically.
+#[cfg(feature = "std")]
+#[derive(Clone, Debug)]
+pub struct FileStorage {
+    dir: std::path::PathBuf,
+}
+
+#[cfg(feature = "std")]
+impl FileStorage {
+    /// Store images under `dir` (created if missing).
+    pub fn new(dir: impl Into<std::path::PathBuf>) -> std::io::Result<Self> {
+        let dir = dir.into();
+        std::fs::create_dir_all(&dir)?;
+        Ok(FileStorage { dir })
+    }
+
+    fn path(&self, group: PersistGroup) -> std::path::PathBuf {
+        let name = match group {
+            PersistGroup::Communication => "communication.params",
+            PersistGroup::Application => "application.params",
+            PersistGroup::Manufacturer => "manufacturer.params",
+            PersistGroup::Volatile => "volatile.params",
+        };
+        self.dir.join(name)
+    }
+}
+
+#[cfg(feature = "std")]
+impl Storage for FileStorage {
+    /// Temporary file, fsync, rename over the old one, fsync the directory:
+    /// a crash at any point leaves either the old or the new image.
+    fn save(&mut self, group: PersistGroup, image: &[u8]) -> Result<(), StorageError> {
+        use std::io::Write;
+        let path = self.path(group);
+        let tmp = path.with_extension("tmp");
+        {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(image)?;
+            f.sync_all()?;
+        }
+        std::fs::rename(&tmp, &path)?;
+        std::fs::File::open(&self.dir)?.sync_all()?;
+        Ok(())
+    }
+    fn load(&mut self, group: PersistGroup) -> Result<Option<Vec<u8>>, StorageError> {
+        match std::fs::read(self.path(group)) {
+            Ok(b) => Ok(Some(b)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(e.into()),
+        }
+    }
+    fn erase(&mut self, group: PersistGroup) -> Result<(), StorageError> {
+        match std::fs::remove_file(self.path(group)) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            Err(e) => Err(e.into()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drivebus_od::{Access, DataType, NoHooks, Object, Value};
+
+    fn od() -> ObjectDictionary {
+        let mut od = ObjectDictionary::new();
+        od.insert(Object::var(0x1017, "Producer heartbeat time", DataType::Unsigned16, Access::Rw, Value::U16(0)));
+        od.insert(Object::var(0x6060, "Modes of operation", DataType::Integer8, Access::Rw, Value::I8(0)));
+        od.insert(Object::var(0x2001, "Name", DataType::VisibleString, Access::Rw, Value::Str("abc".into())));
+        od
+    }
+
+    #[test]
+    fn image_round_trip_per_group() {
+        let mut a = od();
+        a.write(&mut NoHooks, 0x1017, 0, &500u16.to_le_bytes()).unwrap();
+        a.write(&mut NoHooks, 0x2001, 0, b"longer name").unwrap();
+        let comm = encode_image(&a, PersistGroup::Communication);
+        let mfr = encode_image(&a, PersistGroup::Manufacturer);
+        let mut b = od();
+        assert_eq!(apply_image(&mut b, PersistGroup::Communication, &comm), Ok((1, 0)));
+        assert_eq!(apply_image(&mut b, PersistGroup::Manufacturer, &mfr), Ok((1, 0)));
+        assert_eq!(b.get_u64(0x1017, 0), Some(500));
+        assert_eq!(b.get(0x2001, 0).unwrap().bytes(), b"longer name");
+        assert_eq!(apply_image(&mut b, PersistGroup::Application, &comm), Err(ImageError::WrongGroup));
+    }
+
+    #[test]
+    fn corrupt_images_are_refused_not_applied() {
+        let a = od();
+        let img = encode_image(&a, PersistGroup::Communication);
+        let mut b = od();
+        let mut flipped = img.clone();
+        flipped[11] ^= 1;
+        assert_eq!(apply_image(&mut b, PersistGroup::Communication, &flipped), Err(ImageError::BadChecksum));
+        assert_eq!(apply_image(&mut b, PersistGroup::Communication, &img[..5]), Err(ImageError::BadHeader(0)));
+        assert_eq!(apply_image(&mut b, PersistGroup::Communication, b"XXXXXXXXXXXXXX"), Err(ImageError::BadHeader(0)));
+    }
+
+    #[test]
+    fn file_storage_replaces_atomically() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = FileStorage::new(dir.path()).unwrap();
+        assert!(s.load(PersistGroup::Communication).unwrap().is_none());
+        s.save(PersistGroup::Communication, b"one").unwrap();
+        s.save(PersistGroup::Communication, b"two").unwrap();
+        assert_eq!(s.load(PersistGroup::Communication).unwrap().as_deref(), Some(&b"two"[..]));
+        // A stale temporary file from a crash mid-save does not shadow the image.
+        std::fs::write(dir.path().join("communication.tmp"), b"torn").unwrap();
+        assert_eq!(s.load(PersistGroup::Communication).unwrap().as_deref(), Some(&b"two"[..]));
+        s.erase(PersistGroup::Communication).unwrap();
+        assert!(s.load(PersistGroup::Communication).unwrap().is_none());
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn garbage_images_never_panic(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..64)) {
+            let mut b = od();
+            let _ = apply_image(&mut b, PersistGroup::Communication, &bytes);
+        }
+    }
+}
