@@ -1,4 +1,40 @@
-//! A complete CiA 301 device: composes the services over one object dictionary; store/restore
+//! A complete CiA 301 device: the communication services (SDO, PDO, NMT
+//! and error control, EMCY, SYNC, TIME, LSS) composed over one object
+//! dictionary, sans-IO, with 1010h/1011h store and restore.
+//!
+//! ```
+//! use drivebus_can::{Frame, Instant};
+//! use drivebus_node::{Node, NodeConfig};
+//! use drivebus_od::NoHooks;
+//!
+//! let mut cfg = NodeConfig::new(5);
+//! cfg.device_type = 0x0002_0192;
+//! let mut node = Node::new(cfg);
+//! let mut out = Vec::new();
+//! node.boot(Instant::ZERO, &mut NoHooks, &mut out);
+//! assert_eq!(out[0], Frame::new(0x705, &[0x00])); // boot-up
+//! node.handle_frame(&Frame::new(0x605, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]), Instant::ZERO, &mut NoHooks, &mut out);
+//! assert_eq!(out[1], Frame::new(0x585, &[0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x02, 0x00]));
+//! ```
 #![cfg_attr(not(feature = "std"), no_std)]
 
 extern crate alloc;
+
+mod app;
+mod config;
+mod dictionary;
+mod hooks;
+mod node;
+mod sim;
+pub mod storage;
+
+pub use app::{Application, NodeEvent};
+pub use config::{Identity, NodeConfig};
+pub use dictionary::build_dictionary;
+pub use hooks::{LOAD_SIGNATURE, SAVE_SIGNATURE};
+pub use node::Node;
+pub use sim::SimNode;
+pub use storage::{FileStorage, MemoryStorage, Slot, Storage, StorageError};
+
+/// Re-exports so users of the node need one dependency.
+pub use drivebus_nmt::NmtState;

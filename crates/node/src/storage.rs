@@ -9,15 +9,40 @@ use alloc::vec::Vec;
 use core::fmt;
 use drivebus_od::{ObjectDictionary, PersistGroup};
 
+/// One stored image: a 1010h parameter group, or the LSS configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Slot {
+    /// Communication parameters (1010h sub 2).
+    Communication,
+    /// Application (device profile) parameters (1010h sub 3).
+    Application,
+    /// Manufacturer parameters (1010h sub 4).
+    Manufacturer,
+    /// LSS "store configuration": node-ID and bit timing (CiA 305).
+    Lss,
+}
+
+impl Slot {
+    /// The slot of a persistence group (`None` for volatile).
+    pub const fn of(group: PersistGroup) -> Option<Slot> {
+        match group {
+            PersistGroup::Communication => Some(Slot::Communication),
+            PersistGroup::Application => Some(Slot::Application),
+            PersistGroup::Manufacturer => Some(Slot::Manufacturer),
+            PersistGroup::Volatile => None,
+        }
+    }
+}
+
 /// Where stored parameter images live.
 pub trait Storage {
-    /// Replace the stored image of `group`. Must be atomic: after a crash
+    /// Replace the stored image of `slot`. Must be atomic: after a crash
     /// either the old or the new image is found, never a mix.
-    fn save(&mut self, group: PersistGroup, image: &[u8]) -> Result<(), StorageError>;
-    /// The stored image of `group`, if any.
-    fn load(&mut self, group: PersistGroup) -> Result<Option<Vec<u8>>, StorageError>;
-    /// Forget the stored image of `group` (1011h: defaults after the next reset).
-    fn erase(&mut self, group: PersistGroup) -> Result<(), StorageError>;
+    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError>;
+    /// The stored image of `slot`, if any.
+    fn load(&mut self, slot: Slot) -> Result<Option<Vec<u8>>, StorageError>;
+    /// Forget the stored image of `slot` (1011h: defaults after the next reset).
+    fn erase(&mut self, slot: Slot) -> Result<(), StorageError>;
 }
 
 /// A storage failure (reported to the SDO client as `0606 0000`).
@@ -64,15 +89,15 @@ impl MemoryStorage {
 }
 
 impl Storage for MemoryStorage {
-    fn save(&mut self, group: PersistGroup, image: &[u8]) -> Result<(), StorageError> {
-        self.images.insert(group as u8, image.to_vec());
+    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError> {
+        self.images.insert(slot as u8, image.to_vec());
         Ok(())
     }
-    fn load(&mut self, group: PersistGroup) -> Result<Option<Vec<u8>>, StorageError> {
-        Ok(self.images.get(&(group as u8)).cloned())
+    fn load(&mut self, slot: Slot) -> Result<Option<Vec<u8>>, StorageError> {
+        Ok(self.images.get(&(slot as u8)).cloned())
     }
-    fn erase(&mut self, group: PersistGroup) -> Result<(), StorageError> {
-        self.images.remove(&(group as u8));
+    fn erase(&mut self, slot: Slot) -> Result<(), StorageError> {
+        self.images.remove(&(slot as u8));
         Ok(())
     }
 }
@@ -188,12 +213,12 @@ impl FileStorage {
         Ok(FileStorage { dir })
     }
 
-    fn path(&self, group: PersistGroup) -> std::path::PathBuf {
-        let name = match group {
-            PersistGroup::Communication => "communication.params",
-            PersistGroup::Application => "application.params",
-            PersistGroup::Manufacturer => "manufacturer.params",
-            PersistGroup::Volatile => "volatile.params",
+    fn path(&self, slot: Slot) -> std::path::PathBuf {
+        let name = match slot {
+            Slot::Communication => "communication.params",
+            Slot::Application => "application.params",
+            Slot::Manufacturer => "manufacturer.params",
+            Slot::Lss => "lss.params",
         };
         self.dir.join(name)
     }
@@ -203,9 +228,9 @@ impl FileStorage {
 impl Storage for FileStorage {
     /// Temporary file, fsync, rename over the old one, fsync the directory:
     /// a crash at any point leaves either the old or the new image.
-    fn save(&mut self, group: PersistGroup, image: &[u8]) -> Result<(), StorageError> {
+    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError> {
         use std::io::Write;
-        let path = self.path(group);
+        let path = self.path(slot);
         let tmp = path.with_extension("tmp");
         {
             let mut f = std::fs::File::create(&tmp)?;
@@ -216,15 +241,15 @@ impl Storage for FileStorage {
         std::fs::File::open(&self.dir)?.sync_all()?;
         Ok(())
     }
-    fn load(&mut self, group: PersistGroup) -> Result<Option<Vec<u8>>, StorageError> {
-        match std::fs::read(self.path(group)) {
+    fn load(&mut self, slot: Slot) -> Result<Option<Vec<u8>>, StorageError> {
+        match std::fs::read(self.path(slot)) {
             Ok(b) => Ok(Some(b)),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(e.into()),
         }
     }
-    fn erase(&mut self, group: PersistGroup) -> Result<(), StorageError> {
-        match std::fs::remove_file(self.path(group)) {
+    fn erase(&mut self, slot: Slot) -> Result<(), StorageError> {
+        match std::fs::remove_file(self.path(slot)) {
             Ok(()) => Ok(()),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
             Err(e) => Err(e.into()),
@@ -239,7 +264,13 @@ mod tests {
 
     fn od() -> ObjectDictionary {
         let mut od = ObjectDictionary::new();
-        od.insert(Object::var(0x1017, "Producer heartbeat time", DataType::Unsigned16, Access::Rw, Value::U16(0)));
+        od.insert(Object::var(
+            0x1017,
+            "Producer heartbeat time",
+            DataType::Unsigned16,
+            Access::Rw,
+            Value::U16(0),
+        ));
         od.insert(Object::var(0x6060, "Modes of operation", DataType::Integer8, Access::Rw, Value::I8(0)));
         od.insert(Object::var(0x2001, "Name", DataType::VisibleString, Access::Rw, Value::Str("abc".into())));
         od
@@ -268,23 +299,29 @@ mod tests {
         let mut flipped = img.clone();
         flipped[11] ^= 1;
         assert_eq!(apply_image(&mut b, PersistGroup::Communication, &flipped), Err(ImageError::BadChecksum));
-        assert_eq!(apply_image(&mut b, PersistGroup::Communication, &img[..5]), Err(ImageError::BadHeader(0)));
-        assert_eq!(apply_image(&mut b, PersistGroup::Communication, b"XXXXXXXXXXXXXX"), Err(ImageError::BadHeader(0)));
+        assert_eq!(
+            apply_image(&mut b, PersistGroup::Communication, &img[..5]),
+            Err(ImageError::BadHeader(0))
+        );
+        assert_eq!(
+            apply_image(&mut b, PersistGroup::Communication, b"XXXXXXXXXXXXXX"),
+            Err(ImageError::BadHeader(0))
+        );
     }
 
     #[test]
     fn file_storage_replaces_atomically() {
         let dir = tempfile::tempdir().unwrap();
         let mut s = FileStorage::new(dir.path()).unwrap();
-        assert!(s.load(PersistGroup::Communication).unwrap().is_none());
-        s.save(PersistGroup::Communication, b"one").unwrap();
-        s.save(PersistGroup::Communication, b"two").unwrap();
-        assert_eq!(s.load(PersistGroup::Communication).unwrap().as_deref(), Some(&b"two"[..]));
+        assert!(s.load(Slot::Communication).unwrap().is_none());
+        s.save(Slot::Communication, b"one").unwrap();
+        s.save(Slot::Communication, b"two").unwrap();
+        assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"two"[..]));
         // A stale temporary file from a crash mid-save does not shadow the image.
         std::fs::write(dir.path().join("communication.tmp"), b"torn").unwrap();
-        assert_eq!(s.load(PersistGroup::Communication).unwrap().as_deref(), Some(&b"two"[..]));
-        s.erase(PersistGroup::Communication).unwrap();
-        assert!(s.load(PersistGroup::Communication).unwrap().is_none());
+        assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"two"[..]));
+        s.erase(Slot::Communication).unwrap();
+        assert!(s.load(Slot::Communication).unwrap().is_none());
     }
 
     proptest::proptest! {

@@ -1,0 +1,85 @@
+//! What a device is: identity, which services it has, and their sizes.
+
+use alloc::string::String;
+use drivebus_nmt::NmtConfig;
+use drivebus_pdo::PdoConfig;
+use drivebus_sdo::server::ServerConfig;
+
+/// 1018h identity (also the LSS address, CiA 305).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Identity {
+    /// 1018h:1 vendor-ID.
+    pub vendor_id: u32,
+    /// 1018h:2 product code.
+    pub product_code: u32,
+    /// 1018h:3 revision number.
+    pub revision: u32,
+    /// 1018h:4 serial number.
+    pub serial: u32,
+}
+
+/// Everything fixed when a device is built.
+#[derive(Clone, Debug)]
+pub struct NodeConfig {
+    /// Node-ID 1..=127, or 0xFF for an unconfigured LSS node.
+    pub node_id: u8,
+    /// 1000h device type (e.g. 0x0002_0192 for a CiA 402 servo drive).
+    pub device_type: u32,
+    /// 1018h.
+    pub identity: Identity,
+    /// 1008h manufacturer device name (`None`: object absent).
+    pub device_name: Option<String>,
+    /// 1009h manufacturer hardware version.
+    pub hardware_version: Option<String>,
+    /// 100Ah manufacturer software version.
+    pub software_version: Option<String>,
+    /// NMT and error-control switches (the node-ID in it is kept in step).
+    pub nmt: NmtConfig,
+    /// PDO counts, granularity, limits.
+    pub pdo: PdoConfig,
+    /// SDO server behaviour (timeout, block support, size limits).
+    pub sdo: ServerConfig,
+    /// Additional server SDOs (1201h..).
+    pub extra_sdo_servers: u8,
+    /// 1016h entries (0: no heartbeat consumer).
+    pub heartbeat_consumers: u8,
+    /// 1003h history depth (0: no 1003h).
+    pub emcy_history: u8,
+    /// 1028h entries (0: no EMCY consumer).
+    pub emcy_consumers: u8,
+    /// 1029h error classes (0: no 1029h).
+    pub error_classes: u8,
+    /// TIME object 1012h and its service.
+    pub time: bool,
+    /// LSS slave (CiA 305).
+    pub lss: bool,
+    /// 1010h/1011h store and restore.
+    pub store_restore: bool,
+}
+
+impl NodeConfig {
+    /// A generic CiA 301 device with every service: 4+4 PDOs, heartbeat and
+    /// guarding, 8-deep error history, SYNC, TIME, LSS, store/restore.
+    pub fn new(node_id: u8) -> NodeConfig {
+        let pdo_id = if (1..=127).contains(&node_id) { node_id } else { 1 };
+        NodeConfig {
+            node_id,
+            device_type: 0,
+            identity: Identity::default(),
+            device_name: None,
+            hardware_version: None,
+            software_version: None,
+            nmt: NmtConfig::new(node_id),
+            pdo: PdoConfig::new(pdo_id),
+            sdo: ServerConfig::default(),
+            extra_sdo_servers: 0,
+            heartbeat_consumers: 4,
+            emcy_history: 8,
+            emcy_consumers: 0,
+            error_classes: 1,
+            time: true,
+            lss: true,
+            store_restore: true,
+        }
+    }
+}

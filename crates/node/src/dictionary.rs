@@ -1,0 +1,177 @@
+//! Building the communication area of a node's dictionary.
+
+use crate::config::NodeConfig;
+use drivebus_emcy::{Emcy, EmcyConsumer};
+use drivebus_od::{Access, DataType, Object, ObjectDictionary, SubObject, Value, le_u64};
+use drivebus_sync::{SyncService, TimeService};
+
+/// The objects a node with `cfg` has, with CiA 301 defaults for `node_id`.
+pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
+    // COB-ID defaults need a real node-ID; an unconfigured node uses 1
+    // until LSS gives it one (the defaults are rebased then).
+    let id = if (1..=127).contains(&node_id) { node_id } else { 1 };
+    let mut od = ObjectDictionary::new();
+    od.insert(Object::var(
+        0x1000,
+        "Device type",
+        DataType::Unsigned32,
+        Access::Ro,
+        Value::U32(cfg.device_type),
+    ));
+    Emcy::install(&mut od, id, cfg.emcy_history);
+    SyncService::install(&mut od, id);
+    for (index, name, text) in [
+        (0x1008, "Manufacturer device name", &cfg.device_name),
+        (0x1009, "Manufacturer hardware version", &cfg.hardware_version),
+        (0x100A, "Manufacturer software version", &cfg.software_version),
+    ] {
+        if let Some(t) = text {
+            od.insert(Object::var(
+                index,
+                name,
+                DataType::VisibleString,
+                Access::Const,
+                Value::Str(t.clone()),
+            ));
+        }
+    }
+    let mut nmt = cfg.nmt;
+    nmt.node_id = id;
+    drivebus_nmt::install(&mut od, &nmt, cfg.heartbeat_consumers);
+    if cfg.error_classes > 0 {
+        drivebus_nmt::install_error_behaviour(&mut od, cfg.error_classes);
+    }
+    if cfg.store_restore {
+        for (index, name) in [(0x1010, "Store parameters"), (0x1011, "Restore default parameters")] {
+            let mut o = Object::array(index, name, DataType::Unsigned32, Access::Rw, 4, Value::U32(1));
+            for (sub, n) in [
+                (1, "all parameters"),
+                (2, "communication parameters"),
+                (3, "application parameters"),
+                (4, "manufacturer parameters"),
+            ] {
+                // Reads give the capability (bit 0: on command), writes take a signature.
+                o = o.with_sub(
+                    SubObject::new(
+                        sub,
+                        alloc::format!("{name}: {n}"),
+                        DataType::Unsigned32,
+                        Access::Rw,
+                        Value::U32(1),
+                    )
+                    .hooked()
+                    .persist(drivebus_od::PersistGroup::Volatile),
+                );
+            }
+            od.insert(o);
+        }
+    }
+    if cfg.time {
+        TimeService::install(&mut od);
+    }
+    let ident = cfg.identity;
+    od.insert(
+        Object::record(0x1018, "Identity object")
+            .with_sub(SubObject::new(
+                1,
+                "Vendor-ID",
+                DataType::Unsigned32,
+                Access::Ro,
+                Value::U32(ident.vendor_id),
+            ))
+            .with_sub(SubObject::new(
+                2,
+                "Product code",
+                DataType::Unsigned32,
+                Access::Ro,
+                Value::U32(ident.product_code),
+            ))
+            .with_sub(SubObject::new(
+                3,
+                "Revision number",
+                DataType::Unsigned32,
+                Access::Ro,
+                Value::U32(ident.revision),
+            ))
+            .with_sub(SubObject::new(
+                4,
+                "Serial number",
+                DataType::Unsigned32,
+                Access::Ro,
+                Value::U32(ident.serial),
+            )),
+    );
+    if cfg.emcy_consumers > 0 {
+        EmcyConsumer::install(&mut od, cfg.emcy_consumers);
+    }
+    drivebus_sdo::server::install_server_params(&mut od, id, 1 + cfg.extra_sdo_servers);
+    let mut pdo = cfg.pdo;
+    pdo.node_id = id;
+    drivebus_pdo::install(&mut od, &pdo);
+    od
+}
+
+/// Bring a dictionary from elsewhere (an EDS) up to what the services
+/// need: objects it lacks are added from `generated`; sub-objects it has
+/// keep their description and value but take the service's hook flag.
+pub fn merge_services(od: &mut ObjectDictionary, generated: &ObjectDictionary) {
+    for g in generated.objects() {
+        if od.object(g.index).is_none() {
+            od.insert(g.clone());
+            continue;
+        }
+        for gs in g.subs() {
+            if let Some(s) = od.get_mut(g.index, gs.sub) {
+                s.hooked |= gs.hooked;
+            } else if let Some(o) = od.object_mut(g.index) {
+                let merged = o.clone().with_sub(gs.clone());
+                *o = merged;
+            }
+        }
+    }
+}
+
+/// Mark the numeric defaults that follow the node-ID (COB-IDs such as
+/// 1014h = 80h + node-ID): they are the ones that differ between the same
+/// configuration built for two node-IDs.
+pub fn mark_node_relative(cfg: &NodeConfig, od: &mut ObjectDictionary) {
+    let a = build_dictionary(cfg, 1);
+    let b = build_dictionary(cfg, 2);
+    for o in a.objects() {
+        for sa in o.subs() {
+            let Some(sb) = b.get(o.index, sa.sub) else { continue };
+            if sa.data_type.num_kind().is_some()
+                && le_u64(&sb.default).wrapping_sub(le_u64(&sa.default)) == 1
+                && let Some(s) = od.get_mut(o.index, sa.sub)
+            {
+                s.node_id_relative = true;
+            }
+        }
+    }
+}
+
+/// Move node-relative defaults from node-ID `from` to `to` (LSS changed
+/// the node-ID); values equal to the old default move along.
+pub fn rebase_node_id(od: &mut ObjectDictionary, from: u8, to: u8) {
+    let from = if (1..=127).contains(&from) { from } else { 1 };
+    let to_eff = if (1..=127).contains(&to) { to } else { 1 };
+    let indices: alloc::vec::Vec<(u16, u8)> = od
+        .objects()
+        .iter()
+        .flat_map(|o| o.subs().iter().filter(|s| s.node_id_relative).map(move |s| (o.index, s.sub)))
+        .collect();
+    for (index, sub) in indices {
+        let Some(s) = od.get_mut(index, sub) else { continue };
+        let n = s.default.len().min(8);
+        let old = le_u64(&s.default);
+        let new = old.wrapping_sub(from as u64).wrapping_add(to_eff as u64);
+        let was_default = s.bytes() == s.default.as_slice();
+        s.default = new.to_le_bytes()[..n].to_vec();
+        if was_default {
+            let d = s.default.clone();
+            if let Ok(r) = od.find(index, sub) {
+                od.set_raw(r, &d);
+            }
+        }
+    }
+}
