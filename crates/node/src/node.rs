@@ -101,9 +101,18 @@ impl Node {
     pub fn od(&self) -> &ObjectDictionary {
         &self.od
     }
-    /// The object dictionary, for the application to push live values.
+    /// The object dictionary, for the application to push live values
+    /// (`set_le`, `set_raw`, `write_local`). Add objects with
+    /// [`Node::insert_object`], not through this reference: services hold
+    /// resolved handles into the dictionary.
     pub fn od_mut(&mut self) -> &mut ObjectDictionary {
         &mut self.od
+    }
+
+    /// Add (or replace) an object and re-resolve every service's handles.
+    pub fn insert_object(&mut self, obj: drivebus_od::Object) {
+        self.od.insert(obj);
+        self.s.pdo.reload(&self.od);
     }
     /// The configuration the node was built from.
     pub fn config(&self) -> &NodeConfig {

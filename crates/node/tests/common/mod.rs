@@ -63,6 +63,21 @@ impl Rig {
         &mut self.bus.node_mut::<SimNode>(self.dut).expect("dut").node
     }
 
+    /// Raise an EMCY in the device (as its application would) and let it go out.
+    pub fn raise_emcy(&mut self, code: u16, mfr: [u8; 5]) {
+        let now = self.now();
+        self.node_mut().raise_emcy(code, mfr, now);
+        self.bus.wake(self.dut);
+        self.bus.run_for(Duration::from_nanos(1));
+    }
+
+    pub fn clear_emcy(&mut self, code: u16) {
+        let now = self.now();
+        self.node_mut().clear_emcy(code, now);
+        self.bus.wake(self.dut);
+        self.bus.run_for(Duration::from_micros(1));
+    }
+
     pub fn now(&self) -> Instant {
         self.bus.now()
     }
