@@ -284,9 +284,10 @@ impl Node {
         }
         if state.allows(Service::Pdo) {
             let rx = self.s.pdo.handle_frame(frame, now, &mut self.od, &mut AppOnly(&mut *app), out);
-            if let PdoRx::Event(_) = rx {
-                self.drain_pdo_events(now, app);
+            if let PdoRx::Event(ev) = rx {
+                self.on_pdo_event(ev, now, app);
             }
+            self.drain_pdo_events(now, app);
         }
     }
 
@@ -348,18 +349,27 @@ impl Node {
 
     fn drain_pdo_events<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A) {
         while let Some(ev) = self.s.pdo.pop_event() {
-            match ev {
-                drivebus_pdo::PdoEvent::RpdoResumed { .. } => {
-                    self.s.emcy.clear(&mut self.od, 0x8250, now);
-                }
-                drivebus_pdo::PdoEvent::RpdoTimeout { rpdo } => {
-                    app.on_event(&mut self.od, NodeEvent::RpdoTimeout { rpdo }, now);
-                }
-                _ => {}
+            self.on_pdo_event(ev, now, app);
+        }
+    }
+
+    fn on_pdo_event<A: Application + ?Sized>(
+        &mut self,
+        ev: drivebus_pdo::PdoEvent,
+        now: Instant,
+        app: &mut A,
+    ) {
+        match ev {
+            drivebus_pdo::PdoEvent::RpdoResumed { .. } => {
+                self.s.emcy.clear(&mut self.od, 0x8250, now);
             }
-            if let Some(code) = ev.emcy_code() {
-                self.raise_emcy(code, [0; 5], now);
+            drivebus_pdo::PdoEvent::RpdoTimeout { rpdo } => {
+                app.on_event(&mut self.od, NodeEvent::RpdoTimeout { rpdo }, now);
             }
+            _ => {}
+        }
+        if let Some(code) = ev.emcy_code() {
+            self.raise_emcy(code, [0; 5], now);
         }
     }
 

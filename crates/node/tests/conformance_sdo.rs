@@ -75,7 +75,10 @@ fn sdo_07_block_upload_with_crc() {
     r.take();
     r.send("605#A2027F0000000000");
     let end = r.take();
-    assert_eq!(end, vec![drivebus_can::Frame::new(0x585, &[0xC5, crc as u8, (crc >> 8) as u8, 0, 0, 0, 0, 0])]);
+    assert_eq!(
+        end,
+        vec![drivebus_can::Frame::new(0x585, &[0xC5, crc as u8, (crc >> 8) as u8, 0, 0, 0, 0, 0])]
+    );
     r.exchange("605#A100000000000000", &[]);
     r.exchange("605#4000100000000000", &["585#4300100092010200"]);
 }
