@@ -28,6 +28,8 @@ pub(crate) struct Services {
     pub storage: Box<dyn Storage + Send>,
     /// 1200h..127Fh changed while a server was borrowed: rebuild after.
     pub sdo_params_dirty: bool,
+    /// A communication object changed: identifiers may have moved.
+    pub comm_changed: bool,
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
     pub now: Instant,
@@ -56,12 +58,6 @@ fn group(slot: Slot) -> PersistGroup {
         Slot::Application => PersistGroup::Application,
         Slot::Manufacturer | Slot::Lss => PersistGroup::Manufacturer,
     }
-}
-
-fn store_raw(od: &mut ObjectDictionary, index: u16, sub: u8, data: &[u8]) -> Result<(), SdoAbort> {
-    let r = od.find(index, sub)?;
-    od.set_raw(r, data);
-    Ok(())
 }
 
 impl<A: Application + ?Sized> CommHooks<'_, A> {
@@ -118,55 +114,57 @@ impl<A: Application + ?Sized> ObjectHooks for CommHooks<'_, A> {
             return Ok(WriteOutcome::Store);
         }
         let s = &mut *self.s;
+        // Services check here and reconfigure in `after_write`, once the
+        // dictionary has stored the value.
         match index {
             0x1010 | 0x1011 => return self.store_restore(od, index, sub, data),
-            0x1001 | 0x1003 | 0x1014 | 0x1015 => {
-                s.emcy.check_write(od, index, sub, data)?;
-                store_raw(od, index, sub, data)?;
-                s.emcy.reconfigure(od, index, sub);
-            }
+            0x1001 | 0x1003 | 0x1014 | 0x1015 => s.emcy.check_write(od, index, sub, data)?,
             0x1028 => {
-                if let Some(c) = &mut s.emcy_consumer {
+                if let Some(c) = &s.emcy_consumer {
                     c.check_write(od, index, sub, data)?;
-                    store_raw(od, index, sub, data)?;
-                    c.reconfigure(od, index, sub);
-                } else {
-                    return Ok(WriteOutcome::Store);
                 }
             }
-            0x1005..=0x1007 | 0x1019 => {
-                s.sync.check_write(od, index, sub, data)?;
-                store_raw(od, index, sub, data)?;
-                s.sync.reconfigure(od, index, sub);
+            0x1005..=0x1007 | 0x1019 => s.sync.check_write(od, index, sub, data)?,
+            0x1012 => {
+                if let Some(t) = &s.time {
+                    t.check_write(od, index, sub, data)?;
+                }
             }
+            0x100C | 0x100D | 0x1016 | 0x1017 | 0x1029 => s.nmt.check_write(od, index, sub, data)?,
+            0x1200..=0x127F => drivebus_sdo::server::check_write(od, index, sub, data)?,
+            0x1400..=0x1BFF => s.pdo.check_write(od, index, sub, data)?,
+            _ => {}
+        }
+        Ok(WriteOutcome::Store)
+    }
+
+    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        self.app.after_write(od, index, sub);
+        let s = &mut *self.s;
+        match index {
+            0x1001 | 0x1003 | 0x1014 | 0x1015 => s.emcy.reconfigure(od, index, sub),
+            0x1028 => {
+                if let Some(c) = &mut s.emcy_consumer {
+                    c.reconfigure(od, index, sub);
+                }
+            }
+            0x1005..=0x1007 | 0x1019 => s.sync.reconfigure(od, index, sub),
             0x1012 => {
                 if let Some(t) = &mut s.time {
-                    t.check_write(od, index, sub, data)?;
-                    store_raw(od, index, sub, data)?;
                     t.reconfigure(od, index, sub);
-                } else {
-                    return Ok(WriteOutcome::Store);
                 }
             }
             0x100C | 0x100D | 0x1016 | 0x1017 | 0x1029 => {
-                s.nmt.check_write(od, index, sub, data)?;
-                store_raw(od, index, sub, data)?;
                 if let Some(ev) = s.nmt.reconfigure(od, index, sub, s.now) {
                     s.pending_nmt = Some(ev);
                 }
             }
-            0x1200..=0x127F => {
-                drivebus_sdo::server::check_write(od, index, sub, data)?;
-                store_raw(od, index, sub, data)?;
-                s.sdo_params_dirty = true;
-            }
-            0x1400..=0x1BFF => {
-                s.pdo.check_write(od, index, sub, data)?;
-                store_raw(od, index, sub, data)?;
-                s.pdo.reconfigure(od, index, sub);
-            }
-            _ => return Ok(WriteOutcome::Store),
+            0x1200..=0x127F => s.sdo_params_dirty = true,
+            0x1400..=0x1BFF => s.pdo.reconfigure(od, index, sub),
+            _ => {}
         }
-        Ok(WriteOutcome::Handled)
+        if matches!(index, 0x1005 | 0x1012 | 0x1028 | 0x1400..=0x15FF | 0x1800..=0x19FF) {
+            s.comm_changed = true;
+        }
     }
 }

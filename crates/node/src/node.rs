@@ -37,6 +37,28 @@ pub struct Node {
     sdo: Vec<SdoServer>,
     lss: Option<LssSlave>,
     node_id: u8,
+    /// Service behind each 11-bit identifier (see `route`), rebuilt when a
+    /// COB-ID changes: frame dispatch is one table load.
+    routes: Vec<u8>,
+    /// The deadline the last full poll computed, and what it depended on:
+    /// an idle poll before it returns at once.
+    next_deadline: Option<Instant>,
+    polled_generation: u64,
+    dirty: bool,
+}
+
+/// Route codes in [`Node::routes`].
+mod route {
+    pub const NONE: u8 = 0;
+    pub const NMT: u8 = 1;
+    pub const ERROR_CONTROL: u8 = 2;
+    pub const LSS: u8 = 3;
+    pub const SYNC: u8 = 4;
+    pub const TIME: u8 = 5;
+    pub const EMCY_CONSUMER: u8 = 6;
+    pub const PDO: u8 = 7;
+    /// SDO server `i` is `SDO + i`.
+    pub const SDO: u8 = 8;
 }
 
 impl Node {
@@ -76,6 +98,7 @@ impl Node {
             time: None,
             storage,
             sdo_params_dirty: false,
+            comm_changed: false,
             pending_nmt: None,
             now: Instant::ZERO,
         };
@@ -92,7 +115,18 @@ impl Node {
                 0,
             )
         });
-        let mut node = Node { cfg, od, s, sdo: Vec::new(), lss, node_id };
+        let mut node = Node {
+            cfg,
+            od,
+            s,
+            sdo: Vec::new(),
+            lss,
+            node_id,
+            routes: alloc::vec![route::NONE; 0x800],
+            next_deadline: None,
+            polled_generation: 0,
+            dirty: true,
+        };
         node.load_lss_config();
         node
     }
@@ -106,6 +140,7 @@ impl Node {
     /// [`Node::insert_object`], not through this reference: services hold
     /// resolved handles into the dictionary.
     pub fn od_mut(&mut self) -> &mut ObjectDictionary {
+        self.dirty = true;
         &mut self.od
     }
 
@@ -113,6 +148,8 @@ impl Node {
     pub fn insert_object(&mut self, obj: drivebus_od::Object) {
         self.od.insert(obj);
         self.s.pdo.reload(&self.od);
+        self.rebuild_routes();
+        self.dirty = true;
     }
     /// The configuration the node was built from.
     pub fn config(&self) -> &NodeConfig {
@@ -159,6 +196,7 @@ impl Node {
     /// Signal an error: 1001h, 1003h and an EMCY frame (CiA 301 §7.2.7).
     /// Returns false if the code was already active.
     pub fn raise_emcy(&mut self, code: u16, manufacturer: [u8; 5], now: Instant) -> bool {
+        self.dirty = true;
         self.s.emcy.raise(&mut self.od, code, register_bit_for(code), manufacturer, now)
     }
 
@@ -170,26 +208,31 @@ impl Node {
         manufacturer: [u8; 5],
         now: Instant,
     ) -> bool {
+        self.dirty = true;
         self.s.emcy.raise(&mut self.od, code, register, manufacturer, now)
     }
 
     /// An error went away (the error-reset EMCY goes when the last clears).
     pub fn clear_emcy(&mut self, code: u16, now: Instant) -> bool {
+        self.dirty = true;
         self.s.emcy.clear(&mut self.od, code, now)
     }
 
     /// Every active error went away.
     pub fn clear_all_emcy(&mut self, now: Instant) {
+        self.dirty = true;
         self.s.emcy.clear_all(&mut self.od, now)
     }
 
     /// Send an EMCY outside the error bookkeeping (personality quirks).
     pub fn send_raw_emcy(&mut self, code: u16, register: u8, bytes: [u8; 5], now: Instant) {
+        self.dirty = true;
         self.s.emcy.send_raw(code, register, bytes, now)
     }
 
     /// Ask for an event-driven / acyclic TPDO (0-based number).
     pub fn request_tpdo(&mut self, n: u16) -> bool {
+        self.dirty = true;
         self.s.pdo.request_tpdo(n)
     }
 
@@ -201,6 +244,7 @@ impl Node {
         app: &mut A,
         out: &mut impl TxSink,
     ) {
+        self.dirty = true;
         if let Some(ev) = self.s.nmt.set_state(to) {
             self.on_nmt_event(ev, now, app, out);
         }
@@ -217,23 +261,109 @@ impl Node {
         self.s.now = now;
         let Some(id) = frame.std_id() else {
             // 29-bit identifiers can carry PDOs, SYNC and SDOs when configured.
-            self.dispatch_configurable(frame, now, app, out);
+            self.dirty = true;
+            if !self.s.nmt.state().is_initialisation() {
+                self.dispatch_configurable(frame, now, app, out);
+            }
             return;
         };
-        if id == drivebus_lss::MASTER_TO_SLAVE {
+        let r = self.routes[usize::from(id & 0x7FF)];
+        if r == route::LSS {
+            self.dirty = true;
             self.on_lss_frame(frame, now, app, out);
             return;
         }
-        if self.s.nmt.state().is_initialisation() {
+        let state = self.s.nmt.state();
+        if state.is_initialisation() {
             return;
         }
-        if id == 0x000 || (0x701..=0x77F).contains(&id) {
-            if let Some(ev) = self.s.nmt.handle_frame(frame, now, out) {
-                self.on_nmt_event(ev, now, app, out);
+        match r {
+            route::NONE => {}
+            route::NMT | route::ERROR_CONTROL => {
+                self.dirty = true;
+                if let Some(ev) = self.s.nmt.handle_frame(frame, now, out) {
+                    self.on_nmt_event(ev, now, app, out);
+                }
             }
-            return;
+            r if r >= route::SDO => {
+                let i = usize::from(r - route::SDO);
+                if state.allows(Service::Sdo) && i < self.sdo.len() {
+                    let was_idle = self.sdo[i].is_idle();
+                    let mut hooks = CommHooks { s: &mut self.s, app };
+                    self.sdo[i].handle_frame(frame, now, &mut self.od, &mut hooks, out);
+                    // An expedited exchange leaves the server idle and no
+                    // timer behind: the cached deadline stays valid.
+                    if !(was_idle && self.sdo[i].is_idle()) {
+                        self.dirty = true;
+                    }
+                    self.after_sdo_write(now, app, out);
+                }
+            }
+            route::PDO if state.allows(Service::Pdo) => {
+                self.dirty = true;
+                let rx = self.s.pdo.handle_frame(frame, now, &mut self.od, &mut AppOnly(&mut *app), out);
+                match rx {
+                    PdoRx::Event(ev) => {
+                        self.on_pdo_event(ev, now, app);
+                        self.drain_pdo_events(now, app);
+                    }
+                    PdoRx::Handled => self.drain_pdo_events(now, app),
+                    // Not a PDO after all (e.g. an RTR on an RPDO id): the
+                    // other services sharing identifiers get a look.
+                    PdoRx::NotPdo => self.dispatch_configurable(frame, now, app, out),
+                }
+            }
+            _ => {
+                self.dirty = true;
+                self.dispatch_configurable(frame, now, app, out);
+            }
         }
-        self.dispatch_configurable(frame, now, app, out);
+    }
+
+    /// Rebuild the identifier → service table from the services' current
+    /// COB-IDs (after boot and after any communication object changed).
+    fn rebuild_routes(&mut self) {
+        use drivebus_can::CanId;
+        let t = &mut self.routes;
+        t.iter_mut().for_each(|x| *x = route::NONE);
+        let mut set = |id: Option<CanId>, r: u8| {
+            if let Some(CanId::Standard(i)) = id {
+                t[usize::from(i & 0x7FF)] = r;
+            }
+        };
+        // Lowest priority first: later entries win a shared identifier,
+        // in the order dispatch_configurable checks them.
+        let cfg = *self.s.pdo.config();
+        for n in 0..cfg.rpdo_count {
+            set(self.s.pdo.can_id(drivebus_pdo::PdoKind::Rpdo, n), route::PDO);
+        }
+        for n in 0..cfg.tpdo_count {
+            set(self.s.pdo.can_id(drivebus_pdo::PdoKind::Tpdo, n), route::PDO);
+        }
+        if let Some(o) = self.od.object(0x1028) {
+            for sub in o.subs().iter().skip(1) {
+                let cob = drivebus_od::le_u64(sub.bytes()) as u32;
+                if cob & 0xA000_0000 == 0 {
+                    set(CanId::standard((cob & 0x7FF) as u16), route::EMCY_CONSUMER);
+                }
+            }
+        }
+        if self.s.time.is_some()
+            && let Some(cob) = self.od.get_u32(0x1012, 0)
+            && cob & 0xA000_0000 == 0x8000_0000
+        {
+            set(CanId::standard((cob & 0x7FF) as u16), route::TIME);
+        }
+        for (i, s) in self.sdo.iter().enumerate().take(usize::from(u8::MAX - route::SDO)) {
+            set(s.rx_cob_id(), route::SDO + i as u8);
+        }
+        set(Some(self.s.sync.can_id()), route::SYNC);
+        t[0x000] = route::NMT;
+        for x in &mut t[0x701..=0x77F] {
+            *x = route::ERROR_CONTROL;
+        }
+        t[usize::from(drivebus_lss::MASTER_TO_SLAVE)] =
+            if self.lss.is_some() { route::LSS } else { route::NONE };
     }
 
     /// Frames whose identifiers come from the dictionary: SYNC, TIME, EMCY
@@ -293,6 +423,27 @@ impl Node {
 
     /// Do the timed work due at `now`; returns when to call again.
     pub fn poll<A: Application + ?Sized>(
+        &mut self,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) -> Option<Instant> {
+        // Nothing received, nothing written and no deadline reached since
+        // the last full poll: nothing can be due.
+        if !self.dirty
+            && self.od.generation() == self.polled_generation
+            && self.next_deadline.is_none_or(|d| now < d)
+        {
+            return self.next_deadline;
+        }
+        let next = self.poll_services(now, app, out);
+        self.dirty = false;
+        self.polled_generation = self.od.generation();
+        self.next_deadline = next;
+        next
+    }
+
+    fn poll_services<A: Application + ?Sized>(
         &mut self,
         now: Instant,
         app: &mut A,
@@ -379,12 +530,17 @@ impl Node {
         if let Some(ev) = self.s.pending_nmt.take() {
             self.on_nmt_event(ev, now, app, out);
         }
+        if core::mem::take(&mut self.s.comm_changed) {
+            self.dirty = true;
+            self.rebuild_routes();
+        }
         if core::mem::take(&mut self.s.sdo_params_dirty) {
             for s in &mut self.sdo {
                 if let Some(i) = s.param_index() {
                     s.reconfigure(&self.od, i);
                 }
             }
+            self.rebuild_routes();
         }
     }
 
@@ -546,6 +702,8 @@ impl Node {
         self.s.pdo.reload(&self.od);
         self.s.pdo.reset();
         self.sdo = SdoServer::servers_from_od(&self.od, self.cfg.sdo);
+        self.rebuild_routes();
+        self.dirty = true;
         if !(1..=127).contains(&id) {
             return;
         }

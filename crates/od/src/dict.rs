@@ -1,5 +1,6 @@
 //! The object dictionary: objects, sub-objects, lookup and checked access.
 
+use crate::bytes::ValueBytes;
 use crate::types::{check_len, compare_le};
 use crate::{Access, DataType, ObjectCode, PersistGroup, SdoAbort, Value};
 use alloc::borrow::Cow;
@@ -42,7 +43,7 @@ pub struct SubObject {
     pub hooked: bool,
     /// The DefaultValue text contained `$NODEID` (CiA 306): kept for EDS export.
     pub node_id_relative: bool,
-    value: Vec<u8>,
+    value: ValueBytes,
 }
 
 impl SubObject {
@@ -78,7 +79,7 @@ impl SubObject {
             pdo_mappable: false,
             low_limit: None,
             high_limit: None,
-            value: default.clone(),
+            value: ValueBytes::from_slice(&default),
             default,
             persist: PersistGroup::Volatile,
             max_len: None,
@@ -121,7 +122,7 @@ impl SubObject {
     }
     /// The current value, decoded.
     pub fn value(&self) -> Value {
-        Value::decode(self.data_type, &self.value).unwrap_or(Value::Bytes(self.value.clone()))
+        Value::decode(self.data_type, &self.value).unwrap_or(Value::Bytes(self.value.to_vec()))
     }
     /// The default value, decoded.
     pub fn default_value(&self) -> Value {
@@ -259,7 +260,7 @@ impl Object {
             && s0.access == Access::Const
             && s0.data_type == DataType::Unsigned8
         {
-            s0.value = alloc::vec![highest];
+            s0.value = ValueBytes::from_slice(&[highest]);
             s0.default = alloc::vec![highest];
         }
         self
@@ -316,6 +317,11 @@ pub trait ObjectHooks {
         let _ = (od, index, sub, data);
         Ok(WriteOutcome::Store)
     }
+    /// After a write that [`ObjectHooks::on_write`] answered with `Store`
+    /// was stored: react to the new value (reconfigure a service).
+    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        let _ = (od, index, sub);
+    }
 }
 
 /// Hooks that do nothing: a dictionary of plain values.
@@ -341,13 +347,69 @@ impl<A: ObjectHooks, B: ObjectHooks> ObjectHooks for (A, B) {
             WriteOutcome::Store => self.1.on_write(od, index, sub, data),
         }
     }
+    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        self.0.after_write(od, index, sub);
+        self.1.after_write(od, index, sub);
+    }
 }
 
 /// A runtime-built object dictionary, objects sorted by index.
 #[derive(Clone, Debug, Default)]
 pub struct ObjectDictionary {
     objects: Vec<Object>,
+    /// `objects[i].index`, packed: the lookup walks 2-byte keys instead of
+    /// 64-byte objects, and does so without data-dependent branches.
+    keys: Vec<u16>,
     generation: u64,
+}
+
+/// Position of `key` in the sorted `keys`, branch-free (a mispredicted
+/// branch per probe costs more than the whole search otherwise).
+#[inline]
+fn search(keys: &[u16], key: u16) -> Result<usize, usize> {
+    let mut base = 0usize;
+    let mut size = keys.len();
+    if size == 0 {
+        return Err(0);
+    }
+    while size > 1 {
+        let half = size / 2;
+        let mid = base + half;
+        // Compiles to a conditional move.
+        base = if keys[mid] <= key { mid } else { base };
+        size -= half;
+    }
+    if keys[base] == key { Ok(base) } else { Err(base + usize::from(keys[base] < key)) }
+}
+
+/// Copy of a small value with constant-size moves (no `memmove` call).
+#[inline]
+fn copy_small(dst: &mut [u8], src: &[u8]) {
+    match (dst.len(), src.len()) {
+        (1, 1) => dst[0] = src[0],
+        (2, 2) => dst.copy_from_slice(&src[..2]),
+        (4, 4) => dst.copy_from_slice(&src[..4]),
+        (8, 8) => dst.copy_from_slice(&src[..8]),
+        _ => {
+            let n = dst.len().min(src.len());
+            dst[..n].copy_from_slice(&src[..n]);
+        }
+    }
+}
+
+/// Equality of small values without a `memcmp` call.
+#[inline]
+fn same_bytes(a: &[u8], b: &[u8]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    if a.len() <= 8 {
+        let (mut x, mut y) = ([0u8; 8], [0u8; 8]);
+        x[..a.len()].copy_from_slice(a);
+        y[..b.len()].copy_from_slice(b);
+        return u64::from_le_bytes(x) == u64::from_le_bytes(y);
+    }
+    a == b
 }
 
 /// Two dictionaries are equal when their objects are; the change counter is
@@ -366,17 +428,21 @@ impl ObjectDictionary {
 
     /// Insert or replace an object. Invalidates every [`EntryRef`].
     pub fn insert(&mut self, obj: Object) {
-        match self.objects.binary_search_by_key(&obj.index, |o| o.index) {
+        match search(&self.keys, obj.index) {
             Ok(i) => self.objects[i] = obj,
-            Err(i) => self.objects.insert(i, obj),
+            Err(i) => {
+                self.keys.insert(i, obj.index);
+                self.objects.insert(i, obj);
+            }
         }
         self.generation = self.generation.wrapping_add(1);
     }
 
     /// Remove an object. Invalidates every [`EntryRef`].
     pub fn remove(&mut self, index: u16) -> Option<Object> {
-        let i = self.objects.binary_search_by_key(&index, |o| o.index).ok()?;
+        let i = search(&self.keys, index).ok()?;
         self.generation = self.generation.wrapping_add(1);
+        self.keys.remove(i);
         Some(self.objects.remove(i))
     }
 
@@ -386,11 +452,12 @@ impl ObjectDictionary {
     }
     /// One object.
     pub fn object(&self, index: u16) -> Option<&Object> {
-        self.objects.binary_search_by_key(&index, |o| o.index).ok().map(|i| &self.objects[i])
+        search(&self.keys, index).ok().map(|i| &self.objects[i])
     }
-    /// One object, mutable (for builders; values change through checked paths).
+    /// One object, mutable (for builders; values change through checked
+    /// paths). Changing its `index` is not supported: re-insert instead.
     pub fn object_mut(&mut self, index: u16) -> Option<&mut Object> {
-        self.objects.binary_search_by_key(&index, |o| o.index).ok().map(move |i| &mut self.objects[i])
+        search(&self.keys, index).ok().map(move |i| &mut self.objects[i])
     }
 
     /// Counter bumped by every change of a value or of the structure. Lets a
@@ -403,7 +470,7 @@ impl ObjectDictionary {
     /// Resolve `(index, sub)`: `0602 0000` or `0609 0011` if absent.
     #[inline]
     pub fn find(&self, index: u16, sub: u8) -> Result<EntryRef, SdoAbort> {
-        let obj = self.objects.binary_search_by_key(&index, |o| o.index).map_err(|_| SdoAbort::NO_OBJECT)?;
+        let obj = search(&self.keys, index).map_err(|_| SdoAbort::NO_OBJECT)?;
         let subs = &self.objects[obj].subs;
         // Sub-objects are usually dense from 0: try the direct slot first.
         let pos = match subs.get(sub as usize) {
@@ -448,9 +515,12 @@ impl ObjectDictionary {
     #[inline]
     pub fn set_raw(&mut self, r: EntryRef, data: &[u8]) {
         let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
-        if v.as_slice() != data {
-            v.clear();
-            v.extend_from_slice(data);
+        if !same_bytes(v, data) {
+            if v.len() == data.len() {
+                copy_small(v.as_mut_slice(), data);
+            } else {
+                v.set(data);
+            }
             self.generation = self.generation.wrapping_add(1);
         }
     }
@@ -461,9 +531,8 @@ impl ObjectDictionary {
     pub fn set_le(&mut self, r: EntryRef, data: &[u8]) {
         let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
         debug_assert_eq!(v.len(), data.len());
-        if v.as_slice() != data {
-            let n = v.len().min(data.len());
-            v[..n].copy_from_slice(&data[..n]);
+        if !same_bytes(v, data) {
+            copy_small(v.as_mut_slice(), data);
             self.generation = self.generation.wrapping_add(1);
         }
     }
@@ -553,6 +622,9 @@ impl ObjectDictionary {
                 self.generation = self.generation.wrapping_add(1);
                 return Ok(());
             }
+            self.set_raw(r, data);
+            hooks.after_write(self, index, sub);
+            return Ok(());
         }
         self.set_raw(r, data);
         Ok(())
@@ -574,6 +646,9 @@ impl ObjectDictionary {
                 self.generation = self.generation.wrapping_add(1);
                 return Ok(());
             }
+            self.set_raw(r, data);
+            hooks.after_write(self, index, sub);
+            return Ok(());
         }
         self.set_raw(r, data);
         Ok(())
@@ -584,8 +659,8 @@ impl ObjectDictionary {
     pub fn restore_defaults(&mut self, mut pred: impl FnMut(u16, &SubObject) -> bool) {
         for o in &mut self.objects {
             for s in &mut o.subs {
-                if pred(o.index, s) && s.value != s.default {
-                    s.value.clone_from(&s.default);
+                if pred(o.index, s) && *s.value != *s.default {
+                    s.value.set(&s.default);
                 }
             }
         }
@@ -596,10 +671,7 @@ impl ObjectDictionary {
     /// value differs from the default or is writable: what 1010h stores.
     pub fn persistent_values(&self, group: PersistGroup) -> impl Iterator<Item = (u16, u8, &[u8])> + '_ {
         self.objects.iter().flat_map(move |o| {
-            o.subs
-                .iter()
-                .filter(move |s| s.persist == group)
-                .map(move |s| (o.index, s.sub, s.value.as_slice()))
+            o.subs.iter().filter(move |s| s.persist == group).map(move |s| (o.index, s.sub, &*s.value))
         })
     }
 }
@@ -631,6 +703,18 @@ mod tests {
                 .with_sub(SubObject::new(4, "Serial", DataType::Unsigned32, Access::Ro, Value::U32(7))),
         );
         od
+    }
+
+    #[test]
+    fn branch_free_search_matches_binary_search() {
+        for n in 0..40u16 {
+            let keys: Vec<u16> = (0..n).map(|i| i * 3 + 1).collect();
+            for k in 0..(n * 3 + 4) {
+                assert_eq!(search(&keys, k), keys.binary_search(&k), "n={n} k={k}");
+            }
+        }
+        assert!(same_bytes(&[1, 2, 3], &[1, 2, 3]) && !same_bytes(&[1, 2, 3], &[1, 2, 4]));
+        assert!(!same_bytes(&[1], &[1, 0]) && same_bytes(&[7; 12], &[7; 12]));
     }
 
     #[test]

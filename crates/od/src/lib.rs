@@ -9,6 +9,7 @@
 extern crate alloc;
 
 mod abort;
+mod bytes;
 mod dict;
 mod types;
 mod value;

@@ -1,0 +1,62 @@
+//! Value storage: up to 8 bytes inline, longer values on the heap.
+
+use alloc::vec::Vec;
+use core::ops::Deref;
+
+/// The bytes of one value. Every numeric CiA 301 type fits in 8 bytes, so
+/// PDO and SDO hot paths read and write values without chasing a heap
+/// pointer; strings and domains spill to a `Vec`.
+#[derive(Clone, PartialEq, Eq)]
+pub(crate) enum ValueBytes {
+    Inline { len: u8, buf: [u8; 8] },
+    Heap(Vec<u8>),
+}
+
+impl ValueBytes {
+    pub(crate) fn from_slice(b: &[u8]) -> Self {
+        if b.len() <= 8 {
+            let mut buf = [0u8; 8];
+            buf[..b.len()].copy_from_slice(b);
+            ValueBytes::Inline { len: b.len() as u8, buf }
+        } else {
+            ValueBytes::Heap(b.to_vec())
+        }
+    }
+
+    /// Replace the content, keeping a heap buffer's capacity.
+    pub(crate) fn set(&mut self, b: &[u8]) {
+        match self {
+            ValueBytes::Heap(v) => {
+                v.clear();
+                v.extend_from_slice(b);
+            }
+            _ => *self = ValueBytes::from_slice(b),
+        }
+    }
+
+    /// Mutable view of the current content (length unchanged).
+    #[inline]
+    pub(crate) fn as_mut_slice(&mut self) -> &mut [u8] {
+        match self {
+            ValueBytes::Inline { len, buf } => &mut buf[..usize::from(*len).min(8)],
+            ValueBytes::Heap(v) => v,
+        }
+    }
+}
+
+impl Deref for ValueBytes {
+    type Target = [u8];
+    #[inline]
+    fn deref(&self) -> &[u8] {
+        match self {
+            ValueBytes::Inline { len, buf } => &buf[..usize::from(*len).min(8)],
+            ValueBytes::Heap(v) => v,
+        }
+    }
+}
+
+impl core::fmt::Debug for ValueBytes {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        core::fmt::Debug::fmt(&**self, f)
+    }
+}
