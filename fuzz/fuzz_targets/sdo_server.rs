@@ -4,14 +4,19 @@
 #![no_main]
 
 use drivebus_can::{CanId, Duration, Frame, Instant};
-use drivebus_od::{Access, DataType, NoHooks, Object, ObjectDictionary, Value};
+use drivebus_od::{Access, DataType, NoHooks, Object, ObjectDictionary, SubObject, Value};
 use drivebus_sdo::server::{SdoServer, ServerConfig};
 use libfuzzer_sys::fuzz_target;
 
 const RX: u16 = 0x605;
 const TX: u16 = 0x585;
-const COMMANDS: [u8; 16] =
-    [0x40, 0x21, 0x20, 0x23, 0x60, 0x70, 0x00, 0x10, 0xA4, 0xA3, 0xA2, 0xA1, 0xC6, 0xC1, 0x80, 0x81];
+/// Objects of the test dictionary.
+const OBJECTS: [(u16, u8); 6] =
+    [(0x1000, 0), (0x1007, 0), (0x2000, 0), (0x2001, 0), (0x2010, 1), (0x2010, 2)];
+const COMMANDS: [u8; 24] = [
+    0x40, 0x21, 0x20, 0x23, 0x60, 0x70, 0x00, 0x10, 0xA4, 0xA3, 0xA2, 0xA1, 0xC6, 0xC1, 0x80, 0x81, 0x01,
+    0x02, 0x03, 0x04, 0x82, 0x83, 0x84, 0xC2,
+];
 
 fn od() -> ObjectDictionary {
     let mut od = ObjectDictionary::new();
@@ -19,6 +24,11 @@ fn od() -> ObjectDictionary {
     od.insert(Object::var(0x1007, "Window", DataType::Unsigned32, Access::Rw, Value::U32(0)));
     od.insert(Object::var(0x2000, "Blob", DataType::Domain, Access::Rw, Value::Bytes(vec![0x5A; 100])));
     od.insert(Object::var(0x2001, "Text", DataType::VisibleString, Access::Rw, Value::Str("hello".into())));
+    od.insert(
+        Object::record(0x2010, "Rec")
+            .with_sub(SubObject::new(1, "a", DataType::Unsigned8, Access::Rw, Value::U8(7)))
+            .with_sub(SubObject::new(2, "b", DataType::Integer64, Access::Rw, Value::I64(-2))),
+    );
     od
 }
 
@@ -32,7 +42,16 @@ fuzz_target!(|input: &[u8]| {
         let mut data = [0u8; 8];
         data.copy_from_slice(&step[4..12]);
         if sel & 0x80 != 0 {
+            // A likely command on an existing object with a small size, so
+            // sequences get deep into every protocol instead of stopping at
+            // "object does not exist".
             data[0] = COMMANDS[usize::from(data[0]) % COMMANDS.len()];
+            if (data[0] & 0xE0 != 0 && data[0] & 0x80 == 0) || matches!(data[0], 0xA4 | 0xC6 | 0xC2) {
+                let (index, sub) = OBJECTS[usize::from(data[1]) % OBJECTS.len()];
+                [data[1], data[2]] = index.to_le_bytes();
+                data[3] = sub;
+                data[5..].fill(0);
+            }
         }
         let id = match sel & 3 {
             0 | 1 => CanId::Standard(RX),
@@ -41,12 +60,16 @@ fuzz_target!(|input: &[u8]| {
         };
         let dlc = usize::from((sel >> 3) & 0x0F).min(8);
         let dlc = if sel & 0x40 != 0 { 8 } else { dlc };
-        let frame = if sel & 0x04 != 0 {
+        let frame = if sel & 0x24 == 0x24 {
             Frame::try_remote(id, dlc as u8).unwrap()
         } else {
             Frame::try_new(id, &data[..dlc]).unwrap()
         };
-        now += Duration::from_millis(u64::from(step[3]) * 8);
+        // Mostly bus-speed gaps; one step in 16 jumps up to 2 s (timeouts).
+        now += match step[3] {
+            t @ 0..=239 => Duration::from_micros(u64::from(t) * 10),
+            t => Duration::from_millis(u64::from(t - 239) * 128),
+        };
         s.handle_frame(&frame, now, &mut od, &mut NoHooks, &mut out);
         if let Some(deadline) = s.poll(now, &mut out) {
             assert!(deadline > now);

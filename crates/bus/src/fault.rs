@@ -1,0 +1,301 @@
+//! Fault injection rules and the deterministic PRNG behind probabilities.
+
+use alloc::boxed::Box;
+use core::fmt;
+use core::ops::{Bound, RangeBounds};
+use core::time::Duration;
+use drivebus_can::Frame;
+
+use crate::node::NodeId;
+
+/// xorshift64* PRNG.
+///
+/// Hand-written rather than a `rand` dependency: the crate is `no_std`, needs
+/// no cryptographic quality, and a simulation must replay bit-for-bit from its
+/// seed whatever version of an external crate is resolved.
+#[derive(Clone, Debug)]
+pub struct XorShift64 {
+    state: u64,
+}
+
+impl XorShift64 {
+    /// A generator from `seed`; seed 0 (a fixed point of xorshift) is remapped.
+    pub const fn new(seed: u64) -> Self {
+        XorShift64 { state: if seed == 0 { 0x9E37_79B9_7F4A_7C15 } else { seed } }
+    }
+    /// Next 64 pseudo-random bits.
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        let mut x = self.state;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.state = x;
+        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in `0..n` (`0` when `n == 0`); the tiny modulo bias is irrelevant here.
+    #[inline]
+    pub fn below(&mut self, n: u64) -> u64 {
+        if n == 0 { 0 } else { self.next_u64() % n }
+    }
+}
+
+/// What a rule does to a matching transmission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaultAction {
+    /// The frame occupies the bus but no receiver gets it (and it is not logged).
+    Drop,
+    /// A bit is flipped on the wire: every receiver detects a CRC error and
+    /// sends an error frame, the transmitter's error counter rises by 8 and it
+    /// retransmits the frame automatically (it competes in arbitration again).
+    Corrupt,
+    /// Receivers get altered data with a valid CRC, as if the corruption
+    /// escaped detection. `xor` is applied to the data bytes; `None` flips one
+    /// pseudo-random data bit. Frames without data are delivered unaltered.
+    CorruptSilently {
+        /// Mask XORed onto the payload, or `None` for one random bit.
+        xor: Option<[u8; 8]>,
+    },
+    /// Delivered (and logged) this long after its end of frame. The bus time
+    /// is spent as usual.
+    Delay(Duration),
+    /// Delivered, then transmitted again (as after an ACK error seen only by
+    /// the transmitter): receivers get it twice. Rules do not apply to that
+    /// second transmission.
+    Duplicate,
+    /// The transmitter goes bus-off: the frame is destroyed by an error frame
+    /// and the node's queue is flushed.
+    BusOff,
+}
+
+/// A frame predicate for [`FaultRule::when`].
+type Predicate = Box<dyn Fn(&Frame) -> bool>;
+
+/// Handle of a rule added with [`Bus::add_fault`](crate::Bus::add_fault).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RuleId(pub(crate) u32);
+
+/// A fault injection rule: which transmissions it matches and what it does.
+///
+/// A rule matches by identifier range, transmitting station and a
+/// predicate (all optional, all must hold), then skips the first `skip`
+/// matches, fires at most `times` times, each time with `probability`.
+/// Rules are tried in the order added; at most one fires per transmission.
+pub struct FaultRule {
+    pub(crate) action: FaultAction,
+    ids: Option<(u32, u32)>,
+    extended: Option<bool>,
+    from: Option<NodeId>,
+    predicate: Option<Predicate>,
+    skip: u32,
+    remaining: Option<u32>,
+    /// Fires when a draw is below this; `None` means always.
+    threshold: Option<u64>,
+    pub(crate) fired: u32,
+}
+
+impl fmt::Debug for FaultRule {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("FaultRule")
+            .field("action", &self.action)
+            .field("ids", &self.ids)
+            .field("from", &self.from)
+            .field("skip", &self.skip)
+            .field("remaining", &self.remaining)
+            .field("fired", &self.fired)
+            .finish_non_exhaustive()
+    }
+}
+
+impl FaultRule {
+    /// A rule with `action` matching every transmission, always, forever.
+    pub fn new(action: FaultAction) -> Self {
+        FaultRule {
+            action,
+            ids: None,
+            extended: None,
+            from: None,
+            predicate: None,
+            skip: 0,
+            remaining: None,
+            threshold: None,
+            fired: 0,
+        }
+    }
+    /// See [`FaultAction::Drop`].
+    pub fn drop_frames() -> Self {
+        Self::new(FaultAction::Drop)
+    }
+    /// See [`FaultAction::Corrupt`].
+    pub fn corrupt() -> Self {
+        Self::new(FaultAction::Corrupt)
+    }
+    /// See [`FaultAction::CorruptSilently`] (one random bit).
+    pub fn corrupt_silently() -> Self {
+        Self::new(FaultAction::CorruptSilently { xor: None })
+    }
+    /// See [`FaultAction::CorruptSilently`] with a fixed mask.
+    pub fn corrupt_with(xor: [u8; 8]) -> Self {
+        Self::new(FaultAction::CorruptSilently { xor: Some(xor) })
+    }
+    /// See [`FaultAction::Delay`].
+    pub fn delay(by: Duration) -> Self {
+        Self::new(FaultAction::Delay(by))
+    }
+    /// See [`FaultAction::Duplicate`].
+    pub fn duplicate() -> Self {
+        Self::new(FaultAction::Duplicate)
+    }
+    /// See [`FaultAction::BusOff`].
+    pub fn bus_off() -> Self {
+        Self::new(FaultAction::BusOff)
+    }
+
+    /// Only identifiers (raw numeric value) in `range`.
+    pub fn ids(mut self, range: impl RangeBounds<u32>) -> Self {
+        let lo = match range.start_bound() {
+            Bound::Included(&v) => v,
+            Bound::Excluded(&v) => v.saturating_add(1),
+            Bound::Unbounded => 0,
+        };
+        let hi = match range.end_bound() {
+            Bound::Included(&v) => v,
+            Bound::Excluded(&v) => v.saturating_sub(1),
+            Bound::Unbounded => u32::MAX,
+        };
+        self.ids = Some((lo, hi));
+        self
+    }
+    /// Only this identifier.
+    pub fn id(self, id: u32) -> Self {
+        self.ids(id..=id)
+    }
+    /// Only extended (`true`) or only standard (`false`) identifiers.
+    pub fn extended(mut self, extended: bool) -> Self {
+        self.extended = Some(extended);
+        self
+    }
+    /// Only frames transmitted by this station.
+    pub fn from(mut self, node: impl Into<NodeId>) -> Self {
+        self.from = Some(node.into());
+        self
+    }
+    /// Only frames for which `pred` holds.
+    pub fn when(mut self, pred: impl Fn(&Frame) -> bool + 'static) -> Self {
+        self.predicate = Some(Box::new(pred));
+        self
+    }
+    /// Let the first `n` matching transmissions through.
+    pub fn skip(mut self, n: u32) -> Self {
+        self.skip = n;
+        self
+    }
+    /// Fire at most `n` times.
+    pub fn times(mut self, n: u32) -> Self {
+        self.remaining = Some(n);
+        self
+    }
+    /// Fire with probability `p` (clamped to 0..=1) on each match, drawn from
+    /// the bus's seeded PRNG.
+    pub fn probability(mut self, p: f64) -> Self {
+        self.threshold = if p >= 1.0 {
+            None
+        } else if p > 0.0 {
+            // 2^64 · p; `as` saturates, NaN maps to 0 (never fires).
+            Some((p * 18_446_744_073_709_551_616.0) as u64)
+        } else {
+            Some(0)
+        };
+        self
+    }
+    /// How many times the rule has fired.
+    pub fn fired(&self) -> u32 {
+        self.fired
+    }
+
+    fn matches(&self, frame: &Frame, from: NodeId) -> bool {
+        if let Some((lo, hi)) = self.ids {
+            let id = frame.id().raw();
+            if id < lo || id > hi {
+                return false;
+            }
+        }
+        if self.extended.is_some_and(|e| e != frame.id().is_extended()) {
+            return false;
+        }
+        if self.from.is_some_and(|n| n != from) {
+            return false;
+        }
+        self.predicate.as_ref().is_none_or(|p| p(frame))
+    }
+
+    /// Decides whether the rule fires for this transmission, updating counters.
+    pub(crate) fn try_fire(&mut self, frame: &Frame, from: NodeId, rng: &mut XorShift64) -> bool {
+        if self.remaining == Some(0) || !self.matches(frame, from) {
+            return false;
+        }
+        if self.skip > 0 {
+            self.skip -= 1;
+            return false;
+        }
+        if let Some(t) = self.threshold
+            && rng.next_u64() >= t
+        {
+            return false;
+        }
+        if let Some(r) = &mut self.remaining {
+            *r -= 1;
+        }
+        self.fired = self.fired.saturating_add(1);
+        true
+    }
+}
+
+/// Applies a silent corruption to `frame`.
+pub(crate) fn corrupt_data(frame: &Frame, xor: Option<[u8; 8]>, rng: &mut XorShift64) -> Frame {
+    let data = frame.data();
+    if data.is_empty() {
+        return *frame;
+    }
+    let mut buf = [0u8; 8];
+    let n = data.len().min(8);
+    buf[..n].copy_from_slice(&data[..n]);
+    match xor {
+        Some(mask) => buf.iter_mut().zip(mask).for_each(|(b, m)| *b ^= m),
+        None => {
+            let bit = rng.below(n as u64 * 8) as usize;
+            buf[bit / 8] ^= 0x80 >> (bit % 8);
+        }
+    }
+    Frame::try_new(frame.id(), &buf[..n]).unwrap_or(*frame)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xorshift_is_deterministic_and_nonzero() {
+        let mut a = XorShift64::new(0);
+        let mut b = XorShift64::new(0);
+        for _ in 0..100 {
+            let x = a.next_u64();
+            assert_eq!(x, b.next_u64());
+        }
+        assert_ne!(XorShift64::new(1).next_u64(), XorShift64::new(2).next_u64());
+    }
+
+    #[test]
+    fn probability_edges() {
+        let mut rng = XorShift64::new(7);
+        let f = Frame::new(0x100, &[]);
+        let mut never = FaultRule::drop_frames().probability(0.0);
+        let mut always = FaultRule::drop_frames().probability(1.0);
+        let mut nan = FaultRule::drop_frames().probability(f64::NAN);
+        for _ in 0..50 {
+            assert!(!never.try_fire(&f, NodeId(0), &mut rng));
+            assert!(!nan.try_fire(&f, NodeId(0), &mut rng));
+            assert!(always.try_fire(&f, NodeId(0), &mut rng));
+        }
+    }
+}
