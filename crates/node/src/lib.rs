@@ -34,7 +34,9 @@ pub use dictionary::build_dictionary;
 pub use hooks::{LOAD_SIGNATURE, SAVE_SIGNATURE};
 pub use node::Node;
 pub use sim::SimNode;
-pub use storage::{FileStorage, MemoryStorage, Slot, Storage, StorageError};
+#[cfg(feature = "std")]
+pub use storage::FileStorage;
+pub use storage::{MemoryStorage, Slot, Storage, StorageError};
 
 /// Re-exports so users of the node need one dependency.
 pub use drivebus_nmt::NmtState;

@@ -1,0 +1,108 @@
+//! Every personality EDS reads cleanly, passes the CiA 306 checker, builds a
+//! dictionary and survives a write → read round trip.
+
+use drivebus_eds::{Severity, check, parse, to_od, write};
+use drivebus_personality::Profile;
+
+#[test]
+fn every_eds_parses_without_errors() {
+    for p in Profile::all() {
+        let parsed = parse(p.eds_text()).unwrap_or_else(|e| panic!("{p}: {e}"));
+        // The only tolerated reader warnings: a mapping or history object whose
+        // sub 0 (entries in use) is below its highest sub-index, which is what
+        // a default PDO mapping or an empty 1003h looks like.
+        for w in &parsed.warnings {
+            assert!(w.message.contains("sub 0 default is below the highest sub-index"), "{p}: {w}");
+        }
+    }
+}
+
+#[test]
+fn checker_finds_no_errors() {
+    for p in Profile::all() {
+        let findings = check(&p.parse_eds().eds);
+        let errors: Vec<_> = findings.iter().filter(|f| f.severity == Severity::Error).collect();
+        assert!(errors.is_empty(), "{p}: {errors:#?}");
+        let warnings: Vec<String> = findings.iter().map(|f| f.message.clone()).collect();
+        let expected: &[&str] = match p {
+            // iPOS is an EtherCAT (CoE) device: no heartbeat or guarding, and
+            // only the two TPDO COB-ID entries the manual mentions (§2.3.7,
+            // §2.3.8); NrOfRXPDO/NrOfTXPDO still count its 4 + 4 PDOs.
+            Profile::Ipos => &[
+                "neither heartbeat (1017h) nor node guarding (100Ch) is described",
+                "NrOfRXPDO=4 but 0 RPDO communication objects",
+                "NrOfTXPDO=4 but 2 TPDO communication objects",
+            ],
+            _ => &[],
+        };
+        assert_eq!(warnings, expected, "{p}");
+    }
+}
+
+#[test]
+fn dictionary_for_lowest_and_highest_node() {
+    for p in Profile::all() {
+        let eds = p.parse_eds().eds;
+        for node in [1u8, 127] {
+            let od = to_od(&eds, node).unwrap_or_else(|e| panic!("{p} node {node}: {e}"));
+            assert_eq!(od.get_u32(0x1000, 0), Some(p.info().device_type), "{p}");
+            if p.info().transport == drivebus_personality::Transport::Can {
+                // Pre-defined connection set (CiA 301 §7.3.5): EMCY 80h + node.
+                assert_eq!(od.get_u32(0x1014, 0).map(|v| v & 0x7FF), Some(0x80 + node as u32), "{p}");
+                assert_eq!(od.get_u32(0x1800, 1).map(|v| v & 0x7FF), Some(0x180 + node as u32), "{p}");
+            }
+        }
+    }
+}
+
+#[test]
+fn write_then_read_is_identical() {
+    for p in Profile::all() {
+        let first = p.parse_eds().eds;
+        let text = write(&first);
+        let second = parse(&text).unwrap_or_else(|e| panic!("{p}: {e}")).eds;
+        let (mut a, mut b) = (first.clone(), second);
+        a.strip_lines();
+        b.strip_lines();
+        assert!(a == b, "{p}: round trip differs");
+        // Writing the re-read file gives the same text again.
+        assert_eq!(write(&b), text, "{p}");
+    }
+}
+
+#[test]
+fn device_info_matches_the_profile() {
+    for p in Profile::all() {
+        let eds = p.parse_eds().eds;
+        let d = &eds.device_info;
+        let info = p.info();
+        assert_eq!(d.vendor_number, info.vendor_id, "{p}");
+        assert_eq!(d.product_number, info.product_code, "{p}");
+        assert_eq!(d.revision_number, info.revision, "{p}");
+        assert_eq!(d.granularity, info.granularity, "{p}");
+        assert!(!d.lss_supported, "{p}: none of the drives supports LSS");
+        assert_eq!((d.nr_of_rx_pdo, d.nr_of_tx_pdo), (4, 4), "{p}");
+        let mut bauds: Vec<u32> = info.baud_rates_kbit.iter().copied().filter(|b| *b != 100).collect();
+        bauds.sort_unstable();
+        assert_eq!(d.baud_rates, bauds, "{p}");
+        assert_eq!(eds.dummy_usage[1..].iter().any(|d| *d), info.dummy_mapping, "{p}");
+    }
+}
+
+#[test]
+fn object_counts() {
+    // Guards against an accidental regeneration dropping objects.
+    let counts: Vec<(Profile, usize)> =
+        Profile::all().iter().map(|p| (*p, p.parse_eds().eds.objects.len())).collect();
+    assert_eq!(
+        counts,
+        vec![
+            (Profile::Kc1, 342),
+            (Profile::Akd, 407),
+            (Profile::Ipos, 190),
+            (Profile::Ssd630, 7604),
+            (Profile::Dds6, 98),
+            (Profile::Generic, 126),
+        ]
+    );
+}

@@ -1,0 +1,120 @@
+"""Per-drive facts and hand decisions for tsv2eds.py. Each override says why
+and cites the manual section it rests on."""
+
+U8, U16, U32, I8, I16, I32, VS, DOM = 0x5, 0x6, 0x7, 0x2, 0x3, 0x4, 0x9, 0xF
+
+PROFILES = {
+    "kc1": {
+        "tsv": "seed000-kc1-objects.tsv",
+        "manual": "Kollmorgen KC1 CAN-BUS Communication, edition J 05/2013, firmware 1.9",
+        "description": "Kollmorgen KC1 servo drive, CANopen DS301/DS402 (drivebus personality)",
+        "vendor": "Kollmorgen", "vendor_number": 0x6A,
+        "product": "KC1", "product_number": 0x4D303036, "revision_number": 0x00140000,
+        "baud": (125, 250, 500, 1000), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (),
+        "overrides": {},
+    },
+    "akd": {
+        "tsv": "seed001-akd-objects.tsv",
+        "manual": "Kollmorgen AKD CAN-BUS Kommunikation, edition R 09/2016, firmware 1.15",
+        "description": "Kollmorgen AKD servo drive, CANopen DS301/DS402 (drivebus personality)",
+        "vendor": "Kollmorgen", "vendor_number": 0x6A,
+        "product": "AKD", "product_number": 0x4D303036, "revision_number": 0x00140000,
+        "baud": (125, 250, 500, 1000), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (),
+        "overrides": {},
+    },
+    "ipos": {
+        "tsv": "seed002-ipos-objects.tsv",
+        "manual": "Technosoft iPOS CoE Programming, P091.064.UM.0524",
+        "description": "Technosoft iPOS intelligent drive, CoE (CiA 301/402 over EtherCAT) (drivebus personality)",
+        "vendor": "Technosoft S.A.", "vendor_number": 0x1A3,
+        "product": "iPOS360x VX-CAT", "product_number": 28002021, "revision_number": 0x30313030,
+        "baud": (), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (1, 2, 3, 4, 5, 6, 7),
+        "overrides": {},
+    },
+    "ssd630": {
+        "tsv": "seed003-ssd630-objects.tsv",
+        "manual": "SSD Drives CANopen-630 product manual, V0904",
+        "description": "SSD Drives 630 series servo drive, CANopen DS301/DS402 (drivebus personality)",
+        "vendor": "SSD Drives GmbH", "vendor_number": None,
+        "product": "631", "product_number": None, "revision_number": None,
+        "baud": (20, 50, 125, 250, 500, 800, 1000), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (),
+        "overrides": {},
+    },
+    "dds6": {
+        "tsv": "seed004-dds6-objects.tsv",
+        "manual": "LAM Technologies DDS6 CANopen DS301/DS402 user manual, HW 1.00 / FW 0.22",
+        "description": "LAM Technologies DDS6 vector-controlled stepper drive, CANopen DS301/DS402 (drivebus personality)",
+        "vendor": "LAM Technologies", "vendor_number": 0x30C,
+        "product": "DDS6244", "product_number": 0x00624400, "revision_number": None,
+        "baud": (10, 20, 50, 125, 250, 500, 1000), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (),
+        "overrides": {},
+    },
+}
+
+
+def ov(**kw):
+    return kw
+
+
+KC1_AKD_COMMON = {
+    (0x1000, 0): ov(default="0x00020192", why="default: the table gives none but the value the drive reads (0x00020192) is written", sec="KC1 7.2.1.1 / AKD 6.2.1.1"),
+    (0x1008, 0): ov(default="M006", why="default: device name is 4 ASCII chars 'Yzzz' (voltage class + current); the manual's own example 'M006' written", sec="KC1 7.2.1.7, 7.2.1.17 / AKD 6.2.1.7, 6.2.1.18"),
+    (0x1018, 2): ov(default="0x4D303036", why="default: product code is 4 ASCII chars, e.g. 'M006'; byte order not stated, 'M' in the most significant byte chosen (reads as 4D 30 30 36)", sec="KC1 7.2.1.17 / AKD 6.2.1.18"),
+    (0x1018, 3): ov(default="0x00140000", why="default: revision high word = CANopen version, the manual's example 0x00140000 (version 0.20) written", sec="KC1 7.2.1.17 / AKD 6.2.1.18"),
+    (0x100E, 0): ov(name="COB-ID node guarding", access="ro", why="object only listed as '(100E)' in the COB-ID table; kept read-only with 700h+node (pre-v4 DS301 object, our NMT service does not use it)", sec="KC1 6.2 / AKD 5.2"),
+    (0x2100, 0): ov(name="Dummy mapping placeholder", type=U32, access="rw", pdo=True, why="referenced only as the 4-byte dummy of the shared-RPDO example (mapping 21000020h); UNSIGNED32 rw RPDO-mappable written", sec="KC1 8.2.2.1 / AKD 7.2.2.1"),
+    (0x35D9, 0): ov(name="MT.CNTL (as referenced by FBUS.PARAM05 bit 6)", type=U32, access="rw", why="referenced only; the appendix lists MT.CNTL elsewhere (35AFh/35B9h); UNSIGNED32 rw written so the reference resolves", sec="KC1 5.4 / AKD 3.4"),
+    (0x6099, 1): ov(why="default 'equivalent of 60 rpm' depends on the unit settings; 0 written, behaviour pending", sec="KC1 7.10.2.3 / AKD 6.10.2.3"),
+}
+
+PROFILES["kc1"]["overrides"] = dict(KC1_AKD_COMMON)
+PROFILES["kc1"]["overrides"].update({
+    (0x60C2, 2): ov(type=I8, default="-3", why="type/default: table gives INTEGER16 default 1 (as printed); the §8.2 example writes FDh (-3) with a 1-byte SDO and CiA 402 defines INTEGER8: INTEGER8, default -3 (1 ms) chosen", sec="7.9.2.3; 8.1.4"),
+    (0x6099, 2): ov(why="default '1/8 of sub 1' is relative; 0 written", sec="7.10.2.3"),
+    (0x35B9, 1): ov(type=I32, why="type not given; INTEGER32 as the AKD appendix lists MT.CNTL (35B9h)", sec="7.11.2.1"),
+})
+PROFILES["akd"]["overrides"] = dict(KC1_AKD_COMMON)
+PROFILES["akd"]["overrides"].update({
+    (0x6099, 2): ov(why="default '50 % of sub 1' is relative; 0 written", sec="6.10.2.3"),
+    (0x60C1, 0): ov(why="sub 0 = 1 kept (body: linear interpolation only); subs 2 and 3 kept from the appendix as PVT remnants", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
+})
+PROFILES["ipos"]["overrides"] = {
+    (0x1000, 0): ov(default="0x00060192", why="default: table prints '60192' meaning hex; 0x00060192 written", sec="4.8.1"),
+    (0x1018, 0): ov(default="4", why="sub 0: printed default 1 but subs 1..4 are described (range 1..4); 4 written", sec="4.8.6"),
+    (0x1018, 2): ov(default="28002021", why="product code 'product dependent'; the decimal code of the iPOS360x VX-CAT example written", sec="1.5.4.6; 4.8.6"),
+    (0x1009, 0): ov(access="const", why="listed only in Appendix A without attributes; const like 1008h/100Ah", sec="Appendix A"),
+    (0x1802, 1): ov(name="COB-ID used by TPDO3", access="rw", default="$NODEID+0x80000380", why="mentioned only ('disabled by setting bit 31'); CANopen-style COB-ID with bit 31 set written", sec="2.3.7"),
+    (0x1803, 1): ov(name="COB-ID used by TPDO4", access="rw", default="$NODEID+0x80000480", why="mentioned only ('disabled by setting bit 31'); CANopen-style COB-ID with bit 31 set written", sec="2.3.8"),
+}
+PROFILES["ssd630"]["overrides"] = {
+    (0x1008, 0): ov(default="631_402", why="device name of a 631 from the segmented-upload example", sec="14.7"),
+    (0x1010, 1): ov(default="1", why="read value bit 0 = 1 (saves on command)", sec="7; 11"),
+    (0x1011, 1): ov(default="1", why="read value bit 0 = 1 (restores on command); the 'load' signature bytes are misprinted (73h 61h 61h 64h), 0x64616F6C is what the node accepts", sec="7; 11"),
+    (0x60C2, 2): ov(type=I8, why="ip time index: table gives UNSIGNED8; CiA 402 defines INTEGER8 (negative exponents); INTEGER8 chosen", sec="12"),
+    (0x6502, 0): ov(default="0x00000067", why="value not given; derived from the evidenced modes pp, vl (6042h-6048h), pv, hm, ip = bits 0,1,2,5,6", sec="4; 12; 14"),
+}
+for i in range(0x2014, 0x2018):
+    for s in (1, 2):
+        PROFILES["ssd630"]["overrides"][(i, s)] = ov(default="0xFFFFFFFF", why="default 'all bits event-driven' = all mask bits set", sec="4; 11")
+PROFILES["dds6"]["overrides"] = {
+    (0x1016, 0): ov(default="4", why="sub 0 printed 02h but four consumer entries are described; 4 written", sec="6.3.14"),
+    (0x1018, 2): ov(default="0x00624400", why="product code is per model; DDS6244 (digital + analog I/O + encoder, all modes incl. torque) chosen", sec="6.3.16"),
+    (0x2310, 0): ov(type=U8, access="const", why="type/access lost in extraction; UNSIGNED8 const like the other sub 0s", sec="6.4.1"),
+    (0x2310, 1): ov(type=U32, access="rw", why="type lost; LAM motor codes such as 330200101 need UNSIGNED32", sec="6.4.1; 4.1.1.1"),
+    (0x2310, 3): ov(type=U16, access="rw", why="type lost; UNSIGNED16 like the neighbouring motor data", sec="6.4.1; 4.1.1.2"),
+    (0x3210, 1): ov(access="ro", pdo=True, why="access lost; an input image is read-only (TPDO)", sec="6.4.14"),
+    (0x3230, 1): ov(access="rw", pdo=True, why="access lost; output image written by the master", sec="6.4.15"),
+    (0x3230, 2): ov(access="rw", why="access lost; set-output command written by the master", sec="6.4.15"),
+    (0x3260, 1): ov(type=U16, access="rw", why="type/unit lost; UNSIGNED16 rw assumed", sec="6.4.18"),
+    (0x3261, 1): ov(type=U16, access="rw", why="type/unit lost; UNSIGNED16 rw assumed", sec="6.4.19"),
+    (0x3450, 1): ov(type=U16, access="rw", why="type lost; UNSIGNED16 rw (a time-out) assumed", sec="6.4.23"),
+    (0x3470, 1): ov(access="rw", why="access lost; configuration bits, rw", sec="6.4.24"),
+    (0x605E, 0): ov(type=I16, access="rw", default="2", why="only in the IDE screenshot (value 2); CiA 402 type INTEGER16", sec="6.1"),
+}
+for i in (0x1010, 0x1011):
+    for s in (1, 2, 3, 4):
+        PROFILES["dds6"]["overrides"][(i, s)] = ov(default="1", why="no read value given; 1 (= acts on command, CiA 301 §7.5.2.13/14) written", sec="6.3.10; 6.3.11")
+for i in (0x3210, 0x3230, 0x3260, 0x3261, 0x3450, 0x3470):
+    PROFILES["dds6"]["overrides"][(i, 0)] = ov(type=U8, access="const", why="sub 0 type/access lost; UNSIGNED8 const", sec="6.4")
+PROFILES["dds6"]["overrides"][(0x2360, 0)] = ov(default="5", why="sub 0 printed 06h but five sub-indices are described; 5 written", sec="6.4.3")
+PROFILES["dds6"]["overrides"][(0x2810, 0)] = ov(default="13", why="sub 0 printed 08h but sub-indices up to 0Dh are described; 13 written", sec="6.4.8")
