@@ -37,7 +37,9 @@ impl BusNode for Master {
     }
     fn poll(&mut self, now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
         match self.job.take() {
-            Some(Job::Download(d)) => self.client.start_download(0x2000, 0, &d, Protocol::Block, now, out).unwrap(),
+            Some(Job::Download(d)) => {
+                self.client.start_download(0x2000, 0, &d, Protocol::Block, now, out).unwrap()
+            }
             Some(Job::Upload) => self.client.start_upload(0x2000, 0, Protocol::Block, now, out).unwrap(),
             None => {}
         }
@@ -59,7 +61,11 @@ fn run(job: Job) -> (f64, f64, usize) {
     let result = Rc::new(RefCell::new(None));
     let upload = matches!(job, Job::Upload);
     let t0 = bus.now();
-    let master = Master { client: SdoClient::new(SdoClientConfig::for_node(5)), job: Some(job), result: result.clone() };
+    let master = Master {
+        client: SdoClient::new(SdoClientConfig::for_node(5)),
+        job: Some(job),
+        result: result.clone(),
+    };
     bus.attach(master);
     bus.run_for(Duration::from_secs(2));
     let (t_end, completed) = result.borrow_mut().take().expect("finished");
@@ -77,13 +83,19 @@ fn run(job: Job) -> (f64, f64, usize) {
 #[test]
 fn block_download_reaches_the_bus_limit() {
     let (rate, pct, frames) = run(Job::Download((0..LEN).map(|i| (i * 13) as u8).collect()));
-    println!("block download 10 KiB @1 Mbit/s: {frames} frames, {:.1} kB/s, {pct:.1} % of the bus limit", rate / 1e3);
+    println!(
+        "block download 10 KiB @1 Mbit/s: {frames} frames, {:.1} kB/s, {pct:.1} % of the bus limit",
+        rate / 1e3
+    );
     assert!(pct >= 95.0, "{pct:.1} %");
 }
 
 #[test]
 fn block_upload_reaches_the_bus_limit() {
     let (rate, pct, frames) = run(Job::Upload);
-    println!("block upload 10 KiB @1 Mbit/s: {frames} frames, {:.1} kB/s, {pct:.1} % of the bus limit", rate / 1e3);
+    println!(
+        "block upload 10 KiB @1 Mbit/s: {frames} frames, {:.1} kB/s, {pct:.1} % of the bus limit",
+        rate / 1e3
+    );
     assert!(pct >= 95.0, "{pct:.1} %");
 }

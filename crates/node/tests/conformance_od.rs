@@ -18,9 +18,12 @@ fn rig() -> Rig {
         let s = SubObject::new(0, dt.name(), dt, Access::Rw, default);
         node.insert_object(Object::with_code(idx, drivebus_od::ObjectCode::Var, dt.name()).with_sub(s));
     }
-    node.insert_object(Object::var(0x2000, "Limited", DataType::Integer16, Access::Rw, Value::I16(0)).with_sub(
-        SubObject::new(0, "Limited", DataType::Integer16, Access::Rw, Value::I16(0)).limits(Value::I16(-10), Value::I16(10)),
-    ));
+    node.insert_object(
+        Object::var(0x2000, "Limited", DataType::Integer16, Access::Rw, Value::I16(0)).with_sub(
+            SubObject::new(0, "Limited", DataType::Integer16, Access::Rw, Value::I16(0))
+                .limits(Value::I16(-10), Value::I16(10)),
+        ),
+    );
     node.insert_object(Object::var(0x2001, "Write only", DataType::Unsigned8, Access::Wo, Value::U8(0)));
     node.insert_object(Object::var(0x2002, "Constant", DataType::Unsigned8, Access::Const, Value::U8(7)));
     Rig::with_node(node)

@@ -67,8 +67,9 @@ pub(crate) fn check_write(
                 }
             }
             // CiA 301 7.5.2.37: without RTR support, bit 30 = 0 is refused
-            // (on RPDOs bit 30 is reserved and ignored).
-            if kind == PdoKind::Tpdo && !cfg.rtr_supported && new & COB_NO_RTR == 0 {
+            // unless the device is known to ignore it (on RPDOs bit 30 is
+            // reserved and ignored).
+            if kind == PdoKind::Tpdo && !cfg.rtr_supported && !cfg.ignore_rtr_bit && new & COB_NO_RTR == 0 {
                 return Err(SdoAbort::INVALID_VALUE);
             }
             Ok(())

@@ -43,6 +43,11 @@ pub struct PdoConfig {
     pub dummy_types: u32,
     /// Remote frames may trigger TPDOs (types 252/253, and RTR on others).
     pub rtr_supported: bool,
+    /// Without RTR support, accept TPDO COB-IDs with bit 30 clear (and
+    /// still never answer remote frames) instead of refusing them. Real
+    /// drives do this: KC1/AKD masters enable TPDOs as `0000_0183h`
+    /// (seed000 example 6, seed001 §7.2.1.5).
+    pub ignore_rtr_bit: bool,
 }
 
 impl PdoConfig {
@@ -58,6 +63,7 @@ impl PdoConfig {
             max_len: MAX_DATA_LEN,
             dummy_types: DEFAULT_DUMMY_TYPES,
             rtr_supported: true,
+            ignore_rtr_bit: false,
         }
     }
 
@@ -66,6 +72,8 @@ impl PdoConfig {
         let mut c = PdoConfig::new(node_id);
         c.granularity = Granularity::Byte;
         c.max_entries = 8;
+        c.rtr_supported = false;
+        c.ignore_rtr_bit = true;
         c
     }
 

@@ -29,8 +29,9 @@
 //! * Making a PDO valid whose stored mapping no longer resolves → `0609 0030`.
 //!   A valid PDO with sub 0 = 0 is accepted but does not run.
 //! * Without RTR support, a TPDO COB-ID with bit 30 = 0 → `0609 0030`
-//!   (CiA 301 7.5.2.37); on RPDOs bit 30 is ignored. Masters that enable
-//!   TPDOs as `0000_0183h` (seed001 AKD example 6) need `rtr_supported`.
+//!   (CiA 301 7.5.2.37); on RPDOs bit 30 is ignored. Drives that accept
+//!   such writes anyway (KC1/AKD: masters enable TPDOs as `0000_0183h`,
+//!   seed001 AKD example 6) set `ignore_rtr_bit`.
 //! * Dummy entries in a TPDO transmit zeros.
 //! * RTR: 253 samples and sends at once; 252 sends at once the data sampled
 //!   at the last SYNC (before any SYNC: at the next SYNC); 254/255 send at

@@ -155,6 +155,11 @@ fn transmission_type_rules() {
     assert_eq!(sdo32(&mut od, &mut pdo, 0x1800, 1, 0x8000_0181), Err(SdoAbort::INVALID_VALUE));
     sdo32(&mut od, &mut pdo, 0x1800, 1, 0xC000_0181).unwrap();
     sdo32(&mut od, &mut pdo, 0x1400, 1, 0x8000_0201).unwrap(); // RPDO: bit 30 ignored
+    // Drives that ignore the bit (KC1/AKD) accept it and still never answer RTR.
+    let cfg = PdoConfig::kollmorgen(1);
+    let (mut od, mut pdo) = setup(&cfg);
+    sdo32(&mut od, &mut pdo, 0x1800, 1, 0x8000_0181).unwrap();
+    sdo32(&mut od, &mut pdo, 0x1800, 1, 0x181).unwrap();
 }
 
 #[test]
