@@ -34,6 +34,29 @@ impl ValueBytes {
         }
     }
 
+    /// Overwrite an inline value of the same length as one 64-bit word
+    /// compare and store; `Some(changed)`, or `None` if not applicable.
+    #[inline]
+    pub(crate) fn set_inline(&mut self, b: &[u8]) -> Option<bool> {
+        match self {
+            ValueBytes::Inline { len, buf } if usize::from(*len) == b.len() => {
+                let mut new = [0u8; 8];
+                // Constant-length copies: no `memcpy` call on the hot path.
+                match b.len() {
+                    1 => new[0] = b[0],
+                    2 => new[..2].copy_from_slice(&b[..2]),
+                    4 => new[..4].copy_from_slice(&b[..4]),
+                    8 => new.copy_from_slice(&b[..8]),
+                    n => new[..n.min(8)].copy_from_slice(&b[..n.min(8)]),
+                }
+                let changed = *buf != new;
+                *buf = new;
+                Some(changed)
+            }
+            _ => None,
+        }
+    }
+
     /// Mutable view of the current content (length unchanged).
     #[inline]
     pub(crate) fn as_mut_slice(&mut self) -> &mut [u8] {

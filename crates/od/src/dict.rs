@@ -531,7 +531,9 @@ impl ObjectDictionary {
     pub fn set_le(&mut self, r: EntryRef, data: &[u8]) {
         let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
         debug_assert_eq!(v.len(), data.len());
-        if !same_bytes(v, data) {
+        if let Some(changed) = v.set_inline(data) {
+            self.generation = self.generation.wrapping_add(u64::from(changed));
+        } else if !same_bytes(v, data) {
             copy_small(v.as_mut_slice(), data);
             self.generation = self.generation.wrapping_add(1);
         }
