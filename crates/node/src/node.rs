@@ -230,6 +230,15 @@ impl Node {
         self.s.emcy.send_raw(code, register, bytes, now)
     }
 
+    /// Send a TIME stamp if this node is the TIME producer (1012h bit 30)
+    /// and TIME is allowed in the current NMT state. Returns whether it went.
+    pub fn send_time(&mut self, time: drivebus_sync::TimeOfDay, out: &mut impl TxSink) -> bool {
+        match &self.s.time {
+            Some(t) if self.s.nmt.state().allows(Service::Time) => t.transmit(time, out),
+            _ => false,
+        }
+    }
+
     /// Ask for an event-driven / acyclic TPDO (0-based number).
     pub fn request_tpdo(&mut self, n: u16) -> bool {
         self.dirty = true;

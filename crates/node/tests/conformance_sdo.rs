@@ -116,3 +116,18 @@ fn crc16(data: &[u8]) -> u16 {
 fn crc_helper_matches_the_cia_301_vector() {
     assert_eq!(crc16(b"123456789"), 0x31C3);
 }
+
+#[test]
+fn sdo_10_additional_server_channel() {
+    let mut cfg = device();
+    cfg.extra_sdo_servers = 1;
+    let mut r = Rig::new(cfg);
+    // 1201h starts invalid; give it 690h / 6A0h (outside the restricted ranges).
+    Rig::assert_written(r.sdo_write(5, 0x1201, 1, &0x690u32.to_le_bytes()), 5, 0x1201, 1);
+    Rig::assert_written(r.sdo_write(5, 0x1201, 2, &0x6A0u32.to_le_bytes()), 5, 0x1201, 2);
+    r.exchange("690#4000100000000000", &["6A0#4300100092010200"]);
+    // The default channel keeps working alongside.
+    r.exchange("605#4000100000000000", &["585#4300100092010200"]);
+    // Restricted identifiers are refused (CiA 301 §7.3.5): 0x581 is another node's SDO.
+    r.exchange("605#2301120101060000", &["585#8001120130000906"]);
+}
