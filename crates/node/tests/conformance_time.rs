@@ -32,3 +32,36 @@ fn time_02_consumer_accepts_only_six_byte_stamps() {
     r.run_for(Duration::from_millis(10));
     r.exchange("605#4000100000000000", &["585#4300100092010200"]);
 }
+
+#[derive(Default)]
+struct Recorder(Vec<drivebus_node::NodeEvent>);
+impl drivebus_od::ObjectHooks for Recorder {}
+impl drivebus_node::Application for Recorder {
+    fn on_event(
+        &mut self,
+        _: &mut drivebus_od::ObjectDictionary,
+        e: drivebus_node::NodeEvent,
+        _: drivebus_can::Instant,
+    ) {
+        self.0.push(e);
+    }
+}
+
+#[test]
+fn time_03_consumer_delivers_the_stamp_to_the_application() {
+    use drivebus_can::{Frame, Instant};
+    let mut node = drivebus_node::Node::new(device());
+    let mut app = Recorder::default();
+    let mut out = Vec::new();
+    node.boot(Instant::ZERO, &mut app, &mut out);
+    let t = Instant::from_millis(1);
+    node.handle_frame(&Frame::new(0x605, &[0x23, 0x12, 0x10, 0, 0x00, 0x01, 0, 0x80]), t, &mut app, &mut out);
+    node.handle_frame(&Frame::new(0x100, &[0x67, 0x45, 0x23, 0x01, 0x2A, 0x00, 0, 0]), t, &mut app, &mut out);
+    node.handle_frame(&Frame::new(0x100, &[0x67, 0x45, 0x23, 0x01, 0x2A, 0x00]), t, &mut app, &mut out);
+    let stamps: Vec<_> = app
+        .0
+        .iter()
+        .filter_map(|e| if let drivebus_node::NodeEvent::Time(t) = e { Some(*t) } else { None })
+        .collect();
+    assert_eq!(stamps, vec![TimeOfDay { ms: 0x0123_4567, days: 0x2A }]);
+}
