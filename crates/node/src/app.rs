@@ -60,6 +60,14 @@ pub enum NodeEvent {
     Time(TimeOfDay),
     /// LSS configured a new node-ID (active after reset communication).
     LssNodeId(u8),
+    /// LSS "activate bit timing": switch the controller to the CiA 305
+    /// table index after `delay_ms`, then stay silent for `delay_ms`.
+    LssActivateBitTiming {
+        /// Bit timing table index (0 = 1 Mbit/s … 8 = 10 kbit/s).
+        index: u8,
+        /// Switch delay in ms.
+        delay_ms: u16,
+    },
 }
 
 /// Application behaviour on top of the object-dictionary hooks.

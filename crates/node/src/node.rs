@@ -739,6 +739,10 @@ impl Node {
                 };
                 lss.complete_store(status, out);
             }
+            LssEvent::ActivateBitTiming { delay_ms } => {
+                let index = lss.active_bit_timing();
+                app.on_event(&mut self.od, NodeEvent::LssActivateBitTiming { index, delay_ms }, now);
+            }
             LssEvent::ResetCommunication { .. } => {
                 // An unconfigured node got its node-ID: start up on our own (CiA 305).
                 self.s.nmt.set_node_id(lss.pending_node_id());

@@ -11,11 +11,13 @@ extern crate alloc;
 mod abort;
 mod bytes;
 mod dict;
+mod typed;
 mod types;
 mod value;
 
 pub use abort::SdoAbort;
 pub use dict::{EntryRef, NoHooks, Object, ObjectDictionary, ObjectHooks, SubObject, WriteOutcome};
+pub use typed::{Typed, TypedHooks};
 pub use types::{
     ALL_DATA_TYPES, Access, DataType, NumKind, ObjectCode, PersistGroup, check_len, compare_le, le_i64,
     le_u64,
