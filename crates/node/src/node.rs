@@ -316,7 +316,8 @@ impl Node {
                         self.on_pdo_event(ev, now, app);
                         self.drain_pdo_events(now, app);
                     }
-                    PdoRx::Handled => self.drain_pdo_events(now, app),
+                    // Events beyond the first are only queued when a first was returned.
+                    PdoRx::Handled => {}
                     // Not a PDO after all (e.g. an RTR on an RPDO id): the
                     // other services sharing identifiers get a look.
                     PdoRx::NotPdo => self.dispatch_configurable(frame, now, app, out),

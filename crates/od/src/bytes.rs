@@ -34,27 +34,19 @@ impl ValueBytes {
         }
     }
 
-    /// Overwrite an inline value of the same length as one 64-bit word
+    /// Overwrite an inline value of the same length with one 64-bit
     /// compare and store; `Some(changed)`, or `None` if not applicable.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn set_inline(&mut self, b: &[u8]) -> Option<bool> {
-        match self {
-            ValueBytes::Inline { len, buf } if usize::from(*len) == b.len() => {
-                let mut new = [0u8; 8];
-                // Constant-length copies: no `memcpy` call on the hot path.
-                match b.len() {
-                    1 => new[0] = b[0],
-                    2 => new[..2].copy_from_slice(&b[..2]),
-                    4 => new[..4].copy_from_slice(&b[..4]),
-                    8 => new.copy_from_slice(&b[..8]),
-                    n => new[..n.min(8)].copy_from_slice(&b[..n.min(8)]),
-                }
-                let changed = *buf != new;
-                *buf = new;
-                Some(changed)
-            }
-            _ => None,
+        if let ValueBytes::Inline { len, buf } = self
+            && usize::from(*len) == b.len()
+        {
+            let new = load_le(b)?;
+            let old = u64::from_le_bytes(*buf);
+            *buf = new.to_le_bytes();
+            return Some(old != new);
         }
+        None
     }
 
     /// Mutable view of the current content (length unchanged).
@@ -65,6 +57,19 @@ impl ValueBytes {
             ValueBytes::Heap(v) => v,
         }
     }
+}
+
+/// A 1-, 2-, 4- or 8-byte little-endian value as a word, with fixed-size
+/// loads (no `memcpy`); `None` for other lengths.
+#[inline(always)]
+fn load_le(b: &[u8]) -> Option<u64> {
+    Some(match *b {
+        [a] => u64::from(a),
+        [a, b1] => u64::from(u16::from_le_bytes([a, b1])),
+        [a, b1, c, d] => u64::from(u32::from_le_bytes([a, b1, c, d])),
+        [a, b1, c, d, e, f, g, h] => u64::from_le_bytes([a, b1, c, d, e, f, g, h]),
+        _ => return None,
+    })
 }
 
 impl Deref for ValueBytes {

@@ -527,13 +527,21 @@ impl ObjectDictionary {
 
     /// Overwrite a fixed-size numeric value in place: no allocation, no
     /// change of length. Panics in debug builds if the size differs.
-    #[inline]
+    #[inline(always)]
     pub fn set_le(&mut self, r: EntryRef, data: &[u8]) {
         let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
-        debug_assert_eq!(v.len(), data.len());
-        if let Some(changed) = v.set_inline(data) {
-            self.generation = self.generation.wrapping_add(u64::from(changed));
-        } else if !same_bytes(v, data) {
+        match v.set_inline(data) {
+            Some(changed) => self.generation = self.generation.wrapping_add(u64::from(changed)),
+            None => self.set_le_slow(r, data),
+        }
+    }
+
+    /// `set_le` for values that are not 1/2/4/8 bytes inline.
+    #[cold]
+    #[inline(never)]
+    fn set_le_slow(&mut self, r: EntryRef, data: &[u8]) {
+        let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
+        if !same_bytes(v, data) {
             copy_small(v.as_mut_slice(), data);
             self.generation = self.generation.wrapping_add(1);
         }
