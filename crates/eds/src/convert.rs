@@ -45,12 +45,13 @@ fn var_to_sub(
 
 /// Build a dictionary for node `node_id`: `$NODEID` expressions evaluated,
 /// DCF `ParameterValue`s applied as current values. Type definitions
-/// (DEFTYPE/DEFSTRUCT) are not dictionary entries and are skipped.
+/// (DEFTYPE/DEFSTRUCT, e.g. the dummy-mapping entries 0002h..0007h) are
+/// kept: CiA 301 lets a device expose them.
 pub fn to_od(eds: &Eds, node_id: u8) -> Result<ObjectDictionary, EdsError> {
     let mut od = ObjectDictionary::new();
     let mut errors = Vec::new();
     for o in eds.objects.values() {
-        if matches!(o.object_type, ObjectCode::DefType | ObjectCode::DefStruct | ObjectCode::Null) {
+        if o.object_type == ObjectCode::Null {
             continue;
         }
         let mut obj = Object::with_code(o.index, o.object_type, o.name.clone());
@@ -115,7 +116,9 @@ pub fn from_od(od: &ObjectDictionary, device_info: DeviceInfo, node_id: u8, as_d
             line: 0,
         };
         match o.code {
-            ObjectCode::Var | ObjectCode::Domain if o.subs().len() == 1 && o.subs()[0].sub == 0 => {
+            ObjectCode::Var | ObjectCode::Domain | ObjectCode::DefType
+                if o.subs().len() == 1 && o.subs()[0].sub == 0 =>
+            {
                 e.var = Some(sub_to_var(&o.subs()[0], node_id, as_dcf));
             }
             _ => {

@@ -55,6 +55,9 @@ pub struct NodeConfig {
     pub lss: bool,
     /// 1010h/1011h store and restore.
     pub store_restore: bool,
+    /// 1021h "store EDS" (generated from the running dictionary on read)
+    /// and 1022h storage format (0: ASCII). Needs the `std` feature.
+    pub eds_object: bool,
 }
 
 impl NodeConfig {
@@ -80,6 +83,7 @@ impl NodeConfig {
             time: true,
             lss: true,
             store_restore: true,
+            eds_object: false,
         }
     }
 }

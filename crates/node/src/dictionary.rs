@@ -69,6 +69,23 @@ pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
     if cfg.time {
         TimeService::install(&mut od);
     }
+    #[cfg(feature = "std")]
+    if cfg.eds_object {
+        // CiA 301 §7.5.2.21: the device description, read like any DOMAIN.
+        od.insert(
+            Object::with_code(0x1021, drivebus_od::ObjectCode::Domain, "Store EDS").with_sub(
+                SubObject::new(
+                    0,
+                    "Store EDS",
+                    DataType::Domain,
+                    Access::Ro,
+                    Value::Bytes(alloc::vec::Vec::new()),
+                )
+                .hooked(),
+            ),
+        );
+        od.insert(Object::var(0x1022, "Storage format", DataType::Unsigned8, Access::Ro, Value::U8(0)));
+    }
     let ident = cfg.identity;
     od.insert(
         Object::record(0x1018, "Identity object")

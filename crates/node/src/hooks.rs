@@ -95,7 +95,14 @@ impl<A: Application + ?Sized> ObjectHooks for CommHooks<'_, A> {
         if index == 0x1003 {
             self.s.emcy.check_read(index, sub)?;
         }
-        self.app.on_read(od, index, sub)
+        self.app.on_read(od, index, sub)?;
+        #[cfg(feature = "std")]
+        if index == 0x1021 {
+            let text = crate::eds_object::generate(od, self.s.nmt.node_id(), self.s.pdo.config());
+            let r = od.find(index, sub)?;
+            od.set_raw(r, text.as_bytes());
+        }
+        Ok(())
     }
 
     fn on_write(

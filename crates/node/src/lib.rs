@@ -23,6 +23,8 @@ extern crate alloc;
 mod app;
 mod config;
 mod dictionary;
+#[cfg(feature = "std")]
+mod eds_object;
 mod hooks;
 mod node;
 mod sim;

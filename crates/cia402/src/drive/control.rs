@@ -1,0 +1,683 @@
+//! The control period: device control, the operating modes, stopping
+//! reactions, supervision and the published values.
+
+use super::mode::{ModeCommand, ModeIo, op};
+use super::pp::{PpIn, wrap};
+use super::profile::{Limits, Ramp};
+use super::{Drive, EmcyRequest};
+use crate::model::{Command, EventKind};
+use crate::state_machine::{DriveFunction, Outcome, Reaction, State};
+use core::f64::consts::PI;
+use drivebus_od::ObjectDictionary;
+
+/// A stopping reaction in progress.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Stop {
+    ramp: Ramp,
+}
+
+/// Error codes (CiA 402-2 / IEC 61800-7-201 Annex error code table).
+pub(crate) mod code {
+    /// Following error.
+    pub const FOLLOWING_ERROR: u16 = 0x8611;
+    /// Reference limit (limit switch reached, fault reaction configured).
+    pub const LIMIT_SWITCH: u16 = 0x8612;
+    /// Sync controller error (SYNC lost in a cyclic mode).
+    pub const SYNC_LOST: u16 = 0x8700;
+    /// Heartbeat / life guarding (CiA 301): raised by the node itself.
+    pub const GUARDING: u16 = 0x8130;
+}
+
+const CYCLIC: [i8; 4] = [op::IP, op::CSP, op::CSV, op::CST];
+
+impl Drive {
+    /// A controlword arrived (SDO or RPDO): device control and the
+    /// mode-specific edges, effective at once.
+    pub(crate) fn controlword(&mut self, od: &mut ObjectDictionary, cw: u16) {
+        self.cw = cw;
+        self.pp.controlword(cw);
+        let out = self.sm.controlword(cw);
+        if out.fault_reset {
+            self.fault_reset();
+        }
+        self.after_transition(out);
+        self.publish(od);
+    }
+
+    /// 6060h written: CiA 402-2 §6.3 — a new mode takes effect at once,
+    /// also while the drive function is enabled; 6061h follows.
+    pub(crate) fn request_mode(&mut self, od: &mut ObjectDictionary, m: i8) {
+        if m == self.mode {
+            return;
+        }
+        if self.mode_active {
+            self.exit_mode();
+            self.mode = m;
+            self.enter_mode(false);
+        } else {
+            self.mode = m;
+        }
+        self.publish(od);
+    }
+
+    /// Bookkeeping after any state machine input.
+    pub(crate) fn after_transition(&mut self, out: Outcome) {
+        if out.took(13) {
+            let c = self.sm.fault_code();
+            // 8130h belongs to the node's error control (it raised it).
+            if c != code::GUARDING && c != 0 && !self.raised.contains(&c) {
+                self.raised.push(c);
+                self.emcy.push(EmcyRequest::Raise(c));
+            }
+        }
+        if self.sm.drive_function() != DriveFunction::Enabled {
+            // Target reached / acknowledge belong to the running mode.
+            self.status_bits &= !(1 << 10 | 1 << 12);
+        }
+        self.sync_mode_activity();
+    }
+
+    fn sync_mode_activity(&mut self) {
+        let enabled = self.sm.drive_function() == DriveFunction::Enabled;
+        if enabled && !self.mode_active {
+            self.enter_mode(true);
+        } else if !enabled && self.mode_active {
+            self.exit_mode();
+        }
+    }
+
+    /// Fault reset (rising edge of controlword bit 7, transition 15):
+    /// clears latched faults and their EMCYs; a persisting condition faults
+    /// again at the next period.
+    pub(crate) fn fault_reset(&mut self) {
+        self.model.clear_faults();
+        self.sup.fe_timer = 0.0;
+        self.sup.fe_active = false;
+        self.sup.force_following_error = false;
+        self.sup.pending_fault = None;
+        self.sup.sync_lost = false;
+        for c in self.raised.drain(..) {
+            self.emcy.push(EmcyRequest::Clear(c));
+        }
+    }
+
+    fn actual_pos_f(&self) -> f64 {
+        self.units.inc_to_pos_f(self.position_increments() as f64)
+    }
+
+    fn actual_vel_frame(&self) -> f64 {
+        self.units.inc_to_pos_f(self.units.rad_to_inc(self.model.velocity_measured()))
+    }
+
+    fn torque_per_mille(&self, nm: f64) -> f64 {
+        nm / (f64::from(self.extra.rated_torque) / 1000.0) * 1000.0
+    }
+
+    fn enter_mode(&mut self, from_disabled: bool) {
+        if from_disabled {
+            self.dem.pos = self.actual_pos_f();
+            self.dem.vel = 0.0;
+            self.dem.acc = 0.0;
+        }
+        self.stop = None;
+        self.pp.reset(self.dem.pos);
+        self.vel_ramp = Ramp { value: self.dem.vel, rate: 0.0 };
+        self.torque_ramp = Ramp { value: self.torque_per_mille(self.model.torque()), rate: 0.0 };
+        self.window_timer = 0.0;
+        self.threshold_timer = 0.0;
+        self.mode_active = true;
+        let mode = self.mode;
+        let bit = op::supported_bit(mode);
+        let (pos, inc) = (self.position(), self.position_increments());
+        let vel = self.actual_vel_frame();
+        let torque = self.torque_per_mille(self.model.torque());
+        if let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) {
+            let io = ModeIo {
+                controlword: self.cw,
+                position: pos,
+                position_inc: inc,
+                velocity: vel,
+                torque,
+                demand_position: self.dem.pos,
+                demand_velocity: self.dem.vel,
+                events: &self.events,
+                switches: self.model.switches(),
+                params: &self.params,
+                units: &self.units,
+                dt: self.dt,
+                time: self.steps as f64 * self.dt,
+            };
+            h.enter(mode, &io);
+        }
+    }
+
+    pub(crate) fn exit_mode(&mut self) {
+        self.mode_active = false;
+        let mode = self.mode;
+        let bit = op::supported_bit(mode);
+        if let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) {
+            h.exit(mode);
+        }
+    }
+
+    /// SYNC: let a cyclic handler latch its set-points.
+    pub(crate) fn handler_sync(&mut self, od: &mut ObjectDictionary) {
+        let _ = od;
+        if !self.mode_active {
+            return;
+        }
+        let mode = self.mode;
+        let bit = op::supported_bit(mode);
+        let (pos, inc) = (self.position(), self.position_increments());
+        let vel = self.actual_vel_frame();
+        let torque = self.torque_per_mille(self.model.torque());
+        if let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) {
+            let io = ModeIo {
+                controlword: self.cw,
+                position: pos,
+                position_inc: inc,
+                velocity: vel,
+                torque,
+                demand_position: self.dem.pos,
+                demand_velocity: self.dem.vel,
+                events: &self.events,
+                switches: self.model.switches(),
+                params: &self.params,
+                units: &self.units,
+                dt: self.dt,
+                time: self.steps as f64 * self.dt,
+            };
+            h.on_sync(mode, &io);
+        }
+    }
+
+    /// Position-frame demand → model command.
+    fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
+        let u = &self.units;
+        Command::Position {
+            position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset as f64),
+            velocity: u.pos_to_rad(v),
+            acceleration: u.pos_to_rad(a),
+        }
+    }
+
+    fn velocity_command(&self, v: f64, a: f64) -> Command {
+        Command::Velocity { velocity: self.units.pos_to_rad(v), acceleration: self.units.pos_to_rad(a) }
+    }
+
+    /// Profile limits in position units: 6081h ≤ 607Fh ≤ 6080h, ramps ≤ 60C5h/60C6h.
+    fn pp_limits(&self) -> Limits {
+        let p = &self.params;
+        let u = &self.units;
+        let v = self.extra.profile_velocity.min(p.max_profile_velocity).min(p.max_motor_speed);
+        Limits {
+            velocity: u.vel_to_pos(f64::from(v)),
+            acceleration: u.acc_to_pos(f64::from(p.profile_acceleration.min(p.max_acceleration))),
+            deceleration: u.acc_to_pos(f64::from(p.profile_deceleration.min(p.max_deceleration))),
+        }
+    }
+
+    fn halt_deceleration(&self) -> f64 {
+        let p = &self.params;
+        let dec = match self.sm.options().halt_reaction() {
+            Reaction::SlowDownRamp => p.profile_deceleration,
+            // 605Dh 2–4: the quick-stop ramp (current/voltage limit braking
+            // is approximated by it in the halt function).
+            _ => p.quick_stop_deceleration,
+        };
+        self.units.acc_to_pos(f64::from(dec))
+    }
+
+    /// One control period.
+    pub(crate) fn control_step(&mut self, od: &mut ObjectDictionary) {
+        let _ = od;
+        self.steps = self.steps.wrapping_add(1);
+        self.sync_mode_activity();
+        let f = self.sm.drive_function();
+        let cmd = match f {
+            DriveFunction::Disabled => {
+                self.stop = None;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = self.actual_vel_frame();
+                self.dem.acc = 0.0;
+                self.dem.torque = 0.0;
+                self.status_bits = 0;
+                Command::Off
+            }
+            DriveFunction::Enabled => self.mode_step(),
+            DriveFunction::Stopping(r) => self.stop_step(r),
+            DriveFunction::Holding => {
+                self.dem.vel = 0.0;
+                self.position_command(self.dem.pos, 0.0, 0.0)
+            }
+        };
+        self.model.set_command(cmd);
+        self.model.step(self.dt);
+        self.events.clone_from(self.model.events());
+        for i in 0..self.events.len() {
+            let e = self.events.as_slice()[i];
+            let inc = e.counts.saturating_add(self.inc_offset);
+            self.probe.on_event(&e, self.units.inc_to_pos(inc));
+        }
+        self.supervise();
+        if let DriveFunction::Stopping(_) = self.sm.drive_function() {
+            let still = self.model.velocity().abs() < 0.01 * self.model.params().motor.max_speed;
+            let ramp_done = self.stop.is_none_or(|s| s.ramp.value == 0.0);
+            if still && ramp_done {
+                let out = self.sm.motion_stopped();
+                self.after_transition(out);
+            }
+        }
+    }
+
+    fn mode_step(&mut self) -> Command {
+        let dt = self.dt;
+        self.stop = None;
+        let mode = self.mode;
+        let actual_vel = self.actual_vel_frame();
+        let torque_now = self.torque_per_mille(self.model.torque());
+        match mode {
+            op::PP => {
+                let pin = PpIn {
+                    cw: self.cw,
+                    target_raw: self.params.target_position,
+                    lim: self.pp_limits(),
+                    shape: super::shape_of(self.extra.profile_type),
+                    halt_dec: self.halt_deceleration(),
+                    soft_limits: self.params.software_limits,
+                    range: self.params.position_range,
+                    dt,
+                };
+                let (p, v, a) = self.pp.step(&pin, self.dem.pos, self.dem.vel);
+                (self.dem.pos, self.dem.vel, self.dem.acc) = (p, v, a);
+                self.dem.torque = torque_now;
+                let reached = if self.pp.halted {
+                    v == 0.0
+                } else if self.pp.moving || self.pp.buffered.is_some() {
+                    self.window_timer = 0.0;
+                    false
+                } else {
+                    self.in_window(self.pp.target)
+                };
+                self.status_bits = u16::from(reached) << 10
+                    | u16::from(self.pp.limited) << 11
+                    | u16::from(self.pp.ack) << 12
+                    | u16::from(self.sup.fe_active) << 13;
+                self.position_command(p, v, a)
+            }
+            op::PV => {
+                let u = self.units;
+                let p = &self.params;
+                let vmax = u.vel_to_pos(f64::from(p.max_motor_speed));
+                let mut target = u.velocity_to_frame(f64::from(p.target_velocity)).clamp(-vmax, vmax);
+                let halted = self.cw & 0x100 != 0;
+                let blocked = self.sup.limit_block != 0 && target * f64::from(self.sup.limit_block) > 0.0;
+                if halted || blocked {
+                    target = 0.0;
+                }
+                let (up, down) = if halted || blocked {
+                    let d = if blocked {
+                        u.acc_to_pos(f64::from(p.quick_stop_deceleration))
+                    } else {
+                        self.halt_deceleration()
+                    };
+                    (d, d)
+                } else {
+                    (
+                        u.acc_to_pos(f64::from(p.profile_acceleration)),
+                        u.acc_to_pos(f64::from(p.profile_deceleration)),
+                    )
+                };
+                let v = self.vel_ramp.step(target, up, down, dt);
+                self.dem.vel = v;
+                self.dem.acc = self.vel_ramp.rate;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.torque = torque_now;
+                // Bit 10: |v_actual − v_target| ≤ 606Dh for 606Eh (halt: v = 0).
+                let win = u.vel_to_pos(f64::from(self.extra.velocity_window));
+                if (actual_vel - target).abs() <= win && v == target {
+                    self.window_timer += dt;
+                } else {
+                    self.window_timer = 0.0;
+                }
+                let reached = self.window_timer * 1000.0 >= f64::from(self.extra.velocity_window_time);
+                // Bit 12: speed = 0, |v_actual| ≤ 606Fh for 6070h (CiA 402-2 §6.9).
+                let thr = u.vel_to_pos(f64::from(self.extra.velocity_threshold));
+                if actual_vel.abs() <= thr {
+                    self.threshold_timer += dt;
+                } else {
+                    self.threshold_timer = 0.0;
+                }
+                let zero = self.threshold_timer * 1000.0 >= f64::from(self.extra.velocity_threshold_time);
+                self.status_bits = u16::from(reached) << 10 | u16::from(zero) << 12;
+                self.velocity_command(v, self.dem.acc)
+            }
+            op::TQ => {
+                let p = &self.params;
+                let lim = f64::from(p.max_torque);
+                let target =
+                    if self.cw & 0x100 != 0 { 0.0 } else { f64::from(p.target_torque).clamp(-lim, lim) };
+                let slope = f64::from(self.extra.torque_slope);
+                let t = self.torque_ramp.step(target, slope, slope, dt);
+                self.dem.torque = t;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = actual_vel;
+                self.status_bits = u16::from(t == target) << 10;
+                Command::Torque(t / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0)
+            }
+            op::VL => {
+                let x = &self.extra;
+                let mut target = f64::from(x.vl_target);
+                if target != 0.0 {
+                    // 6046h: the amount is held between min and max.
+                    let a = target.abs().clamp(f64::from(x.vl_min), f64::from(x.vl_max.max(x.vl_min)));
+                    target = a.copysign(target);
+                }
+                if self.cw & 0x100 != 0 {
+                    target = 0.0;
+                }
+                let up = f64::from(x.vl_acc.0) / f64::from(x.vl_acc.1.max(1));
+                let down = f64::from(x.vl_dec.0) / f64::from(x.vl_dec.1.max(1));
+                let rpm = self.vel_ramp.step(target, up, down, dt);
+                let rad = rpm * 2.0 * PI / 60.0;
+                self.dem.vel = self.units.rad_to_pos(rad);
+                self.dem.pos = self.actual_pos_f();
+                self.dem.torque = torque_now;
+                self.status_bits = 0;
+                Command::Velocity { velocity: rad, acceleration: self.vel_ramp.rate * 2.0 * PI / 60.0 }
+            }
+            _ => self.handler_step(),
+        }
+    }
+
+    /// Position window 6067h/6068h around `target` → bit 10.
+    fn in_window(&mut self, target: f64) -> bool {
+        let w = self.params.position_window;
+        if w == u32::MAX {
+            return true;
+        }
+        if (self.actual_pos_f() - target).abs() <= f64::from(w) {
+            self.window_timer += self.dt;
+        } else {
+            self.window_timer = 0.0;
+        }
+        self.window_timer * 1000.0 + 1e-9 >= f64::from(self.params.position_window_time)
+    }
+
+    fn handler_step(&mut self) -> Command {
+        let mode = self.mode;
+        let bit = op::supported_bit(mode);
+        let (pos, inc) = (self.position(), self.position_increments());
+        let vel = self.actual_vel_frame();
+        let torque = self.torque_per_mille(self.model.torque());
+        let dt = self.dt;
+        let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) else {
+            self.status_bits = 0;
+            self.dem.vel = 0.0;
+            return self.position_command(self.dem.pos, 0.0, 0.0);
+        };
+        let io = ModeIo {
+            controlword: self.cw,
+            position: pos,
+            position_inc: inc,
+            velocity: vel,
+            torque,
+            demand_position: self.dem.pos,
+            demand_velocity: self.dem.vel,
+            events: &self.events,
+            switches: self.model.switches(),
+            params: &self.params,
+            units: &self.units,
+            dt,
+            time: self.steps as f64 * dt,
+        };
+        let mut out = h.step(mode, &io, dt);
+        let finite = match out.command {
+            ModeCommand::Position { position, velocity, acceleration } => {
+                position.is_finite() && velocity.is_finite() && acceleration.is_finite()
+            }
+            ModeCommand::Velocity { velocity, acceleration } => {
+                velocity.is_finite() && acceleration.is_finite()
+            }
+            ModeCommand::Torque(t) => t.is_finite(),
+            ModeCommand::Hold => true,
+        };
+        if !finite {
+            // A broken set-point never reaches the motor: hold instead.
+            out.command = ModeCommand::Hold;
+        }
+        if let Some(r) = out.position_reset {
+            // Shift the reference so the actual position reads `r`; the
+            // demand moves with it (no motion).
+            let want = self.units.pos_to_inc(r);
+            let delta_pos = r as f64 - pos as f64;
+            self.inc_offset = self.inc_offset.saturating_add(want.saturating_sub(inc));
+            self.dem.pos += delta_pos;
+        }
+        if let Some(c) = out.fault {
+            self.sup.pending_fault = Some(c);
+        }
+        self.status_bits = out.status & super::ModeOutput::STATUS_MASK;
+        match out.command {
+            ModeCommand::Position { position, velocity, acceleration } => {
+                let fe = self.sup.fe_active && matches!(mode, op::CSP | op::IP | op::HM);
+                self.status_bits |= u16::from(fe) << 13;
+                (self.dem.pos, self.dem.vel, self.dem.acc) = (position, velocity, acceleration);
+                self.dem.torque = torque;
+                self.position_command(position, velocity, acceleration)
+            }
+            ModeCommand::Velocity { velocity, acceleration } => {
+                self.dem.vel = velocity;
+                self.dem.acc = acceleration;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.torque = torque;
+                self.velocity_command(velocity, acceleration)
+            }
+            ModeCommand::Torque(t) => {
+                let lim = f64::from(self.params.max_torque.min(self.extra.max_current));
+                let t = if t.is_finite() { t.clamp(-lim, lim) } else { 0.0 };
+                self.dem.torque = t;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = vel;
+                Command::Torque(t / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0)
+            }
+            ModeCommand::Hold => {
+                self.dem.vel = 0.0;
+                self.dem.acc = 0.0;
+                self.position_command(self.dem.pos, 0.0, 0.0)
+            }
+        }
+    }
+
+    /// Executes a stopping reaction (CiA 402-2 §6.2: 605Ah–605Eh codings).
+    fn stop_step(&mut self, r: Reaction) -> Command {
+        if self.stop.is_none() {
+            // Position-controlled modes ramp from their demand; velocity and
+            // torque modes from the measured speed.
+            let v0 = if matches!(self.mode, op::PP | op::HM | op::IP | op::CSP) {
+                self.dem.vel
+            } else {
+                self.dem.pos = self.actual_pos_f();
+                self.actual_vel_frame()
+            };
+            self.stop = Some(Stop { ramp: Ramp { value: v0, rate: 0.0 } });
+        }
+        self.status_bits &= !(1 << 10 | 1 << 12);
+        let p = &self.params;
+        let dec = match r {
+            Reaction::SlowDownRamp => p.profile_deceleration,
+            Reaction::QuickStopRamp => p.quick_stop_deceleration,
+            Reaction::CurrentLimit => {
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = 0.0;
+                if let Some(s) = &mut self.stop {
+                    s.ramp.value = 0.0;
+                }
+                return Command::Velocity { velocity: 0.0, acceleration: 0.0 };
+            }
+            Reaction::VoltageLimit => {
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = 0.0;
+                if let Some(s) = &mut self.stop {
+                    s.ramp.value = 0.0;
+                }
+                return Command::ShortCircuit;
+            }
+            Reaction::DisableDrive => return Command::Off,
+        };
+        let dec = self.units.acc_to_pos(f64::from(dec));
+        let dt = self.dt;
+        let Some(s) = &mut self.stop else { return Command::Off };
+        let v0 = s.ramp.value;
+        let v = s.ramp.step(0.0, dec, dec, dt);
+        self.dem.pos += (v0 + v) / 2.0 * dt;
+        self.dem.vel = v;
+        self.dem.acc = s.ramp.rate;
+        self.position_command(self.dem.pos, v, self.dem.acc)
+    }
+
+    /// Faults from the model, following error, limit switches, SYNC loss,
+    /// injections (CiA 402-2 §6.2: transition 13, 603Fh, EMCY).
+    fn supervise(&mut self) {
+        let mut fault = self.sup.pending_fault.take();
+        if fault.is_none() {
+            fault = self.model.faults().error_code();
+        }
+        // Following error (6065h/6066h) while position-controlled.
+        let enabled = self.sm.drive_function() == DriveFunction::Enabled;
+        let position_mode = matches!(self.mode, op::PP | op::HM | op::IP | op::CSP);
+        if enabled && position_mode {
+            let fe = self.dem.pos - self.actual_pos_f();
+            let w = self.params.following_error_window;
+            let out = self.sup.force_following_error || (w != u32::MAX && fe.abs() > f64::from(w));
+            if out {
+                self.sup.fe_timer += self.dt;
+                if self.sup.fe_timer * 1000.0 > f64::from(self.params.following_error_timeout) {
+                    self.sup.fe_active = true;
+                    fault = fault.or(Some(code::FOLLOWING_ERROR));
+                }
+            } else {
+                self.sup.fe_timer = 0.0;
+                self.sup.fe_active = false;
+            }
+        }
+        // Interlock input (60FDh bit 3): while active the drive function
+        // is kept off (disable voltage, CiA 402-2 §6.2 transition 9/10/7).
+        if self.cfg.io.interlock
+            && self.interlock
+            && !matches!(self.sm.state(), State::SwitchOnDisabled | State::Fault | State::FaultReactionActive)
+        {
+            let out = self.sm.controlword(self.cw & 0x80);
+            self.after_transition(out);
+        }
+        // Limit switches (60FDh bits 0/1).
+        let sw = self.model.switches();
+        self.sup.limit_block = if sw.negative_limit {
+            -1
+        } else if sw.positive_limit {
+            1
+        } else {
+            0
+        };
+        self.limit_active = self.sup.limit_block != 0;
+        self.warning = self.limit_active || self.sup.sync_lost;
+        for i in 0..self.events.len() {
+            let e = self.events.as_slice()[i];
+            let toward = match e.kind {
+                EventKind::NegativeLimit if e.active => self.dem.vel < 0.0,
+                EventKind::PositiveLimit if e.active => self.dem.vel > 0.0,
+                _ => false,
+            };
+            if toward && enabled {
+                match self.cfg.io.limit_switch {
+                    super::LimitSwitchReaction::Fault => fault = fault.or(Some(code::LIMIT_SWITCH)),
+                    super::LimitSwitchReaction::StopAndWarn => self.limit_stop(),
+                }
+            }
+        }
+        if enabled && self.sup.sync_lost && self.cfg.sync_loss_fault && CYCLIC.contains(&self.mode) {
+            fault = fault.or(Some(code::SYNC_LOST));
+        }
+        if let Some(c) = fault
+            && !matches!(self.sm.state(), State::Fault | State::FaultReactionActive)
+        {
+            let out = self.sm.fault(c);
+            self.after_transition(out);
+        }
+    }
+
+    /// Limit switch reached moving towards it: stop on the quick-stop ramp.
+    fn limit_stop(&mut self) {
+        if self.mode == op::PP {
+            let d = self.units.acc_to_pos(f64::from(self.params.quick_stop_deceleration));
+            let (p, v) = (self.dem.pos, self.dem.vel);
+            let stop_at = p + v * v.abs() / (2.0 * d);
+            let lim = Limits { velocity: v.abs().max(1.0), acceleration: d, deceleration: d };
+            self.pp.target = stop_at;
+            self.pp.buffered = None;
+            self.pp.traj =
+                super::profile::Trajectory::plan(p, v, stop_at, lim, super::profile::Shape::Linear);
+            self.pp.t = 0.0;
+            self.pp.moving = true;
+        }
+    }
+
+    /// Statusword 6041h (CiA 402-2 §6.2.2).
+    pub(crate) fn statusword_value(&self) -> u16 {
+        let mut sw = self.sm.statusword();
+        sw |= u16::from(self.warning) << 7;
+        sw |= u16::from(self.cfg.remote) << 9;
+        if matches!(self.sm.state(), State::OperationEnabled | State::QuickStopActive) {
+            sw |= self.status_bits & 0x3C00;
+        }
+        sw |= u16::from(self.limit_active) << 11;
+        sw
+    }
+
+    /// Pushes the live values into the dictionary.
+    pub(crate) fn publish(&mut self, od: &mut ObjectDictionary) {
+        if self.refs.is_none_or(|r| r.objects != od.objects().len()) {
+            // An object was inserted after install: handles moved.
+            self.refs = super::objects::Refs::resolve(od);
+        }
+        let Some(r) = self.refs else { return };
+        let sw = self.statusword_value();
+        let inc = self.position_increments();
+        let pos = self.units.inc_to_pos(inc);
+        let (lo, hi) = self.params.position_range;
+        let pos_shown = if lo < hi { wrap(pos as f64, lo, hi) as i64 } else { pos };
+        let vel_act = self.units.frame_to_velocity(self.actual_vel_frame());
+        let vel_dem = self.units.frame_to_velocity(self.dem.vel);
+        let rated_i = f64::from(self.extra.rated_current) / 1000.0;
+        let i32s = |x: f64| {
+            if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
+        };
+        let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
+        od.set_le(r.statusword, &sw.to_le_bytes());
+        od.set_le(r.error_code, &self.sm.fault_code().to_le_bytes());
+        od.set_le(r.mode_display, &self.mode.to_le_bytes());
+        od.set_le(r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
+        od.set_le(r.pos_internal, &(inc as i32).to_le_bytes());
+        od.set_le(r.pos_actual, &(pos_shown as i32).to_le_bytes());
+        od.set_le(r.vel_demand, &i32s(vel_dem).to_le_bytes());
+        od.set_le(r.vel_actual, &i32s(vel_act).to_le_bytes());
+        od.set_le(r.torque_demand, &i16s(self.dem.torque).to_le_bytes());
+        od.set_le(r.torque_actual, &i16s(self.torque_per_mille(self.model.torque())).to_le_bytes());
+        od.set_le(r.current_actual, &i16s(self.model.current() / rated_i * 1000.0).to_le_bytes());
+        let mv = (self.model.bus_voltage() * 1000.0).clamp(0.0, f64::from(u32::MAX)) as u32;
+        od.set_le(r.dc_link, &mv.to_le_bytes());
+        od.set_le(r.following_error, &i32s(self.dem.pos - pos as f64).to_le_bytes());
+        let di = self.model.switches().digital_inputs() | u32::from(self.interlock) << 3;
+        od.set_le(r.inputs, &di.to_le_bytes());
+        od.set_le(r.probe_status, &self.probe.status.to_le_bytes());
+        for k in 0..4 {
+            od.set_le(r.probe_pos[k], &self.probe.pos[k].to_le_bytes());
+        }
+        if let (Some(d), Some(a)) = (r.vl_demand, r.vl_actual) {
+            let rpm_act = self.model.velocity_measured() * 60.0 / (2.0 * PI);
+            let rpm_dem = if self.mode == op::VL { self.vel_ramp.value } else { 0.0 };
+            od.set_le(d, &i16s(rpm_dem).to_le_bytes());
+            od.set_le(a, &i16s(rpm_act).to_le_bytes());
+        }
+    }
+}

@@ -1,0 +1,444 @@
+//! The CiA 402 drive: object dictionary binding, device control, profile
+//! modes, units, I/O and faults.
+//!
+//! [`Drive::install`] inserts the CiA 402 objects into a [`Node`]'s
+//! dictionary; the drive is then the node's [`Application`]: it validates
+//! writes through [`ObjectHooks`], steps the [`DriveModel`] at its control
+//! rate in [`Application::poll`] and pushes the live values (statusword,
+//! actual values) with `set_le` through handles resolved once.
+//! [`DriveNode`] puts node and drive on the virtual bus and forwards the
+//! drive's EMCY requests to the node.
+//!
+//! ```
+//! use drivebus_cia402::drive::generic_drive;
+//! use drivebus_bus::{Bus, BusConfig};
+//! use drivebus_can::Duration;
+//!
+//! let mut bus = Bus::new(BusConfig::zero_time());
+//! let id = bus.attach(generic_drive(3));
+//! bus.run_for(Duration::from_millis(1));
+//! let dn = bus.node::<drivebus_cia402::drive::DriveNode>(id).unwrap();
+//! assert_eq!(dn.drive.statusword() & 0x4F, 0x40); // switch on disabled
+//! ```
+
+mod config;
+mod control;
+mod hooks;
+pub mod mode;
+mod node;
+mod objects;
+mod pp;
+pub mod profile;
+mod supervise;
+pub mod units;
+
+pub use config::{DriveConfig, IoConfig, LimitSwitchReaction, ProfileDefaults};
+pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
+pub use node::{DriveNode, default_pdo_mapping, generic_drive, generic_drive_with};
+pub use units::{Carry, FactorGroup, Ratio, Units};
+
+use crate::model::{DriveModel, ParamError, StepEvents};
+use crate::state_machine::StateMachine;
+use alloc::boxed::Box;
+use alloc::vec::Vec;
+use drivebus_can::{Duration, Instant};
+use drivebus_node::{Application, Node, NodeEvent};
+use drivebus_od::ObjectDictionary;
+use objects::Refs;
+use profile::{Ramp, Shape};
+
+/// Fault injections on the drive (test and demo scenarios).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Injection {
+    /// A model-level condition (over-current, temperature, DC link, encoder,
+    /// load torque step, clear).
+    Model(crate::model::Injection),
+    /// A following error: the next control periods see the window exceeded
+    /// (as if the load blocked), raising 8611h after 6066h.
+    FollowingError,
+    /// A fault with an arbitrary error code (603Fh / EMCY).
+    Fault(u16),
+    /// Connection to the master lost: executes 6007h (as on a heartbeat loss).
+    ConnectionLost,
+}
+
+/// An EMCY request for the node (the drive's callbacks only get the
+/// dictionary; [`DriveNode`] drains these into `Node::raise_emcy` /
+/// `Node::clear_emcy` after every call).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EmcyRequest {
+    /// Raise an error code (1001h, 1003h, EMCY frame).
+    Raise(u16),
+    /// The error went away.
+    Clear(u16),
+}
+
+/// Profile and I/O parameters the drive keeps besides [`ModeParams`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Extra {
+    pub profile_velocity: u32,
+    pub end_velocity: u32,
+    pub profile_type: i16,
+    pub torque_slope: u32,
+    pub velocity_window: u16,
+    pub velocity_window_time: u16,
+    pub velocity_threshold: u16,
+    pub velocity_threshold_time: u16,
+    pub max_current: u16,
+    pub rated_current: u32,
+    pub rated_torque: u32,
+    pub probe_function: u16,
+    pub outputs: u32,
+    pub output_mask: u32,
+    pub vl_target: i16,
+    pub vl_min: u32,
+    pub vl_max: u32,
+    pub vl_acc: (u32, u16),
+    pub vl_dec: (u32, u16),
+}
+
+/// The set-point state shared by the modes (position units).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Demand {
+    pub pos: f64,
+    pub vel: f64,
+    pub acc: f64,
+    /// Torque demand \[per mille of rated torque\].
+    pub torque: f64,
+}
+
+/// A CiA 402 drive: device control, pp/pv/tq/vl, factor group, I/O, touch
+/// probe, faults, and plug-in modes through [`ModeHandler`].
+pub struct Drive {
+    cfg: DriveConfig,
+    model: DriveModel,
+    sm: StateMachine,
+    units: Units,
+    factor: FactorGroup,
+    params: ModeParams,
+    extra: Extra,
+    refs: Option<Refs>,
+    handlers: Vec<Box<dyn ModeHandler + Send>>,
+    modes: u32,
+    // time
+    dt: f64,
+    period: Duration,
+    next: Option<Instant>,
+    steps: u64,
+    // control
+    cw: u16,
+    mode: i8,
+    mode_active: bool,
+    dem: Demand,
+    inc_offset: i64,
+    pp: pp::Pp,
+    vel_ramp: Ramp,
+    torque_ramp: Ramp,
+    stop: Option<control::Stop>,
+    window_timer: f64,
+    threshold_timer: f64,
+    status_bits: u16,
+    warning: bool,
+    limit_active: bool,
+    // supervision
+    sup: supervise::Supervision,
+    emcy: Vec<EmcyRequest>,
+    raised: Vec<u16>,
+    probe: supervise::Probe,
+    events: StepEvents,
+    interlock: bool,
+}
+
+impl Drive {
+    /// Builds the drive, inserts its objects into `node` and resolves the
+    /// handles of its live values. Fails on invalid model parameters (or a
+    /// control rate outside 4–16 kHz).
+    pub fn install(node: &mut Node, cfg: DriveConfig) -> Result<Drive, ParamError> {
+        Drive::install_with(node, cfg, Vec::new())
+    }
+
+    /// [`Drive::install`] with mode handlers for hm, ip, csp, csv, cst;
+    /// their modes are added to 6502h.
+    pub fn install_with(
+        node: &mut Node,
+        mut cfg: DriveConfig,
+        handlers: Vec<Box<dyn ModeHandler + Send>>,
+    ) -> Result<Drive, ParamError> {
+        if !(4000.0..=16000.0).contains(&cfg.control_rate_hz) {
+            return Err(ParamError { field: "control_rate_hz", reason: "outside 4–16 kHz" });
+        }
+        cfg.params.control.control_rate_hz = cfg.control_rate_hz;
+        // 608Fh:1 is the physical encoder (read-only): the model's counts.
+        cfg.factor.encoder = (cfg.params.encoder.counts_per_rev, 1);
+        let model = DriveModel::new(cfg.params)?;
+        let units = Units::new(&cfg.factor).ok_or(ParamError { field: "factor", reason: "zero ratio" })?;
+        let own = cfg.modes
+            & (op::supported_bit(op::PP)
+                | op::supported_bit(op::VL)
+                | op::supported_bit(op::PV)
+                | op::supported_bit(op::TQ));
+        let modes = handlers.iter().fold(own, |m, h| m | h.supported_modes());
+        for o in objects::objects(&cfg, modes) {
+            node.insert_object(o);
+        }
+        let dt = 1.0 / cfg.control_rate_hz;
+        let period = Duration::from_nanos((1e9 / cfg.control_rate_hz) as u64);
+        let mut d = Drive {
+            sm: StateMachine::new(cfg.options),
+            factor: cfg.factor,
+            model,
+            units,
+            params: ModeParams::default(),
+            extra: Extra::default(),
+            refs: None,
+            handlers,
+            modes,
+            dt,
+            period,
+            next: None,
+            steps: 0,
+            cw: 0,
+            mode: 0,
+            mode_active: false,
+            dem: Demand::default(),
+            inc_offset: 0,
+            pp: pp::Pp::default(),
+            vel_ramp: Ramp::default(),
+            torque_ramp: Ramp::default(),
+            stop: None,
+            window_timer: 0.0,
+            threshold_timer: 0.0,
+            status_bits: 0,
+            warning: false,
+            limit_active: false,
+            sup: supervise::Supervision::default(),
+            emcy: Vec::with_capacity(8),
+            raised: Vec::with_capacity(8),
+            probe: supervise::Probe::default(),
+            events: StepEvents::default(),
+            interlock: false,
+            cfg,
+        };
+        d.reload(node.od_mut());
+        d.sm.self_test_passed();
+        d.publish(node.od_mut());
+        Ok(d)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &DriveConfig {
+        &self.cfg
+    }
+    /// The motor and axis model.
+    pub fn model(&self) -> &DriveModel {
+        &self.model
+    }
+    /// The device control state machine.
+    pub fn state_machine(&self) -> &StateMachine {
+        &self.sm
+    }
+    /// The factor group conversions in force.
+    pub fn units(&self) -> &Units {
+        &self.units
+    }
+    /// The mode parameters (as the handlers see them).
+    pub fn mode_params(&self) -> &ModeParams {
+        &self.params
+    }
+    /// 6502h: supported drive modes.
+    pub fn supported_modes(&self) -> u32 {
+        self.modes
+    }
+    /// The active mode (6061h).
+    pub fn mode(&self) -> i8 {
+        self.mode
+    }
+    /// The control period \[s\].
+    pub fn control_period(&self) -> f64 {
+        self.dt
+    }
+    /// Control periods stepped so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    /// The statusword as last published.
+    pub fn statusword(&self) -> u16 {
+        self.statusword_value()
+    }
+    /// Position demand \[position units\] (6062h, unrounded).
+    pub fn demand_position(&self) -> f64 {
+        self.dem.pos
+    }
+    /// Velocity demand \[position units/s\].
+    pub fn demand_velocity(&self) -> f64 {
+        self.dem.vel
+    }
+    /// Torque demand \[per mille\] (6074h, unrounded).
+    pub fn demand_torque(&self) -> f64 {
+        self.dem.torque
+    }
+    /// Position actual internal value \[increments\] (6063h).
+    pub fn position_increments(&self) -> i64 {
+        self.model.position_counts().saturating_add(self.inc_offset)
+    }
+    /// Position actual value \[position units\] (6064h before range wrap).
+    pub fn position(&self) -> i64 {
+        self.units.inc_to_pos(self.position_increments())
+    }
+
+    /// Applies a fault injection; faults show at the next control period.
+    pub fn inject(&mut self, what: Injection) {
+        match what {
+            Injection::Model(i) => self.model.inject(i),
+            Injection::FollowingError => self.sup.force_following_error = true,
+            Injection::Fault(code) => self.sup.pending_fault = Some(code),
+            Injection::ConnectionLost => self.connection_lost(0x8130),
+        }
+    }
+
+    /// Physical digital outputs as set through 60FEh:1 (masked by 60FEh:2).
+    pub fn digital_outputs(&self) -> u32 {
+        self.extra.outputs
+    }
+
+    /// Sets the interlock input (60FDh bit 3). With
+    /// [`IoConfig::interlock`] an active interlock disables the voltage and
+    /// keeps the drive in Switch on disabled.
+    pub fn set_interlock(&mut self, active: bool) {
+        self.interlock = active;
+    }
+
+    /// Takes the queued EMCY requests (for wrappers other than [`DriveNode`]).
+    pub fn take_emcy(&mut self) -> impl Iterator<Item = EmcyRequest> + '_ {
+        self.emcy.drain(..)
+    }
+
+    /// Registers a mode handler after installation (adds its modes to 6502h).
+    pub fn add_handler(&mut self, od: &mut ObjectDictionary, h: Box<dyn ModeHandler + Send>) {
+        self.modes |= h.supported_modes();
+        self.handlers.push(h);
+        if let Ok(r) = od.find(0x6502, 0) {
+            od.set_le(r, &self.modes.to_le_bytes());
+        }
+    }
+
+    /// Steps the drive to `now`: whole control periods on simulated time
+    /// (the first call starts the clock). Returns the next step instant.
+    fn advance(&mut self, od: &mut ObjectDictionary, now: Instant) -> Instant {
+        let mut next = *self.next.get_or_insert(now);
+        // Catch up in fixed steps; bounded so a huge jump cannot stall.
+        let mut budget = 1_000_000u32;
+        while next <= now && budget > 0 {
+            self.control_step(od);
+            next += self.period;
+            budget -= 1;
+        }
+        if next <= now {
+            next = now + self.period;
+        }
+        self.next = Some(next);
+        self.publish(od);
+        next
+    }
+
+    /// Runs `n` control periods at once, without a node clock (numeric tests,
+    /// benchmarks).
+    pub fn step_n(&mut self, od: &mut ObjectDictionary, n: u32) {
+        for _ in 0..n {
+            self.control_step(od);
+        }
+        self.publish(od);
+    }
+
+    fn connection_lost(&mut self, code: u16) {
+        // CiA 402-2 6007h: the reaction applies in Operation enabled.
+        if self.sm.state() == crate::state_machine::State::OperationEnabled {
+            let out = self.sm.connection_lost(code);
+            self.after_transition(out);
+        }
+    }
+}
+
+impl drivebus_od::ObjectHooks for Drive {
+    fn on_read(
+        &mut self,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+    ) -> Result<(), drivebus_od::SdoAbort> {
+        let _ = (od, index, sub);
+        Ok(())
+    }
+
+    fn on_write(
+        &mut self,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<drivebus_od::WriteOutcome, drivebus_od::SdoAbort> {
+        self.write_hook(od, index, sub, data)
+    }
+}
+
+impl Application for Drive {
+    fn on_sync(&mut self, od: &mut ObjectDictionary, counter: Option<u8>, now: Instant) {
+        let _ = (counter, now);
+        self.sup.sync_lost = false;
+        self.handler_sync(od);
+    }
+
+    fn on_event(&mut self, od: &mut ObjectDictionary, event: NodeEvent, now: Instant) {
+        let _ = now;
+        match event {
+            NodeEvent::HeartbeatTimeout { .. } | NodeEvent::LifeGuardingLost => {
+                self.connection_lost(0x8130);
+            }
+            NodeEvent::NmtState { from, to } => {
+                use drivebus_node::NmtState;
+                if from == NmtState::Operational && to != NmtState::Operational {
+                    // CiA 402-2 6007h: NMT stopped / leaving operational
+                    // counts as an abort of the connection.
+                    self.connection_lost(0x8130);
+                }
+                if to == NmtState::PreOperational && from != NmtState::Operational {
+                    // Stored parameters may have been loaded behind the hooks.
+                    self.reload(od);
+                }
+            }
+            NodeEvent::ResetApplication => {
+                // NMT reset node: the application restarts from power-on
+                // (Not ready → Switch on disabled); the node restores the
+                // parameters and the following boot reloads them.
+                self.connection_lost(0x8130);
+                if self.mode_active {
+                    self.exit_mode();
+                }
+                self.fault_reset();
+                self.emcy.clear();
+                self.sm = StateMachine::new(*self.sm.options());
+                self.sm.self_test_passed();
+                self.cw = 0;
+                self.pp = pp::Pp::default();
+                self.pp.reset(self.dem.pos);
+            }
+            NodeEvent::ResetCommunication => {
+                self.connection_lost(0x8130);
+            }
+            NodeEvent::SyncTimeout => {
+                self.sup.sync_lost = true;
+            }
+            _ => {}
+        }
+        self.publish(od);
+    }
+
+    fn poll(&mut self, od: &mut ObjectDictionary, now: Instant) -> Option<Instant> {
+        Some(self.advance(od, now))
+    }
+}
+
+/// 6086h → ramp shape.
+const fn shape_of(profile_type: i16) -> Shape {
+    if profile_type == 1 { Shape::SinSquared } else { Shape::Linear }
+}

@@ -1,0 +1,176 @@
+//! Profile position mode (CiA 402-2 §6.7 / IEC 61800-7-201 "profile
+//! position"): set-point handshake (controlword bit 4 new set-point,
+//! statusword bit 12 set-point acknowledge), single set-point (bit 5 change
+//! immediately) and set of set-points (one buffered), bit 6 relative, bit 9
+//! change on set-point, halt (bit 8, 605Dh), software limits 607Dh, position
+//! range 607Bh, target reached by 6067h/6068h.
+
+use super::profile::{Limits, Ramp, Shape, Trajectory};
+
+/// A buffered set-point.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Pending {
+    pub target: f64,
+    pub change_on_setpoint: bool,
+}
+
+/// Profile position state.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Pp {
+    pub traj: Trajectory,
+    /// Time into `traj` \[s\].
+    pub t: f64,
+    /// The target of the running (or last) move \[position units\].
+    pub target: f64,
+    pub buffered: Option<Pending>,
+    /// Statusword bit 12.
+    pub ack: bool,
+    /// Rising edge of controlword bit 4 not yet processed.
+    pub edge: bool,
+    /// The controlword of that edge (bits 5, 6, 9 qualify the set-point).
+    pub edge_cw: u16,
+    pub bit4: bool,
+    /// The last target was clamped by 607Dh (statusword bit 11).
+    pub limited: bool,
+    pub halted: bool,
+    pub halt_ramp: Ramp,
+    /// A move is in progress (trajectory not finished).
+    pub moving: bool,
+}
+
+/// Inputs of one profile position period.
+pub(crate) struct PpIn {
+    pub cw: u16,
+    pub target_raw: i32,
+    pub lim: Limits,
+    pub shape: Shape,
+    pub halt_dec: f64,
+    pub soft_limits: (i32, i32),
+    pub range: (i32, i32),
+    pub dt: f64,
+}
+
+/// Wraps `x` into the position range `[lo, hi]` (modulo axis, 607Bh).
+pub(crate) fn wrap(x: f64, lo: i32, hi: i32) -> f64 {
+    if lo >= hi {
+        return x;
+    }
+    let (lo, span) = (f64::from(lo), f64::from(hi) - f64::from(lo) + 1.0);
+    let r = libm::fmod(x - lo, span);
+    lo + if r < 0.0 { r + span } else { r }
+}
+
+impl Pp {
+    /// Forgets any move: hold at `pos`.
+    pub fn reset(&mut self, pos: f64) {
+        *self = Pp { target: pos, bit4: self.bit4, ..Pp::default() };
+        self.traj = Trajectory::plan(
+            pos,
+            0.0,
+            pos,
+            Limits { velocity: 1.0, acceleration: 1.0, deceleration: 1.0 },
+            Shape::Linear,
+        );
+    }
+
+    /// Controlword bits 4 edges (called on every controlword write).
+    pub fn controlword(&mut self, cw: u16) {
+        let b4 = cw & 0x10 != 0;
+        if b4 && !self.bit4 {
+            self.edge = true;
+            self.edge_cw = cw;
+        }
+        self.bit4 = b4;
+    }
+
+    fn absolute_target(&self, i: &PpIn, pos: f64) -> (f64, bool) {
+        let raw = f64::from(i.target_raw);
+        // Bit 6: relative to the preceding target (60F2h default).
+        let mut t = if self.edge_cw & 0x40 != 0 { self.target + raw } else { raw };
+        let (lo, hi) = i.range;
+        if lo < hi {
+            // Modulo axis: the nearest equivalent of the wrapped target.
+            let w = wrap(t, lo, hi);
+            let span = f64::from(hi) - f64::from(lo) + 1.0;
+            let here = wrap(pos, lo, hi);
+            let mut d = w - here;
+            if d > span / 2.0 {
+                d -= span;
+            } else if d < -span / 2.0 {
+                d += span;
+            }
+            t = pos + d;
+        }
+        let (smin, smax) = i.soft_limits;
+        if smin != 0 || smax != 0 {
+            let c = t.clamp(f64::from(smin), f64::from(smax.max(smin)));
+            return (c, c != t);
+        }
+        (t, false)
+    }
+
+    fn start(&mut self, target: f64, p: f64, v: f64, i: &PpIn) {
+        self.target = target;
+        self.traj = Trajectory::plan(p, v, target, i.lim, i.shape);
+        self.t = 0.0;
+        self.moving = true;
+    }
+
+    /// One control period: returns the demand `(position, velocity,
+    /// acceleration)` and updates the handshake. `(p, v)` is the present
+    /// demand.
+    pub fn step(&mut self, i: &PpIn, p: f64, v: f64) -> (f64, f64, f64) {
+        let halt = i.cw & 0x100 != 0;
+        if self.edge && !self.ack {
+            self.edge = false;
+            let (t, limited) = self.absolute_target(i, p);
+            self.limited = limited;
+            if self.edge_cw & 0x20 != 0 || !self.moving {
+                // Single set-point / idle: the new target applies at once.
+                self.buffered = None;
+                self.start(t, p, v, i);
+            } else {
+                self.buffered = Some(Pending { target: t, change_on_setpoint: self.edge_cw & 0x200 != 0 });
+            }
+            self.ack = true;
+        } else if self.edge && self.ack {
+            // Buffer full: the set-point is ignored (CiA 402-2 §6.7.x).
+            self.edge = false;
+        }
+        if self.ack && !self.bit4 && self.buffered.is_none() {
+            self.ack = false;
+        }
+        if halt {
+            if !self.halted {
+                self.halted = true;
+                self.halt_ramp = Ramp { value: v, rate: 0.0 };
+            }
+            let nv = self.halt_ramp.step(0.0, i.halt_dec, i.halt_dec, i.dt);
+            return (p + (v + nv) / 2.0 * i.dt, nv, self.halt_ramp.rate);
+        }
+        if self.halted {
+            // Halt released: continue to the target from where we are.
+            self.halted = false;
+            if self.moving {
+                let t = self.target;
+                self.start(t, p, v, i);
+            }
+        }
+        if self.moving {
+            self.t += i.dt;
+            if let Some(b) = self.buffered
+                && (self.t >= self.traj.duration()
+                    || (b.change_on_setpoint && self.traj.decelerating(self.t)))
+            {
+                // Next set-point of the set: bit 9 continues without stopping.
+                self.buffered = None;
+                self.start(b.target, p, v, i);
+                self.t = i.dt;
+            }
+            if self.t >= self.traj.duration() {
+                self.moving = false;
+            }
+        }
+        self.traj.at(self.t)
+    }
+}

@@ -1,0 +1,314 @@
+//! Factor group (CiA 402-2 §6.4 / IEC 61800-7-201 "factor group"): user
+//! position, velocity and acceleration units ↔ encoder increments, in exact
+//! rational arithmetic.
+//!
+//! increments per position unit = (608Fh:1 / 608Fh:2) · (6091h:1 / 6091h:2)
+//! / (6092h:1 / 6092h:2): encoder increments per motor revolution, times
+//! motor revolutions per driving-shaft revolution, divided by feed per
+//! driving-shaft revolution. The product of three `u32` ratios fits `u128`
+//! numerators and denominators, reduced by their gcd; conversions multiply
+//! in `i128`, so no move ever loses an increment ([`Carry`] carries the
+//! remainder of relative conversions).
+
+use core::f64::consts::PI;
+
+/// A reduced positive fraction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Ratio {
+    /// Numerator (> 0).
+    pub num: u128,
+    /// Denominator (> 0).
+    pub den: u128,
+}
+
+const fn gcd(mut a: u128, mut b: u128) -> u128 {
+    while b != 0 {
+        let t = a % b;
+        a = b;
+        b = t;
+    }
+    a
+}
+
+impl Ratio {
+    /// `1/1`.
+    pub const ONE: Ratio = Ratio { num: 1, den: 1 };
+
+    /// `num / den` reduced; `None` if either is zero.
+    pub const fn new(num: u128, den: u128) -> Option<Ratio> {
+        if num == 0 || den == 0 {
+            return None;
+        }
+        let g = gcd(num, den);
+        Some(Ratio { num: num / g, den: den / g })
+    }
+
+    /// Product of two ratios, reduced; `None` on overflow.
+    pub fn times(self, o: Ratio) -> Option<Ratio> {
+        // Cross-reduce first so products of u32 chains never overflow.
+        let g1 = gcd(self.num, o.den);
+        let g2 = gcd(o.num, self.den);
+        let n = (self.num / g1).checked_mul(o.num / g2)?;
+        let d = (self.den / g2).checked_mul(o.den / g1)?;
+        Ratio::new(n, d)
+    }
+
+    /// The reciprocal.
+    pub const fn inv(self) -> Ratio {
+        Ratio { num: self.den, den: self.num }
+    }
+
+    /// As a float.
+    pub fn to_f64(self) -> f64 {
+        self.num as f64 / self.den as f64
+    }
+
+    /// `round(x · num / den)` (half away from zero), saturating to `i64`.
+    pub fn apply_round(self, x: i64) -> i64 {
+        let p = i128::from(x).saturating_mul(self.num as i128);
+        let d = self.den as i128;
+        let q = if p >= 0 { (p + d / 2) / d } else { -((-p + d / 2) / d) };
+        q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+    }
+}
+
+/// The factor group values as written in the object dictionary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct FactorGroup {
+    /// 608Fh:1 encoder increments, 608Fh:2 motor revolutions.
+    pub encoder: (u32, u32),
+    /// 6090h:1 velocity encoder increments per second, :2 motor revolutions per second.
+    pub velocity_encoder: (u32, u32),
+    /// 6091h:1 motor revolutions, :2 driving shaft revolutions.
+    pub gear: (u32, u32),
+    /// 6092h:1 feed, :2 driving shaft revolutions.
+    pub feed: (u32, u32),
+    /// 6096h:1/:2 velocity factor: position units per second per velocity unit.
+    pub velocity_factor: (u32, u32),
+    /// 6097h:1/:2 acceleration factor: position units per second² per acceleration unit.
+    pub acceleration_factor: (u32, u32),
+    /// 607Eh polarity: bit 7 position, bit 6 velocity.
+    pub polarity: u8,
+}
+
+impl FactorGroup {
+    /// Increments = position units, velocity units = position units/s.
+    pub const fn increments(counts_per_rev: u32) -> Self {
+        FactorGroup {
+            encoder: (counts_per_rev, 1),
+            velocity_encoder: (counts_per_rev, 1),
+            gear: (1, 1),
+            feed: (counts_per_rev, 1),
+            velocity_factor: (1, 1),
+            acceleration_factor: (1, 1),
+            polarity: 0,
+        }
+    }
+}
+
+/// Resolved conversions between user units, increments and motor radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Units {
+    /// Increments per position unit.
+    pos: Ratio,
+    /// Position units/s per velocity unit.
+    vel: Ratio,
+    /// Position units/s² per acceleration unit.
+    acc: Ratio,
+    pos_sign: f64,
+    vel_sign: f64,
+    pos_sign_i: i64,
+    inc_per_rad: f64,
+    pos_per_inc: f64,
+    inc_per_pos: f64,
+}
+
+impl Default for Units {
+    /// One position unit = one increment, 2^20 increments per revolution.
+    fn default() -> Self {
+        Units::new(&FactorGroup::increments(1 << 20)).expect("valid default")
+    }
+}
+
+fn ratio(r: (u32, u32)) -> Option<Ratio> {
+    Ratio::new(u128::from(r.0), u128::from(r.1))
+}
+
+impl Units {
+    /// Resolves a factor group; `None` if any numerator or denominator is 0.
+    pub fn new(f: &FactorGroup) -> Option<Units> {
+        let enc = ratio(f.encoder)?;
+        let pos = enc.times(ratio(f.gear)?)?.times(ratio(f.feed)?.inv())?;
+        let vel = ratio(f.velocity_factor)?;
+        let acc = ratio(f.acceleration_factor)?;
+        let inc_per_rad = enc.to_f64() / (2.0 * PI);
+        let pos_sign_i = if f.polarity & 0x80 != 0 { -1 } else { 1 };
+        Some(Units {
+            pos,
+            vel,
+            acc,
+            pos_sign: pos_sign_i as f64,
+            vel_sign: if f.polarity & 0x40 != 0 { -1.0 } else { 1.0 },
+            pos_sign_i,
+            inc_per_rad,
+            pos_per_inc: pos.inv().to_f64(),
+            inc_per_pos: pos.to_f64(),
+        })
+    }
+
+    /// Increments per position unit, exact.
+    pub fn position_ratio(&self) -> Ratio {
+        self.pos
+    }
+
+    /// Position \[units\] → increments, exact (rounded to the nearest increment).
+    pub fn pos_to_inc(&self, p: i64) -> i64 {
+        self.pos.apply_round(p.saturating_mul(self.pos_sign_i))
+    }
+
+    /// Increments → position \[units\], exact (rounded to the nearest unit).
+    pub fn inc_to_pos(&self, inc: i64) -> i64 {
+        self.pos.inv().apply_round(inc).saturating_mul(self.pos_sign_i)
+    }
+
+    /// Position \[units\] → increments as a float (set-points, derivatives).
+    pub fn pos_to_inc_f(&self, p: f64) -> f64 {
+        p * self.inc_per_pos * self.pos_sign
+    }
+
+    /// Increments → position units as a float.
+    pub fn inc_to_pos_f(&self, inc: f64) -> f64 {
+        inc * self.pos_per_inc * self.pos_sign
+    }
+
+    /// Velocity units → position units/s (magnitude, no polarity).
+    pub fn vel_to_pos(&self, v: f64) -> f64 {
+        v * self.vel.to_f64()
+    }
+
+    /// Position units/s → velocity units (magnitude, no polarity).
+    pub fn pos_to_vel(&self, v: f64) -> f64 {
+        v / self.vel.to_f64()
+    }
+
+    /// Acceleration units → position units/s² (magnitude).
+    pub fn acc_to_pos(&self, a: f64) -> f64 {
+        a * self.acc.to_f64()
+    }
+
+    /// A signed velocity-mode value \[velocity units\] → increments/s,
+    /// applying the velocity polarity (607Eh bit 6).
+    pub fn vel_units_to_inc_s(&self, v: f64) -> f64 {
+        v * self.vel.to_f64() * self.inc_per_pos * self.vel_sign
+    }
+
+    /// Increments/s → velocity units, with the velocity polarity.
+    pub fn inc_s_to_vel_units(&self, w: f64) -> f64 {
+        w * self.pos_per_inc / self.vel.to_f64() * self.vel_sign
+    }
+
+    /// A velocity-unit value (60FFh, 606Ch) → position units/s in the
+    /// position frame (velocity factor 6096h, polarities 607Eh bits 6 and 7).
+    pub fn velocity_to_frame(&self, v: f64) -> f64 {
+        v * self.vel.to_f64() * self.vel_sign * self.pos_sign
+    }
+
+    /// Position units/s (position frame) → velocity units (606Bh, 606Ch).
+    pub fn frame_to_velocity(&self, v: f64) -> f64 {
+        v / self.vel.to_f64() * self.vel_sign * self.pos_sign
+    }
+
+    /// Increments → motor angle \[rad\].
+    pub fn inc_to_rad(&self, inc: f64) -> f64 {
+        inc / self.inc_per_rad
+    }
+
+    /// Motor angle \[rad\] → increments.
+    pub fn rad_to_inc(&self, rad: f64) -> f64 {
+        rad * self.inc_per_rad
+    }
+
+    /// Position units → motor angle \[rad\].
+    pub fn pos_to_rad(&self, p: f64) -> f64 {
+        self.inc_to_rad(self.pos_to_inc_f(p))
+    }
+
+    /// Motor angle \[rad\] → position units.
+    pub fn rad_to_pos(&self, rad: f64) -> f64 {
+        self.inc_to_pos_f(self.rad_to_inc(rad))
+    }
+}
+
+/// Converts a stream of relative moves to increments, carrying the
+/// remainder so the sum of the converted moves is always the exact
+/// conversion of the sum (no drift over any number of moves).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Carry {
+    rem: i128,
+}
+
+impl Carry {
+    /// Increments for a relative move of `d` position units under `r`
+    /// (increments per unit): `floor((Σd · num + r₀) / den)` so far.
+    pub fn delta_to_inc(&mut self, r: Ratio, d: i64) -> i64 {
+        let den = r.den as i128;
+        let total = i128::from(d).saturating_mul(r.num as i128).saturating_add(self.rem);
+        let q = total.div_euclid(den);
+        self.rem = total.rem_euclid(den);
+        q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+    }
+
+    /// The remainder carried (in 1/den increments).
+    pub fn remainder(&self) -> i128 {
+        self.rem
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn milli_degree_ratio() {
+        let f = FactorGroup { feed: (360_000, 1), ..FactorGroup::increments(1 << 20) };
+        let u = Units::new(&f).unwrap();
+        // 2^20 / 360000 reduced by 64 → 16384 / 5625.
+        assert_eq!(u.position_ratio(), Ratio { num: 16384, den: 5625 });
+        assert_eq!(u.pos_to_inc(5625), 16384);
+        assert_eq!(u.inc_to_pos(16384), 5625);
+        assert_eq!(u.pos_to_inc(-1), -3); // -2.9127 → -3
+    }
+
+    #[test]
+    fn polarity_negates_positions() {
+        let f = FactorGroup { polarity: 0xC0, ..FactorGroup::increments(1000) };
+        let u = Units::new(&f).unwrap();
+        assert_eq!(u.pos_to_inc(10), -10);
+        assert_eq!(u.inc_to_pos(-10), 10);
+        assert_eq!(u.vel_units_to_inc_s(5.0), -5.0);
+    }
+
+    #[test]
+    fn zero_factor_refused() {
+        let f = FactorGroup { gear: (0, 1), ..FactorGroup::increments(1000) };
+        assert!(Units::new(&f).is_none());
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn carry_never_drifts(moves in proptest::collection::vec(-1_000_000i64..1_000_000, 1..200),
+                              num in 1u32..100_000, den in 1u32..100_000) {
+            let r = Ratio::new(u128::from(num), u128::from(den)).unwrap();
+            let mut c = Carry::default();
+            let mut sum_inc: i128 = 0;
+            let mut sum_units: i128 = 0;
+            for d in &moves {
+                sum_inc += i128::from(c.delta_to_inc(r, *d));
+                sum_units += i128::from(*d);
+            }
+            // Analytic: floor(Σd · num / den).
+            let exact = (sum_units * i128::from(num)).div_euclid(i128::from(den));
+            proptest::prop_assert_eq!(sum_inc, exact);
+        }
+    }
+}

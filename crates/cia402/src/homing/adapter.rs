@@ -1,0 +1,124 @@
+//! [`HomingMode`]: the homing engine as the drive's `ModeHandler` for hm (6).
+
+use alloc::vec::Vec;
+
+use super::{Homing, HomingCommand, HomingConfig, HomingEvent, HomingEvents, HomingInput, HomingRegistry};
+use crate::drive::mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, op};
+
+/// Homing mode (6060h = 6) for the drive: converts the OD parameters
+/// (6098h, 6099h, 609Ah, 607Ch) and the model events to position units and
+/// runs [`Homing`].
+///
+/// Event positions (model radians, raw encoder frame) are placed in the
+/// actual-position frame with the increment offset this handler's own
+/// `position_reset`s have caused, mirroring the drive's arithmetic
+/// (`offset += pos_to_inc(reset) − position_inc`). So this assumes nothing
+/// else shifts 6063h; a drive that does should pass the shift in `ModeIo`.
+#[derive(Debug)]
+pub struct HomingMode {
+    engine: Homing,
+    /// Increments between the raw encoder and 6063h caused by our resets.
+    inc_shift: i64,
+}
+
+impl Default for HomingMode {
+    fn default() -> Self {
+        Self::new(HomingRegistry::standard())
+    }
+}
+
+impl HomingMode {
+    /// hm offering `registry`'s methods.
+    pub fn new(registry: HomingRegistry) -> Self {
+        HomingMode { engine: Homing::new(registry), inc_shift: 0 }
+    }
+
+    /// The engine (state, registry).
+    pub fn engine(&self) -> &Homing {
+        &self.engine
+    }
+
+    /// The engine, e.g. to register manufacturer methods.
+    pub fn engine_mut(&mut self) -> &mut Homing {
+        &mut self.engine
+    }
+
+    /// 60E3h: supported homing methods, sub 1..n.
+    pub fn supported_methods(&self) -> Vec<i8> {
+        self.engine.registry().codes().collect()
+    }
+
+    /// Whether a 6098h write of `method` is acceptable (else abort 0609 0030).
+    pub fn is_supported(&self, method: i8) -> bool {
+        self.engine.registry().is_supported(method)
+    }
+
+    /// The status bits 10/12/13 now (for the statusword outside hm steps).
+    pub fn status(&self) -> u16 {
+        self.engine.status()
+    }
+}
+
+fn config(io: &ModeIo<'_>) -> HomingConfig {
+    let p = io.params;
+    let u = io.units;
+    HomingConfig {
+        method: p.homing_method,
+        switch_speed: u.vel_to_pos(f64::from(p.homing_speed_switch)),
+        zero_speed: u.vel_to_pos(f64::from(p.homing_speed_zero)),
+        acceleration: u.acc_to_pos(f64::from(p.homing_acceleration)),
+        home_offset: f64::from(p.home_offset),
+        units_per_rev: u.rad_to_pos(2.0 * core::f64::consts::PI).abs(),
+    }
+}
+
+impl ModeHandler for HomingMode {
+    fn supported_modes(&self) -> u32 {
+        op::supported_bit(op::HM)
+    }
+
+    fn enter(&mut self, _mode: i8, io: &ModeIo<'_>) {
+        self.engine.enter(io.demand_position, io.controlword);
+    }
+
+    fn step(&mut self, _mode: i8, io: &ModeIo<'_>, dt: f64) -> ModeOutput {
+        let u = io.units;
+        // 607Eh polarity may flip the direction in position units.
+        let flip = u.rad_to_pos(1.0) < 0.0;
+        let mut events = HomingEvents::default();
+        for e in io.events.iter() {
+            let inc = u.rad_to_inc(e.position) + self.inc_shift as f64;
+            events.push(HomingEvent {
+                kind: e.kind,
+                active: e.active,
+                position: u.inc_to_pos_f(inc),
+                positive_direction: e.positive_direction != flip,
+            });
+        }
+        let input = HomingInput {
+            position: io.position as f64,
+            velocity: io.velocity,
+            torque: io.torque,
+            switches: io.switches,
+            events: events.as_slice(),
+        };
+        let out = self.engine.step(io.controlword, &config(io), &input, dt);
+        let command = match out.command {
+            HomingCommand::Position { position, velocity, acceleration } => {
+                ModeCommand::Position { position, velocity, acceleration }
+            }
+            HomingCommand::Torque(t) => ModeCommand::Torque(t),
+        };
+        let position_reset = out.position_reset.map(|r| libm::round(r.clamp(-9.0e15, 9.0e15)) as i64);
+        if let Some(r) = position_reset {
+            // The drive's shift of 6063h, reproduced.
+            let delta = u.pos_to_inc(r).saturating_sub(io.position_inc);
+            self.inc_shift = self.inc_shift.saturating_add(delta);
+        }
+        ModeOutput { command, status: out.status, position_reset, fault: None }
+    }
+
+    fn exit(&mut self, _mode: i8) {
+        self.engine.interrupt();
+    }
+}

@@ -1,0 +1,100 @@
+//! Switch and index-pulse edge detection between two steps. The motion in a
+//! step is taken as the straight segment θ₀ → θ₁, so each switch boundary is
+//! crossed at most once per step and its crossing is located exactly.
+
+use super::physics::frac;
+use super::{DriveModel, Event, EventKind, Switches};
+use core::f64::consts::PI;
+
+impl DriveModel {
+    pub(super) fn event_at(&self, kind: EventKind, active: bool, position: f64, f: f64) -> Event {
+        Event {
+            kind,
+            active,
+            position,
+            counts: if self.encoder_failed { self.counts } else { self.read_counts(position) },
+            positive_direction: self.omega >= 0.0,
+            fraction: f,
+        }
+    }
+
+    pub(super) fn switch_levels(&self, th: f64) -> Switches {
+        Switches {
+            negative_limit: self.d.neg_limit.is_some_and(|b| th <= b),
+            positive_limit: self.d.pos_limit.is_some_and(|b| th >= b),
+            home: self.d.home.is_some_and(|(lo, hi)| lo <= th && th <= hi),
+        }
+    }
+
+    fn edge(&mut self, kind: EventKind, active: bool, th0: f64, th1: f64, at: f64) {
+        let mut e = self.event_at(kind, active, at, frac(th0, th1, at));
+        e.positive_direction = th1 > th0;
+        self.events.push(e);
+    }
+
+    pub(super) fn detect(&mut self, th0: f64) {
+        let th1 = self.theta;
+        if th1 == th0 {
+            return;
+        }
+        let up = th1 > th0;
+        let old = self.switches;
+        let new = self.switch_levels(th1);
+        let neg_changed = old.negative_limit != new.negative_limit;
+        if let Some(b) = self.d.neg_limit.filter(|_| neg_changed) {
+            self.edge(EventKind::NegativeLimit, new.negative_limit, th0, th1, b);
+        }
+        let pos_changed = old.positive_limit != new.positive_limit;
+        if let Some(b) = self.d.pos_limit.filter(|_| pos_changed) {
+            self.edge(EventKind::PositiveLimit, new.positive_limit, th0, th1, b);
+        }
+        if let Some((lo, hi)) = self.d.home {
+            // Each boundary on its own, so passing the whole switch inside
+            // one step still yields both edges.
+            if (th0 < lo) != (th1 < lo) {
+                self.edge(EventKind::Home, up, th0, th1, lo);
+            }
+            if (th0 > hi) != (th1 > hi) {
+                self.edge(EventKind::Home, !up, th0, th1, hi);
+            }
+        }
+        self.switches = new;
+        if !self.encoder_failed {
+            self.index_edges(th0, th1);
+        }
+    }
+
+    /// Index pulses at `φ + 2πk` in the half-open segment (θ₀, θ₁].
+    fn index_edges(&mut self, th0: f64, th1: f64) {
+        let phi = self.p.encoder.index_angle;
+        let rev = 2.0 * PI;
+        let k0 = libm::floor((th0 - phi) / rev);
+        let k1 = libm::floor((th1 - phi) / rev);
+        // Moving up: k0+1 ..= k1. Moving down the pulse at exactly θ₀ was
+        // already reported, so k1+1 ..= k0 minus the one at θ₀ if on it.
+        let (first, last, step) = if th1 > th0 {
+            (k0 + 1.0, k1, 1.0)
+        } else {
+            let on_start = phi + k0 * rev == th0;
+            let hi = if on_start { k0 - 1.0 } else { k0 };
+            let lo = libm::ceil((th1 - phi) / rev);
+            (hi, lo, -1.0)
+        };
+        let count = (last - first) * step + 1.0;
+        if count < 1.0 {
+            return;
+        }
+        let mut k = first;
+        let mut stored = 0u32;
+        while stored < super::MAX_EVENTS as u32 && (k - last) * step <= 0.0 {
+            let x = phi + k * rev;
+            self.edge(EventKind::Index, true, th0, th1, x);
+            stored += 1;
+            k += step;
+        }
+        let rest = count - f64::from(stored);
+        if rest >= 1.0 {
+            self.events.add_index_crossings(rest.min(f64::from(u32::MAX)) as u32);
+        }
+    }
+}
