@@ -5,6 +5,7 @@
 //! a [`TxSink`]. Nothing here reads a clock or touches I/O.
 #![cfg_attr(not(feature = "std"), no_std)]
 
+pub mod cob;
 mod frame;
 mod time;
 

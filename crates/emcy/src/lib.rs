@@ -61,25 +61,9 @@ pub const COB_ID_INVALID: u32 = 1 << 31;
 /// COB-ID bit 29: 29-bit (extended) CAN identifier.
 pub const COB_ID_EXTENDED: u32 = 1 << 29;
 
-/// The CAN identifier a COB-ID entry names (bits 0..28 with the frame bit
-/// 29), or `None` if an 11-bit entry has bits set above bit 10.
-pub(crate) fn can_id_of(cob_id: u32) -> Option<CanId> {
-    if cob_id & COB_ID_EXTENDED != 0 {
-        CanId::extended(cob_id & 0x1FFF_FFFF)
-    } else if cob_id & 0x1FFF_F800 == 0 {
-        CanId::standard((cob_id & 0x7FF) as u16)
-    } else {
-        None
-    }
-}
+pub(crate) use drivebus_can::cob::can_id as can_id_of;
 
-/// CiA 301 §7.3.5 restricted 11-bit CAN-IDs: they belong to NMT, SDO and
-/// NMT error control (or are reserved) and must not be configured for EMCY.
-/// A local copy: the same table is needed by every COB-ID owner and could
-/// move to `drivebus-can` later.
-pub(crate) fn is_restricted(id: u16) -> bool {
-    matches!(id, 0x000..=0x07F | 0x101..=0x180 | 0x581..=0x5FF | 0x601..=0x67F | 0x6E0..=0x6FF | 0x701..=0x7FF)
-}
+pub(crate) use drivebus_can::cob::is_restricted;
 
 /// Common checks for a COB-ID written to an EMCY object (1014h, 1028h):
 /// CiA 301 §7.5.2 (1014h) forbids changing bits 0..29 while the entry is valid

@@ -14,7 +14,7 @@ pub const COB_ID_BITS: u32 = 0x3FFF_FFFF;
 /// True for 11-bit CAN-IDs CiA 301 §7.3.5 (Table 36) reserves for other
 /// services (NMT, SYNC/EMCY/TIME base range, SDO, LSS, heartbeat...).
 pub const fn restricted_id(id: u16) -> bool {
-    matches!(id, 0x000..=0x07F | 0x101..=0x180 | 0x581..=0x5FF | 0x601..=0x67F | 0x6E0..=0x6FF | 0x701..=0x7FF)
+    drivebus_can::cob::is_restricted(id)
 }
 
 /// The CAN identifier a COB-ID entry names, or `None` if it is malformed

@@ -56,24 +56,9 @@ pub const COB_ID_CONSUME: u32 = 1 << 31;
 /// Bits 0..29: the identifier and its frame format.
 const ID_BITS: u32 = 0x3FFF_FFFF;
 
-/// The CAN identifier a COB-ID entry names, or `None` if an 11-bit entry
-/// has bits set between bit 11 and bit 28.
-pub(crate) fn can_id_of(cob_id: u32) -> Option<CanId> {
-    if cob_id & COB_ID_EXTENDED != 0 {
-        CanId::extended(cob_id & 0x1FFF_FFFF)
-    } else if cob_id & 0x1FFF_F800 == 0 {
-        CanId::standard((cob_id & 0x7FF) as u16)
-    } else {
-        None
-    }
-}
+pub(crate) use drivebus_can::cob::can_id as can_id_of;
 
-/// CiA 301 §7.3.5 restricted 11-bit CAN-IDs (NMT, SDO, NMT error control,
-/// reserved). A local copy: every COB-ID owner needs this table; it could
-/// move to `drivebus-can`.
-pub(crate) fn is_restricted(id: u16) -> bool {
-    matches!(id, 0x000..=0x07F | 0x101..=0x180 | 0x581..=0x5FF | 0x601..=0x67F | 0x6E0..=0x6FF | 0x701..=0x7FF)
-}
+pub(crate) use drivebus_can::cob::is_restricted;
 
 /// COB-ID write rules shared by 1005h and 1012h: the identifier must fit its
 /// format and not be restricted, and while the service is active

@@ -87,16 +87,7 @@ pub fn cob_ids_from_od(od: &ObjectDictionary, index: u16) -> Option<(CanId, CanI
 /// 11-bit CAN-IDs CiA 301 §7.3.5 reserves (NMT, SYNC/EMCY, TIME, the default
 /// SDO channels, LSS, NMT error control): no additional channel may use them.
 pub const fn is_restricted_can_id(id: u32) -> bool {
-    matches!(
-        id,
-        0x000..=0x07F
-            | 0x101..=0x180
-            | 0x581..=0x5FF
-            | 0x601..=0x67F
-            | 0x6E0..=0x6FF
-            | 0x701..=0x77F
-            | 0x780..=0x7FF
-    )
+    id <= 0x7FF && drivebus_can::cob::is_restricted(id as u16)
 }
 
 /// The abort for an SDO write to a server parameter record, or `Ok` to let
