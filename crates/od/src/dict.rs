@@ -621,23 +621,10 @@ impl ObjectDictionary {
         r: EntryRef,
         data: &[u8],
     ) -> Result<(), SdoAbort> {
-        let e = self.entry(r);
-        if !e.access.writable() {
+        if !self.entry(r).access.writable() {
             return Err(SdoAbort::WRITE_READ_ONLY);
         }
-        e.validate(data)?;
-        if e.hooked {
-            let (index, sub) = self.index_of(r);
-            if hooks.on_write(self, index, sub, data)? == WriteOutcome::Handled {
-                self.generation = self.generation.wrapping_add(1);
-                return Ok(());
-            }
-            self.set_raw(r, data);
-            hooks.after_write(self, index, sub);
-            return Ok(());
-        }
-        self.set_raw(r, data);
-        Ok(())
+        self.write_local(hooks, r, data)
     }
 
     /// Write by the local device or a PDO (no SDO access check, but type,
@@ -664,8 +651,8 @@ impl ObjectDictionary {
         Ok(())
     }
 
-    /// Reset every sub-object whose persistence group is in `groups` (or all
-    /// writable ones when `groups` is `None`) to its default value.
+    /// Reset every sub-object for which `pred(index, sub_object)` holds to
+    /// its default value.
     pub fn restore_defaults(&mut self, mut pred: impl FnMut(u16, &SubObject) -> bool) {
         for o in &mut self.objects {
             for s in &mut o.subs {
