@@ -1,0 +1,330 @@
+//! The in-process bus hub: one ordering point that every participant
+//! (TCP clients of the socketcand server, the slcan pty, in-process virtual
+//! drives) sends into and receives from.
+//!
+//! Built on [`tokio::sync::broadcast`]: publishing never waits for a
+//! receiver, so one slow participant cannot stall the bus. A receiver that
+//! falls more than [`HubConfig::capacity`] frames behind loses the oldest
+//! ones (in-process handles count an overrun; the socketcand server
+//! disconnects such a TCP client).
+
+use std::collections::HashMap;
+use std::ops::RangeInclusive;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, LazyLock, Mutex, Weak};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+use drivebus_can::Frame;
+use tokio::sync::broadcast;
+
+use crate::handle::{CanBus, hub_handle};
+
+/// Identifies a participant of a [`Hub`]; frames are never delivered back
+/// to the participant that sent them.
+pub type ParticipantId = u64;
+
+/// A frame as it crossed the hub.
+#[derive(Clone, Copy, Debug)]
+pub struct HubFrame {
+    /// Who sent it.
+    pub from: ParticipantId,
+    /// The frame.
+    pub frame: Frame,
+    /// Wall-clock time it was relayed, microseconds since the Unix epoch
+    /// (socketcand puts this in `< frame ID SECS.USECS … >`).
+    pub timestamp_us: u64,
+}
+
+/// What a fault rule does to a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaultVerdict {
+    /// Relay it unchanged.
+    Pass,
+    /// Nobody receives it (it still occupies a paced bus).
+    Drop,
+    /// Receivers get this frame instead.
+    Replace(Frame),
+}
+
+/// A fault injection rule: frames whose identifier is in `ids` are hit,
+/// after skipping `skip` matches, at most `times` times, then every
+/// `every`-th match.
+#[derive(Clone, Debug)]
+pub struct FaultRule {
+    ids: RangeInclusive<u32>,
+    corrupt: Option<[u8; 8]>,
+    skip: u32,
+    every: u32,
+    times: Option<u32>,
+    seen: u32,
+}
+
+impl FaultRule {
+    /// Drops frames with an identifier in `ids`.
+    pub fn drop_ids(ids: RangeInclusive<u32>) -> Self {
+        FaultRule { ids, corrupt: None, skip: 0, every: 1, times: None, seen: 0 }
+    }
+    /// XORs `mask` onto the data of frames with an identifier in `ids`
+    /// (the CRC is assumed to miss it: receivers get altered data).
+    pub fn corrupt_ids(ids: RangeInclusive<u32>, mask: [u8; 8]) -> Self {
+        FaultRule { corrupt: Some(mask), ..FaultRule::drop_ids(ids) }
+    }
+    /// Lets the first `n` matching frames through.
+    pub fn skip(mut self, n: u32) -> Self {
+        self.skip = n;
+        self
+    }
+    /// Hits only every `n`-th match (n ≥ 1).
+    pub fn every(mut self, n: u32) -> Self {
+        self.every = n.max(1);
+        self
+    }
+    /// Hits at most `n` frames, then stays inactive.
+    pub fn times(mut self, n: u32) -> Self {
+        self.times = Some(n);
+        self
+    }
+
+    fn apply(&mut self, frame: &Frame) -> FaultVerdict {
+        if !self.ids.contains(&frame.id().raw()) || self.times == Some(0) {
+            return FaultVerdict::Pass;
+        }
+        self.seen = self.seen.saturating_add(1);
+        if self.seen <= self.skip || !(self.seen - self.skip - 1).is_multiple_of(self.every) {
+            return FaultVerdict::Pass;
+        }
+        if let Some(t) = &mut self.times {
+            *t -= 1;
+        }
+        match self.corrupt {
+            None => FaultVerdict::Drop,
+            Some(mask) if !frame.is_rtr() => {
+                let mut data = [0u8; 8];
+                for (i, b) in frame.data().iter().enumerate() {
+                    data[i] = b ^ mask[i];
+                }
+                match Frame::try_new(frame.id(), &data[..frame.len()]) {
+                    Ok(f) => FaultVerdict::Replace(f),
+                    Err(_) => FaultVerdict::Pass,
+                }
+            }
+            Some(_) => FaultVerdict::Pass,
+        }
+    }
+}
+
+/// A custom fault hook: called for every frame before it is relayed.
+pub type FaultHook = Arc<dyn Fn(&Frame) -> FaultVerdict + Send + Sync>;
+
+/// Hub settings.
+#[derive(Clone)]
+pub struct HubConfig {
+    /// Pace relaying at this CAN bit rate (bit/s): each frame occupies the
+    /// hub for its exact stuffed length plus intermission
+    /// ([`drivebus_bus::timing::frame_bits`]). Senders wait for their slot.
+    /// Timers have about 1 ms resolution, so the rate is exact on average
+    /// and frames go out in bursts of up to 1 ms. `None`: as fast as possible.
+    pub bitrate: Option<u32>,
+    /// Frames a receiver may fall behind before it loses frames.
+    pub capacity: usize,
+    /// Called for every frame after the rules, if set.
+    pub fault_hook: Option<FaultHook>,
+}
+
+impl Default for HubConfig {
+    fn default() -> Self {
+        HubConfig { bitrate: None, capacity: 8192, fault_hook: None }
+    }
+}
+
+impl std::fmt::Debug for HubConfig {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HubConfig")
+            .field("bitrate", &self.bitrate)
+            .field("capacity", &self.capacity)
+            .field("fault_hook", &self.fault_hook.is_some())
+            .finish()
+    }
+}
+
+struct HubInner {
+    tx: broadcast::Sender<HubFrame>,
+    next_id: AtomicU64,
+    bitrate: Option<u32>,
+    hook: Option<FaultHook>,
+    rules: Mutex<Vec<FaultRule>>,
+    /// When the paced bus is free again.
+    busy_until: Mutex<std::time::Instant>,
+    relayed: AtomicU64,
+    dropped: AtomicU64,
+}
+
+/// An in-process CAN bus hub; clones share the same bus.
+#[derive(Clone)]
+pub struct Hub {
+    inner: Arc<HubInner>,
+}
+
+impl Default for Hub {
+    fn default() -> Self {
+        Hub::new(HubConfig::default())
+    }
+}
+
+impl std::fmt::Debug for Hub {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hub").field("relayed", &self.relayed()).finish_non_exhaustive()
+    }
+}
+
+impl Hub {
+    /// A new, empty bus.
+    pub fn new(cfg: HubConfig) -> Hub {
+        let (tx, _) = broadcast::channel(cfg.capacity.max(16));
+        Hub {
+            inner: Arc::new(HubInner {
+                tx,
+                next_id: AtomicU64::new(1),
+                bitrate: cfg.bitrate.filter(|&b| b > 0),
+                hook: cfg.fault_hook,
+                rules: Mutex::new(Vec::new()),
+                busy_until: Mutex::new(std::time::Instant::now()),
+                relayed: AtomicU64::new(0),
+                dropped: AtomicU64::new(0),
+            }),
+        }
+    }
+
+    /// A new participant: a handle that receives every frame the others
+    /// send from now on, and whose frames reach everybody else. This is how
+    /// virtual drives hosted in the process join the bus.
+    pub fn attach(&self) -> CanBus {
+        let (id, rx) = self.join();
+        hub_handle(self.clone(), id, rx)
+    }
+
+    /// A fresh participant id and a subscription (lower-level than
+    /// [`attach`](Hub::attach); the subscriber must skip its own frames).
+    pub fn join(&self) -> (ParticipantId, broadcast::Receiver<HubFrame>) {
+        (self.inner.next_id.fetch_add(1, Ordering::Relaxed), self.inner.tx.subscribe())
+    }
+
+    /// A subscription to every frame relayed from now on.
+    pub fn subscribe(&self) -> broadcast::Receiver<HubFrame> {
+        self.inner.tx.subscribe()
+    }
+
+    /// A fresh participant id.
+    pub fn new_participant(&self) -> ParticipantId {
+        self.inner.next_id.fetch_add(1, Ordering::Relaxed)
+    }
+
+    /// Adds a fault rule; rules are tried in order, the first hit applies.
+    pub fn add_fault(&self, rule: FaultRule) {
+        if let Ok(mut r) = self.inner.rules.lock() {
+            r.push(rule);
+        }
+    }
+
+    /// Removes every fault rule.
+    pub fn clear_faults(&self) {
+        if let Ok(mut r) = self.inner.rules.lock() {
+            r.clear();
+        }
+    }
+
+    /// Frames relayed so far.
+    pub fn relayed(&self) -> u64 {
+        self.inner.relayed.load(Ordering::Relaxed)
+    }
+
+    /// Frames dropped by fault injection so far.
+    pub fn dropped(&self) -> u64 {
+        self.inner.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Relays `frame` from participant `from` to everybody else; on a paced
+    /// hub, first waits for the frame's slot on the bus.
+    pub async fn publish(&self, from: ParticipantId, frame: Frame) {
+        if let Some(bitrate) = self.inner.bitrate {
+            let bits = drivebus_bus::timing::frame_bits(&frame).total();
+            let dur = drivebus_bus::timing::bits_duration(bits, bitrate);
+            let now = std::time::Instant::now();
+            let end = match self.inner.busy_until.lock() {
+                Ok(mut busy) => {
+                    let end = (*busy).max(now) + dur;
+                    *busy = end;
+                    end
+                }
+                Err(_) => now,
+            };
+            // Sleep only when ahead by more than the timer resolution.
+            if end.saturating_duration_since(now) > Duration::from_millis(1) {
+                tokio::time::sleep_until(end.into()).await;
+            }
+        }
+        self.publish_now(from, frame);
+    }
+
+    /// Relays without pacing (fault rules still apply).
+    pub fn publish_now(&self, from: ParticipantId, frame: Frame) {
+        let mut verdict = match self.inner.rules.lock() {
+            Ok(mut rules) => rules
+                .iter_mut()
+                .map(|r| r.apply(&frame))
+                .find(|v| *v != FaultVerdict::Pass)
+                .unwrap_or(FaultVerdict::Pass),
+            Err(_) => FaultVerdict::Pass,
+        };
+        if verdict == FaultVerdict::Pass
+            && let Some(h) = &self.inner.hook
+        {
+            verdict = h(&frame);
+        }
+        let frame = match verdict {
+            FaultVerdict::Pass => frame,
+            FaultVerdict::Replace(f) => f,
+            FaultVerdict::Drop => {
+                self.inner.dropped.fetch_add(1, Ordering::Relaxed);
+                return;
+            }
+        };
+        self.inner.relayed.fetch_add(1, Ordering::Relaxed);
+        let timestamp_us = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_micros() as u64);
+        // Err only when nobody listens, which is fine on a bus.
+        let _ = self.inner.tx.send(HubFrame { from, frame, timestamp_us });
+    }
+}
+
+/// Named in-process buses for `virtual://NAME`. Weak so a bus disappears
+/// with its last handle (tests on separate runtimes do not share state).
+static VIRTUAL: LazyLock<Mutex<HashMap<String, Weak<HubInner>>>> = LazyLock::new(Default::default);
+
+/// The in-process bus called `name`, created on first use.
+pub fn virtual_hub(name: &str) -> Hub {
+    let Ok(mut map) = VIRTUAL.lock() else { return Hub::default() };
+    map.retain(|_, w| w.strong_count() > 0);
+    if let Some(inner) = map.get(name).and_then(Weak::upgrade) {
+        return Hub { inner };
+    }
+    let hub = Hub::default();
+    map.insert(name.to_owned(), Arc::downgrade(&hub.inner));
+    hub
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fault_rule_counts() {
+        let mut r = FaultRule::drop_ids(0x100..=0x1FF).skip(1).every(2).times(2);
+        let f = Frame::new(0x180, &[1]);
+        let got: Vec<_> = (0..8).map(|_| r.apply(&f)).collect();
+        use FaultVerdict::*;
+        assert_eq!(got, [Pass, Drop, Pass, Drop, Pass, Pass, Pass, Pass]);
+        assert_eq!(r.apply(&Frame::new(0x80, &[])), Pass);
+        let mut c = FaultRule::corrupt_ids(0..=0x7FF, [0xFF; 8]);
+        assert_eq!(c.apply(&Frame::new(1, &[0x0F])), Replace(Frame::new(1, &[0xF0])));
+    }
+}
