@@ -88,7 +88,7 @@ impl Node {
         cfg.nmt.node_id = node_id;
         let generated = build_dictionary(&cfg, node_id);
         crate::dictionary::merge_services(&mut od, &generated);
-        mark_node_relative(&cfg, &mut od);
+        mark_node_relative(&cfg, &generated, node_id, &mut od);
         let s = Services {
             nmt: Nmt::new(cfg.nmt),
             pdo: Pdo::new(&cfg.pdo, &od),
