@@ -151,14 +151,18 @@ pub fn merge_services(od: &mut ObjectDictionary, generated: &ObjectDictionary) {
 /// Mark the numeric defaults that follow the node-ID (COB-IDs such as
 /// 1014h = 80h + node-ID): they are the ones that differ between the same
 /// configuration built for two node-IDs.
-pub fn mark_node_relative(cfg: &NodeConfig, od: &mut ObjectDictionary) {
-    let a = build_dictionary(cfg, 1);
-    let b = build_dictionary(cfg, 2);
-    for o in a.objects() {
+pub fn mark_node_relative(cfg: &NodeConfig, generated: &ObjectDictionary, generated_id: u8, od: &mut ObjectDictionary) {
+    // `generated` was built for `generated_id` (1 when unconfigured); one
+    // more build for a neighbouring node-ID shows which defaults move with it.
+    let id = if (1..=127).contains(&generated_id) { generated_id } else { 1 };
+    let other = if id == 127 { 126 } else { id + 1 };
+    let b = build_dictionary(cfg, other);
+    let step = u64::from(other).wrapping_sub(u64::from(id));
+    for o in generated.objects() {
         for sa in o.subs() {
             let Some(sb) = b.get(o.index, sa.sub) else { continue };
             if sa.data_type.num_kind().is_some()
-                && le_u64(&sb.default).wrapping_sub(le_u64(&sa.default)) == 1
+                && le_u64(&sb.default).wrapping_sub(le_u64(&sa.default)) == step
                 && let Some(s) = od.get_mut(o.index, sa.sub)
             {
                 s.node_id_relative = true;
