@@ -1,11 +1,73 @@
 //! CiA 402 drive building blocks for virtual drives: the device control
-//! state machine ([`state_machine`], CiA 402-2 §6.2 / IEC 61800-7-201) and a
+//! state machine ([`state_machine`], CiA 402-2 §6.2 / IEC 61800-7-201), a
 //! physical motor and axis model ([`model`]) stepped at the drive's control
-//! rate. Both are pure, deterministic logic (no clocks, no I/O, no
-//! allocation per step); the operating modes and the object dictionary
-//! binding sit on top.
+//! rate, the drive itself ([`drive`]: object dictionary binding, device
+//! control, pp/pv/vl/tq, factor group, I/O, touch probe, faults) and the
+//! plug-in modes: homing ([`homing`]) and ip/csp/csv/cst ([`interp`]). All
+//! of it is pure, deterministic logic (no clocks, no I/O, no allocation per
+//! step).
 //!
-//! # How the mode layer drives them
+//! # A generic drive on the bus
+//!
+//! [`drive::generic_drive`] is a complete CiA 402 servo (CiA 301 node,
+//! pre-defined PDO set, pp/vl/pv/tq); [`drive::generic_drive_with`] adds a
+//! configuration and mode handlers:
+//!
+//! ```
+//! use drivebus_bus::{Bus, BusConfig};
+//! use drivebus_can::Duration;
+//! use drivebus_cia402::drive::{DriveConfig, DriveNode, ModeHandler, generic_drive_with};
+//! use drivebus_cia402::homing::HomingMode;
+//! use drivebus_cia402::interp::{CspMode, CstMode, CsvMode, IpMode};
+//!
+//! let handlers: Vec<Box<dyn ModeHandler + Send>> = vec![
+//!     Box::new(HomingMode::default()), // hm, every standard method (60E3h)
+//!     Box::new(IpMode::new(16)),       // ip, 16-record buffer (60C4h:1)
+//!     Box::new(CspMode::new()),
+//!     Box::new(CsvMode::new()),
+//!     Box::new(CstMode::new()),
+//! ];
+//! let mut bus = Bus::new(BusConfig::zero_time());
+//! let id = bus.attach(generic_drive_with(3, DriveConfig::default(), handlers));
+//! bus.run_for(Duration::from_millis(1)); // boot-up, pre-operational
+//! let dn = bus.node::<DriveNode>(id).unwrap();
+//! assert_eq!(dn.drive.supported_modes(), 0x3EF); // 6502h: pp vl pv tq hm ip csp csv cst
+//! assert_eq!(dn.drive.statusword() & 0x4F, 0x40); // switch on disabled
+//! ```
+//!
+//! A master then drives it over the bus as any CiA 402 device: NMT start,
+//! controlword 6040h 06h/07h/0Fh, 6060h the mode, targets by SDO or RPDO,
+//! SYNC for the cyclic modes. Outside the virtual bus, wrap a
+//! `drivebus_node::Node` and a [`drive::Drive`] yourself
+//! ([`drive::Drive::install_with`]) and forward [`drive::Drive::take_emcy`]
+//! to the node after every call, as [`drive::DriveNode`] does.
+//!
+//! Personalities set manufacturer statusword bits 8/14/15, the *remote*
+//! bit 9, and refuse writes by drive state (e.g. no 1010h store while
+//! enabled) with a [`drive::DriveExtension`] in
+//! [`drive::DriveConfig::extension`].
+//!
+//! # The mode handler contract
+//!
+//! pp, pv, vl and tq run inside the drive; hm, ip, csp, csv and cst are
+//! [`drive::ModeHandler`]s (see [`drive::mode`] for the full contract):
+//!
+//! - once per control period while *Operation enabled* in its mode the
+//!   handler gets a [`drive::ModeIo`] snapshot and returns a
+//!   [`drive::ModeOutput`]: the set-point, statusword bits 10–13 (the mode's
+//!   alone: the drive adds none of its own, CiA 402-2 §6.2.2), bit 7
+//!   `warning`, an `emcy` code to raise, a `fault`, a `position_reset`
+//!   (homing) and a `torque_offset` feed-forward;
+//! - `on_sync` latches cyclic set-points at SYNC; `enter`/`exit` bracket
+//!   the mode;
+//! - `owns_following_error` decides who supervises 6065h/6066h in the mode
+//!   (one owner: the drive by default, [`interp::CspMode`] in csp);
+//! - `write_object` / `read_object` own mode objects (60C0h, 60C1h, 60C4h,
+//!   6098h) with their SDO aborts; `homing_methods` fills 60E3h;
+//! - event positions: raw encoder counts + [`drive::ModeIo::inc_offset`] =
+//!   6063h, so handlers never track the reference shifts.
+//!
+//! # How the drive uses the state machine and the model
 //!
 //! Once per control period (4–16 kHz):
 //!

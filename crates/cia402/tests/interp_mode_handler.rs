@@ -18,6 +18,7 @@ fn io<'a>(
         controlword: cw,
         position,
         position_inc: position,
+        inc_offset: 0,
         velocity: 0.0,
         torque: 0.0,
         demand_position: position as f64,

@@ -102,6 +102,10 @@ pub struct DriveConfig {
     pub sync_loss_fault: bool,
     /// Initial mode of operation (6060h).
     pub initial_mode: i8,
+    /// The personality hook: statusword bits 8/9/14/15 and write vetoes by
+    /// drive state (see [`DriveExtension`](super::DriveExtension)). None by
+    /// default.
+    pub extension: super::Extension,
 }
 
 impl DriveConfig {
@@ -148,6 +152,7 @@ impl DriveConfig {
             remote: true,
             sync_loss_fault: true,
             initial_mode: op::PP,
+            extension: super::Extension::none(),
         }
     }
 }

@@ -127,28 +127,7 @@ impl Drive {
         self.threshold_timer = 0.0;
         self.mode_active = true;
         let mode = self.mode;
-        let bit = op::supported_bit(mode);
-        let (pos, inc) = (self.position(), self.position_increments());
-        let vel = self.actual_vel_frame();
-        let torque = self.torque_per_mille(self.model.torque());
-        if let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) {
-            let io = ModeIo {
-                controlword: self.cw,
-                position: pos,
-                position_inc: inc,
-                velocity: vel,
-                torque,
-                demand_position: self.dem.pos,
-                demand_velocity: self.dem.vel,
-                events: &self.events,
-                switches: self.model.switches(),
-                params: &self.params,
-                units: &self.units,
-                dt: self.dt,
-                time: self.steps as f64 * self.dt,
-            };
-            h.enter(mode, &io);
-        }
+        self.with_handler(|h, io| h.enter(mode, io));
     }
 
     pub(crate) fn exit_mode(&mut self) {
@@ -158,6 +137,65 @@ impl Drive {
         if let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) {
             h.exit(mode);
         }
+        self.clear_mode_warning();
+    }
+
+    /// The handler's warning is over (or its mode left): bit 7 drops and
+    /// the EMCYs it raised are cleared (CiA 301 error reset).
+    fn clear_mode_warning(&mut self) {
+        self.mode_warning = false;
+        for c in self.mode_emcy.drain(..) {
+            self.emcy.push(EmcyRequest::Clear(c));
+        }
+    }
+
+    /// The snapshot a handler sees now.
+    fn mode_io(&self) -> ModeIo<'_> {
+        ModeIo {
+            controlword: self.cw,
+            position: self.position(),
+            position_inc: self.position_increments(),
+            inc_offset: self.inc_offset,
+            velocity: self.actual_vel_frame(),
+            torque: self.torque_per_mille(self.model.torque()),
+            demand_position: self.dem.pos,
+            demand_velocity: self.dem.vel,
+            events: &self.events,
+            switches: self.model.switches(),
+            params: &self.params,
+            units: &self.units,
+            dt: self.dt,
+            time: self.steps as f64 * self.dt,
+        }
+    }
+
+    /// Calls `f` with the handler of the active mode and the snapshot
+    /// (`None` without one). The handlers are moved out for the call (no
+    /// allocation) so the snapshot can borrow the drive.
+    fn with_handler<R>(
+        &mut self,
+        f: impl FnOnce(&mut (dyn super::ModeHandler + Send), &ModeIo<'_>) -> R,
+    ) -> Option<R> {
+        let bit = op::supported_bit(self.mode);
+        let mut hs = core::mem::take(&mut self.handlers);
+        let r = match hs.iter_mut().find(|h| h.supported_modes() & bit != 0) {
+            Some(h) => {
+                let io = self.mode_io();
+                Some(f(&mut **h, &io))
+            }
+            None => None,
+        };
+        self.handlers = hs;
+        r
+    }
+
+    /// Whether the active mode's handler supervises the following error.
+    fn handler_owns_following_error(&self) -> bool {
+        let bit = op::supported_bit(self.mode);
+        self.handlers
+            .iter()
+            .find(|h| h.supported_modes() & bit != 0)
+            .is_some_and(|h| h.owns_following_error(self.mode))
     }
 
     /// SYNC: let a cyclic handler latch its set-points.
@@ -167,28 +205,7 @@ impl Drive {
             return;
         }
         let mode = self.mode;
-        let bit = op::supported_bit(mode);
-        let (pos, inc) = (self.position(), self.position_increments());
-        let vel = self.actual_vel_frame();
-        let torque = self.torque_per_mille(self.model.torque());
-        if let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) {
-            let io = ModeIo {
-                controlword: self.cw,
-                position: pos,
-                position_inc: inc,
-                velocity: vel,
-                torque,
-                demand_position: self.dem.pos,
-                demand_velocity: self.dem.vel,
-                events: &self.events,
-                switches: self.model.switches(),
-                params: &self.params,
-                units: &self.units,
-                dt: self.dt,
-                time: self.steps as f64 * self.dt,
-            };
-            h.on_sync(mode, &io);
-        }
+        self.with_handler(|h, io| h.on_sync(mode, io));
     }
 
     /// Position-frame demand → model command.
@@ -406,32 +423,15 @@ impl Drive {
 
     fn handler_step(&mut self) -> Command {
         let mode = self.mode;
-        let bit = op::supported_bit(mode);
         let (pos, inc) = (self.position(), self.position_increments());
         let vel = self.actual_vel_frame();
         let torque = self.torque_per_mille(self.model.torque());
         let dt = self.dt;
-        let Some(h) = self.handlers.iter_mut().find(|h| h.supported_modes() & bit != 0) else {
+        let Some(mut out) = self.with_handler(|h, io| h.step(mode, io, dt)) else {
             self.status_bits = 0;
             self.dem.vel = 0.0;
             return self.position_command(self.dem.pos, 0.0, 0.0);
         };
-        let io = ModeIo {
-            controlword: self.cw,
-            position: pos,
-            position_inc: inc,
-            velocity: vel,
-            torque,
-            demand_position: self.dem.pos,
-            demand_velocity: self.dem.vel,
-            events: &self.events,
-            switches: self.model.switches(),
-            params: &self.params,
-            units: &self.units,
-            dt,
-            time: self.steps as f64 * dt,
-        };
-        let mut out = h.step(mode, &io, dt);
         let finite = match out.command {
             ModeCommand::Position { position, velocity, acceleration } => {
                 position.is_finite() && velocity.is_finite() && acceleration.is_finite()
@@ -457,21 +457,44 @@ impl Drive {
         if let Some(c) = out.fault {
             self.sup.pending_fault = Some(c);
         }
+        // CiA 402-2 §6.2.2: bits 10–13 are the mode's; the drive adds
+        // nothing of its own here (its following error shows as the fault).
         self.status_bits = out.status & super::ModeOutput::STATUS_MASK;
+        if let Some(c) = out.emcy
+            && !self.mode_emcy.contains(&c)
+        {
+            self.mode_emcy.push(c);
+            self.emcy.push(EmcyRequest::Raise(c));
+        }
+        if out.warning {
+            self.mode_warning = true;
+        } else if self.mode_warning || !self.mode_emcy.is_empty() {
+            self.clear_mode_warning();
+        }
+        // 60B2h torque offset as feed-forward: the acceleration that takes
+        // that torque on the total inertia (the loops add J·a / kₜ).
+        let t_ff = if out.torque_offset.is_finite() { out.torque_offset } else { 0.0 };
+        let acc_ff_rad = t_ff / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0 / self.model.inertia();
         match out.command {
             ModeCommand::Position { position, velocity, acceleration } => {
-                let fe = self.sup.fe_active && matches!(mode, op::CSP | op::IP | op::HM);
-                self.status_bits |= u16::from(fe) << 13;
                 (self.dem.pos, self.dem.vel, self.dem.acc) = (position, velocity, acceleration);
                 self.dem.torque = torque;
-                self.position_command(position, velocity, acceleration)
+                let mut c = self.position_command(position, velocity, acceleration);
+                if let Command::Position { acceleration, .. } = &mut c {
+                    *acceleration += acc_ff_rad;
+                }
+                c
             }
             ModeCommand::Velocity { velocity, acceleration } => {
                 self.dem.vel = velocity;
                 self.dem.acc = acceleration;
                 self.dem.pos = self.actual_pos_f();
                 self.dem.torque = torque;
-                self.velocity_command(velocity, acceleration)
+                let mut c = self.velocity_command(velocity, acceleration);
+                if let Command::Velocity { acceleration, .. } = &mut c {
+                    *acceleration += acc_ff_rad;
+                }
+                c
             }
             ModeCommand::Torque(t) => {
                 let lim = f64::from(self.params.max_torque.min(self.extra.max_current));
@@ -546,10 +569,13 @@ impl Drive {
         // Following error (6065h/6066h) while position-controlled.
         let enabled = self.sm.drive_function() == DriveFunction::Enabled;
         let position_mode = matches!(self.mode, op::PP | op::HM | op::IP | op::CSP);
+        // One owner per mode: a handler that supervises 6065h itself (csp)
+        // is not second-guessed; only the injection still applies.
+        let owned = position_mode && self.handler_owns_following_error();
         if enabled && position_mode {
             let fe = self.dem.pos - self.actual_pos_f();
             let w = self.params.following_error_window;
-            let out = self.sup.force_following_error || (w != u32::MAX && fe.abs() > f64::from(w));
+            let out = self.sup.force_following_error || (!owned && w != u32::MAX && fe.abs() > f64::from(w));
             if out {
                 self.sup.fe_timer += self.dt;
                 if self.sup.fe_timer * 1000.0 > f64::from(self.params.following_error_timeout) {
@@ -622,10 +648,28 @@ impl Drive {
         }
     }
 
-    /// Statusword 6041h (CiA 402-2 §6.2.2).
+    /// Statusword 6041h (CiA 402-2 §6.2.2), with the personality's bits
+    /// 8/9/14/15.
     pub(crate) fn statusword_value(&self) -> u16 {
+        let sw = self.base_statusword();
+        match self.cfg.extension.get() {
+            None => sw,
+            Some(ext) => {
+                let mask = super::extension::STATUS_MASK;
+                (sw & !mask) | (ext.status_bits(&self.view()) & mask)
+            }
+        }
+    }
+
+    /// 60FDh digital inputs as published.
+    pub(crate) fn digital_inputs(&self) -> u32 {
+        self.model.switches().digital_inputs() | u32::from(self.interlock) << 3
+    }
+
+    /// The statusword without the personality's bits.
+    pub(crate) fn base_statusword(&self) -> u16 {
         let mut sw = self.sm.statusword();
-        sw |= u16::from(self.warning) << 7;
+        sw |= u16::from(self.warning || self.mode_warning) << 7;
         sw |= u16::from(self.cfg.remote) << 9;
         if matches!(self.sm.state(), State::OperationEnabled | State::QuickStopActive) {
             sw |= self.status_bits & 0x3C00;
@@ -667,7 +711,7 @@ impl Drive {
         let mv = (self.model.bus_voltage() * 1000.0).clamp(0.0, f64::from(u32::MAX)) as u32;
         od.set_le(r.dc_link, &mv.to_le_bytes());
         od.set_le(r.following_error, &i32s(self.dem.pos - pos as f64).to_le_bytes());
-        let di = self.model.switches().digital_inputs() | u32::from(self.interlock) << 3;
+        let di = self.digital_inputs();
         od.set_le(r.inputs, &di.to_le_bytes());
         od.set_le(r.probe_status, &self.probe.status.to_le_bytes());
         for k in 0..4 {

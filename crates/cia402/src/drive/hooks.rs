@@ -29,6 +29,22 @@ impl Drive {
         sub: u8,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
+        // The personality may refuse by drive state (e.g. no 1010h store
+        // while enabled); it sees every hooked write, 1000h–1FFFh included,
+        // because the node asks the application first.
+        if let Some(ext) = self.cfg.extension.get() {
+            ext.check_write(&self.view(), index, sub, data)?;
+        }
+        // Mode objects a handler may own (ip buffer, homing method): the
+        // owner validates and takes the value; the drive keeps its copy.
+        if matches!(index, 0x60C0 | 0x60C1 | 0x60C4 | 0x6098) {
+            let units = self.units;
+            for h in self.handlers.iter_mut() {
+                if h.write_object(index, sub, data, &units)? {
+                    break;
+                }
+            }
+        }
         // Type, length and OD limits were checked by the dictionary.
         let s = le_i64(data);
         let u = le_u64(data);
@@ -224,6 +240,37 @@ impl Drive {
             _ => {}
         }
         Ok(WriteOutcome::Store)
+    }
+
+    /// Shows the handlers' present values of the objects they own (60C4h)
+    /// in the dictionary (before an SDO upload, after install).
+    pub(crate) fn read_handler_object(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        if index != 0x60C4 {
+            return;
+        }
+        let Some(v) = self.handlers.iter().find_map(|h| h.read_object(index, sub)) else { return };
+        if let Ok(r) = od.find(index, sub) {
+            let n = od.bytes(r).len().min(8);
+            od.set_le(r, &v.to_le_bytes()[..n]);
+        }
+    }
+
+    /// After install or a new handler: 60C4h from the ip handler, 60E3h
+    /// from the hm handler's method registry.
+    pub(crate) fn refresh_handler_objects(&mut self, od: &mut ObjectDictionary) {
+        for sub in 1..=6 {
+            self.read_handler_object(od, 0x60C4, sub);
+        }
+        // Replaced in place only: inserting a new object would move the
+        // handles the node's PDO service holds (a handler added after
+        // install without hm at install keeps no 60E3h).
+        let present = od.object(0x60E3).is_some();
+        if let Some(methods) = self.handlers.iter().find_map(|h| h.homing_methods())
+            && present
+        {
+            od.insert(super::objects::supported_homing_methods(&methods));
+            self.refs = super::objects::Refs::resolve(od);
+        }
     }
 
     /// Re-derives the unit conversions after a factor group write; refuses

@@ -23,6 +23,7 @@
 
 mod config;
 mod control;
+pub mod extension;
 mod hooks;
 pub mod mode;
 mod node;
@@ -32,7 +33,11 @@ pub mod profile;
 mod supervise;
 pub mod units;
 
+#[cfg(test)]
+mod tests;
+
 pub use config::{DriveConfig, IoConfig, LimitSwitchReaction, ProfileDefaults};
+pub use extension::{DriveExtension, DriveView, Extension};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
 pub use node::{DriveNode, default_pdo_mapping, generic_drive, generic_drive_with};
 pub use units::{Carry, FactorGroup, Ratio, Units};
@@ -147,6 +152,12 @@ pub struct Drive {
     probe: supervise::Probe,
     events: StepEvents,
     interlock: bool,
+    /// NMT operational (for [`DriveView::operational`]).
+    operational: bool,
+    /// The active handler's warning (statusword bit 7).
+    mode_warning: bool,
+    /// EMCY codes the active handler raised, cleared with its warning.
+    mode_emcy: Vec<u16>,
 }
 
 impl Drive {
@@ -217,9 +228,17 @@ impl Drive {
             probe: supervise::Probe::default(),
             events: StepEvents::default(),
             interlock: false,
+            operational: false,
+            mode_warning: false,
+            mode_emcy: Vec::with_capacity(4),
             cfg,
         };
         d.reload(node.od_mut());
+        d.refresh_handler_objects(node.od_mut());
+        if let Some(o) = node.od().object(0x60E3).cloned() {
+            // Through the node so its services re-resolve their handles.
+            node.insert_object(o);
+        }
         d.sm.self_test_passed();
         d.publish(node.od_mut());
         Ok(d)
@@ -308,18 +327,46 @@ impl Drive {
         self.interlock = active;
     }
 
+    /// What a [`DriveExtension`] sees (state, mode, statusword without the
+    /// extension's bits, controlword, inputs, NMT operational).
+    pub fn view(&self) -> DriveView {
+        DriveView {
+            state: self.sm.state(),
+            mode: self.mode,
+            statusword: self.base_statusword(),
+            controlword: self.cw,
+            digital_inputs: self.digital_inputs(),
+            operational: self.operational,
+        }
+    }
+
+    /// The personality hook in force (from [`DriveConfig::extension`]).
+    pub fn extension(&self) -> &Extension {
+        &self.cfg.extension
+    }
+
+    /// Replaces the personality hook (e.g. after [`generic_drive_with`]);
+    /// the statusword is republished at the next poll.
+    pub fn set_extension(&mut self, ext: Extension) {
+        self.cfg.extension = ext;
+    }
+
     /// Takes the queued EMCY requests (for wrappers other than [`DriveNode`]).
     pub fn take_emcy(&mut self) -> impl Iterator<Item = EmcyRequest> + '_ {
         self.emcy.drain(..)
     }
 
-    /// Registers a mode handler after installation (adds its modes to 6502h).
+    /// Registers a mode handler after installation (adds its modes to 6502h,
+    /// shows its 60C4h values; 60E3h is rebuilt from its homing registry if
+    /// the drive was installed with hm, else pass hm handlers to
+    /// [`Drive::install_with`]).
     pub fn add_handler(&mut self, od: &mut ObjectDictionary, h: Box<dyn ModeHandler + Send>) {
         self.modes |= h.supported_modes();
         self.handlers.push(h);
         if let Ok(r) = od.find(0x6502, 0) {
             od.set_le(r, &self.modes.to_le_bytes());
         }
+        self.refresh_handler_objects(od);
     }
 
     /// Steps the drive to `now`: whole control periods on simulated time
@@ -366,7 +413,7 @@ impl drivebus_od::ObjectHooks for Drive {
         index: u16,
         sub: u8,
     ) -> Result<(), drivebus_od::SdoAbort> {
-        let _ = (od, index, sub);
+        self.read_handler_object(od, index, sub);
         Ok(())
     }
 
@@ -396,6 +443,7 @@ impl Application for Drive {
             }
             NodeEvent::NmtState { from, to } => {
                 use drivebus_node::NmtState;
+                self.operational = to == NmtState::Operational;
                 if from == NmtState::Operational && to != NmtState::Operational {
                     // CiA 402-2 6007h: NMT stopped / leaving operational
                     // counts as an abort of the connection.

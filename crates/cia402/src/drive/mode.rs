@@ -19,9 +19,37 @@
 //! acceleration units); convert those with [`Units`].
 //!
 //! The trait is object safe; the drive stores `Box<dyn ModeHandler + Send>`.
+//!
+//! # The handler contract
+//!
+//! - **Statusword.** Bits 10–13 of the statusword belong to the active
+//!   mode (CiA 402-2 §6.2.2: bits 12 and 13 are mode-specific). In a
+//!   handler's mode the drive shows exactly [`ModeOutput::status`] there
+//!   (bit 11 additionally while a limit switch is active); it never ORs in
+//!   bits of its own. Bit 7 (warning) is [`ModeOutput::warning`], ORed with
+//!   the drive's warnings (limit switch, SYNC loss).
+//! - **EMCY.** [`ModeOutput::emcy`] raises a code once (EMCY + 1003h); the
+//!   drive clears it (EMCY error reset) when the handler's `warning` drops
+//!   or the mode is left. [`ModeOutput::fault`] is a fault (603Fh,
+//!   transition 13).
+//! - **Following error.** Exactly one party supervises 6065h/6066h per
+//!   mode: the drive, unless [`ModeHandler::owns_following_error`] says the
+//!   handler does (csp: [`CspMode`](crate::interp::CspMode) reports bit 13
+//!   and 8611h itself).
+//! - **Objects.** The drive forwards writes of the mode objects a handler
+//!   may own (60C0h, 60C1h:1–3, 60C4h:2–6, 6098h) to
+//!   [`ModeHandler::write_object`] of every handler, and refreshes 60C4h
+//!   from [`ModeHandler::read_object`] before an SDO upload. 60E3h is built
+//!   from [`ModeHandler::homing_methods`].
+//! - **Positions.** Event positions from the model are raw encoder counts;
+//!   add [`ModeIo::inc_offset`] to get 6063h increments (or use
+//!   [`ModeIo::event_position`]), so a handler never tracks the drive's
+//!   reference shifts itself.
 
 use super::units::Units;
 use crate::model::{StepEvents, Switches};
+use alloc::vec::Vec;
+use drivebus_od::SdoAbort;
 
 /// Modes of operation codes (6060h / 6061h, CiA 402-2 §6.3.2).
 pub mod op {
@@ -143,6 +171,10 @@ pub struct ModeIo<'a> {
     pub position: i64,
     /// Position actual internal value 6063h \[increments\].
     pub position_inc: i64,
+    /// 6063h minus the raw encoder counts \[increments\]: the shift of the
+    /// position reference caused by every `position_reset` so far (homing).
+    /// Model event `counts` + this = 6063h at the event.
+    pub inc_offset: i64,
     /// Velocity actual \[position units/s\] (from the measured motor speed).
     pub velocity: f64,
     /// Torque actual \[per mille of rated torque\] (6077h).
@@ -173,6 +205,14 @@ impl ModeIo<'_> {
     pub fn cw_bit(&self, n: u8) -> bool {
         n < 16 && self.controlword & (1 << n) != 0
     }
+
+    /// Where a model event happened in the actual-position frame
+    /// \[position units\] (its exact encoder position shifted by
+    /// [`ModeIo::inc_offset`]).
+    pub fn event_position(&self, e: &crate::model::Event) -> f64 {
+        let u = self.units;
+        u.inc_to_pos_f(u.rad_to_inc(e.position) + self.inc_offset as f64)
+    }
 }
 
 /// The set-point a mode produces, in position units (see module docs).
@@ -201,8 +241,17 @@ pub enum ModeCommand {
     Hold,
 }
 
-/// What a mode handler returns each control period.
-#[derive(Debug, Clone, Copy, PartialEq)]
+impl Default for ModeCommand {
+    /// [`ModeCommand::Hold`].
+    fn default() -> Self {
+        ModeCommand::Hold
+    }
+}
+
+/// What a mode handler returns each control period. Build it with
+/// [`ModeOutput::new`] or `ModeOutput { command, status, ..Default::default() }`
+/// so fields added later keep their neutral defaults.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ModeOutput {
     /// The set-point for the motor.
     pub command: ModeCommand,
@@ -216,6 +265,15 @@ pub struct ModeOutput {
     pub position_reset: Option<i64>,
     /// Report a fault (603Fh / EMCY code, e.g. 8611h following error).
     pub fault: Option<u16>,
+    /// Statusword bit 7 (warning) while set, e.g. ip buffer under/overflow.
+    pub warning: bool,
+    /// Raise this EMCY error code (once; repeated values are ignored while
+    /// raised). The drive clears it when `warning` goes false or the mode
+    /// is left (e.g. FF01h / FF02h ip buffer underflow / overflow).
+    pub emcy: Option<u16>,
+    /// Torque feed-forward \[per mille of rated torque 6076h\] added to a
+    /// position or velocity command (csp/csv 60B2h); ignored otherwise.
+    pub torque_offset: f64,
 }
 
 impl ModeOutput {
@@ -224,12 +282,20 @@ impl ModeOutput {
 
     /// Hold position, no status bits.
     pub const fn hold() -> Self {
-        ModeOutput { command: ModeCommand::Hold, status: 0, position_reset: None, fault: None }
+        ModeOutput::new(ModeCommand::Hold, 0)
     }
 
     /// A command with status bits.
     pub const fn new(command: ModeCommand, status: u16) -> Self {
-        ModeOutput { command, status, position_reset: None, fault: None }
+        ModeOutput {
+            command,
+            status,
+            position_reset: None,
+            fault: None,
+            warning: false,
+            emcy: None,
+            torque_offset: 0.0,
+        }
     }
 }
 
@@ -259,5 +325,37 @@ pub trait ModeHandler {
     /// The mode was left or the drive function disabled (stop, fault).
     fn exit(&mut self, mode: i8) {
         let _ = mode;
+    }
+
+    /// Whether this handler supervises the following error (6065h/6066h,
+    /// bit 13, fault 8611h) in `mode` itself; then the drive does not (one
+    /// owner per mode). Default: the drive supervises.
+    fn owns_following_error(&self, mode: i8) -> bool {
+        let _ = mode;
+        false
+    }
+
+    /// A write of a mode object the drive forwards (60C0h, 60C1h:1–3,
+    /// 60C4h:2–6, 6098h; see the module docs), already checked against the
+    /// object's type and limits. `Ok(true)`: the handler owns the object and
+    /// accepted the value (the dictionary stores it); `Ok(false)`: not its
+    /// object; `Err`: the SDO abort (an RPDO write is dropped). Called
+    /// whether or not the mode is active.
+    fn write_object(&mut self, index: u16, sub: u8, data: &[u8], units: &Units) -> Result<bool, SdoAbort> {
+        let _ = (index, sub, data, units);
+        Ok(false)
+    }
+
+    /// The present value of an object the handler owns (60C4h subs), shown
+    /// by an SDO upload; `None` keeps the dictionary's value.
+    fn read_object(&self, index: u16, sub: u8) -> Option<i64> {
+        let _ = (index, sub);
+        None
+    }
+
+    /// 60E3h supported homing methods (in 60E3h sub order), for a handler
+    /// implementing hm; `None` (the default) for other handlers.
+    fn homing_methods(&self) -> Option<Vec<i8>> {
+        None
     }
 }

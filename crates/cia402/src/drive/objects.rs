@@ -51,6 +51,12 @@ fn record(index: u16, name: &'static str, subs: impl IntoIterator<Item = SubObje
     subs.into_iter().fold(Object::record(index, name), Object::with_sub)
 }
 
+/// 60E3h supported homing methods, sub 1..n (CiA 402-2 homing mode).
+pub(crate) fn supported_homing_methods(methods: &[i8]) -> Object {
+    let values: alloc::vec::Vec<Value> = methods.iter().map(|&m| Value::I8(m)).collect();
+    array(0x60E3, "Supported homing methods", T::Integer8, Access::Ro, &values, PLAIN)
+}
+
 /// Every object of the drive, with power-on values from `cfg`; `modes` is
 /// 6502h.
 pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> {
@@ -146,7 +152,9 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
         var(0x60BC, "Touch probe 2 positive edge", T::Integer32, Ro, I32(0), MAP),
         var(0x60BD, "Touch probe 2 negative edge", T::Integer32, Ro, I32(0), MAP),
         var(0x60C0, "Interpolation sub mode select", T::Integer16, Rw, I16(0), MAP_HOOK),
-        array(0x60C1, "Interpolation data record", T::Integer32, Rww, &[I32(0)], MAP_HOOK),
+        // Sub 1 position; subs 2 (velocity, PVT) and 3 (segment time in ms,
+        // PT/PVT) for the manufacturer sub-modes of `IpMode`.
+        array(0x60C1, "Interpolation data record", T::Integer32, Rww, &[I32(0), I32(0), I32(0)], MAP_HOOK),
         record(
             0x60C2,
             "Interpolation time period",
@@ -160,12 +168,12 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
             0x60C4,
             "Interpolation data configuration",
             [
-                sub(1, "Maximum buffer size", T::Unsigned32, Ro, U32(1), PLAIN),
-                sub(2, "Actual buffer size", T::Unsigned32, Rw, U32(1), PLAIN),
-                sub(3, "Buffer organization", T::Unsigned8, Rw, U8(0), PLAIN),
-                sub(4, "Buffer position", T::Unsigned16, Rw, U16(1), PLAIN),
-                sub(5, "Size of data record", T::Unsigned8, Rw, U8(4), PLAIN),
-                sub(6, "Buffer clear", T::Unsigned8, Rw, U8(0), PLAIN),
+                sub(1, "Maximum buffer size", T::Unsigned32, Ro, U32(1), HOOK),
+                sub(2, "Actual buffer size", T::Unsigned32, Rw, U32(1), HOOK),
+                sub(3, "Buffer organization", T::Unsigned8, Rw, U8(0), HOOK),
+                sub(4, "Buffer position", T::Unsigned16, Rw, U16(1), HOOK),
+                sub(5, "Size of data record", T::Unsigned8, Rw, U8(4), HOOK),
+                sub(6, "Buffer clear", T::Unsigned8, Rw, U8(0), HOOK),
             ]
         ),
         var(0x60C5, "Max acceleration", T::Unsigned32, Rw, U32(p.max_acceleration), MAP_HOOK),
@@ -178,9 +186,10 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
     ];
     if modes & op::supported_bit(op::HM) != 0 {
         // 60E3h: the standard methods (CiA 402-2 §6.7.x: 1–14, 17–30, 33–35, 37).
-        let methods: alloc::vec::Vec<Value> =
-            (1..=37i8).filter(|m| !matches!(m, 15 | 16 | 31 | 32 | 36)).map(I8).collect();
-        v.push(array(0x60E3, "Supported homing methods", T::Integer8, Ro, &methods, PLAIN));
+        // A handler with a registry replaces it (`refresh_handler_objects`).
+        let methods: alloc::vec::Vec<i8> =
+            (1..=37i8).filter(|m| !matches!(m, 15 | 16 | 31 | 32 | 36)).collect();
+        v.push(supported_homing_methods(&methods));
     }
     if modes & op::supported_bit(op::VL) != 0 {
         // vl (CiA 402-2 §6.5): speeds in rpm of the motor shaft.

@@ -3,22 +3,25 @@
 use alloc::vec::Vec;
 
 use super::{Homing, HomingCommand, HomingConfig, HomingEvent, HomingEvents, HomingInput, HomingRegistry};
+use crate::drive::Units;
 use crate::drive::mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, op};
+use drivebus_od::SdoAbort;
 
 /// Homing mode (6060h = 6) for the drive: converts the OD parameters
 /// (6098h, 6099h, 609Ah, 607Ch) and the model events to position units and
 /// runs [`Homing`].
 ///
 /// Event positions (model radians, raw encoder frame) are placed in the
-/// actual-position frame with the increment offset this handler's own
-/// `position_reset`s have caused, mirroring the drive's arithmetic
-/// (`offset += pos_to_inc(reset) − position_inc`). So this assumes nothing
-/// else shifts 6063h; a drive that does should pass the shift in `ModeIo`.
+/// actual-position frame with [`ModeIo::event_position`], i.e. with the
+/// drive's present reference shift [`ModeIo::inc_offset`], whoever caused it.
+///
+/// As the drive's handler it provides 60E3h from its registry
+/// ([`ModeHandler::homing_methods`], manufacturer methods with negative codes
+/// included) and refuses 6098h writes of methods not registered (0609 0030;
+/// 0 "no homing method" is always accepted).
 #[derive(Debug)]
 pub struct HomingMode {
     engine: Homing,
-    /// Increments between the raw encoder and 6063h caused by our resets.
-    inc_shift: i64,
 }
 
 impl Default for HomingMode {
@@ -30,7 +33,7 @@ impl Default for HomingMode {
 impl HomingMode {
     /// hm offering `registry`'s methods.
     pub fn new(registry: HomingRegistry) -> Self {
-        HomingMode { engine: Homing::new(registry), inc_shift: 0 }
+        HomingMode { engine: Homing::new(registry) }
     }
 
     /// The engine (state, registry).
@@ -87,11 +90,10 @@ impl ModeHandler for HomingMode {
         let flip = u.rad_to_pos(1.0) < 0.0;
         let mut events = HomingEvents::default();
         for e in io.events.iter() {
-            let inc = u.rad_to_inc(e.position) + self.inc_shift as f64;
             events.push(HomingEvent {
                 kind: e.kind,
                 active: e.active,
-                position: u.inc_to_pos_f(inc),
+                position: io.event_position(e),
                 positive_direction: e.positive_direction != flip,
             });
         }
@@ -110,15 +112,23 @@ impl ModeHandler for HomingMode {
             HomingCommand::Torque(t) => ModeCommand::Torque(t),
         };
         let position_reset = out.position_reset.map(|r| libm::round(r.clamp(-9.0e15, 9.0e15)) as i64);
-        if let Some(r) = position_reset {
-            // The drive's shift of 6063h, reproduced.
-            let delta = u.pos_to_inc(r).saturating_sub(io.position_inc);
-            self.inc_shift = self.inc_shift.saturating_add(delta);
-        }
-        ModeOutput { command, status: out.status, position_reset, fault: None }
+        ModeOutput { command, status: out.status, position_reset, ..ModeOutput::default() }
     }
 
     fn exit(&mut self, _mode: i8) {
         self.engine.interrupt();
+    }
+
+    fn homing_methods(&self) -> Option<Vec<i8>> {
+        Some(self.supported_methods())
+    }
+
+    fn write_object(&mut self, index: u16, sub: u8, data: &[u8], _units: &Units) -> Result<bool, SdoAbort> {
+        if (index, sub) != (0x6098, 0) {
+            return Ok(false);
+        }
+        let m = data.first().copied().unwrap_or(0) as i8;
+        // CiA 402-2: 6098h = 0 means "no homing method assigned".
+        if m == 0 || self.is_supported(m) { Ok(true) } else { Err(SdoAbort::INVALID_VALUE) }
     }
 }

@@ -2,8 +2,10 @@
 //! [`IpMode`] (7), [`CspMode`] (8), [`CsvMode`] (9), [`CstMode`] (10).
 
 use super::cyclic::{Cyclic, CyclicConfig, CyclicKind};
-use super::ip::{Ip, IpConfig, SubMode};
+use super::ip::{Ip, IpBufferError, IpConfig, Organisation, SubMode, WARNING};
+use crate::drive::Units;
 use crate::drive::mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, op};
+use drivebus_od::{SdoAbort, le_i64};
 
 /// Cycle time when 60C2h is 0 or out of range \[s\].
 const DEFAULT_PERIOD: f64 = 1e-3;
@@ -21,11 +23,18 @@ fn halt_deceleration(io: &ModeIo<'_>) -> f64 {
 
 /// Interpolated position mode for the drive (see [`Ip`]).
 ///
-/// Records: the drive's OD binding should forward 60C1h writes to
-/// [`IpMode::engine_mut`]`.write_data(sub, value)` and 60C4h writes to the
-/// buffer. Without that (the default), each SYNC with bit 4 set pushes the
-/// present 60C1h:1 (`ModeParams::interpolation_data`) before consuming one
-/// record: the CiA 402 buffer-size-1 behaviour.
+/// Records: the drive forwards 60C1h:1–3 writes (SDO or RPDO) through
+/// [`ModeHandler::write_object`] into the buffer (60C4h:1 records deep);
+/// 60C4h:2–6 configure it (actual size, organisation, position, record
+/// size, clear) and read back through [`ModeHandler::read_object`]. Linear
+/// records are consumed one per SYNC. A host that does not forward writes
+/// gets the CiA 402 buffer-size-1 behaviour instead: each SYNC with bit 4
+/// set pushes the present 60C1h:1 (`ModeParams::interpolation_data`) before
+/// consuming one record (auto-push, switched off by the first forwarded
+/// 60C1h write).
+///
+/// Buffer underflow / overflow set statusword bit 7 and raise EMCY FF01h /
+/// FF02h ([`ModeOutput::warning`], [`ModeOutput::emcy`]).
 #[derive(Debug, Clone)]
 pub struct IpMode {
     engine: Ip,
@@ -88,16 +97,88 @@ impl ModeHandler for IpMode {
 
     fn step(&mut self, _mode: i8, io: &ModeIo<'_>, dt: f64) -> ModeOutput {
         let out = self.engine.step(io.controlword, &Self::config(io), dt);
-        // Bit 7 (buffer warning) is outside ModeOutput::STATUS_MASK; the
-        // drive reads it from `engine().underflow()/overflow()`.
-        ModeOutput::new(
-            ModeCommand::Position {
+        ModeOutput {
+            command: ModeCommand::Position {
                 position: out.position,
                 velocity: out.velocity,
                 acceleration: out.acceleration,
             },
-            out.status & ModeOutput::STATUS_MASK,
-        )
+            status: out.status & ModeOutput::STATUS_MASK,
+            warning: out.status & WARNING != 0,
+            emcy: out.emcy,
+            ..ModeOutput::default()
+        }
+    }
+
+    fn write_object(&mut self, index: u16, sub: u8, data: &[u8], units: &Units) -> Result<bool, SdoAbort> {
+        let v = le_i64(data);
+        let buf = self.engine.buffer_mut();
+        let ok = |b: bool| if b { Ok(true) } else { Err(SdoAbort::INVALID_VALUE) };
+        match (index, sub) {
+            // 60C0h: 0 linear, −1 PT, −2 PVT (manufacturer sub-modes).
+            (0x60C0, 0) => ok(SubMode::from_code(v as i16).is_some()),
+            (0x60C1, 1..=3) => {
+                self.auto_push = false;
+                let value = match sub {
+                    1 => v as f64,
+                    2 => units.vel_to_pos(v as f64),
+                    _ => v as f64,
+                };
+                match self.engine.write_data(sub, value) {
+                    // Overflow is reported as warning bit 7 + EMCY FF02h
+                    // (the record is dropped); SDO and RPDO alike.
+                    Ok(()) | Err(IpBufferError::Overflow) => Ok(true),
+                    // 60C4h:6 = 0: buffer access disabled.
+                    Err(IpBufferError::Disabled) => Err(SdoAbort::DEVICE_STATE),
+                    Err(IpBufferError::Invalid) => Err(SdoAbort::INVALID_VALUE),
+                }
+            }
+            (0x60C4, 2) => {
+                if v < 1 {
+                    Err(SdoAbort::VALUE_TOO_LOW)
+                } else if v as u64 > buf.max_size() as u64 {
+                    Err(SdoAbort::VALUE_TOO_HIGH)
+                } else {
+                    ok(buf.set_size(v as usize))
+                }
+            }
+            (0x60C4, 3) => ok(buf.set_organisation(v as u8)),
+            (0x60C4, 4) => {
+                if buf.organisation() == Organisation::Fifo {
+                    // A FIFO has no writable position.
+                    Err(SdoAbort::INVALID_VALUE)
+                } else if v as u64 >= buf.size() as u64 {
+                    Err(SdoAbort::VALUE_TOO_HIGH)
+                } else {
+                    ok(buf.set_position(v as usize))
+                }
+            }
+            // 60C4h:5: the record size of a supported sub-mode.
+            (0x60C4, 5) => ok([4, 5, 9].contains(&v)),
+            (0x60C4, 6) => {
+                let r = ok(buf.set_clear(v as u8));
+                if v == 0 {
+                    self.engine.clear_warnings();
+                }
+                r
+            }
+            _ => Ok(false),
+        }
+    }
+
+    fn read_object(&self, index: u16, sub: u8) -> Option<i64> {
+        let b = self.engine.buffer();
+        match (index, sub) {
+            (0x60C4, 1) => Some(b.max_size() as i64),
+            (0x60C4, 2) => Some(b.size() as i64),
+            (0x60C4, 3) => Some(match b.organisation() {
+                Organisation::Fifo => 0,
+                Organisation::Ring => 1,
+            }),
+            (0x60C4, 4) => Some(b.position() as i64),
+            (0x60C4, 6) => Some(i64::from(b.access_enabled())),
+            _ => None,
+        }
     }
 }
 
@@ -105,6 +186,8 @@ impl ModeHandler for IpMode {
 #[derive(Debug, Clone, Copy)]
 struct CyclicMode {
     engine: Cyclic,
+    /// 60B2h latched at SYNC: torque feed-forward in csp/csv \[per mille\].
+    torque_ff: f64,
 }
 
 impl CyclicMode {
@@ -115,7 +198,7 @@ impl CyclicMode {
             following_timeout: 0.0,
             halt_deceleration: 0.0,
         };
-        CyclicMode { engine: Cyclic::new(kind, 0.0, &cfg) }
+        CyclicMode { engine: Cyclic::new(kind, 0.0, &cfg), torque_ff: 0.0 }
     }
 
     fn config(&self, io: &ModeIo<'_>) -> CyclicConfig {
@@ -140,6 +223,7 @@ impl CyclicMode {
             CyclicKind::Torque => io.torque,
         };
         self.engine.enter(start);
+        self.torque_ff = 0.0;
     }
 
     fn on_sync(&mut self, io: &ModeIo<'_>) {
@@ -155,6 +239,12 @@ impl CyclicMode {
                 (u.vel_to_pos(f64::from(p.target_velocity)), u.vel_to_pos(f64::from(p.velocity_offset)), 0.0)
             }
             CyclicKind::Torque => (f64::from(p.target_torque), f64::from(p.torque_offset), 0.0),
+        };
+        // csp/csv: 60B2h is torque feed-forward (CiA 402-4; cst adds it to
+        // the target above).
+        self.torque_ff = match self.engine.kind() {
+            CyclicKind::Torque => 0.0,
+            _ => f64::from(p.torque_offset),
         };
         let cfg = self.config(io);
         self.engine.sync(target, offset, ff, &cfg);
@@ -174,7 +264,15 @@ impl CyclicMode {
             }
             CyclicKind::Torque => ModeCommand::Torque(out.demand),
         };
-        ModeOutput { command, status: out.status, position_reset: None, fault: out.fault }
+        // Halted: no feed-forward, the ramp alone brings the axis to rest.
+        let halted = io.cw_bit(8);
+        ModeOutput {
+            command,
+            status: out.status,
+            fault: out.fault,
+            torque_offset: if halted { 0.0 } else { self.torque_ff },
+            ..ModeOutput::default()
+        }
     }
 }
 
@@ -218,6 +316,12 @@ macro_rules! cyclic_mode {
             fn on_sync(&mut self, _mode: i8, io: &ModeIo<'_>) {
                 self.0.on_sync(io);
             }
+
+            fn owns_following_error(&self, _mode: i8) -> bool {
+                // csp reports bit 13 and 8611h itself (paired samples,
+                // 60F4h); the drive does not supervise it a second time.
+                self.0.engine.kind() == CyclicKind::Position
+            }
         }
     };
 }
@@ -227,14 +331,16 @@ cyclic_mode!(
     CyclicKind::Position,
     op::CSP,
     "Cyclic synchronous position (8): 607Ah + 60B0h at SYNC, 60B1h velocity \
-     feed-forward, following error 6065h/6066h → 8611h; 60F4h via \
+     and 60B2h torque feed-forward, following error 6065h/6066h → 8611h \
+     (supervised here, not by the drive); 60F4h via \
      `engine().following_error()`."
 );
 cyclic_mode!(
     CsvMode,
     CyclicKind::Velocity,
     op::CSV,
-    "Cyclic synchronous velocity (9): 60FFh + 60B1h at SYNC."
+    "Cyclic synchronous velocity (9): 60FFh + 60B1h at SYNC, 60B2h torque \
+     feed-forward."
 );
 cyclic_mode!(
     CstMode,

@@ -450,6 +450,13 @@ impl Ip {
         self.overflow = false;
     }
 
+    /// Drops the under/overflow warnings (60C4h:6 = 0 clears the buffer).
+    pub fn clear_warnings(&mut self) {
+        self.underflow = false;
+        self.overflow = false;
+        self.pending_emcy = None;
+    }
+
     fn active(&self) -> bool {
         self.bit4 && self.halt.is_none()
     }
