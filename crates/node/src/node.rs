@@ -776,4 +776,7 @@ impl<A: Application + ?Sized> drivebus_od::ObjectHooks for AppOnly<'_, A> {
     ) -> Result<drivebus_od::WriteOutcome, drivebus_od::SdoAbort> {
         self.0.on_write(od, index, sub, data)
     }
+    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        self.0.after_write(od, index, sub)
+    }
 }

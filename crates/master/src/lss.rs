@@ -1,0 +1,308 @@
+//! LSS master (CiA 305) on the async bus.
+//!
+//! Operations are serialised on one lock (LSS has a single COB-ID pair, so
+//! two concurrent operations could take each other's answers). Each
+//! subscribes to the 7E4h frames before sending, then waits for the answer
+//! with the expected command specifier.
+
+use std::fmt;
+use std::time::Duration;
+
+use drivebus_can::Frame;
+use drivebus_lss::codec::{LssField, LssResponse, err};
+use drivebus_lss::{FastScan, FastScanOutcome, LssAddress, LssAddressRange, LssMode, master};
+use tokio::sync::broadcast;
+
+use crate::master::Master;
+
+/// Why an LSS operation failed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LssError {
+    /// No answer in time (no slave in configuration / with that address).
+    Timeout,
+    /// The slave refused: `error` per CiA 305 (1: not supported / out of
+    /// range, 2: storage access error, FFh: see `spec_error`).
+    Refused {
+        /// Error code.
+        error: u8,
+        /// Implementation-specific error (when `error` is FFh).
+        spec_error: u8,
+    },
+    /// The bus failed.
+    Transport(String),
+    /// A node-ID or bit timing outside the allowed range.
+    InvalidArgument(String),
+}
+
+impl fmt::Display for LssError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LssError::Timeout => f.write_str("LSS: no answer"),
+            LssError::Refused { error, spec_error } => {
+                write!(f, "LSS: slave refused (error {error}, specific error {spec_error})")
+            }
+            LssError::Transport(s) => write!(f, "LSS: bus error: {s}"),
+            LssError::InvalidArgument(s) => write!(f, "LSS: {s}"),
+        }
+    }
+}
+
+impl std::error::Error for LssError {}
+
+/// The LSS master; from [`Master::lss`].
+#[derive(Clone, Debug)]
+pub struct LssMaster {
+    master: Master,
+    timeout: Duration,
+}
+
+impl Master {
+    /// The LSS master with a 100 ms answer timeout.
+    pub fn lss(&self) -> LssMaster {
+        LssMaster { master: self.clone(), timeout: Duration::from_millis(100) }
+    }
+}
+
+fn check(error: u8, spec_error: u8) -> Result<(), LssError> {
+    if error == err::OK { Ok(()) } else { Err(LssError::Refused { error, spec_error }) }
+}
+
+impl LssMaster {
+    /// Timeout for each answer.
+    pub fn timeout(mut self, t: Duration) -> Self {
+        self.timeout = t;
+        self
+    }
+
+    async fn send(&self, f: Frame) -> Result<(), LssError> {
+        self.master.send(f).await.map_err(|e| LssError::Transport(e.to_string()))
+    }
+
+    /// Sends `frames` and returns the first answer `accept` maps to `Some`.
+    async fn request<T>(
+        &self,
+        frames: &[Frame],
+        accept: impl Fn(LssResponse) -> Option<T>,
+    ) -> Result<T, LssError> {
+        let _one = self.master.inner.lss_lock.lock().await;
+        let mut rx = self.master.inner.lss.subscribe();
+        for f in frames {
+            self.send(*f).await?;
+        }
+        wait(&mut rx, self.timeout, accept).await
+    }
+
+    /// Switch state global: every slave enters `mode` (no answer).
+    pub async fn switch_global(&self, mode: LssMode) -> Result<(), LssError> {
+        let _one = self.master.inner.lss_lock.lock().await;
+        self.send(master::switch_state_global(mode)).await
+    }
+
+    /// Switch state selective: the slave with `addr` enters configuration.
+    pub async fn switch_selective(&self, addr: &LssAddress) -> Result<(), LssError> {
+        let frames = master::switch_state_selective(addr);
+        self.request(&frames, |r| (r == LssResponse::SwitchStateSelective).then_some(())).await
+    }
+
+    /// Inquires the LSS address of the slave in configuration.
+    pub async fn inquire_identity(&self) -> Result<LssAddress, LssError> {
+        let mut addr = LssAddress::default();
+        for field in LssField::ALL {
+            let v = self
+                .request(&[master::inquire_identity(field)], |r| match r {
+                    LssResponse::Identity { field: f, value } if f == field => Some(value),
+                    _ => None,
+                })
+                .await?;
+            addr.set(field, v);
+        }
+        Ok(addr)
+    }
+
+    /// Inquires the node-ID of the slave in configuration (FFh: unconfigured).
+    pub async fn inquire_node_id(&self) -> Result<u8, LssError> {
+        self.request(&[master::inquire_node_id()], |r| match r {
+            LssResponse::NodeId(n) => Some(n),
+            _ => None,
+        })
+        .await
+    }
+
+    /// Configures the pending node-ID (1..=127, or FFh to unconfigure).
+    pub async fn configure_node_id(&self, node_id: u8) -> Result<(), LssError> {
+        if !drivebus_lss::is_configurable_node_id(node_id) {
+            return Err(LssError::InvalidArgument(format!("node-ID {node_id} is not 1..=127 or 255")));
+        }
+        let (e, s) = self
+            .request(&[master::configure_node_id(node_id)], |r| match r {
+                LssResponse::ConfigureNodeId { error, spec_error } => Some((error, spec_error)),
+                _ => None,
+            })
+            .await?;
+        check(e, s)
+    }
+
+    /// Configures the pending bit timing (index of the CiA standard table).
+    pub async fn configure_bit_timing(&self, index: u8) -> Result<(), LssError> {
+        let (e, s) = self
+            .request(&[master::configure_bit_timing(index)], |r| match r {
+                LssResponse::ConfigureBitTiming { error, spec_error } => Some((error, spec_error)),
+                _ => None,
+            })
+            .await?;
+        check(e, s)
+    }
+
+    /// Activates the pending bit timing after `delay_ms` (no answer).
+    pub async fn activate_bit_timing(&self, delay_ms: u16) -> Result<(), LssError> {
+        let _one = self.master.inner.lss_lock.lock().await;
+        self.send(master::activate_bit_timing(delay_ms)).await
+    }
+
+    /// Stores the pending node-ID and bit timing.
+    pub async fn store(&self) -> Result<(), LssError> {
+        let (e, s) = self
+            .request(&[master::store_configuration()], |r| match r {
+                LssResponse::StoreConfiguration { error, spec_error } => Some((error, spec_error)),
+                _ => None,
+            })
+            .await?;
+        check(e, s)
+    }
+
+    /// Identify non-configured remote slaves: true if any answered.
+    pub async fn identify_non_configured(&self) -> Result<bool, LssError> {
+        match self
+            .request(&[master::identify_non_configured()], |r| {
+                (r == LssResponse::IdentifyNonConfiguredSlave).then_some(())
+            })
+            .await
+        {
+            Ok(()) => Ok(true),
+            Err(LssError::Timeout) => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Identify remote slaves in `range`: true if any answered.
+    pub async fn identify_remote(&self, range: &LssAddressRange) -> Result<bool, LssError> {
+        let frames = master::identify_remote_slave(range);
+        match self.request(&frames, |r| (r == LssResponse::IdentifySlave).then_some(())).await {
+            Ok(()) => Ok(true),
+            Err(LssError::Timeout) => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Fastscan (CiA 305): finds one non-configured slave in LSS waiting
+    /// and leaves it alone in configuration. `Ok(None)` when none answers.
+    /// Each of the up to 133 questions waits for this handle's timeout.
+    /// A scan that loses its slave (an answer later than the timeout flips
+    /// a bit) is repeated up to twice.
+    pub async fn fastscan(&self) -> Result<Option<LssAddress>, LssError> {
+        let mut tries = 0;
+        loop {
+            match self.fastscan_with(FastScan::new(self.timeout)).await {
+                Err(LssError::Timeout) if tries < 2 => tries += 1,
+                r => return r,
+            }
+        }
+    }
+
+    /// Fastscan with a prepared scanner (known parts, early advance).
+    pub async fn fastscan_with(&self, mut scan: FastScan) -> Result<Option<LssAddress>, LssError> {
+        let inner = &self.master.inner;
+        let _one = inner.lss_lock.lock().await;
+        let mut rx = inner.lss.subscribe();
+        let clock = inner.clock;
+        let mut out: Vec<Frame> = Vec::new();
+        scan.start(clock.now(), &mut out);
+        loop {
+            for f in out.drain(..) {
+                self.send(f).await?;
+            }
+            if let Some(o) = scan.outcome() {
+                return match o {
+                    FastScanOutcome::Found(a) => Ok(Some(a)),
+                    FastScanOutcome::NoneFound => Ok(None),
+                    FastScanOutcome::Lost(_) => Err(LssError::Timeout),
+                };
+            }
+            // Take every answer already queued before judging the question:
+            // after a late wake-up the deadline has passed too.
+            loop {
+                match rx.try_recv() {
+                    Ok(f) => {
+                        scan.handle_frame(&f, clock.now(), &mut out);
+                    }
+                    Err(broadcast::error::TryRecvError::Lagged(_)) => {}
+                    Err(_) => break,
+                }
+            }
+            if !out.is_empty() || scan.outcome().is_some() {
+                continue;
+            }
+            let next = scan.poll(clock.now(), &mut out);
+            if !out.is_empty() || scan.outcome().is_some() {
+                continue;
+            }
+            let Some(deadline) = next else { return Ok(None) };
+            tokio::select! {
+                // An answer already queued counts even if the deadline also
+                // passed while this task waited to be scheduled.
+                biased;
+                r = rx.recv() => match r {
+                    Ok(f) => { scan.handle_frame(&f, clock.now(), &mut out); }
+                    Err(broadcast::error::RecvError::Lagged(_)) => {}
+                    Err(broadcast::error::RecvError::Closed) => return Err(LssError::Transport("closed".into())),
+                },
+                () = tokio::time::sleep_until(clock.at(deadline)) => {}
+            }
+        }
+    }
+
+    /// Fastscan, then configure `node_id` on the found slave, optionally
+    /// store, and return it to waiting (it starts with the new node-ID
+    /// after a reset communication / power cycle, CiA 305).
+    pub async fn assign_node_id(&self, node_id: u8, store: bool) -> Result<Option<LssAddress>, LssError> {
+        self.assign_node_id_with(FastScan::new(self.timeout), node_id, store).await
+    }
+
+    /// [`assign_node_id`](Self::assign_node_id) with a prepared scanner
+    /// (known vendor/product make the scan 4× shorter).
+    pub async fn assign_node_id_with(
+        &self,
+        scan: FastScan,
+        node_id: u8,
+        store: bool,
+    ) -> Result<Option<LssAddress>, LssError> {
+        let Some(addr) = self.fastscan_with(scan).await? else { return Ok(None) };
+        self.configure_node_id(node_id).await?;
+        if store {
+            self.store().await?;
+        }
+        self.switch_global(LssMode::Waiting).await?;
+        Ok(Some(addr))
+    }
+}
+
+async fn wait<T>(
+    rx: &mut broadcast::Receiver<Frame>,
+    timeout: Duration,
+    accept: impl Fn(LssResponse) -> Option<T>,
+) -> Result<T, LssError> {
+    let fut = async {
+        loop {
+            match rx.recv().await {
+                Ok(f) => {
+                    if let Some(t) = master::parse_response(&f).and_then(&accept) {
+                        return Ok(t);
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => return Err(LssError::Transport("closed".into())),
+            }
+        }
+    };
+    tokio::time::timeout(timeout, fut).await.unwrap_or(Err(LssError::Timeout))
+}
