@@ -70,6 +70,10 @@ pub struct ServerConfig {
     /// initiate (or the segment that crosses it) is refused with `0504 0005`.
     /// Default 1 MiB; raise it for large DOMAINs such as 1F50h program data.
     pub max_download: usize,
+    /// The abort for an index the dictionary does not have. CiA 301 says
+    /// `0602 0000`; some drives answer otherwise (the SSD 630 sends
+    /// `0601 0000`, seed003 EX14.1), and a faithful personality does too.
+    pub missing_object: SdoAbort,
 }
 
 impl Default for ServerConfig {
@@ -80,6 +84,7 @@ impl Default for ServerConfig {
             block_transfer: true,
             crc: true,
             max_download: 1 << 20,
+            missing_object: SdoAbort::NO_OBJECT,
         }
     }
 }
@@ -584,7 +589,9 @@ impl SdoServer {
         {
             return Ok(r);
         }
-        let r = od.find(index, sub)?;
+        let r = od
+            .find(index, sub)
+            .map_err(|e| if e == SdoAbort::NO_OBJECT { self.config.missing_object } else { e })?;
         let objs = od.objects();
         if let Ok(p) = objs.binary_search_by_key(&index, |o| o.index)
             && let Ok(sp) = objs[p].subs().binary_search_by_key(&sub, |s| s.sub)

@@ -718,3 +718,13 @@ fn read_hook_runs_once_per_upload() {
     }
     assert_eq!(h.reads, 2);
 }
+
+#[test]
+fn missing_object_abort_is_configurable() {
+    let mut r =
+        Rig::with(ServerConfig { missing_object: SdoAbort::UNSUPPORTED_ACCESS, ..ServerConfig::default() });
+    // Upload of a missing index: the personality's code (SSD 630: 0601 0000).
+    assert_eq!(r.one([0x40, 0x34, 0x12, 0x00, 0, 0, 0, 0]), abort(0x1234, 0, SdoAbort::UNSUPPORTED_ACCESS));
+    // A missing sub-index of an existing object keeps 0609 0011.
+    assert_eq!(r.one([0x40, 0x00, 0x10, 0x07, 0, 0, 0, 0]), abort(0x1000, 7, SdoAbort::NO_SUB_INDEX));
+}
