@@ -88,6 +88,9 @@ struct Tpdo {
     has_synced: bool,
     next_allowed: Instant,
     event_deadline: Option<Instant>,
+    /// Only these bits of the packed data count as a change of state
+    /// (`None`: every bit). A device feature, kept across reconfiguration.
+    change_mask: Option<[u8; MAX_DATA_LEN]>,
 }
 
 impl Tpdo {
@@ -129,7 +132,13 @@ impl Tpdo {
     #[inline]
     fn changed(&self, buf: &[u8; MAX_DATA_LEN]) -> bool {
         let n = usize::from(self.s.plan.len).min(MAX_DATA_LEN);
-        !self.has_last || buf[..n] != self.last[..n]
+        if !self.has_last {
+            return true;
+        }
+        match &self.change_mask {
+            None => buf[..n] != self.last[..n],
+            Some(m) => (0..n).any(|i| (buf[i] ^ self.last[i]) & m[i] != 0),
+        }
     }
 }
 
@@ -352,6 +361,21 @@ impl Pdo {
                 true
             }
             _ => false,
+        }
+    }
+
+    /// Restrict change-of-state detection of TPDO `n` (0-based) to the bits
+    /// set in `mask` (byte `i` masks byte `i` of the PDO); `None` restores
+    /// "any change". Drives use this for "send on statusword change only"
+    /// and for the KC1/AKD TPDO masks 2014h–2017h. The event timer still
+    /// sends regardless. `false` if the TPDO does not exist.
+    pub fn set_change_mask(&mut self, n: u16, mask: Option<[u8; MAX_DATA_LEN]>) -> bool {
+        match self.tpdos.get_mut(usize::from(n)) {
+            Some(t) => {
+                t.change_mask = mask;
+                true
+            }
+            None => false,
         }
     }
 

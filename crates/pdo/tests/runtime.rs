@@ -440,3 +440,28 @@ proptest::proptest! {
         proptest::prop_assert_eq!(out, vec![Frame::new(0x183, &want[..len])]);
     }
 }
+
+#[test]
+fn change_mask_limits_change_of_state() {
+    let (mut od, mut pdo) = node3();
+    // TPDO1: statusword only counts in its low byte (a drive's "send on
+    // state change", KC1/AKD masks 2014h..2017h).
+    remap(&mut od, &mut pdo, 0x1800, 0x183, 254, &[0x6041_0010]);
+    assert!(pdo.set_change_mask(0, Some([0xFF, 0, 0, 0, 0, 0, 0, 0])));
+    assert!(!pdo.set_change_mask(99, None));
+    assert_eq!(poll(&mut pdo, &mut od, ms(10)).0.len(), 1);
+    // A change in the high byte alone is not a change of state.
+    let v0 = od.get_u64(0x6041, 0).unwrap() as u16;
+    set(&mut od, 0x6041, 0, Value::U16(v0 ^ 0x0600));
+    let before = od.get_u64(0x6041, 0).unwrap();
+    assert_eq!(poll(&mut pdo, &mut od, ms(11)).0, vec![]);
+    // A change in the masked byte is, and carries the whole value.
+    set(&mut od, 0x6041, 0, Value::U16(before as u16 ^ 0x0001));
+    let v = (before as u16 ^ 0x0001).to_le_bytes();
+    assert_eq!(poll(&mut pdo, &mut od, ms(12)).0, vec![Frame::new(0x183, &v)]);
+    // The mask survives reconfiguration.
+    remap(&mut od, &mut pdo, 0x1800, 0x183, 254, &[0x6041_0010]);
+    poll(&mut pdo, &mut od, ms(20));
+    set(&mut od, 0x6041, 0, Value::U16((before as u16 ^ 0x0001) ^ 0x0100));
+    assert_eq!(poll(&mut pdo, &mut od, ms(21)).0, vec![]);
+}
