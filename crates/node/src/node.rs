@@ -230,6 +230,13 @@ impl Node {
         self.s.emcy.send_raw(code, register, bytes, now)
     }
 
+    /// Restrict change-of-state detection of TPDO `n` (0-based) to the bits
+    /// of `mask` (see `drivebus_pdo::Pdo::set_change_mask`).
+    pub fn set_tpdo_change_mask(&mut self, n: u16, mask: Option<[u8; drivebus_can::MAX_DATA_LEN]>) -> bool {
+        self.dirty = true;
+        self.s.pdo.set_change_mask(n, mask)
+    }
+
     /// Send a TIME stamp if this node is the TIME producer (1012h bit 30)
     /// and TIME is allowed in the current NMT state. Returns whether it went.
     pub fn send_time(&mut self, time: drivebus_sync::TimeOfDay, out: &mut impl TxSink) -> bool {
