@@ -3,9 +3,16 @@
 //! it that an EDS cannot hold (supported modes, homing methods, EMCY codes,
 //! which CiA 301 services exist, quirks).
 //!
-//! This crate is data only. The behaviour (a CiA 402 drive that acts like a
-//! KC1 or an SSD 630) comes with `drivebus-cia402`; `docs/personalities.md`
-//! says what is "data (EDS) done" and what is "behaviour pending".
+//! [`build`] turns a profile into a running drive on the virtual bus (EDS
+//! dictionary, CiA 402 drive from `drivebus-cia402`, the profile's
+//! [`Behaviour`] from [`behaviour`]); `docs/personalities.md` says what each
+//! personality emulates and what not.
+//!
+//! ```
+//! use drivebus_personality::Profile;
+//! let kc1 = Profile::Kc1.build(3).unwrap(); // a drivebus_bus::BusNode
+//! assert_eq!(kc1.node.od().get_u32(0x6502, 0), Some(0xE5));
+//! ```
 //!
 //! ```
 //! use drivebus_personality::Profile;
@@ -15,8 +22,15 @@
 //! assert!(p.info().modes.contains(&-3)); // AKD electronic gearing
 //! ```
 
+pub mod behaviour;
+pub mod build;
 mod emcy_tables;
 mod profiles;
+
+pub use build::{
+    Action, Behaviour, BuildError, Context, EmcyFrame, FilterOutcome, PersonalityNode, Plain, Verdict, build,
+    build_custom, build_on_machine, build_with, parse_drive_spec,
+};
 
 pub use drivebus_eds::Parsed;
 
