@@ -142,7 +142,6 @@ fn boot_emcy_and_no_heartbeat() {
 /// EX14.1: unknown index 1234h → `0601 0000h` (not CiA 301's 0602 0000h).
 /// Both rows printed with 7 bytes (one 00 lost).
 #[test]
-#[ignore = "needs a framework hook to answer a frame for an index the dictionary lacks (see replay_report.md)"]
 fn ex14_1_unknown_index_0601() {
     let mut r = Rig::new();
     r.ex("601#40 34 12 00 00 00 00 00", &["581#80 34 12 00 00 00 01 06"]);

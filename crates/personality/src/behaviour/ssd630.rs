@@ -285,6 +285,8 @@ impl Behaviour for Ssd630 {
         cfg.nmt.life_guarding_honoured = false;
         cfg.heartbeat_consumers = 0;
         cfg.error_classes = 0;
+        // EX14.1: a missing index is answered with 0601 0000, not 0602 0000.
+        cfg.sdo.missing_object = drivebus_od::SdoAbort::UNSUPPORTED_ACCESS;
     }
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
