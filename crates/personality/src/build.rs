@@ -151,6 +151,14 @@ pub enum Action {
     },
     /// Inject a fault into the drive (a manufacturer switch that faults).
     Inject(Injection),
+    /// Restrict change-of-state detection of a TPDO (0-based) to the set
+    /// bits of `mask` (byte `i` masks PDO byte `i`); `None`: every bit.
+    TpdoChangeMask {
+        /// TPDO number, 0-based.
+        tpdo: u16,
+        /// The mask.
+        mask: Option<[u8; 8]>,
+    },
 }
 
 /// The context a [`Behaviour`] gets: the drive (to forward a translated

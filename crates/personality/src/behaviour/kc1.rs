@@ -20,7 +20,7 @@
 use crate::Profile;
 
 extern crate alloc;
-use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
+use crate::build::{Action, Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
 use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, Injection};
 use drivebus_node::{Node, NodeConfig, NodeEvent};
@@ -72,8 +72,8 @@ impl Kollmorgen {
 
     /// Objects whose writes the Kollmorgen behaviour watches.
     pub const HOOKED: &'static [u16] = &[
-        0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403, 0x1800, 0x1801, 0x1802, 0x1803,
-        0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
+        0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
+        0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
     ];
 }
 
@@ -112,6 +112,10 @@ impl Behaviour for Kollmorgen {
     }
 
     fn finish(&mut self, node: &mut Node) {
+        for index in 0x2014..=0x2017u16 {
+            let mask = tpdo_mask(node.od(), index);
+            node.set_tpdo_change_mask(index - 0x2014, mask);
+        }
         // §7.10.2.3: 6099h:1 "equivalent 60 rpm", :2 1/8 of it.
         let od = node.od_mut();
         set_default(od, 0x6099, 1, &Value::U32(UNITS_PER_REV));
@@ -226,7 +230,10 @@ impl Behaviour for Kollmorgen {
         Ok(())
     }
 
-    fn after_write(&mut self, _cx: &mut Context<'_>, od: &mut ObjectDictionary, _index: u16, _sub: u8) {
+    fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, _sub: u8) {
+        if let 0x2014..=0x2017 = index {
+            cx.actions.push(Action::TpdoChangeMask { tpdo: index - 0x2014, mask: tpdo_mask(od, index) });
+        }
         // Valid again before the PDO service re-reads the PDO.
         if let Some((comm, cob)) = self.lifted.take()
             && let Ok(r) = od.find(comm, 1)
@@ -345,4 +352,19 @@ pub fn kollmorgen_units(cfg: &mut DriveConfig) {
     ] {
         *v = (*v / k).max(1);
     }
+}
+
+/// KC1 §7.2.2.4 / AKD B.4: 2014h..2017h sub 1 masks TPDO bytes 0..3, sub 2
+/// bytes 4..7; a set bit is monitored for change of state. All ones is the
+/// CiA 301 default (every change counts).
+fn tpdo_mask(od: &ObjectDictionary, index: u16) -> Option<[u8; 8]> {
+    let lo = od.get_u32(index, 1).unwrap_or(u32::MAX);
+    let hi = od.get_u32(index, 2).unwrap_or(u32::MAX);
+    if lo == u32::MAX && hi == u32::MAX {
+        return None;
+    }
+    let mut m = [0u8; 8];
+    m[..4].copy_from_slice(&lo.to_le_bytes());
+    m[4..].copy_from_slice(&hi.to_le_bytes());
+    Some(m)
 }

@@ -313,6 +313,9 @@ impl PersonalityNode {
                     }
                 }
                 Action::Inject(i) => self.drive.inject(i),
+                Action::TpdoChangeMask { tpdo, mask } => {
+                    self.node.set_tpdo_change_mask(tpdo, mask);
+                }
             }
         }
         any
