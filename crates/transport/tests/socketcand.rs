@@ -218,7 +218,7 @@ async fn garbage_and_vanishing_clients_do_not_hurt_the_hub() {
 }
 
 #[tokio::test]
-async fn frames_in_the_grace_window_are_dropped() {
+async fn frames_in_the_grace_window_are_held_back_not_lost() {
     let (srv, addr) = server().await;
     let drive = srv.attach();
     let mut s = TcpStream::connect(addr).await.unwrap();
@@ -228,10 +228,16 @@ async fn frames_in_the_grace_window_are_dropped() {
     s.write_all(b"< rawmode >").await.unwrap();
     assert_eq!(recv_once(&mut s).await, b"< ok >");
     drive.send(Frame::new(0x111, &[])).await.unwrap(); // within 20 ms of the ok
+    // Nothing may follow `< ok >` inside the grace (python-can's exact compare)...
+    let mut buf = [0u8; 64];
+    let early = tokio::time::timeout(Duration::from_millis(10), s.read(&mut buf)).await;
+    assert!(early.is_err(), "a frame followed `< ok >` within the grace");
+    // ...but the frame is delivered after it, like a response to an early request.
     sleep(Duration::from_millis(60)).await;
     drive.send(Frame::new(0x222, &[])).await.unwrap();
-    let m = read_messages(&mut s, 1).await;
-    assert!(m[0].starts_with(" frame 222 "), "{m:?}");
+    let m = read_messages(&mut s, 2).await;
+    assert!(m[0].starts_with(" frame 111 "), "{m:?}");
+    assert!(m[1].starts_with(" frame 222 "), "{m:?}");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

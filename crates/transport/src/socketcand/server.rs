@@ -138,7 +138,7 @@ async fn accept_loop(listener: TcpListener, cfg: Arc<ServerConfig>, hub: Hub, cl
 /// write half, so replies and relayed frames never interleave mid-message).
 enum Ctl {
     Reply(&'static str),
-    /// `< ok >` for rawmode, grace, then start relaying.
+    /// `< ok >` for rawmode, a grace with frames held back, then relaying.
     EnterRaw,
 }
 
@@ -249,9 +249,13 @@ async fn writer(
                     return why;
                 }
                 if matches!(c, Ctl::EnterRaw) {
-                    tokio::time::sleep(cfg.grace).await;
-                    // Subscribing only now drops the grace window's frames.
+                    // Subscribe first, write later: frames of the grace
+                    // window (e.g. the answer to a request a client sends
+                    // right after `< ok >`) wait in the queue instead of
+                    // being lost; the pause keeps `< ok >` alone in the
+                    // client's first read (transport-feasibility §4.2).
                     sub = Some(hub.subscribe());
+                    tokio::time::sleep(cfg.grace).await;
                 }
             }
             m = recv_some(&mut sub) => {
