@@ -151,7 +151,12 @@ pub fn merge_services(od: &mut ObjectDictionary, generated: &ObjectDictionary) {
 /// Mark the numeric defaults that follow the node-ID (COB-IDs such as
 /// 1014h = 80h + node-ID): they are the ones that differ between the same
 /// configuration built for two node-IDs.
-pub fn mark_node_relative(cfg: &NodeConfig, generated: &ObjectDictionary, generated_id: u8, od: &mut ObjectDictionary) {
+pub fn mark_node_relative(
+    cfg: &NodeConfig,
+    generated: &ObjectDictionary,
+    generated_id: u8,
+    od: &mut ObjectDictionary,
+) {
     // `generated` was built for `generated_id` (1 when unconfigured); one
     // more build for a neighbouring node-ID shows which defaults move with it.
     let id = if (1..=127).contains(&generated_id) { generated_id } else { 1 };
