@@ -304,14 +304,13 @@ impl Node {
             r if r >= route::SDO => {
                 let i = usize::from(r - route::SDO);
                 if state.allows(Service::Sdo) && i < self.sdo.len() {
-                    let was_idle = self.sdo[i].is_idle();
                     let mut hooks = CommHooks { s: &mut self.s, app };
                     self.sdo[i].handle_frame(frame, now, &mut self.od, &mut hooks, out);
-                    // An expedited exchange leaves the server idle and no
-                    // timer behind: the cached deadline stays valid.
-                    if !(was_idle && self.sdo[i].is_idle()) {
-                        self.dirty = true;
-                    }
+                    // A transfer only moves this server's own timeout: fold
+                    // it into the cached deadline rather than forcing a full
+                    // poll (an early wake-up is harmless, a late one is not).
+                    let d = self.sdo[i].poll(now, out);
+                    self.next_deadline = earliest(self.next_deadline, d);
                     self.after_sdo_write(now, app, out);
                 }
             }
