@@ -115,6 +115,7 @@ Examples:
   drivebus serve --drive akd:1
   drivebus serve --listen 127.0.0.1:29536 --channel can0 --drive kc1:1 --drive dds6:2 --state-dir ./state
   drivebus serve --drive generic:5 --bitrate 1000000
+  drivebus serve --drive generic:5 --fault drop:0x185,every=10   (lose every 10th TPDO1)
 
 Prints one line containing `listening on` when ready; stops on SIGINT/SIGTERM (exit 0).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
@@ -137,6 +138,10 @@ pub struct ServeArgs {
     /// Pace frames like a CAN bus at this bit rate.
     #[arg(long, value_name = "BPS")]
     pub bitrate: Option<u32>,
+    /// Fault injection on the hosting bus (repeatable): `drop:IDS[,every=N][,skip=N][,times=N]`
+    /// or `corrupt:IDS:MASK[,...]`; IDS is `0x585` or `0x180-0x1FF`, MASK is hex XORed onto the data.
+    #[arg(long = "fault", value_name = "RULE")]
+    pub faults: Vec<String>,
 }
 
 const DEMO_EXAMPLES: &str = "\
@@ -515,4 +520,8 @@ pub struct SlcanPtyArgs {
     /// Stop after this many seconds (default: until SIGINT/SIGTERM).
     #[arg(long)]
     pub seconds: Option<f64>,
+    /// Fault injection on the hosting bus (repeatable): `drop:IDS[,every=N][,skip=N][,times=N]`
+    /// or `corrupt:IDS:MASK[,...]`; IDS is `0x585` or `0x180-0x1FF`, MASK is hex XORed onto the data.
+    #[arg(long = "fault", value_name = "RULE")]
+    pub faults: Vec<String>,
 }

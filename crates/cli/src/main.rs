@@ -8,6 +8,7 @@ mod args;
 mod demo;
 mod dump;
 mod eds_cmd;
+mod fault;
 mod link;
 mod misc;
 mod motion;

@@ -415,6 +415,7 @@ pub async fn slcan_pty(g: &Global, a: &SlcanPtyArgs) -> anyhow::Result<()> {
             drivebus_transport::BusUrl::Virtual { name } => drivebus_transport::hub::virtual_hub(&name),
             _ => bail!("slcan-pty runs on the in-process virtual bus: use --bus virtual (not `{}`)", g.bus),
         };
+        crate::fault::install(&hub, &a.faults)?;
         let _drives = spawn_on_hub(&specs, &hub, None)?;
         let pty = drivebus_transport::slcan::SlcanPty::spawn(hub.attach())
             .context("cannot open a pseudo-terminal")?;

@@ -29,6 +29,7 @@ pub async fn run(a: &ServeArgs) -> anyhow::Result<()> {
             .with_context(|| format!("cannot create --state-dir {}", dir.display()))?;
     }
     let hub = Hub::new(HubConfig { bitrate: a.bitrate, ..HubConfig::default() });
+    crate::fault::install(&hub, &a.faults)?;
     let (server, addr) =
         SocketcandServer::bind_with(a.listen.as_str(), ServerConfig::new(&a.channel), hub.clone())
             .await

@@ -144,3 +144,38 @@ fn serve_help_has_examples() {
         .success()
         .stdout(predicate::str::contains("Examples:").and(predicate::str::contains("--state-dir")));
 }
+
+/// `--fault`: the hub drops (or corrupts) frames by rule, for testing how a
+/// master copes (issue 5 §1: fault injection on every transport hosting drives).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn fault_rules_drop_and_corrupt_frames() {
+    // Every SDO response of node 5 is lost; node 6 answers, with byte 7 flipped.
+    let srv = Serve::start(
+        &[
+            "--drive",
+            "generic:5",
+            "--drive",
+            "generic:6",
+            "--fault",
+            "drop:0x585",
+            "--fault",
+            "corrupt:0x586:00000000000000FF",
+        ],
+        None,
+    );
+    let mut bus = connect(&srv.url()).await;
+    bus.send(Frame::new(0x605, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0])).await.unwrap();
+    assert!(wait_frame(&mut bus, Duration::from_millis(500), |f| f.std_id() == Some(0x585)).await.is_none());
+    // 1000h of the generic drive: 0x00020192 → the top byte arrives XORed with FF.
+    assert_eq!(sdo_read(&mut bus, 6, 0x1000, 0).await, Ok(0xFF02_0192));
+}
+
+#[test]
+fn bad_fault_rules_fail_with_a_clear_message() {
+    Command::new(common::bin())
+        .args(["serve", "--listen", "127.0.0.1:0", "--drive", "generic:5", "--fault", "drop:banana"])
+        .timeout(Duration::from_secs(20))
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("bad --fault `drop:banana`"));
+}
