@@ -1,6 +1,9 @@
 //! Replays of the Kollmorgen KC1 CANopen manual's example frames (seed000,
 //! edition May 2013 rev. J) that exercise CiA 301 services. Examples and
 //! frame numbers follow `seed000-kc1-examples.md`; sections are the manual's.
+//! The printed frames (with the typo corrections) are read from
+//! `crates/personality/traces/kc1_ex*.txt`, shared with the personality
+//! replays.
 //!
 //! The CiA 402 parts (statusword changes after a controlword, motion) are
 //! not replayed: the values such a drive would report are set in the
@@ -15,12 +18,15 @@
 
 mod common;
 mod manual;
+#[path = "../../personality/tests/replay_rig/trace.rs"]
+mod trace;
 
 use common::*;
 use drivebus_node::{Identity, Node};
 use drivebus_od::Value;
 use drivebus_pdo::PdoConfig;
 use manual::*;
+use trace::{every_2nd_and_3rd, kc1};
 
 /// A KC1 (seed000 inventory): device type 0002_0192h (§7.2.1.1), vendor-ID
 /// 6Ah (§7.2.1.17), product code / device name as 4 ASCII characters
@@ -66,16 +72,7 @@ fn unprinted(r: &mut Rig, id: u8, index: u16, sub: u8, value: u32) {
 #[test]
 fn kc1_ex01_free_mapping_of_tpdo1() {
     let mut r = rig(node_id(1));
-    replay(
-        &mut r,
-        &[
-            ("601#23 00 18 01 81 01 00 C0", &["581#60 00 18 01 00 00 00 00"]),
-            ("601#2F 00 1A 00 00 00 00 00", &["581#60 00 1A 00 00 00 00 00"]),
-            ("601#23 00 1A 01 10 00 41 60", &["581#60 00 1A 01 00 00 00 00"]),
-            ("601#23 00 1A 02 20 00 02 10", &["581#60 00 1A 02 00 00 00 00"]),
-            ("601#2F 00 1A 00 02 00 00 00", &["581#60 00 1A 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &kc1(1).steps(1, 5));
     // As printed, TPDO1 stays invalid (1800h:1 bit 31 set).
     assert_eq!(r.node().od().get_u32(0x1800, 1), Some(0xC000_0181));
     assert_eq!(r.node().od().get_u32(0x1A00, 2), Some(0x1002_0020));
@@ -86,37 +83,18 @@ fn kc1_ex01_free_mapping_of_tpdo1() {
 fn kc1_ex03_status_machine_by_sdo() {
     let mut r = rig(node());
     set(&mut r, 0x6041, 0, Value::U16(0x0240));
-    // Frame 1 prints data bytes `40 00 00 00` in an upload request: reserved, ignored.
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 40 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-            ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-        ],
-    );
+    let t = kc1(3);
+    replay(&mut r, &t.steps(1, 6));
     // 0x0233 is the 402 state machine's answer (issue 3): set as printed.
     set(&mut r, 0x6041, 0, Value::U16(0x0233));
-    // Frame 7 prints its data field as "—": reserved bytes, sent as 00.
-    r.exchange("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 33 02 00 00"]);
+    replay(&mut r, &t.steps(7, 8));
 }
 
 /// Example 4, §8.2.1.3: jog (profile velocity) by SDO — every download confirmed.
 #[test]
 fn kc1_ex04_jog_mode_by_sdo() {
     let mut r = rig(node());
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 03 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 FF 60 00 00 00 00 00", &["583#60 FF 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 0F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#23 FF 60 00 00 41 00 00", &["583#60 FF 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &kc1(4).steps(1, 14));
     assert_eq!(r.node().od().get_value(0x60FF, 0), Some(Value::I32(0x4100)));
 }
 
@@ -124,145 +102,66 @@ fn kc1_ex04_jog_mode_by_sdo() {
 #[test]
 fn kc1_ex05_torque_mode_by_sdo() {
     let mut r = rig(node());
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 04 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2B 71 60 00 00 00 00 00", &["583#60 71 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 0F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 71 60 00 90 01 00 00", &["583#60 71 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &kc1(5).steps(1, 14));
     assert_eq!(r.node().od().get_value(0x6071, 0), Some(Value::I16(400)));
 }
-
-/// The disable writes of examples 6/7 (TPDO2..4, RPDO2..4 of node 3).
-const DISABLE_OTHER_PDOS: &[Step<'static>] = &[
-    ("603#23 01 18 01 83 02 00 80", &["583#60 01 18 01 00 00 00 00"]),
-    ("603#23 02 18 01 83 03 00 80", &["583#60 02 18 01 00 00 00 00"]),
-    ("603#23 03 18 01 83 04 00 80", &["583#60 03 18 01 00 00 00 00"]),
-    ("603#23 01 14 01 03 03 00 80", &["583#60 01 14 01 00 00 00 00"]),
-    ("603#23 02 14 01 03 04 00 80", &["583#60 02 14 01 00 00 00 00"]),
-    ("603#23 03 14 01 03 05 00 80", &["583#60 03 14 01 00 00 00 00"]),
-];
-
-const ENABLE_BY_SDO: &[Step<'static>] = &[
-    ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-    ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-    ("603#2B 40 60 00 0F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-];
 
 /// Example 6, §8.2.1.5: jog by PDO. RPDO1 → 60FFh, TPDO1 → 6064h + 606Ch on
 /// every SYNC; the other PDOs disabled; NMT start; setpoint by RPDO1; SYNC.
 #[test]
 fn kc1_ex06_jog_mode_by_pdo() {
+    let t = kc1(6);
     let mut r = rig(node());
-    r.exchange("603#2F 60 60 00 03 00 00 00", &["583#60 60 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(1, 2));
     unprinted(&mut r, 3, 0x1400, 1, 0x8000_0203);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 00 16 00 00 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 16 01 20 00 FF 60", &["583#60 00 16 01 00 00 00 00"]),
-            ("603#2F 00 16 00 01 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(3, 8));
     unprinted(&mut r, 3, 0x1800, 1, 0x8000_0183);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#23 00 1A 02 20 00 6C 60", &["583#60 00 1A 02 00 00 00 00"]),
-            ("603#2F 00 1A 00 02 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 01 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, DISABLE_OTHER_PDOS);
+    replay(&mut r, &t.steps(9, 18));
+    // Frames 19–30: TPDO2..4, RPDO2..4 disabled.
+    replay(&mut r, &t.steps(19, 30));
     unprinted(&mut r, 3, 0x1400, 1, 0x203);
     unprinted(&mut r, 3, 0x1800, 1, 0x183);
-    r.exchange("000#01 03", &[]);
-    replay(&mut r, ENABLE_BY_SDO);
-    // TYPO (examples file): `203 00 40` prints 2 bytes of a 32-bit mapping;
-    // the setpoint 0x4000 as a full 4-byte PDO.
-    r.exchange("203#00 40 00 00", &[]);
+    replay(&mut r, &t.steps(31, 37));
+    // Frame 38, TYPO (examples file): `203 00 40` prints 2 bytes of a 32-bit
+    // mapping; the setpoint 0x4000 as a full 4-byte PDO.
+    r.exchange(&format!("{} 00 00", t.frame(38)), &[]);
     assert_eq!(r.node().od().get_value(0x60FF, 0), Some(Value::I32(0x4000)));
     // Actual position / velocity at the SYNC, as the manual's TPDO shows them.
     set(&mut r, 0x6064, 0, Value::I32(0x0001_45FE));
     set(&mut r, 0x606C, 0, Value::I32(0x001A_ABA6));
-    r.exchange("080#", &["183#FE 45 01 00 A6 AB 1A 00"]);
-    r.exchange("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(39, 42));
 }
 
 /// Example 7, §8.2.1.6: torque by PDO. RPDO1 → 6071h, TPDO1 → 6077h on SYNC.
 #[test]
 fn kc1_ex07_torque_mode_by_pdo() {
+    let t = kc1(7);
     let mut r = rig(node());
-    r.exchange("603#2F 60 60 00 04 00 00 00", &["583#60 60 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(1, 2));
     unprinted(&mut r, 3, 0x1400, 1, 0x8000_0203);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 00 16 00 00 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 16 01 10 00 71 60", &["583#60 00 16 01 00 00 00 00"]),
-            ("603#2F 00 16 00 01 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(3, 8));
     unprinted(&mut r, 3, 0x1800, 1, 0x8000_0183);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 10 00 77 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 01 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, DISABLE_OTHER_PDOS);
+    replay(&mut r, &t.steps(9, 28));
     unprinted(&mut r, 3, 0x1400, 1, 0x203);
     unprinted(&mut r, 3, 0x1800, 1, 0x183);
-    r.exchange("000#01 03", &[]);
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("203#12 02", &[]);
+    replay(&mut r, &t.steps(29, 36));
     assert_eq!(r.node().od().get_value(0x6071, 0), Some(Value::I16(0x0212)));
     set(&mut r, 0x6077, 0, Value::I16(0x0219));
-    r.exchange("080#", &["183#19 02"]);
-    r.exchange("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(37, 40));
 }
 
 /// Example 8, §8.2.1.7: boot-up (checked by the rig: `703 00`), homing
 /// parameters by SDO, statusword reads (values set as printed: issue 3).
 #[test]
 fn kc1_ex08_homing_by_sdo() {
+    let t = kc1(8);
     let mut r = rig(node());
     set(&mut r, 0x6041, 0, Value::U16(0x0240));
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-            ("603#23 99 60 01 10 27 00 00", &["583#60 99 60 01 00 00 00 00"]),
-            ("603#23 99 60 02 88 13 00 00", &["583#60 99 60 02 00 00 00 00"]),
-            ("603#23 9A 60 00 10 27 00 00", &["583#60 9A 60 00 00 00 00 00"]),
-            ("603#23 7C 60 00 A8 61 00 00", &["583#60 7C 60 00 00 00 00 00"]),
-            ("603#2F 60 60 00 06 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
+    replay(&mut r, &t.steps(2, 21));
     set(&mut r, 0x6041, 0, Value::U16(0x0237));
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 02 00 00"]),
-            ("603#2B 40 60 00 1F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 02 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(22, 27));
     set(&mut r, 0x6041, 0, Value::U16(0x1637));
-    r.exchange("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 16 00 00"]);
+    replay(&mut r, &t.steps(28, 29));
 }
 
 /// Example 9, §8.2.1.8: the PDO configuration for profile position (frames
@@ -272,113 +171,61 @@ fn kc1_ex08_homing_by_sdo() {
 /// scaling) and motion need the 402 drive (issue 3/4).
 #[test]
 fn kc1_ex09_profile_position_pdo_configuration() {
+    let t = kc1(9);
     let mut r = rig(node());
     unprinted(&mut r, 3, 0x1401, 1, 0x8000_0303);
-    // Frames 1 and 9 carry 01 in byte 7 beyond a 1-byte payload: ignored (n = 3).
-    replay(
-        &mut r,
-        &[
-            ("603#2F 01 16 00 00 00 00 01", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 16 01 20 00 7A 60", &["583#60 01 16 01 00 00 00 00"]),
-            ("603#23 01 16 02 20 00 81 60", &["583#60 01 16 02 00 00 00 00"]),
-            ("603#2F 01 16 00 02 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 8));
     unprinted(&mut r, 3, 0x1800, 1, 0x8000_0183);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 00 1A 00 00 00 00 01", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 10 00 41 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(9, 14));
     unprinted(&mut r, 3, 0x1801, 1, 0x8000_0283);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 01 1A 00 00 00 00 01", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#23 01 1A 01 20 00 64 60", &["583#60 01 1A 01 00 00 00 00"]),
-            ("603#23 01 1A 02 20 00 6C 60", &["583#60 01 1A 02 00 00 00 00"]),
-            ("603#2F 01 1A 00 02 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#2F 01 18 02 01 00 00 00", &["583#60 01 18 02 00 00 00 00"]),
-            ("603#23 02 18 01 83 03 00 80", &["583#60 02 18 01 00 00 00 00"]),
-            ("603#23 03 18 01 83 04 00 80", &["583#60 03 18 01 00 00 00 00"]),
-            ("603#23 02 14 01 03 04 00 80", &["583#60 02 14 01 00 00 00 00"]),
-            ("603#23 03 14 01 03 05 00 80", &["583#60 03 14 01 00 00 00 00"]),
-            // "6092h" in the text, 6093h in the bytes: replayed as printed.
-            ("603#23 93 60 01 00 00 10 00", &["583#60 93 60 01 00 00 00 00"]),
-            ("603#23 93 60 02 A0 8C 00 00", &["583#60 93 60 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(15, 36));
     unprinted(&mut r, 3, 0x1401, 1, 0x303);
     unprinted(&mut r, 3, 0x1800, 1, 0x183);
     unprinted(&mut r, 3, 0x1801, 1, 0x283);
     // Frames 37/38: NMT start; the event-driven TPDO1 goes out at once with
     // the statusword (0240h as printed; its value is issue 3's).
     set(&mut r, 0x6041, 0, Value::U16(0x0240));
-    r.exchange("000#01 03", &["183#40 02"]);
+    replay(&mut r, &t.steps(37, 38));
     // Frames 39–42 and 45–46/48–49/51–52/54–55/59–64: the SDO downloads of the
     // homing / positioning part (their TPDO1 statusword frames need issue 3).
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 06 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2F 98 60 00 0C 00 00 00", &["583#60 98 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 0F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 1F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2F 60 60 00 01 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 83 60 00 32 00 00 00", &["583#60 83 60 00 00 00 00 00"]),
-            ("603#23 84 60 00 32 00 00 00", &["583#60 84 60 00 00 00 00 00"]),
-        ],
-    );
-    // TYPO (examples file): RPDO2 `303 20 4E 00 00` prints 4 of 8 bytes;
-    // the full frame is position 8CA0h then velocity 4E20h.
-    r.exchange("303#A0 8C 00 00 20 4E 00 00", &[]);
+    replay(&mut r, &t.steps(39, 42));
+    for k in [45, 48, 51, 54, 59, 61, 63] {
+        r.exchange(t.frame(k), &[t.frame(k + 1)]);
+    }
+    // Frame 65 (RPDO2, corrected to 8 bytes in the trace): position 8CA0h
+    // then velocity 4E20h.
+    replay(&mut r, &t.steps(65, 65));
     assert_eq!(r.node().od().get_value(0x607A, 0), Some(Value::I32(0x8CA0)));
     assert_eq!(r.node().od().get_value(0x6081, 0), Some(Value::U32(0x4E20)));
-    // TPDO2 on SYNC: the printed `283 BB F8 FF FF` is 4 bytes of an 8-byte
-    // mapping (6064h + 606Ch); the position part is checked with velocity 0.
+    // Frames 66/67, TPDO2 on SYNC (printed with 4 of 8 bytes, 6064h + 606Ch):
+    // the position part is checked with velocity 0.
     set(&mut r, 0x6064, 0, Value::I32(-1861));
     set(&mut r, 0x606C, 0, Value::I32(0));
-    r.exchange("080#", &["283#BB F8 FF FF 00 00 00 00"]);
+    replay(&mut r, &t.steps(66, 67));
     // Frames 58, 68, 70: controlwords by RPDO1 (default mapping 6040h); the
     // TPDO1 answers (69, 71, 72) are the 402 handshake (issue 3).
-    for (cw, v) in [("203#0F 00", 0x000F), ("203#1F 00", 0x001F), ("203#0F 00", 0x000F)] {
-        r.exchange(cw, &[]);
+    for (k, v) in [(58, 0x000F), (68, 0x001F), (70, 0x000F)] {
+        r.exchange(t.frame(k), &[]);
         assert_eq!(r.node().od().get_value(0x6040, 0), Some(Value::U16(v)));
     }
     // Frames 73/74: the second SYNC, TPDO2 printed with 4 of 8 bytes again.
     set(&mut r, 0x6064, 0, Value::I32(-878));
-    r.exchange("080#", &["283#92 FC FF FF 00 00 00 00"]);
+    replay(&mut r, &t.steps(73, 74));
 }
 
 /// Example 10, §8.2.1.9: the ASCII channel 2026h, node 1. The command
-/// interpreter is the drive's (issue 4): the test sets each reply chunk.
+/// interpreter is the drive's (issue 4): the test sets each reply chunk, the
+/// 4 data bytes of the printed reply (typos corrected in the trace:
+/// ">No faults active\n\r\n").
 #[test]
 fn kc1_ex10_ascii_channel() {
+    let t = kc1(10);
     let mut r = rig(node_id(1));
-    replay(
-        &mut r,
-        &[
-            ("601#23 26 20 01 44 52 56 2E", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#23 26 20 01 46 41 55 4C", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#23 26 20 01 54 53 0D 0A", &["581#60 26 20 01 00 00 00 00"]),
-        ],
-    );
-    // TYPO (examples file): chunk 4 prints "cdiv" (63 64 69 76) and chunk 5
-    // "f\n\r\n" (66 ..); the reply is ">No faults active\n\r\n".
-    for (chunk, resp) in [
-        (">No ", "581#43 26 20 02 3E 4E 6F 20"),
-        ("faul", "581#43 26 20 02 66 61 75 6C"),
-        ("ts a", "581#43 26 20 02 74 73 20 61"),
-        ("ctiv", "581#43 26 20 02 63 74 69 76"),
-        ("e\n\r\n", "581#43 26 20 02 65 0A 0D 0A"),
-    ] {
-        set(&mut r, 0x2026, 2, Value::Str(chunk.into()));
-        r.exchange("601#40 26 20 02 00 00 00 00", &[resp]);
+    replay(&mut r, &t.steps(1, 6));
+    for (req, resp) in t.steps(7, 16) {
+        let chunk: Vec<u8> = fr(resp[0]).data()[4..].to_vec();
+        set(&mut r, 0x2026, 2, Value::Str(String::from_utf8(chunk).unwrap()));
+        r.exchange(req, resp);
     }
 }
 
@@ -386,40 +233,14 @@ fn kc1_ex10_ascii_channel() {
 /// SYNC, TPDO2 → 6041h + 1002h every 3rd SYNC.
 #[test]
 fn kc1_ex11_sync_every_nth() {
+    let t = kc1(11);
     let mut r = rig(node());
     unprinted(&mut r, 3, 0x1401, 1, 0x8000_0303);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 01 16 00 00 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 16 01 20 00 7A 60", &["583#60 01 16 01 00 00 00 00"]),
-            ("603#23 01 16 02 20 00 81 60", &["583#60 01 16 02 00 00 00 00"]),
-            ("603#2F 01 16 00 02 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 8));
     unprinted(&mut r, 3, 0x1800, 1, 0x8000_0183);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 02 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(9, 16));
     unprinted(&mut r, 3, 0x1801, 1, 0x8000_0283);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 01 1A 00 00 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#23 01 1A 01 10 00 41 60", &["583#60 01 1A 01 00 00 00 00"]),
-            ("603#23 01 1A 02 20 00 02 10", &["583#60 01 1A 02 00 00 00 00"]),
-            // TYPO (examples file): printed `2F 01 16 00 02` (1601h) under
-            // "TPDO2: enter number of mapped objects"; 1A01h meant.
-            ("603#2F 01 1A 00 02 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#2F 01 18 02 03 00 00 00", &["583#60 01 18 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(17, 26));
     unprinted(&mut r, 3, 0x1401, 1, 0x303);
     unprinted(&mut r, 3, 0x1800, 1, 0x183);
     unprinted(&mut r, 3, 0x1801, 1, 0x283);
@@ -431,20 +252,13 @@ fn kc1_ex11_sync_every_nth() {
     set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
     r.send("000#01 03");
     r.take();
-    // TYPO? (examples file): the comment names 181/281, node 3 uses 183/283.
+    // Frame 27 (SYNC) and the pattern its comment describes, on 183h/283h.
+    let sync = t.frame(27);
     let tpdo1 = "183#34 12 00 00";
     let tpdo2 = "283#37 02 00 00 03 44";
-    replay(
-        &mut r,
-        &[
-            ("080#", &[]),
-            ("080#", &[tpdo1]),
-            ("080#", &[tpdo2]),
-            ("080#", &[tpdo1]),
-            ("080#", &[]),
-            ("080#", &[tpdo1, tpdo2]),
-        ],
-    );
+    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
+        r.exchange(sync, &tpdos);
+    }
 }
 
 /// Examples 11 and 12: the EMCY frames of node 1. Their error register has
@@ -453,16 +267,17 @@ fn kc1_ex11_sync_every_nth() {
 /// frames check the EMCY COB-ID and layout.
 #[test]
 fn kc1_ex12_emcy_frames() {
+    let (t11, t12) = (kc1(11), kc1(12));
     let mut r = rig(node_id(1));
     // §8.2.2.1 prints 8 bytes: code 4310h, register 08h, category 01h.
     raw_emcy(&mut r, 0x4310, 0x08, [0x01, 0, 0, 0, 0]);
-    assert_eq!(r.take(), frs(&["081#10 43 08 01 00 00 00 00"]));
+    assert_eq!(r.take(), frs(&[t12.frame(60)]));
     raw_emcy(&mut r, 0x0000, 0x08, [0; 5]);
-    assert_eq!(r.take(), frs(&["081#00 00 08 00 00 00 00 00"]));
+    assert_eq!(r.take(), frs(&[t12.frame(61)]));
     // §8.2.1.10 prints the same frames with 7 bytes (category column lost):
     // read as the 8-byte layout of §6.4.4.2, register 88h in the reset frame.
     raw_emcy(&mut r, 0x0000, 0x88, [0; 5]);
-    assert_eq!(r.take(), frs(&["081#00 00 88 00 00 00 00 00"]));
+    assert_eq!(r.take(), frs(&[t11.frame(29)]));
 }
 
 /// Example 12, §8.2.2.1, axis 1 (node 1): RPDO2 → 60C1h:1 + dummy 2100h,
@@ -470,53 +285,31 @@ fn kc1_ex12_emcy_frames() {
 /// period; NMT start; RPDO2 + SYNC → TPDO2.
 #[test]
 fn kc1_ex12_ip_two_axes_axis1() {
+    let t = kc1(12);
     let mut r = rig(node_id(1));
     unprinted(&mut r, 1, 0x1401, 1, 0x8000_0301);
-    replay(
-        &mut r,
-        &[
-            ("601#2F 01 16 00 00 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 16 01 20 01 C1 60", &["581#60 01 16 01 00 00 00 00"]),
-            ("601#23 01 16 02 20 00 00 21", &["581#60 01 16 02 00 00 00 00"]),
-            ("601#2F 01 16 00 02 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(1, 8, "601"));
     unprinted(&mut r, 1, 0x1801, 1, 0x8000_0281);
-    replay(
-        &mut r,
-        &[
-            ("601#2F 01 1A 00 00 00 00 00", &["581#60 01 1A 00 00 00 00 00"]),
-            ("601#23 01 1A 01 20 00 63 60", &["581#60 01 1A 01 00 00 00 00"]),
-            ("601#23 01 1A 02 20 00 02 10", &["581#60 01 1A 02 00 00 00 00"]),
-            ("601#2F 01 1A 00 02 00 00 00", &["581#60 01 1A 00 00 00 00 00"]),
-            ("601#2F 01 14 02 01 00 00 00", &["581#60 01 14 02 00 00 00 00"]),
-            ("601#2F 01 18 02 01 00 00 00", &["581#60 01 18 02 00 00 00 00"]),
-            ("601#23 02 18 01 81 03 00 80", &["581#60 02 18 01 00 00 00 00"]),
-            ("601#23 03 18 01 81 04 00 80", &["581#60 03 18 01 00 00 00 00"]),
-            ("601#2F 60 60 00 07 00 00 00", &["581#60 60 60 00 00 00 00 00"]),
-            ("601#2F C2 60 01 01 00 00 00", &["581#60 C2 60 01 00 00 00 00"]),
-            ("601#2F C2 60 02 FD 00 00 00", &["581#60 C2 60 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(19, 46, "601"));
     unprinted(&mut r, 1, 0x1401, 1, 0x301);
     unprinted(&mut r, 1, 0x1801, 1, 0x281);
     // Frame 47, NMT start. The event-driven TPDO1 (statusword) goes out on
     // entering operational, as in example 9; not printed here, not asserted.
-    r.send("000#01 01");
+    r.send(t.frame(47));
     r.take();
     // Frames 48–55: controlwords by RPDO1; the TPDO1 state answers are the
     // 402 state machine's (issue 3).
-    for cw in ["201#06 00", "201#07 00", "201#0F 00", "201#1F 00"] {
+    for (cw, _) in t.steps(48, 55) {
         r.exchange(cw, &[]);
     }
     assert_eq!(r.node().od().get_value(0x6040, 0), Some(Value::U16(0x001F)));
-    r.exchange("301#F4 01 00 00 E8 03 00 00", &[]);
+    replay(&mut r, &t.steps(56, 56));
     set(&mut r, 0x6063, 0, Value::I32(0x123));
     set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
-    // RPDO2 is synchronous: applied at the SYNC. INCONSISTENT (examples file):
-    // TPDO2 printed on 181h; TPDO2 of node 1 is 281h.
+    // RPDO2 is synchronous: applied at the SYNC. Frame 58 (TPDO2 printed on
+    // 181h, INCONSISTENT) is on 281h in the trace.
     assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(0)));
-    r.exchange("080#", &["281#23 01 00 00 00 00 03 44"]);
+    r.exchange(t.frame(57), &[t.frame(58)]);
     assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(500)));
 }
 
@@ -524,24 +317,10 @@ fn kc1_ex12_ip_two_axes_axis1() {
 /// set-point in bytes 4–7.
 #[test]
 fn kc1_ex12_ip_two_axes_axis2() {
+    let t = kc1(12);
     let mut r = rig(node_id(2));
     unprinted(&mut r, 2, 0x1401, 1, 0x8000_0302);
-    replay(
-        &mut r,
-        &[
-            ("602#2F 01 16 00 00 00 00 00", &["582#60 01 16 00 00 00 00 00"]),
-            // TYPO (examples file): the sub-indices of the two entries are
-            // swapped in print; entry 1 = dummy, entry 2 = 60C1h:1.
-            ("602#23 01 16 01 20 00 00 21", &["582#60 01 16 01 00 00 00 00"]),
-            ("602#23 01 16 02 20 01 C1 60", &["582#60 01 16 02 00 00 00 00"]),
-            ("602#2F 01 16 00 02 00 00 00", &["582#60 01 16 00 00 00 00 00"]),
-            // TYPO (examples file): printed as 1601h sub 1; the COB-ID is 1401h sub 1.
-            ("602#23 01 14 01 01 03 00 00", &["582#60 01 14 01 00 00 00 00"]),
-            ("602#2F 01 14 02 01 00 00 00", &["582#60 01 14 02 00 00 00 00"]),
-            ("602#2F 01 18 02 01 00 00 00", &["582#60 01 18 02 00 00 00 00"]),
-            ("602#2F 60 60 00 07 00 00 00", &["582#60 60 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(1, 46, "602"));
     // The manual prints TPDO2's mapping for axis 1 only; the axis-2 answer
     // it prints has the same layout (6063h + 1002h): mapped the same way.
     unprinted(&mut r, 2, 0x1801, 1, 0x8000_0282);
@@ -558,11 +337,11 @@ fn kc1_ex12_ip_two_axes_axis2() {
     // entering operational: not asserted.
     r.send("000#01 02");
     r.take();
-    r.exchange("301#F4 01 00 00 E8 03 00 00", &[]);
+    replay(&mut r, &t.steps(56, 56));
     set(&mut r, 0x6063, 0, Value::I32(0x2A5));
     set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
-    // INCONSISTENT (examples file): printed on 182h; TPDO2 of node 2 is 282h.
-    r.exchange("080#", &["282#A5 02 00 00 00 00 03 44"]);
+    // Frame 59 (printed on 182h, INCONSISTENT) is on 282h in the trace.
+    r.exchange(t.frame(57), &[t.frame(59)]);
     assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(1000)));
 }
 
@@ -572,45 +351,23 @@ fn kc1_ex12_ip_two_axes_axis2() {
 /// tolerance (issue 4) and are not replayed.
 #[test]
 fn kc1_ex13_pvt_configuration() {
+    let t = kc1(13);
     let mut r = rig(node_id(1));
-    replay(
-        &mut r,
-        &[
-            ("601#23 01 14 01 01 03 00 80", &["581#60 01 14 01 00 00 00 00"]),
-            ("601#2F 01 16 00 00 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 16 01 20 01 C1 60", &["581#60 01 16 01 00 00 00 00"]),
-            ("601#23 01 16 02 20 02 C1 60", &["581#60 01 16 02 00 00 00 00"]),
-            ("601#2F 01 16 00 02 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 14 01 01 03 00 00", &["581#60 01 14 01 00 00 00 00"]),
-            ("601#23 02 14 01 01 04 00 80", &["581#60 02 14 01 00 00 00 00"]),
-            ("601#2F 02 16 00 00 00 00 00", &["581#60 02 16 00 00 00 00 00"]),
-            ("601#23 02 16 01 20 03 C1 60", &["581#60 02 16 01 00 00 00 00"]),
-            ("601#2F 02 16 00 01 00 00 00", &["581#60 02 16 00 00 00 00 00"]),
-            ("601#23 02 14 01 01 04 00 00", &["581#60 02 14 01 00 00 00 00"]),
-            // TYPO (examples file): "Switch off TPDO1" prints 0x80000281.
-            ("601#23 00 18 01 81 01 00 80", &["581#60 00 18 01 00 00 00 00"]),
-            ("601#23 01 18 01 81 02 00 80", &["581#60 01 18 01 00 00 00 00"]),
-            ("601#23 02 18 01 81 03 00 80", &["581#60 02 18 01 00 00 00 00"]),
-            ("601#23 03 18 01 81 04 00 80", &["581#60 03 18 01 00 00 00 00"]),
-            // TYPO (examples file): printed `2B C0 60 00 00 00 FE FF`; -2 = FE FF.
-            ("601#2B C0 60 00 FE FF 00 00", &["581#60 C0 60 00 00 00 00 00"]),
-            ("601#2F 60 60 00 07 00 00 00", &["581#60 60 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 11));
+    replay(&mut r, &t.steps(14, 19));
     assert_eq!(r.node().od().get_value(0x60C0, 0), Some(Value::I16(-2)));
     // Frame 23: NMT start (all TPDOs were switched off: silent).
-    r.exchange("000#01 01", &[]);
+    replay(&mut r, &t.steps(23, 23));
     // Frames 24–27: controlwords by RPDO1.
-    for cw in ["201#06 00", "201#07 00", "201#0F 00", "201#1F 00"] {
-        r.exchange(cw, &[]);
-    }
+    replay(&mut r, &t.steps(24, 27));
     assert_eq!(r.node().od().get_value(0x6040, 0), Some(Value::U16(0x001F)));
-    // Frame 28: free buffer entries (60C4h:2, default 9): an expedited 4-byte reply.
-    r.exchange("601#40 C4 60 02 00 00 00 00", &["581#43 C4 60 02 09 00 00 00"]);
+    // Frame 28: free buffer entries (60C4h:2, default 9): an expedited 4-byte
+    // reply (derived, not printed).
+    r.exchange(t.frame(28), &["581#43 C4 60 02 09 00 00 00"]);
     // Frames 29–31: a PVT point by RPDO2 (60C1h:1 + :2) and RPDO3 (60C1h:3),
     // then SYNC. Frames 12/13 (which would make them synchronous) are not
     // replayed (see above), so the data applies on reception.
-    replay(&mut r, &[("301#00 00 00 00 00 00 00 00", &[]), ("401#00 00 00 00", &[]), ("080#", &[])]);
+    replay(&mut r, &t.steps(29, 31));
     assert_eq!(r.node().od().get_value(0x60C1, 3), Some(Value::I32(0)));
 }
 
@@ -623,5 +380,5 @@ fn kc1_rtr_unsupported_tpdo_cob_id_with_bit30_clear() {
     let mut cfg = node().config().clone();
     cfg.pdo.rtr_supported = false;
     let mut r = rig(Node::new(cfg));
-    replay(&mut r, &DISABLE_OTHER_PDOS[..3]);
+    replay(&mut r, &kc1(6).steps(19, 24));
 }

@@ -6,13 +6,19 @@
 //! Ported from `crates/node/tests/manual_akd.rs` (hand-configured node,
 //! values preset): here nothing is preset; statuswords, TPDOs and motion are
 //! the drive's. The AKD examples invalidate a PDO before remapping it, so
-//! the CiA 301 §7.5.2.36 procedure is replayed as printed.
+//! the CiA 301 §7.5.2.36 procedure is replayed as printed. The printed
+//! frames (with the typo corrections) are read from
+//! `crates/personality/traces/akd_s*.txt` — sections 1, 3, 4, 5 and 10 from
+//! the byte-identical KC1 files `kc1_ex*.txt` (frame numbers there) — shared
+//! with the CiA 301 replays; frames marked `form` are checked in form
+//! (COB-ID, length).
 
 mod replay_rig;
 
 use drivebus_node::MemoryStorage;
 use drivebus_od::Value;
 use drivebus_personality::{Profile, build_on_machine};
+use replay_rig::trace::{akd as trace, every_2nd_and_3rd};
 use replay_rig::*;
 
 /// An AKD as node `id`, booted: the only power-on frame is the boot-up
@@ -36,15 +42,7 @@ fn value(r: &Rig, index: u16, sub: u8) -> Option<Value> {
 #[test]
 fn akd_s0_store_restore_and_device_type() {
     let mut r = akd(1);
-    replay(
-        &mut r,
-        &[
-            ("601#40 00 10 00 00 00 00 00", &["581#43 00 10 00 92 01 02 00"]),
-            ("601#40 18 10 03 00 00 00 00", &["581#43 18 10 03 00 00 14 00"]),
-            ("601#23 10 10 01 73 61 76 65", &["581#60 10 10 01 00 00 00 00"]),
-            ("601#23 11 10 01 6C 6F 61 64", &["581#60 11 10 01 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &trace(0).steps(1, 4));
 }
 
 /// §6.3 (section 1): free mapping of TPDO1, node 1 — requests only in print;
@@ -52,62 +50,30 @@ fn akd_s0_store_restore_and_device_type() {
 #[test]
 fn akd_s1_free_mapping_of_tpdo1() {
     let mut r = akd(1);
-    replay(
-        &mut r,
-        &[
-            ("601#23 00 18 01 81 01 00 C0", &["581#60 00 18 01 00 00 00 00"]),
-            ("601#2F 00 1A 00 00 00 00 00", &["581#60 00 1A 00 00 00 00 00"]),
-            ("601#23 00 1A 01 10 00 41 60", &["581#60 00 1A 01 00 00 00 00"]),
-            ("601#23 00 1A 02 20 00 02 10", &["581#60 00 1A 02 00 00 00 00"]),
-            ("601#2F 00 1A 00 02 00 00 00", &["581#60 00 1A 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &trace(1).steps(1, 5));
     assert_eq!(r.node().od().get_u32(0x1800, 1), Some(0xC000_0181));
 }
 
 /// §7.2.1.2 (section 3): state machine by SDO.
 #[test]
 fn akd_s3_state_machine_by_sdo() {
+    let t = trace(3);
     let mut r = node();
-    // 3a prints data bytes `40 00 00 00` in the read request: reserved, ignored.
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 40 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-            ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 6));
     r.run_ms(1);
-    // 3c prints the request's data as "—": sent as 00.
-    r.exchange("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 33 02 00 00"]);
+    replay(&mut r, &t.steps(7, 8));
 }
-
-const ENABLE_BY_SDO: &[Step<'static>] = &[
-    ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-    ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-    ("603#2B 40 60 00 0F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-];
-
-const HALT: Step<'static> = ("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
 
 /// §7.2.1.3 (section 4): jog by SDO.
 #[test]
 fn akd_s4_jog_mode_by_sdo() {
+    let t = trace(4);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 03 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 FF 60 00 00 00 00 00", &["583#60 FF 60 00 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("603#23 FF 60 00 00 41 00 00", &["583#60 FF 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(1, 12));
     r.run_ms(500);
     let v = r.velocity();
     assert!((v - 0x4100).abs() < 0x4100 / 20, "jog velocity {v}");
-    replay(&mut r, &[HALT]);
+    replay(&mut r, &t.steps(13, 14));
     r.run_ms(500);
     assert_eq!(r.velocity(), 0, "halted");
 }
@@ -115,114 +81,60 @@ fn akd_s4_jog_mode_by_sdo() {
 /// §7.2.1.4 (section 5): torque by SDO.
 #[test]
 fn akd_s5_torque_mode_by_sdo() {
+    let t = trace(5);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 04 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2B 71 60 00 00 00 00 00", &["583#60 71 60 00 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("603#2B 71 60 00 90 01 00 00", &["583#60 71 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(1, 12));
     r.run_ms(20);
     assert!(r.velocity() > 0, "torque accelerates the axis");
-    replay(&mut r, &[HALT]);
+    replay(&mut r, &t.steps(13, 14));
 }
-
-/// Disable TPDO2..4 and RPDO2..4 of node 3 (sections 6 and 7).
-const DISABLE_OTHER_PDOS: &[Step<'static>] = &[
-    ("603#23 01 18 01 83 02 00 C0", &["583#60 01 18 01 00 00 00 00"]),
-    ("603#23 02 18 01 83 03 00 C0", &["583#60 02 18 01 00 00 00 00"]),
-    ("603#23 03 18 01 83 04 00 C0", &["583#60 03 18 01 00 00 00 00"]),
-    ("603#23 01 14 01 03 03 00 C0", &["583#60 01 14 01 00 00 00 00"]),
-    ("603#23 02 14 01 03 04 00 C0", &["583#60 02 14 01 00 00 00 00"]),
-    ("603#23 03 14 01 03 05 00 C0", &["583#60 03 14 01 00 00 00 00"]),
-];
 
 /// §7.2.1.5 (section 6): jog by PDO — RPDO1 → 60FFh, TPDO1 → 6064h + 606Ch
 /// on every SYNC.
 #[test]
 fn akd_s6_jog_mode_by_pdo() {
+    let t = trace(6);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 03 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 00 14 01 03 02 00 C0", &["583#60 00 14 01 00 00 00 00"]),
-            ("603#2F 00 16 00 00 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 16 01 20 00 FF 60", &["583#60 00 16 01 00 00 00 00"]),
-            ("603#2F 00 16 00 01 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 14 01 03 02 00 00", &["583#60 00 14 01 00 00 00 00"]),
-            ("603#23 00 18 01 83 01 00 C0", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#23 00 1A 02 20 00 6C 60", &["583#60 00 1A 02 00 00 00 00"]),
-            ("603#2F 00 1A 00 02 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            // Re-enabled with bit 30 clear (RTR allowed) although the AKD has no RTR.
-            ("603#23 00 18 01 83 01 00 00", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 18 02 01 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, DISABLE_OTHER_PDOS);
-    r.exchange("000#01 03", &[]);
-    replay(&mut r, ENABLE_BY_SDO);
-    // TYPO (examples file): `203 00 40` prints 2 of 4 bytes; the AKD takes
-    // the short RPDO as well (set-point 4000h).
+    // Lines 5573–5598: the remapping; 5599–5613: TPDO2..4, RPDO2..4 disabled;
+    // 5614: NMT start; 5615–5620: enable.
+    replay(&mut r, &t.steps(5573, 5620));
+    // Line 5621 prints the RPDO1 with 4 bytes (`00 40 00 00`); this replay
+    // sends 2 of them, as the KC1's `203 00 40`: the AKD takes the short RPDO
+    // as well (set-point 4000h).
     r.exchange("203#00 40", &[]);
     assert_eq!(value(&r, 0x60FF, 0), Some(Value::I32(0x4000)));
-    // TPDO1 at the SYNC: the printed values are the manual's running axis;
-    // here it runs 1 s first (velocity at the set-point, position ≈ 1 s of it).
+    // TPDO1 at the SYNC, in form: the printed values are the manual's running
+    // axis; here it runs 1 s first (velocity at the set-point, position ≈ 1 s
+    // of it).
     r.run_ms(1000);
     r.take();
-    r.send("080#");
+    r.send(t.frame(5622));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x183), 8));
+    assert_form(&f[0], t.line(5623));
     let d = f[0].data();
     let pos = i32::from_le_bytes([d[0], d[1], d[2], d[3]]);
     let vel = i32::from_le_bytes([d[4], d[5], d[6], d[7]]);
     assert!((vel - 0x4000).abs() < 0x4000 / 20, "velocity {vel}");
     assert!(pos > 0x4000 * 8 / 10 && pos < 0x4000, "position {pos}");
-    replay(&mut r, &[HALT]);
+    replay(&mut r, &t.steps(5624, 5625));
 }
 
 /// §7.2.1.6 (section 7): torque by PDO — RPDO1 → 6071h, TPDO1 → 6077h on SYNC.
 #[test]
 fn akd_s7_torque_mode_by_pdo() {
+    let t = trace(7);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 04 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 00 14 01 03 02 00 C0", &["583#60 00 14 01 00 00 00 00"]),
-            ("603#2F 00 16 00 00 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 16 01 10 00 71 60", &["583#60 00 16 01 00 00 00 00"]),
-            ("603#2F 00 16 00 01 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 14 01 03 02 00 00", &["583#60 00 14 01 00 00 00 00"]),
-            // TYPO (examples file, line 5645): printed 0xC0000383; TPDO1 is 183h.
-            ("603#23 00 18 01 83 01 00 C0", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 10 00 77 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            // TYPO (examples file, line 5653): printed 0x00000383.
-            ("603#23 00 18 01 83 01 00 00", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 18 02 01 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, DISABLE_OTHER_PDOS);
-    r.exchange("000#01 03", &[]);
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("203#12 02", &[]);
+    replay(&mut r, &t.steps(5633, 5679));
     assert_eq!(value(&r, 0x6071, 0), Some(Value::I16(530)));
-    // TPDO1 at the SYNC: 6077h follows the 530 ‰ demand (printed 537).
+    // TPDO1 at the SYNC, in form: 6077h follows the 530 ‰ demand (printed 537).
     r.run_ms(60);
     r.take();
-    r.send("080#");
+    r.send(t.frame(5680));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x183), 2));
-    let t = i16::from_le_bytes([f[0].data()[0], f[0].data()[1]]);
-    assert!((i32::from(t) - 530).abs() < 530 / 20, "torque actual {t}");
-    replay(&mut r, &[HALT]);
+    assert_form(&f[0], t.line(5681));
+    let tq = i16::from_le_bytes([f[0].data()[0], f[0].data()[1]]);
+    assert!((i32::from(tq) - 530).abs() < 530 / 20, "torque actual {tq}");
+    replay(&mut r, &t.steps(5682, 5683));
 }
 
 /// §7.2.1.7 (section 8): boot-up (`703 00`, checked by the rig), homing
@@ -230,29 +142,11 @@ fn akd_s7_torque_mode_by_pdo() {
 /// incomplete (`60` only) and is not replayed.
 #[test]
 fn akd_s8_homing_by_sdo() {
+    let t = trace(8);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-            ("603#23 99 60 01 10 27 00 00", &["583#60 99 60 01 00 00 00 00"]),
-            ("603#23 99 60 02 88 13 00 00", &["583#60 99 60 02 00 00 00 00"]),
-            ("603#23 9A 60 00 10 27 00 00", &["583#60 9A 60 00 00 00 00 00"]),
-            ("603#23 7C 60 00 A8 61 00 00", &["583#60 7C 60 00 00 00 00 00"]),
-            ("603#2F 60 60 00 06 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
+    replay(&mut r, &t.steps(5708, 5732));
     r.run_ms(1);
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 02 00 00"]),
-            ("603#2B 40 60 00 1F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 02 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(5733, 5738));
 }
 
 /// An AKD on a machine with a home switch over −20°..−5° (homing method 12).
@@ -273,58 +167,21 @@ fn home_switch_machine(id: u8) -> Rig {
 /// the move to 36000 (9k).
 #[test]
 fn akd_s9_profile_position() {
+    let t = trace(9);
     let mut r = home_switch_machine(3);
-    // Lines 5758/5775/5792 carry 01 in byte 7 beyond a 1-byte payload (n = 3): ignored.
-    replay(
-        &mut r,
-        &[
-            ("603#23 01 14 01 03 03 00 C0", &["583#60 01 14 01 00 00 00 00"]),
-            ("603#2F 01 16 00 00 00 00 01", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 16 01 20 00 7A 60", &["583#60 01 16 01 00 00 00 00"]),
-            ("603#23 01 16 02 20 00 81 60", &["583#60 01 16 02 00 00 00 00"]),
-            ("603#2F 01 16 00 02 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 14 01 03 03 00 00", &["583#60 01 14 01 00 00 00 00"]),
-            ("603#23 00 18 01 83 01 00 C0", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 01", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 10 00 41 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 18 01 83 01 00 00", &["583#60 00 18 01 00 00 00 00"]),
-            // TYPO (examples file, line 5790): printed 0xC0000383; TPDO2 is 283h.
-            ("603#23 01 18 01 83 02 00 C0", &["583#60 01 18 01 00 00 00 00"]),
-            ("603#2F 01 1A 00 00 00 00 01", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#23 01 1A 01 20 00 64 60", &["583#60 01 1A 01 00 00 00 00"]),
-            ("603#23 01 1A 02 20 00 6C 60", &["583#60 01 1A 02 00 00 00 00"]),
-            ("603#2F 01 1A 00 02 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            // TYPO (examples file, line 5800): printed 0x00000383.
-            ("603#23 01 18 01 83 02 00 00", &["583#60 01 18 01 00 00 00 00"]),
-            ("603#2F 01 18 02 01 00 00 00", &["583#60 01 18 02 00 00 00 00"]),
-            ("603#23 02 18 01 83 03 00 C0", &["583#60 02 18 01 00 00 00 00"]),
-            ("603#23 03 18 01 83 04 00 C0", &["583#60 03 18 01 00 00 00 00"]),
-            ("603#23 02 14 01 03 04 00 C0", &["583#60 02 14 01 00 00 00 00"]),
-            ("603#23 03 14 01 03 05 00 C0", &["583#60 03 14 01 00 00 00 00"]),
-            // 9e: "6092h" in the text, 6093h in the bytes: replayed as printed.
-            ("603#23 93 60 01 00 00 10 00", &["583#60 93 60 01 00 00 00 00"]),
-            ("603#23 93 60 02 A0 8C 00 00", &["583#60 93 60 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(5756, 5835));
     // 9f: NMT start; TPDO1 (event-driven) sends the statusword at once.
-    r.exchange("000#01 03", &["183#40 02"]);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 06 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2F 98 60 00 0C 00 00 00", &["583#60 98 60 00 00 00 00 00"]),
-            // Lines 5851/5852: 72000 units/s (2 rev/s) is refused: 0609 0031.
-            ("603#23 99 60 01 40 19 01 00", &["583#80 99 60 01 31 00 09 06"]),
-        ],
-    );
+    replay(&mut r, &t.steps(5840, 5841));
+    // Lines 5847–5852, incl. the 0609 0031 abort of 6099h:1.
+    replay(&mut r, &t.steps(5847, 5852));
     // Lines 5853–5861: the state machine, each step answered by TPDO1.
-    r.exchange_ms("603#2B 40 60 00 06 00 00 00", 1, &["583#60 40 60 00 00 00 00 00", "183#21 02"]);
-    r.exchange_ms("603#2B 40 60 00 07 00 00 00", 1, &["583#60 40 60 00 00 00 00 00", "183#33 02"]);
-    r.exchange_ms("603#2B 40 60 00 0F 00 00 00", 1, &["583#60 40 60 00 00 00 00 00", "183#37 02"]);
+    for (req, resp) in t.steps(5853, 5861) {
+        r.exchange_ms(req, 1, resp);
+    }
     // Lines 5862–5865: homing (method 12 on the machine's home switch) ends
-    // with 1637h (homing attained).
-    r.exchange("603#2B 40 60 00 1F 00 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    // with 1637h (homing attained); 5864 (0637h) in form: the sequence is
+    // checked to end in 1637h.
+    r.exchange(t.frame(5862), &[t.frame(5863)]);
     r.run_ms(20_000);
     let sws: Vec<u16> = r
         .take()
@@ -332,37 +189,32 @@ fn akd_s9_profile_position() {
         .filter(|f| f.std_id() == Some(0x183))
         .map(|f| u16::from_le_bytes([f.data()[0], f.data()[1]]))
         .collect();
+    assert!(t.line(5864).form());
     assert_eq!(sws.last(), Some(&0x1637), "homing attained: {sws:04X?}");
     // 9h: controlword by RPDO1 (default mapping 6040h), bit 4 cleared.
-    r.send("203#0F 00");
+    r.send(t.frame(5870));
     r.run_ms(1);
     r.take();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 01 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 83 60 00 32 00 00 00", &["583#60 83 60 00 00 00 00 00"]),
-            ("603#23 84 60 00 32 00 00 00", &["583#60 84 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(5876, 5881));
     r.run_ms(1);
     r.take();
-    r.exchange("303#A0 8C 00 00 20 4E 00 00", &[]);
+    replay(&mut r, &t.steps(5886, 5886));
     assert_eq!(value(&r, 0x607A, 0), Some(Value::I32(36_000)));
     assert_eq!(value(&r, 0x6081, 0), Some(Value::U32(20_000)));
-    // 9j: TPDO2 at SYNC, printed with 4 of its 8 bytes (6064h + 606Ch).
-    r.send("080#");
+    // 9j: TPDO2 at SYNC, in form (printed with 4 of its 8 bytes).
+    r.send(t.frame(5887));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x283), 8));
+    assert_form(&f[0], t.line(5888));
     // 9k: set-point handshake by RPDO1, then target reached (6083h/6084h = 50
     // taken as acceleration units: ≈ 54 s for one revolution).
-    r.exchange_ms("203#1F 00", 1, &["183#37 12"]);
-    r.exchange_ms("203#0F 00", 1, &["183#37 02"]);
+    r.exchange_ms(t.frame(5893), 1, &[t.frame(5898)]);
+    r.exchange_ms(t.frame(5903), 1, &[t.frame(5904)]);
     r.run_ms(60_000);
     let last = r.take().into_iter().rfind(|f| f.std_id() == Some(0x183));
-    assert_eq!(last, Some(fr("183#37 06")), "target reached");
-    r.send("080#");
+    assert_eq!(last, Some(fr(t.frame(5909))), "target reached");
+    r.send(t.frame(5910));
     let f = r.take();
+    assert_form(&f[0], t.line(5911));
     let pos = i32::from_le_bytes([f[0].data()[0], f[0].data()[1], f[0].data()[2], f[0].data()[3]]);
     assert!((pos - 36_000).abs() <= 2, "position {pos}");
 }
@@ -372,93 +224,44 @@ fn akd_s9_profile_position() {
 #[test]
 fn akd_s10_ascii_channel() {
     let mut r = akd(1);
-    replay(
-        &mut r,
-        &[
-            ("601#23 26 20 01 44 52 56 2E", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#23 26 20 01 46 41 55 4C", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#23 26 20 01 54 53 0D 0A", &["581#60 26 20 01 00 00 00 00"]),
-        ],
-    );
-    // TYPO (examples file, lines 5932/5934): "cdiv" and "f\n\r\n" in print;
-    // the drive's own reply is ">No faults active\n\r\n".
-    replay(
-        &mut r,
-        &[
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 3E 4E 6F 20"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 66 61 75 6C"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 74 73 20 61"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 63 74 69 76"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 65 0A 0D 0A"]),
-        ],
-    );
+    replay(&mut r, &trace(10).steps(1, 16));
 }
 
 /// §7.2.1.10 (section 11): TPDO1 (6064h) every 2nd SYNC, TPDO2 (6041h +
 /// 1002h) every 3rd SYNC; RPDO2 → 607Ah + 6081h.
 #[test]
 fn akd_s11_sync_every_nth() {
+    let t = trace(11);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#23 01 14 01 03 03 00 C0", &["583#60 01 14 01 00 00 00 00"]),
-            ("603#2F 01 16 00 00 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 16 01 20 00 7A 60", &["583#60 01 16 01 00 00 00 00"]),
-            ("603#23 01 16 02 20 00 81 60", &["583#60 01 16 02 00 00 00 00"]),
-            ("603#2F 01 16 00 02 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 14 01 03 03 00 00", &["583#60 01 14 01 00 00 00 00"]),
-            ("603#23 00 18 01 83 01 00 C0", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 02 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-            ("603#23 00 18 01 83 01 00 00", &["583#60 00 18 01 00 00 00 00"]),
-            // TYPO (examples file, line 5972): printed 0xC0000383; TPDO2 is 283h.
-            ("603#23 01 18 01 83 02 00 C0", &["583#60 01 18 01 00 00 00 00"]),
-            ("603#2F 01 1A 00 00 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#23 01 1A 01 10 00 41 60", &["583#60 01 1A 01 00 00 00 00"]),
-            ("603#23 01 1A 02 20 00 02 10", &["583#60 01 1A 02 00 00 00 00"]),
-            // TYPO (examples file, line 5981): printed index 1601h; 1A01h meant.
-            ("603#2F 01 1A 00 02 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#2F 01 18 02 03 00 00 00", &["583#60 01 18 02 00 00 00 00"]),
-            // TYPO (examples file, line 5985): printed `23 00 18 01 83 03 00 00`;
-            // "enable TPDO2" is 1801h := 283h.
-            ("603#23 01 18 01 83 02 00 00", &["583#60 01 18 01 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(5948, 5986));
     // TPDO3/4 are still valid and event-driven: they go out when the node
     // becomes operational (no NMT start is printed; PDOs need it).
     r.send("000#01 03");
     r.run_ms(1);
     r.take();
-    // The comment names 181/281 (node 1); node 3 uses 183/283. Axis at rest:
-    // position 0, statusword 0240h, 1002h 0.
+    // Line 5991 (SYNC) and the pattern of its comment, on 183h/283h. Axis at
+    // rest: position 0, statusword 0240h, 1002h 0.
+    let sync = t.frame(5991);
     let tpdo1 = "183#00 00 00 00";
     let tpdo2 = "283#40 02 00 00 00 00";
-    replay(
-        &mut r,
-        &[
-            ("080#", &[]),
-            ("080#", &[tpdo1]),
-            ("080#", &[tpdo2]),
-            ("080#", &[tpdo1]),
-            ("080#", &[]),
-            ("080#", &[tpdo1, tpdo2]),
-        ],
-    );
+    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
+        r.exchange(sync, &tpdos);
+    }
 }
 
 /// Sections 11b and 13k: a drive fault raises the AKD EMCY: code, error
 /// register without the generic bit (08h for 4310h), category 01h (13k's
 /// 8-byte form; 11b prints 7 bytes, the category column lost); the fault
-/// reset sends the error-reset EMCY (register of what is still active: 00h).
+/// reset sends the error-reset EMCY (register of what is still active: 00h;
+/// the printed reset frames, lines 6000 and 6191, in form).
 #[test]
 fn akd_s11_s13_emcy_frames() {
+    let (t11, t13) = (trace(11), trace(13));
     let mut r = akd(1);
     r.pn_mut().inject(drivebus_cia402::drive::Injection::Fault(0x4310));
     r.run_ms(1);
-    assert_eq!(r.take(), frs(&["081#10 43 08 01 00 00 00 00"]));
+    assert_eq!(r.take(), frs(&[t13.frame(6190)]));
+    assert!(t11.line(6000).form() && t13.line(6191).form());
     r.exchange_ms(
         "601#2B 40 60 00 80 00 00 00",
         1,
@@ -470,55 +273,29 @@ fn akd_s11_s13_emcy_frames() {
 /// TPDO2 → 6063h + 1002h, both on every SYNC; TPDO3/4 off; IP mode, period.
 #[test]
 fn akd_s13_ip_axis1() {
+    let t = trace(13);
     let mut r = akd_ip_axis(1);
-    replay(
-        &mut r,
-        &[
-            ("601#23 01 14 01 01 03 00 C0", &["581#60 01 14 01 00 00 00 00"]),
-            ("601#2F 01 16 00 00 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 16 01 20 01 C1 60", &["581#60 01 16 01 00 00 00 00"]),
-            ("601#23 01 16 02 20 00 00 21", &["581#60 01 16 02 00 00 00 00"]),
-            ("601#2F 01 16 00 02 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 14 01 01 03 00 00", &["581#60 01 14 01 00 00 00 00"]),
-            // TYPO (examples file, lines 6076/6086): printed 0xC0000381 /
-            // 0x00000381; TPDO2 of node 1 is 281h.
-            ("601#23 01 18 01 81 02 00 C0", &["581#60 01 18 01 00 00 00 00"]),
-            ("601#2F 01 1A 00 00 00 00 00", &["581#60 01 1A 00 00 00 00 00"]),
-            ("601#23 01 1A 01 20 00 63 60", &["581#60 01 1A 01 00 00 00 00"]),
-            ("601#23 01 1A 02 20 00 02 10", &["581#60 01 1A 02 00 00 00 00"]),
-            ("601#2F 01 1A 00 02 00 00 00", &["581#60 01 1A 00 00 00 00 00"]),
-            ("601#23 01 18 01 81 02 00 00", &["581#60 01 18 01 00 00 00 00"]),
-            ("601#2F 01 14 02 01 00 00 00", &["581#60 01 14 02 00 00 00 00"]),
-            ("601#2F 01 18 02 01 00 00 00", &["581#60 01 18 02 00 00 00 00"]),
-            ("601#23 02 18 01 81 03 00 C0", &["581#60 02 18 01 00 00 00 00"]),
-            ("601#23 03 18 01 81 04 00 C0", &["581#60 03 18 01 00 00 00 00"]),
-            ("601#2F 60 60 00 07 00 00 00", &["581#60 60 60 00 00 00 00 00"]),
-            ("601#2F C2 60 01 01 00 00 00", &["581#60 C2 60 01 00 00 00 00"]),
-            ("601#2F C2 60 02 FD 00 00 00", &["581#60 C2 60 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(6038, 6133, "601"));
     // 13h: NMT start of node 1. The event-driven TPDO1 goes out on entering
     // operational with 0240h (as printed in 9f; 13h prints no frame).
-    r.exchange("000#01 01", &["181#40 02"]);
+    r.exchange(t.frame(6146), &["181#40 02"]);
     // 13i (lines 6151–6158): controlwords by RPDO1, answered by TPDO1.
-    r.exchange_ms("201#06 00", 1, &["181#31 02"]);
-    r.exchange_ms("201#07 00", 1, &["181#33 02"]);
-    r.exchange_ms("201#0F 00", 1, &["181#37 02"]);
-    r.exchange_ms("201#1F 00", 1, &["181#37 12"]);
+    for (req, resp) in t.steps(6151, 6158) {
+        r.exchange_ms(req, 1, resp);
+    }
     // 13j: the set-points are applied at the SYNC (synchronous RPDO2).
-    r.exchange("301#F4 01 00 00 E8 03 00 00", &[]);
+    replay(&mut r, &t.steps(6167, 6167));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(0)));
-    // INCONSISTENT (examples file, line 6181): printed on 181h; TPDO2 is 281h.
-    // The printed 6063h (123h) and 1002h (4403_0000h) are the manual's axis;
-    // this one starts at 0: layout checked.
-    r.send("080#");
+    // Line 6181 in form (printed on 181h, see the trace; its values are the
+    // manual's axis, this one starts at 0).
+    r.send(t.frame(6177));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x281), 8));
+    assert_form(&f[0], t.line(6181));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(500)));
     for _ in 0..200 {
         r.run_ms(1);
-        r.send("301#F4 01 00 00 E8 03 00 00");
-        r.send("080#");
+        r.send(t.frame(6167));
+        r.send(t.frame(6177));
     }
     r.run_ms(100);
     let p = r.position();
@@ -528,26 +305,9 @@ fn akd_s13_ip_axis1() {
 /// §7.2.2.1, axis 2 (node 2): RPDO2 on 301h with the set-point in bytes 4–7.
 #[test]
 fn akd_s13_ip_axis2() {
+    let t = trace(13);
     let mut r = akd_ip_axis(2);
-    replay(
-        &mut r,
-        &[
-            ("602#23 01 14 01 02 03 00 C0", &["582#60 01 14 01 00 00 00 00"]),
-            ("602#2F 01 16 00 00 00 00 00", &["582#60 01 16 00 00 00 00 00"]),
-            // TYPO (examples file, lines 6059/6061): sub-indices swapped in print.
-            ("602#23 01 16 01 20 00 00 21", &["582#60 01 16 01 00 00 00 00"]),
-            ("602#23 01 16 02 20 01 C1 60", &["582#60 01 16 02 00 00 00 00"]),
-            ("602#2F 01 16 00 02 00 00 00", &["582#60 01 16 00 00 00 00 00"]),
-            // TYPO (examples file, line 6065): printed as 1601h sub 1.
-            ("602#23 01 14 01 01 03 00 00", &["582#60 01 14 01 00 00 00 00"]),
-            // TYPO (examples file, line 6067): printed 0x00000202; the goal is 301h
-            // (the same value again, accepted while valid).
-            ("602#23 01 14 01 01 03 00 00", &["582#60 01 14 01 00 00 00 00"]),
-            ("602#2F 01 14 02 01 00 00 00", &["582#60 01 14 02 00 00 00 00"]),
-            ("602#2F 01 18 02 01 00 00 00", &["582#60 01 18 02 00 00 00 00"]),
-            ("602#2F 60 60 00 07 00 00 00", &["582#60 60 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(6038, 6133, "602"));
     // "The same procedure must be carried out for axis 2" (13c, 13e): TPDO2 →
     // 6063h + 1002h, TPDO3/4 off — not printed for node 2, done here so the
     // printed axis-2 answer of 13j can be checked.
@@ -567,11 +327,11 @@ fn akd_s13_ip_axis2() {
     r.send("000#01 02");
     r.run_ms(1);
     r.take();
-    r.exchange("301#F4 01 00 00 E8 03 00 00", &[]);
-    // INCONSISTENT (examples file, line 6182): printed on 182h; TPDO2 is 282h.
-    r.send("080#");
+    replay(&mut r, &t.steps(6167, 6167));
+    // Line 6182 in form (printed on 182h, see the trace).
+    r.send(t.frame(6177));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x282), 8));
+    assert_form(&f[0], t.line(6182));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(1000)));
 }
 
@@ -596,17 +356,7 @@ fn akd_ip_axis(id: u8) -> Rig {
 #[test]
 fn akd_rtr_unsupported_tpdo_cob_id_with_bit30_clear() {
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#23 00 18 01 83 01 00 C0", &["583#60 00 18 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#23 00 1A 02 20 00 6C 60", &["583#60 00 1A 02 00 00 00 00"]),
-            ("603#2F 00 1A 00 02 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 18 01 83 01 00 00", &["583#60 00 18 01 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &trace(6).steps(5585, 5596));
     // A remote frame on 183h is never answered.
     r.exchange("183#R0", &[]);
 }

@@ -2,8 +2,10 @@
 //! against the real personality: `Profile::Kc1.build(node)` — EDS
 //! dictionary, CiA 402 drive, KC1 behaviour — on the virtual bus. Examples
 //! and frame numbers follow `seed000-kc1-examples.md`, sections are the
-//! manual's. Expected frames come from the manual; where the manual prints
-//! a typo the correction is in a comment next to the frame.
+//! manual's. Expected frames come from the manual, read from
+//! `crates/personality/traces/kc1_ex*.txt` (shared with the CiA 301 replays);
+//! where the manual prints a typo the correction is in a comment next to the
+//! frame there. Frames marked `form` are checked in form (COB-ID, length).
 //!
 //! Unlike `crates/node/tests/manual_kc1.rs` (hand-configured node, values
 //! preset), nothing is set in the dictionary here: statuswords, TPDOs and
@@ -15,6 +17,7 @@ mod replay_rig;
 use drivebus_node::MemoryStorage;
 use drivebus_od::Value;
 use drivebus_personality::{Profile, build_on_machine};
+use replay_rig::trace::{every_2nd_and_3rd, kc1 as trace};
 use replay_rig::*;
 
 /// A KC1 as node `id`, booted: the only power-on frame is the boot-up
@@ -159,65 +162,35 @@ fn kc1_mapping_rules_and_dummy_2100h() {
 #[test]
 fn kc1_ex01_free_mapping_of_tpdo1() {
     let mut r = kc1(1);
-    replay(
-        &mut r,
-        &[
-            ("601#23 00 18 01 81 01 00 C0", &["581#60 00 18 01 00 00 00 00"]),
-            ("601#2F 00 1A 00 00 00 00 00", &["581#60 00 1A 00 00 00 00 00"]),
-            ("601#23 00 1A 01 10 00 41 60", &["581#60 00 1A 01 00 00 00 00"]),
-            ("601#23 00 1A 02 20 00 02 10", &["581#60 00 1A 02 00 00 00 00"]),
-            ("601#2F 00 1A 00 02 00 00 00", &["581#60 00 1A 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &trace(1).steps(1, 5));
     assert_eq!(r.node().od().get_u32(0x1800, 1), Some(0xC000_0181));
     assert_eq!(r.node().od().get_u32(0x1A00, 2), Some(0x1002_0020));
 }
-
-const ENABLE_BY_SDO: &[Step<'static>] = &[
-    ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-    ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-    ("603#2B 40 60 00 0F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-];
 
 /// Example 3, §8.2.1.2: statusword 0240h (switch on disabled + remote),
 /// shutdown and switch on by SDO → 0233h, all from the drive.
 #[test]
 fn kc1_ex03_status_machine_by_sdo() {
+    let t = trace(3);
     let mut r = node();
-    // Frame 1 prints data bytes `40 00 00 00` in an upload request: reserved, ignored.
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 40 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-            ("603#2B 40 60 00 06 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#2B 40 60 00 07 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 6));
     r.run_ms(1);
-    // Frame 7 prints its data field as "—": reserved bytes, sent as 00.
-    r.exchange("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 33 02 00 00"]);
+    replay(&mut r, &t.steps(7, 8));
 }
 
 /// Example 4, §8.2.1.3: jog (profile velocity) by SDO; the axis turns at
 /// the set-point 4100h velocity units and stops on halt (bit 8, "0F 01").
 #[test]
 fn kc1_ex04_jog_mode_by_sdo() {
+    let t = trace(4);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 03 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 FF 60 00 00 00 00 00", &["583#60 FF 60 00 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("603#23 FF 60 00 00 41 00 00", &["583#60 FF 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(1, 12));
     r.run_ms(500);
     let v = r.velocity();
     assert!((v - 0x4100).abs() < 0x4100 / 20, "jog velocity {v}");
     let p0 = r.position();
     assert!(p0 > 0);
-    r.exchange("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(13, 14));
     r.run_ms(500);
     assert_eq!(r.velocity(), 0, "halted");
     assert_eq!(r.statusword() & 0x6F, 0x27, "still operation enabled");
@@ -227,115 +200,67 @@ fn kc1_ex04_jog_mode_by_sdo() {
 /// rated torque) makes the unloaded motor accelerate positively.
 #[test]
 fn kc1_ex05_torque_mode_by_sdo() {
+    let t = trace(5);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 04 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2B 71 60 00 00 00 00 00", &["583#60 71 60 00 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("603#2B 71 60 00 90 01 00 00", &["583#60 71 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(1, 12));
     r.run_ms(20);
     assert!(r.velocity() > 0, "torque accelerates the axis");
-    let t = r.node().od().get_i64(0x6077, 0).unwrap();
-    assert!(t > 100, "torque actual {t}");
-    r.exchange("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    let t6077 = r.node().od().get_i64(0x6077, 0).unwrap();
+    assert!(t6077 > 100, "torque actual {t6077}");
+    replay(&mut r, &t.steps(13, 14));
     assert_eq!(value(&r, 0x6071, 0), Some(Value::I16(400)));
 }
-
-/// The disable writes of examples 6/7 (TPDO2..4, RPDO2..4 of node 3).
-const DISABLE_OTHER_PDOS: &[Step<'static>] = &[
-    ("603#23 01 18 01 83 02 00 80", &["583#60 01 18 01 00 00 00 00"]),
-    ("603#23 02 18 01 83 03 00 80", &["583#60 02 18 01 00 00 00 00"]),
-    ("603#23 03 18 01 83 04 00 80", &["583#60 03 18 01 00 00 00 00"]),
-    ("603#23 01 14 01 03 03 00 80", &["583#60 01 14 01 00 00 00 00"]),
-    ("603#23 02 14 01 03 04 00 80", &["583#60 02 14 01 00 00 00 00"]),
-    ("603#23 03 14 01 03 05 00 80", &["583#60 03 14 01 00 00 00 00"]),
-];
 
 /// Example 6, §8.2.1.5: jog by PDO, every frame as printed (the valid
 /// RPDO1/TPDO1 are remapped without invalidating them first, as the KC1
 /// allows). RPDO1 → 60FFh, TPDO1 → 6064h + 606Ch on every SYNC.
 #[test]
 fn kc1_ex06_jog_mode_by_pdo() {
+    let t = trace(6);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 03 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2F 00 16 00 00 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 16 01 20 00 FF 60", &["583#60 00 16 01 00 00 00 00"]),
-            ("603#2F 00 16 00 01 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#23 00 1A 02 20 00 6C 60", &["583#60 00 1A 02 00 00 00 00"]),
-            ("603#2F 00 1A 00 02 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 01 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, DISABLE_OTHER_PDOS);
-    // Frame 31: NMT start; TPDO1 is synchronous now: nothing is sent.
-    r.exchange("000#01 03", &[]);
-    replay(&mut r, ENABLE_BY_SDO);
-    // TYPO (examples file): `203 00 40` prints 2 bytes of the 32-bit 60FFh
-    // mapping; the KC1 takes the short RPDO (set-point 4000h).
-    r.exchange("203#00 40", &[]);
+    // Frames 1–30: the remapping and the other PDOs disabled; frame 31: NMT
+    // start, TPDO1 is synchronous now: nothing is sent; 32–37 enable.
+    replay(&mut r, &t.steps(1, 37));
+    // Frame 38 as printed (2 of the 4 bytes, see the trace): the KC1 takes
+    // the short RPDO (set-point 4000h).
+    replay(&mut r, &t.steps(38, 38));
     assert_eq!(value(&r, 0x60FF, 0), Some(Value::I32(0x4000)));
-    // Frame 40: TPDO1 at the SYNC with 6064h + 606Ch. The printed values
-    // (0145FEh, 1AABA6h) are those of the manual's axis, already turning; here
-    // the axis runs for 1 s first and the frame carries our motion: velocity
-    // at the set-point, position advanced by about 1 s × 4000h.
+    // Frame 40: TPDO1 at the SYNC with 6064h + 606Ch, in form; here the axis
+    // runs for 1 s first and the frame carries our motion: velocity at the
+    // set-point, position advanced by about 1 s × 4000h.
     r.run_ms(1000);
     r.take();
-    r.send("080#");
+    r.send(t.frame(39));
     let f = r.take();
     assert_eq!(f.len(), 1);
-    assert_eq!(f[0].std_id(), Some(0x183));
+    assert_form(&f[0], t.line(40));
     let d = f[0].data();
-    assert_eq!(d.len(), 8);
     let pos = i32::from_le_bytes([d[0], d[1], d[2], d[3]]);
     let vel = i32::from_le_bytes([d[4], d[5], d[6], d[7]]);
     assert!((vel - 0x4000).abs() < 0x4000 / 20, "velocity {vel}");
     assert!(pos > 0x4000 * 8 / 10 && pos < 0x4000, "position {pos}");
-    r.exchange("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    replay(&mut r, &t.steps(41, 42));
 }
 
 /// Example 7, §8.2.1.6: torque by PDO. RPDO1 → 6071h, TPDO1 → 6077h on SYNC.
 #[test]
 fn kc1_ex07_torque_mode_by_pdo() {
+    let t = trace(7);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 04 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2F 00 16 00 00 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#23 00 16 01 10 00 71 60", &["583#60 00 16 01 00 00 00 00"]),
-            ("603#2F 00 16 00 01 00 00 00", &["583#60 00 16 00 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 10 00 77 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 01 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-        ],
-    );
-    replay(&mut r, DISABLE_OTHER_PDOS);
-    r.exchange("000#01 03", &[]);
-    replay(&mut r, ENABLE_BY_SDO);
-    r.exchange("203#12 02", &[]);
+    replay(&mut r, &t.steps(1, 36));
     assert_eq!(value(&r, 0x6071, 0), Some(Value::I16(0x0212)));
-    // Frame 38: TPDO1 at the SYNC, 6077h torque actual. The manual prints
-    // 0219h for a 0212h demand ("537 mA" for "530 mA"): the actual value
-    // follows the demand (after the 6087h torque slope); checked within 5 %.
+    // Frame 38: TPDO1 at the SYNC, 6077h torque actual, in form: the actual
+    // value follows the 0212h demand (after the 6087h torque slope); checked
+    // within 5 % (the manual prints 0219h).
     r.run_ms(60);
     r.take();
-    r.send("080#");
+    r.send(t.frame(37));
     let f = r.take();
     assert_eq!(f.len(), 1);
-    assert_eq!(f[0].std_id(), Some(0x183));
-    let t = i16::from_le_bytes([f[0].data()[0], f[0].data()[1]]);
-    assert!((i32::from(t) - 0x212).abs() < 0x212 / 20, "torque actual {t}");
-    r.exchange("603#2B 40 60 00 0F 01 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    assert_form(&f[0], t.line(38));
+    let tq = i16::from_le_bytes([f[0].data()[0], f[0].data()[1]]);
+    assert!((i32::from(tq) - 0x212).abs() < 0x212 / 20, "torque actual {tq}");
+    replay(&mut r, &t.steps(39, 40));
 }
 
 /// The machine of the homing examples: limit switches as the §8.2.1.7
@@ -357,41 +282,18 @@ fn homing_machine(id: u8, neg_limit: Option<f64>, home: Option<(f64, f64)>) -> R
 /// homing, 1637h (homing attained + target reached) when done.
 #[test]
 fn kc1_ex08_homing_by_sdo() {
+    let t = trace(8);
     let mut r = homing_machine(3, Some(-10.0), None);
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-            ("603#23 99 60 01 10 27 00 00", &["583#60 99 60 01 00 00 00 00"]),
-            ("603#23 99 60 02 88 13 00 00", &["583#60 99 60 02 00 00 00 00"]),
-            ("603#23 9A 60 00 10 27 00 00", &["583#60 9A 60 00 00 00 00 00"]),
-            ("603#23 7C 60 00 A8 61 00 00", &["583#60 7C 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(2, 11));
     // Unprinted: the example uses "the homing method stored in the drive"
     // (no 6098h write); with limit-switch inputs that is method 17
     // (negative limit switch, §7.10.2.2).
     Rig::assert_written(r.sdo_write(3, 0x6098, 0, &[17]), 3, 0x6098, 0);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 06 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            // The comment says "0250h Voltage Enabled", the frame 0240h: frame kept.
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 40 02 00 00"]),
-        ],
-    );
-    replay(&mut r, ENABLE_BY_SDO);
+    replay(&mut r, &t.steps(12, 21));
     r.run_ms(1);
-    replay(
-        &mut r,
-        &[
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 02 00 00"]),
-            ("603#2B 40 60 00 1F 00 00 00", &["583#60 40 60 00 00 00 00 00"]),
-            ("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 02 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(22, 27));
     r.run_ms(3000);
-    r.exchange("603#40 41 60 00 00 00 00 00", &["583#4B 41 60 00 37 16 00 00"]);
+    replay(&mut r, &t.steps(28, 29));
     // The home position (where the negative limit switch releases) became
     // 607Ch = 25000; the axis stopped just past it.
     let p = r.position();
@@ -404,51 +306,21 @@ fn kc1_ex08_homing_by_sdo() {
 /// drive's homing speed limit; statuswords by TPDO1 are the drive's.
 #[test]
 fn kc1_ex09_profile_position() {
+    let t = trace(9);
     let mut r = homing_machine(3, None, Some((-20.0, -5.0)));
-    // Frames 1, 9 and 15 carry 01 in byte 7 beyond a 1-byte payload: ignored (n = 3).
-    replay(
-        &mut r,
-        &[
-            ("603#2F 01 16 00 00 00 00 01", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 16 01 20 00 7A 60", &["583#60 01 16 01 00 00 00 00"]),
-            ("603#23 01 16 02 20 00 81 60", &["583#60 01 16 02 00 00 00 00"]),
-            ("603#2F 01 16 00 02 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 01", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 10 00 41 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 01 1A 00 00 00 00 01", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#23 01 1A 01 20 00 64 60", &["583#60 01 1A 01 00 00 00 00"]),
-            ("603#23 01 1A 02 20 00 6C 60", &["583#60 01 1A 02 00 00 00 00"]),
-            ("603#2F 01 1A 00 02 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#2F 01 18 02 01 00 00 00", &["583#60 01 18 02 00 00 00 00"]),
-            ("603#23 02 18 01 83 03 00 80", &["583#60 02 18 01 00 00 00 00"]),
-            ("603#23 03 18 01 83 04 00 80", &["583#60 03 18 01 00 00 00 00"]),
-            ("603#23 02 14 01 03 04 00 80", &["583#60 02 14 01 00 00 00 00"]),
-            ("603#23 03 14 01 03 05 00 80", &["583#60 03 14 01 00 00 00 00"]),
-            // "6092h" in the text, 6093h in the bytes: replayed as printed.
-            ("603#23 93 60 01 00 00 10 00", &["583#60 93 60 01 00 00 00 00"]),
-            ("603#23 93 60 02 A0 8C 00 00", &["583#60 93 60 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 36));
     // Frames 37/38: NMT start, the event-driven TPDO1 with 0240h at once.
-    r.exchange("000#01 03", &["183#40 02"]);
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 06 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#2F 98 60 00 0C 00 00 00", &["583#60 98 60 00 00 00 00 00"]),
-            // Frames 43/44: 72000 units/s (2 rev/s) is refused: 0609 0031.
-            ("603#23 99 60 01 40 19 01 00", &["583#80 99 60 01 31 00 09 06"]),
-        ],
-    );
+    replay(&mut r, &t.steps(37, 38));
+    // Frames 39–44, incl. the 0609 0031 abort of 6099h:1.
+    replay(&mut r, &t.steps(39, 44));
     // Frames 45–53: the state machine by SDO, each step answered by TPDO1.
-    r.exchange_ms("603#2B 40 60 00 06 00 00 00", 1, &["583#60 40 60 00 00 00 00 00", "183#21 02"]);
-    r.exchange_ms("603#2B 40 60 00 07 00 00 00", 1, &["583#60 40 60 00 00 00 00 00", "183#33 02"]);
-    r.exchange_ms("603#2B 40 60 00 0F 00 00 00", 1, &["583#60 40 60 00 00 00 00 00", "183#37 02"]);
-    // Frames 54–57: start homing; the manual prints 0637h then 1637h
-    // (homing attained). Here homing takes its time on the machine; the
-    // TPDO1 sequence ends with 1637h.
-    r.exchange("603#2B 40 60 00 1F 00 00 00", &["583#60 40 60 00 00 00 00 00"]);
+    for (req, resp) in t.steps(45, 53) {
+        r.exchange_ms(req, 1, resp);
+    }
+    // Frames 54–57: start homing; the manual prints 0637h (frame 56, form)
+    // then 1637h (homing attained). Here homing takes its time on the
+    // machine; the TPDO1 sequence ends with 1637h.
+    r.exchange(t.frame(54), &[t.frame(55)]);
     // Through the switch at 6099h:2 (1/8 rev/s) to the next index pulse.
     r.run_ms(20_000);
     let tpdo1: Vec<u16> = r
@@ -457,36 +329,28 @@ fn kc1_ex09_profile_position() {
         .filter(|f| f.std_id() == Some(0x183))
         .map(|f| u16::from_le_bytes([f.data()[0], f.data()[1]]))
         .collect();
+    assert!(t.line(56).form());
     assert_eq!(tpdo1.last(), Some(&0x1637), "homing attained: {tpdo1:04X?}");
     // Frame 58: controlword by RPDO1, bit 4 cleared.
-    r.send("203#0F 00");
+    r.send(t.frame(58));
     r.run_ms(1);
     r.take();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 60 60 00 01 00 00 00", &["583#60 60 60 00 00 00 00 00"]),
-            ("603#23 83 60 00 32 00 00 00", &["583#60 83 60 00 00 00 00 00"]),
-            ("603#23 84 60 00 32 00 00 00", &["583#60 84 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(59, 64));
     r.run_ms(1);
     r.take();
-    // Frame 65. TYPO (examples file): RPDO2 `303 20 4E 00 00` prints 4 of 8
-    // bytes; the comment gives position 8CA0h (36000 = one revolution) and
-    // velocity 4E20h.
-    r.exchange("303#A0 8C 00 00 20 4E 00 00", &[]);
+    // Frame 65 (RPDO2, corrected to 8 bytes in the trace).
+    replay(&mut r, &t.steps(65, 65));
     assert_eq!(value(&r, 0x607A, 0), Some(Value::I32(0x8CA0)));
     assert_eq!(value(&r, 0x6081, 0), Some(Value::U32(0x4E20)));
-    // Frames 66/67: TPDO2 at SYNC. TYPO (examples file): printed with 4 of its
-    // 8 bytes (6064h + 606Ch); the axis stands at the homed position.
-    r.send("080#");
+    // Frames 66/67: TPDO2 at SYNC, in form (printed with 4 of its 8 bytes);
+    // the axis stands at the homed position.
+    r.send(t.frame(66));
     let f = r.take();
     assert_eq!(f.len(), 1);
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x283), 8));
+    assert_form(&f[0], t.line(67));
     // Frames 68–72: new set-point handshake, then target reached.
-    r.exchange_ms("203#1F 00", 1, &["183#37 12"]);
-    r.exchange_ms("203#0F 00", 1, &["183#37 02"]);
+    r.exchange_ms(t.frame(68), 1, &[t.frame(69)]);
+    r.exchange_ms(t.frame(70), 1, &[t.frame(71)]);
     // 6083h/6084h = 50 are taken as CiA 402 acceleration units (position
     // units/s², the manual's "50 ms" is a ramp-time unit setting it does not
     // name): the move of 36000 units takes 2·√(36000/50) ≈ 54 s.
@@ -495,9 +359,9 @@ fn kc1_ex09_profile_position() {
         r.take().into_iter().filter(|f| f.std_id() == Some(0x183)).map(|f| f.data().to_vec()).collect();
     assert_eq!(tpdo1.last().map(|d| d.as_slice()), Some(&[0x37u8, 0x06][..]), "target reached");
     // Frames 73/74: the second SYNC: position at the target 8CA0h.
-    r.send("080#");
+    r.send(t.frame(73));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x283), 8));
+    assert_form(&f[0], t.line(74));
     let pos = i32::from_le_bytes([f[0].data()[0], f[0].data()[1], f[0].data()[2], f[0].data()[3]]);
     assert!((pos - 0x8CA0).abs() <= 2, "position {pos}");
 }
@@ -507,68 +371,29 @@ fn kc1_ex09_profile_position() {
 #[test]
 fn kc1_ex10_ascii_channel() {
     let mut r = kc1(1);
-    replay(
-        &mut r,
-        &[
-            ("601#23 26 20 01 44 52 56 2E", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#23 26 20 01 46 41 55 4C", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#23 26 20 01 54 53 0D 0A", &["581#60 26 20 01 00 00 00 00"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 3E 4E 6F 20"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 66 61 75 6C"]),
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 74 73 20 61"]),
-            // TYPO (examples file): printed `63 64 69 76` ("cdiv"), comment "ctiv".
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 63 74 69 76"]),
-            // TYPO (examples file): printed `66 0A 0D 0A`, comment "e\n\r\n".
-            ("601#40 26 20 02 00 00 00 00", &["581#43 26 20 02 65 0A 0D 0A"]),
-        ],
-    );
+    replay(&mut r, &trace(10).steps(1, 16));
 }
 
 /// Example 11, §8.2.1.10: RPDO2 → 607Ah + 6081h, TPDO1 → 6064h every 2nd
 /// SYNC, TPDO2 → 6041h + 1002h every 3rd SYNC; all remapped while valid.
 #[test]
 fn kc1_ex11_sync_every_nth() {
+    let t = trace(11);
     let mut r = node();
-    replay(
-        &mut r,
-        &[
-            ("603#2F 01 16 00 00 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#23 01 16 01 20 00 7A 60", &["583#60 01 16 01 00 00 00 00"]),
-            ("603#23 01 16 02 20 00 81 60", &["583#60 01 16 02 00 00 00 00"]),
-            ("603#2F 01 16 00 02 00 00 00", &["583#60 01 16 00 00 00 00 00"]),
-            ("603#2F 00 1A 00 00 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#23 00 1A 01 20 00 64 60", &["583#60 00 1A 01 00 00 00 00"]),
-            ("603#2F 00 1A 00 01 00 00 00", &["583#60 00 1A 00 00 00 00 00"]),
-            ("603#2F 00 18 02 02 00 00 00", &["583#60 00 18 02 00 00 00 00"]),
-            ("603#2F 01 1A 00 00 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#23 01 1A 01 10 00 41 60", &["583#60 01 1A 01 00 00 00 00"]),
-            ("603#23 01 1A 02 20 00 02 10", &["583#60 01 1A 02 00 00 00 00"]),
-            // TYPO (examples file): printed `2F 01 16 00 02` (1601h) under
-            // "TPDO2: enter number of mapped objects"; 1A01h meant.
-            ("603#2F 01 1A 00 02 00 00 00", &["583#60 01 1A 00 00 00 00 00"]),
-            ("603#2F 01 18 02 03 00 00 00", &["583#60 01 18 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 26));
     // The example sends SYNCs without showing NMT start; PDOs need
     // operational. TPDO3/4 (still event-driven) go out on entering it.
     r.send("000#01 03");
     r.run_ms(1);
     r.take();
-    // TYPO? (examples file): the comment names 181/281, node 3 uses 183/283.
-    // Position 0 (axis at rest), statusword 0240h, 1002h 0.
+    // Frame 27 (SYNC) and the pattern its comment describes, on 183h/283h:
+    // position 0 (axis at rest), statusword 0240h, 1002h 0.
+    let sync = t.frame(27);
     let tpdo1 = "183#00 00 00 00";
     let tpdo2 = "283#40 02 00 00 00 00";
-    replay(
-        &mut r,
-        &[
-            ("080#", &[]),
-            ("080#", &[tpdo1]),
-            ("080#", &[tpdo2]),
-            ("080#", &[tpdo1]),
-            ("080#", &[]),
-            ("080#", &[tpdo1, tpdo2]),
-        ],
-    );
+    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
+        r.exchange(sync, &tpdos);
+    }
 }
 
 /// Examples 11/12 (§8.2.1.10, §8.2.2.1): a drive fault raises the KC1 EMCY:
@@ -579,11 +404,13 @@ fn kc1_ex11_ex12_emcy_frames() {
     let mut r = kc1(1);
     r.pn_mut().inject(drivebus_cia402::drive::Injection::Fault(0x4310));
     r.run_ms(1);
-    assert_eq!(r.take(), frs(&["081#10 43 08 01 00 00 00 00"]));
+    assert_eq!(r.take(), frs(&[trace(12).frame(60)]));
     assert_eq!(r.read_u32(1, 0x1001, 0), 0x08);
     // Fault reset (controlword bit 7): the error goes, EMCY 0000h. The
-    // manual prints the reset frame with register 08h (§8.2.2.1) or 88h
-    // (§8.2.1.10, other errors pending); with no error left it is 00h here.
+    // manual prints the reset frame with register 08h (§8.2.2.1 frame 61)
+    // or 88h (§8.2.1.10 frame 29, other errors pending): both in form; with
+    // no error left it is 00h here.
+    assert!(trace(12).line(61).form() && trace(11).line(29).form());
     r.exchange_ms(
         "601#2B 40 60 00 80 00 00 00",
         1,
@@ -614,51 +441,32 @@ fn kc1_ip_axis(id: u8) -> Rig {
 /// ip set-points by RPDO2 + SYNC, TPDO2 back; the axis follows.
 #[test]
 fn kc1_ex12_ip_two_axes_axis1() {
+    let t = trace(12);
     let mut r = kc1_ip_axis(1);
-    replay(
-        &mut r,
-        &[
-            ("601#2F 01 16 00 00 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 16 01 20 01 C1 60", &["581#60 01 16 01 00 00 00 00"]),
-            ("601#23 01 16 02 20 00 00 21", &["581#60 01 16 02 00 00 00 00"]),
-            ("601#2F 01 16 00 02 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#2F 01 1A 00 00 00 00 00", &["581#60 01 1A 00 00 00 00 00"]),
-            ("601#23 01 1A 01 20 00 63 60", &["581#60 01 1A 01 00 00 00 00"]),
-            ("601#23 01 1A 02 20 00 02 10", &["581#60 01 1A 02 00 00 00 00"]),
-            ("601#2F 01 1A 00 02 00 00 00", &["581#60 01 1A 00 00 00 00 00"]),
-            ("601#2F 01 14 02 01 00 00 00", &["581#60 01 14 02 00 00 00 00"]),
-            ("601#2F 01 18 02 01 00 00 00", &["581#60 01 18 02 00 00 00 00"]),
-            ("601#23 02 18 01 81 03 00 80", &["581#60 02 18 01 00 00 00 00"]),
-            ("601#23 03 18 01 81 04 00 80", &["581#60 03 18 01 00 00 00 00"]),
-            ("601#2F 60 60 00 07 00 00 00", &["581#60 60 60 00 00 00 00 00"]),
-            ("601#2F C2 60 01 01 00 00 00", &["581#60 C2 60 01 00 00 00 00"]),
-            ("601#2F C2 60 02 FD 00 00 00", &["581#60 C2 60 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(1, 46, "601"));
     // Frame 47: NMT start; the event-driven TPDO1 goes out with 0240h
     // (not printed in this example; as example 9 frame 38).
-    r.exchange("000#01 01", &["181#40 02"]);
+    r.exchange(t.frame(47), &["181#40 02"]);
     // Frames 48–55: the state machine by RPDO1, each answered by TPDO1.
-    r.exchange_ms("201#06 00", 1, &["181#31 02"]);
-    r.exchange_ms("201#07 00", 1, &["181#33 02"]);
-    r.exchange_ms("201#0F 00", 1, &["181#37 02"]);
-    r.exchange_ms("201#1F 00", 1, &["181#37 12"]);
+    for (req, resp) in t.steps(48, 55) {
+        r.exchange_ms(req, 1, resp);
+    }
     // Frames 56–58: set-point 500 (bytes 4–7 go to the dummy 2100h) and
-    // SYNC; TPDO2 carries 6063h and 1002h. INCONSISTENT (examples file):
-    // printed on 181h, TPDO2 of node 1 is 281h; the printed 6063h value
-    // (123h) is the manual's axis: here the axis starts at 0.
-    r.exchange("301#F4 01 00 00 E8 03 00 00", &[]);
-    r.send("080#");
+    // SYNC; TPDO2 carries 6063h and 1002h, in form (printed on 181h, see the
+    // trace; the printed 6063h value is the manual's axis: here the axis
+    // starts at 0).
+    replay(&mut r, &t.steps(56, 56));
+    r.send(t.frame(57));
     let f = r.take();
     assert_eq!(f.len(), 1, "{f:?}");
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x281), 8));
+    assert_form(&f[0], t.line(58));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(500)));
     assert_eq!(value(&r, 0x2100, 0), Some(Value::U32(0)), "dummy ignores 03E8h");
     // Keep feeding the set-point at 1 ms SYNCs: the axis reaches 500.
     for _ in 0..200 {
         r.run_ms(1);
-        r.send("301#F4 01 00 00 E8 03 00 00");
-        r.send("080#");
+        r.send(t.frame(56));
+        r.send(t.frame(57));
     }
     r.run_ms(100);
     let p = r.position();
@@ -669,23 +477,9 @@ fn kc1_ex12_ip_two_axes_axis1() {
 /// set-point in bytes 4–7.
 #[test]
 fn kc1_ex12_ip_two_axes_axis2() {
+    let t = trace(12);
     let mut r = kc1_ip_axis(2);
-    replay(
-        &mut r,
-        &[
-            ("602#2F 01 16 00 00 00 00 00", &["582#60 01 16 00 00 00 00 00"]),
-            // TYPO (examples file): the sub-indices of the two entries are
-            // swapped in print; entry 1 = dummy, entry 2 = 60C1h:1.
-            ("602#23 01 16 01 20 00 00 21", &["582#60 01 16 01 00 00 00 00"]),
-            ("602#23 01 16 02 20 01 C1 60", &["582#60 01 16 02 00 00 00 00"]),
-            ("602#2F 01 16 00 02 00 00 00", &["582#60 01 16 00 00 00 00 00"]),
-            // TYPO (examples file): printed as 1601h sub 1; the COB-ID is 1401h sub 1.
-            ("602#23 01 14 01 01 03 00 00", &["582#60 01 14 01 00 00 00 00"]),
-            ("602#2F 01 14 02 01 00 00 00", &["582#60 01 14 02 00 00 00 00"]),
-            ("602#2F 01 18 02 01 00 00 00", &["582#60 01 18 02 00 00 00 00"]),
-            ("602#2F 60 60 00 07 00 00 00", &["582#60 60 60 00 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps_on(1, 46, "602"));
     // The manual prints TPDO2's mapping for axis 1 only; axis 2's printed
     // answer has the same layout (6063h + 1002h): mapped the same way.
     for (sub, v) in [(0u8, 0u32), (1, 0x6063_0020), (2, 0x1002_0020)] {
@@ -707,11 +501,11 @@ fn kc1_ex12_ip_two_axes_axis2() {
     }
     r.take();
     assert_eq!(r.statusword(), 0x1237);
-    r.exchange("301#F4 01 00 00 E8 03 00 00", &[]);
-    // INCONSISTENT (examples file): printed on 182h; TPDO2 of node 2 is 282h.
-    r.send("080#");
+    replay(&mut r, &t.steps(56, 56));
+    // Frame 59 (printed on 182h, see the trace) in form.
+    r.send(t.frame(57));
     let f = r.take();
-    assert_eq!((f[0].std_id(), f[0].len()), (Some(0x282), 8));
+    assert_form(&f[0], t.line(59));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(1000)));
 }
 
@@ -723,45 +517,18 @@ fn kc1_ex12_ip_two_axes_axis2() {
 /// requests only).
 #[test]
 fn kc1_ex13_pvt_configuration() {
+    let t = trace(13);
     let mut r = kc1(1);
-    replay(
-        &mut r,
-        &[
-            ("601#23 01 14 01 01 03 00 80", &["581#60 01 14 01 00 00 00 00"]),
-            ("601#2F 01 16 00 00 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 16 01 20 01 C1 60", &["581#60 01 16 01 00 00 00 00"]),
-            ("601#23 01 16 02 20 02 C1 60", &["581#60 01 16 02 00 00 00 00"]),
-            ("601#2F 01 16 00 02 00 00 00", &["581#60 01 16 00 00 00 00 00"]),
-            ("601#23 01 14 01 01 03 00 00", &["581#60 01 14 01 00 00 00 00"]),
-            ("601#23 02 14 01 01 04 00 80", &["581#60 02 14 01 00 00 00 00"]),
-            ("601#2F 02 16 00 00 00 00 00", &["581#60 02 16 00 00 00 00 00"]),
-            ("601#23 02 16 01 20 03 C1 60", &["581#60 02 16 01 00 00 00 00"]),
-            ("601#2F 02 16 00 01 00 00 00", &["581#60 02 16 00 00 00 00 00"]),
-            ("601#23 02 14 01 01 04 00 00", &["581#60 02 14 01 00 00 00 00"]),
-            ("601#23 01 14 02 01 00 00 00", &["581#60 01 14 02 00 00 00 00"]),
-            ("601#23 02 14 02 01 00 00 00", &["581#60 02 14 02 00 00 00 00"]),
-            // TYPO (examples file): "Switch off TPDO1" prints 0x80000281.
-            ("601#23 00 18 01 81 01 00 80", &["581#60 00 18 01 00 00 00 00"]),
-            ("601#23 01 18 01 81 02 00 80", &["581#60 01 18 01 00 00 00 00"]),
-            ("601#23 02 18 01 81 03 00 80", &["581#60 02 18 01 00 00 00 00"]),
-            ("601#23 03 18 01 81 04 00 80", &["581#60 03 18 01 00 00 00 00"]),
-            // TYPO (examples file): printed `2B C0 60 00 00 00 FE FF`; -2 = FE FF.
-            ("601#2B C0 60 00 FE FF 00 00", &["581#60 C0 60 00 00 00 00 00"]),
-            ("601#2F 60 60 00 07 00 00 00", &["581#60 60 60 00 00 00 00 00"]),
-            ("601#2B 8F 60 01 00 00 10 00", &["581#60 8F 60 01 00 00 00 00"]),
-            ("601#2F 4C 20 01 01 00 00 00", &["581#60 4C 20 01 00 00 00 00"]),
-            ("601#2F 4C 20 02 01 00 00 00", &["581#60 4C 20 02 00 00 00 00"]),
-        ],
-    );
+    replay(&mut r, &t.steps(1, 22));
     assert_eq!(value(&r, 0x1401, 2), Some(Value::U8(1)));
     assert_eq!(value(&r, 0x1402, 2), Some(Value::U8(1)));
     assert_eq!(value(&r, 0x60C0, 0), Some(Value::I16(-2)));
     assert_eq!(r.node().od().get_u32(0x608F, 1), Some(0x0010_0000));
     assert_eq!(value(&r, 0x204C, 1), Some(Value::I32(1)));
     // Frame 23: NMT start (all TPDOs switched off: silent).
-    r.exchange("000#01 01", &[]);
-    for cw in ["201#06 00", "201#07 00", "201#0F 00", "201#1F 00"] {
-        r.exchange(cw, &[]);
+    replay(&mut r, &t.steps(23, 23));
+    for (cw, resp) in t.steps(24, 27) {
+        r.exchange(cw, resp);
         r.run_ms(1);
     }
     assert_eq!(r.statusword() & 0x6F, 0x27);
@@ -770,6 +537,6 @@ fn kc1_ex13_pvt_configuration() {
     assert_eq!(resp.data()[0] & 0xF3, 0x43, "{resp:?}");
     // Frames 29–31: a PVT point by RPDO2 (60C1h:1 + :2) and RPDO3 (60C1h:3),
     // synchronous, then SYNC.
-    replay(&mut r, &[("301#00 00 00 00 00 00 00 00", &[]), ("401#00 00 00 00", &[]), ("080#", &[])]);
+    replay(&mut r, &t.steps(29, 31));
     assert_eq!(value(&r, 0x60C1, 3), Some(Value::I32(0)));
 }

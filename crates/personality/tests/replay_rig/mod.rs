@@ -3,6 +3,8 @@
 //! frames written candump-style (`603#2F 60 60 00 03 00 00 00`).
 #![allow(dead_code)]
 
+pub mod trace;
+
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{CanId, Duration, Frame, Instant};
 use drivebus_node::Node;
@@ -181,4 +183,11 @@ pub fn replay(r: &mut Rig, steps: &[Step<'_>]) {
     for (req, resp) in steps {
         r.exchange(req, resp);
     }
+}
+
+/// `f` in the form of the printed `|form` frame `l`: its COB-ID and length
+/// (the values are those of the manual's machine).
+pub fn assert_form(f: &Frame, l: trace::Line) {
+    assert!(l.form(), "{l:?} is not marked `form`");
+    assert_eq!((f.std_id(), f.len()), (Some(l.id()), l.dlc()), "in form: {l:?}");
 }
