@@ -116,6 +116,7 @@ Examples:
   drivebus serve --listen 127.0.0.1:29536 --channel can0 --drive kc1:1 --drive dds6:2 --state-dir ./state
   drivebus serve --drive generic:5 --bitrate 1000000
   drivebus serve --drive generic:5 --fault drop:0x185,every=10   (lose every 10th TPDO1)
+  drivebus serve --drive akd:1 --eds-object   (then: drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 eds export)
 
 Prints one line containing `listening on` when ready; stops on SIGINT/SIGTERM (exit 0).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
@@ -142,6 +143,11 @@ pub struct ServeArgs {
     /// or `corrupt:IDS:MASK[,...]`; IDS is `0x585` or `0x180-0x1FF`, MASK is hex XORed onto the data.
     #[arg(long = "fault", value_name = "RULE")]
     pub faults: Vec<String>,
+    /// Give every drive 1021h "store EDS" and 1022h (CiA 301 §7.5.2.21): its EDS, generated from
+    /// its running dictionary, read by SDO upload. Without it only `generic` has them (the other
+    /// manuals do not list them).
+    #[arg(long)]
+    pub eds_object: bool,
 }
 
 const DEMO_EXAMPLES: &str = "\

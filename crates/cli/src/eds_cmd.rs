@@ -35,6 +35,13 @@ pub fn load_global_eds(g: &Global) -> anyhow::Result<Option<Eds>> {
     g.eds.as_deref().map(load_eds).transpose()
 }
 
+/// The device refused a block transfer (it has none, CiA 301 §7.2.4.3.17).
+fn refused_block(e: &anyhow::Error) -> bool {
+    e.downcast_ref::<crate::link::SdoFailure>().is_some_and(|f| {
+        f.error == drivebus_sdo::client::ClientError::ServerAbort(drivebus_od::SdoAbort::INVALID_COMMAND)
+    })
+}
+
 fn profile(name: &str) -> anyhow::Result<Profile> {
     Profile::from_name(name).ok_or_else(|| {
         let names = Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>().join(", ");
@@ -129,10 +136,16 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
                 profile(p)?.eds_text().to_owned()
             } else if let Some(node) = g.node {
                 let mut link = Link::open(g).await?;
-                let data = link
-                    .upload_with(node, 0x1021, 0, Protocol::Block, None)
-                    .await
-                    .with_context(|| format!("node {node} gives no EDS through 1021h (store EDS)"))?;
+                let data = match link.upload_with(node, 0x1021, 0, Protocol::Block, None).await {
+                    // A server without block transfer refuses the command
+                    // specifier (CiA 301 §7.2.4.3.17 0504 0001h): read it
+                    // segmented instead.
+                    Err(e) if refused_block(&e) => {
+                        link.upload_with(node, 0x1021, 0, Protocol::Auto, None).await
+                    }
+                    r => r,
+                }
+                .with_context(|| format!("node {node} gives no EDS through 1021h (store EDS)"))?;
                 String::from_utf8_lossy(&data).into_owned()
             } else if let Some(f) = &g.eds {
                 drivebus_eds::write(&load_eds(f)?)

@@ -101,7 +101,7 @@ pub async fn open_bus(g: &Global) -> anyhow::Result<(CanBus, Hosted)> {
             anyhow::bail!("--sim hosts drives only on the `virtual` bus, not on `{}`", g.bus);
         };
         let hub = drivebus_transport::hub::virtual_hub(name);
-        drives = spawn_on_hub(&specs, &hub, None)?;
+        drives = spawn_on_hub(&specs, &hub, None, Default::default())?;
     }
     let hosted = Hosted(drives);
     let bus = tokio::time::timeout(Duration::from_secs(10), drivebus_transport::open_parsed(&g.bus, &parsed))

@@ -416,7 +416,7 @@ pub async fn slcan_pty(g: &Global, a: &SlcanPtyArgs) -> anyhow::Result<()> {
             _ => bail!("slcan-pty runs on the in-process virtual bus: use --bus virtual (not `{}`)", g.bus),
         };
         crate::fault::install(&hub, &a.faults)?;
-        let _drives = spawn_on_hub(&specs, &hub, None)?;
+        let _drives = spawn_on_hub(&specs, &hub, None, Default::default())?;
         let pty = drivebus_transport::slcan::SlcanPty::spawn(hub.attach())
             .context("cannot open a pseudo-terminal")?;
         {

@@ -7,6 +7,7 @@
 use std::io::Write;
 
 use anyhow::Context;
+use drivebus_personality::build::BuildOptions;
 use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
 use drivebus_transport::{Hub, HubConfig};
 
@@ -34,7 +35,8 @@ pub async fn run(a: &ServeArgs) -> anyhow::Result<()> {
         SocketcandServer::bind_with(a.listen.as_str(), ServerConfig::new(&a.channel), hub.clone())
             .await
             .with_context(|| format!("cannot listen on {}", a.listen))?;
-    let drives = spawn_on_hub(&specs, &hub, a.state_dir.as_deref())?;
+    let options = BuildOptions { eds_object: a.eds_object };
+    let drives = spawn_on_hub(&specs, &hub, a.state_dir.as_deref(), options)?;
     let list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
     let pace = a.bitrate.map_or_else(|| "unpaced".to_owned(), |b| format!("{b} bit/s"));
     // Handlers first: a SIGTERM right after the ready line must end in a

@@ -27,7 +27,7 @@ impl SimMaster {
         let mut bus = Bus::new(BusConfig { log: false, ..BusConfig::with_bitrate(bitrate) });
         let probe = bus.attach_probe();
         for s in specs {
-            bus.attach(VDrive::build(*s, None)?.pn);
+            bus.attach(VDrive::build(*s, None, Default::default())?.pn);
         }
         Ok(SimMaster { bus, probe, backlog: Vec::new(), sdo_count: 0 })
     }

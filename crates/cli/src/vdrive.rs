@@ -8,6 +8,7 @@ use std::path::Path;
 use anyhow::{Context, anyhow, bail};
 use drivebus_can::{Frame, Instant, TxSink};
 use drivebus_node::{MemoryStorage, Storage};
+use drivebus_personality::build::BuildOptions;
 use drivebus_personality::{PersonalityNode, Profile};
 use drivebus_transport::CanBus;
 use tokio::task::JoinHandle;
@@ -73,9 +74,10 @@ pub struct VDrive {
 }
 
 impl VDrive {
-    /// Builds the drive `spec`; parameters stored with 1010h go to
-    /// `state_dir/<profile>-<node>/` when given, else to memory.
-    pub fn build(spec: DriveSpec, state_dir: Option<&Path>) -> anyhow::Result<VDrive> {
+    /// Builds the drive `spec` with `options` (e.g. the EDS at 1021h);
+    /// parameters stored with 1010h go to `state_dir/<profile>-<node>/`
+    /// when given, else to memory.
+    pub fn build(spec: DriveSpec, state_dir: Option<&Path>, options: BuildOptions) -> anyhow::Result<VDrive> {
         let storage: Box<dyn Storage + Send> = match state_dir {
             Some(dir) => {
                 let d = dir.join(spec.dir_name());
@@ -88,7 +90,7 @@ impl VDrive {
         };
         let pn = spec
             .profile
-            .build_with_storage(spec.node, storage)
+            .build_with_options(spec.node, storage, options)
             .map_err(|e| anyhow!("cannot build {spec}: {e}"))?;
         Ok(VDrive { pn, spec })
     }
@@ -151,10 +153,11 @@ pub fn spawn_on_hub(
     specs: &[DriveSpec],
     hub: &drivebus_transport::Hub,
     state_dir: Option<&Path>,
+    options: BuildOptions,
 ) -> anyhow::Result<Vec<JoinHandle<()>>> {
     let mut drives = Vec::new();
     for s in specs {
-        drives.push(VDrive::build(*s, state_dir)?);
+        drives.push(VDrive::build(*s, state_dir, options)?);
     }
     Ok(drives.into_iter().map(|d| spawn_realtime(d, hub.attach())).collect())
 }

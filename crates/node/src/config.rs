@@ -41,6 +41,10 @@ pub struct NodeConfig {
     pub sdo: ServerConfig,
     /// Additional server SDOs (1201h..).
     pub extra_sdo_servers: u8,
+    /// 1200h, the default SDO server's parameter (optional in CiA 301:
+    /// its identifiers are the pre-defined 600h/580h + node-ID). Without
+    /// it the default server runs all the same.
+    pub sdo_server_param: bool,
     /// 1016h entries (0: no heartbeat consumer).
     pub heartbeat_consumers: u8,
     /// 1003h history depth (0: no 1003h).
@@ -49,6 +53,15 @@ pub struct NodeConfig {
     pub emcy_consumers: u8,
     /// 1029h error classes (0: no 1029h).
     pub error_classes: u8,
+    /// 1015h inhibit time EMCY. Without it (a device whose manual does not
+    /// list the object) EMCY frames go out with no inhibit time.
+    pub emcy_inhibit: bool,
+    /// 1007h synchronous window length. Without it there is no window:
+    /// synchronous PDOs are processed whenever a SYNC came.
+    pub sync_window: bool,
+    /// 1019h synchronous counter overflow value. Without it SYNC has no
+    /// counter (DLC 0).
+    pub sync_counter: bool,
     /// TIME object 1012h and its service.
     pub time: bool,
     /// LSS slave (CiA 305).
@@ -76,10 +89,14 @@ impl NodeConfig {
             pdo: PdoConfig::new(pdo_id),
             sdo: ServerConfig::default(),
             extra_sdo_servers: 0,
+            sdo_server_param: true,
             heartbeat_consumers: 4,
             emcy_history: 8,
             emcy_consumers: 0,
             error_classes: 1,
+            emcy_inhibit: true,
+            sync_window: true,
+            sync_counter: true,
             time: true,
             lss: true,
             store_restore: true,

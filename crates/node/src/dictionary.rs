@@ -20,6 +20,17 @@ pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
     ));
     Emcy::install(&mut od, id, cfg.emcy_history);
     SyncService::install(&mut od, id);
+    // Optional objects a device may lack: the services keep their
+    // power-on setting (no inhibit time, no window, no counter).
+    for (present, index) in [
+        (cfg.emcy_inhibit, drivebus_emcy::OD_INHIBIT_TIME_EMCY),
+        (cfg.sync_window, drivebus_sync::OD_SYNC_WINDOW),
+        (cfg.sync_counter, drivebus_sync::OD_SYNC_COUNTER_OVERFLOW),
+    ] {
+        if !present {
+            od.remove(index);
+        }
+    }
     for (index, name, text) in [
         (0x1008, "Manufacturer device name", &cfg.device_name),
         (0x1009, "Manufacturer hardware version", &cfg.hardware_version),
@@ -122,6 +133,9 @@ pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
         EmcyConsumer::install(&mut od, cfg.emcy_consumers);
     }
     drivebus_sdo::server::install_server_params(&mut od, id, 1 + cfg.extra_sdo_servers);
+    if !cfg.sdo_server_param {
+        od.remove(drivebus_sdo::server::FIRST_PARAM_INDEX);
+    }
     let mut pdo = cfg.pdo;
     pdo.node_id = id;
     drivebus_pdo::install(&mut od, &pdo);

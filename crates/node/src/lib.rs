@@ -41,4 +41,4 @@ pub use storage::FileStorage;
 pub use storage::{MemoryStorage, Slot, Storage, StorageError};
 
 /// Re-exports so users of the node need one dependency.
-pub use drivebus_nmt::NmtState;
+pub use drivebus_nmt::{NmtCommand, NmtState};

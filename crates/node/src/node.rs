@@ -7,13 +7,13 @@ use crate::hooks::{CommHooks, Services};
 use crate::storage::{MemoryStorage, Slot, Storage, apply_image};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
-use drivebus_can::{Frame, Instant, TxSink, earliest};
+use drivebus_can::{CanId, Frame, Instant, TxSink, earliest};
 use drivebus_emcy::{Emcy, EmcyConsumer, register_bit_for};
 use drivebus_lss::{LssAddress, LssEvent, LssSlave, StoreStatus};
-use drivebus_nmt::{ErrorClass, Nmt, NmtEvent, NmtState, Service};
+use drivebus_nmt::{ErrorClass, InitSubState, Nmt, NmtCommand, NmtEvent, NmtState, Service};
 use drivebus_od::{ObjectDictionary, PersistGroup};
 use drivebus_pdo::{Pdo, PdoRx};
-use drivebus_sdo::server::SdoServer;
+use drivebus_sdo::server::{FIRST_PARAM_INDEX, SdoServer};
 use drivebus_sync::{SyncService, TimeService};
 
 /// EMCY for a heartbeat or life-guarding loss (CiA 301 Table 21).
@@ -266,6 +266,29 @@ impl Node {
         }
     }
 
+    /// A local NMT command: the device acts on it as on one received for
+    /// its node-ID (state change, reset node, reset communication with
+    /// boot-up), but [`drivebus_nmt::NmtConfig::supported_commands`] does
+    /// not apply — that set limits what a master may send, not what the
+    /// device's own application does (e.g. "operational after power-on").
+    pub fn nmt_command<A: Application + ?Sized>(
+        &mut self,
+        cmd: NmtCommand,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        let to = match cmd {
+            NmtCommand::Start => NmtState::Operational,
+            NmtCommand::Stop => NmtState::Stopped,
+            NmtCommand::EnterPreOperational => NmtState::PreOperational,
+            NmtCommand::ResetNode => NmtState::Initialisation(InitSubState::ResetApplication),
+            NmtCommand::ResetCommunication => NmtState::Initialisation(InitSubState::ResetCommunication),
+        };
+        self.s.now = now;
+        self.set_nmt_state(to, now, app, out);
+    }
+
     /// Handle one received frame.
     pub fn handle_frame<A: Application + ?Sized>(
         &mut self,
@@ -339,7 +362,6 @@ impl Node {
     /// Rebuild the identifier → service table from the services' current
     /// COB-IDs (after boot and after any communication object changed).
     fn rebuild_routes(&mut self) {
-        use drivebus_can::CanId;
         let t = &mut self.routes;
         t.iter_mut().for_each(|x| *x = route::NONE);
         let mut set = |id: Option<CanId>, r: u8| {
@@ -718,6 +740,13 @@ impl Node {
         self.s.pdo.reload(&self.od);
         self.s.pdo.reset();
         self.sdo = SdoServer::servers_from_od(&self.od, self.cfg.sdo);
+        if self.od.object(FIRST_PARAM_INDEX).is_none() {
+            // No 1200h: the default server on its pre-defined identifiers
+            // (CiA 301 §7.3.5), 600h/580h + node-ID.
+            let sid = u16::from(if (1..=127).contains(&id) { id } else { 1 });
+            let (rx, tx) = (CanId::Standard(0x600 + sid), CanId::Standard(0x580 + sid));
+            self.sdo.insert(0, SdoServer::new(rx, tx, self.cfg.sdo));
+        }
         self.rebuild_routes();
         self.dirty = true;
         if !(1..=127).contains(&id) {

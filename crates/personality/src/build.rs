@@ -25,7 +25,8 @@
 //! 1. dictionary: `drivebus_eds::to_od(profile EDS, node_id)`;
 //! 2. [`node_config`] from [`ProfileInfo`] (identity, PDO counts and
 //!    granularity, block SDO, TIME, NMT commands, error control, EMCY
-//!    history, LSS), then [`Behaviour::adjust_node_config`];
+//!    history, LSS, 1015h), then [`Behaviour::adjust_node_config`], then
+//!    [`BuildOptions`] (1021h/1022h);
 //! 3. `Node::with_dictionary(cfg, od, storage)`;
 //! 4. [`drive_config`] + mode handlers from [`ProfileInfo::modes`] and a
 //!    homing registry of [`ProfileInfo::homing_methods`] (standard codes from
@@ -46,7 +47,9 @@
 //! values ([`Behaviour::after_step`]: statusword bits 8/9/14/15, the
 //! manufacturer-mode display). Fault codes the drive raises are turned into
 //! EMCY frames by [`Behaviour::emcy`] (code, error register, manufacturer
-//! bytes). Boot-time frames come from [`Behaviour::on_boot`].
+//! bytes). Boot-time frames (and a local NMT command, [`Action::Nmt`]) come
+//! from [`Behaviour::on_boot`]. [`PersonalityNode::behaviour_mut`] reaches
+//! the behaviour's concrete type at run time ([`Behaviour::as_any_mut`]).
 
 use crate::{PdoDefault, Profile, ProfileInfo};
 use alloc::boxed::Box;
@@ -159,6 +162,11 @@ pub enum Action {
         /// The mask.
         mask: Option<[u8; 8]>,
     },
+    /// A local NMT command: the device changes its own NMT state (e.g.
+    /// operational after power-on) as if the master had sent `cmd`, whether
+    /// or not the drive takes that command from the bus
+    /// ([`Node::nmt_command`]).
+    Nmt(NmtCommand),
 }
 
 /// The context a [`Behaviour`] gets: the drive (to forward a translated
@@ -199,6 +207,13 @@ pub trait Behaviour: Send {
     /// framework.
     fn homing_methods(&self) -> Vec<Box<dyn HomingMethod + Send>> {
         Vec::new()
+    }
+
+    /// The interpolated position handler (60C4h buffer depth and
+    /// organisation), for profiles with ip: a 16-record FIFO unless the
+    /// drive documents otherwise.
+    fn ip_mode(&self) -> IpMode {
+        IpMode::new(16)
     }
 
     /// The standard mode (1..=10) a manufacturer mode (negative 6060h) runs
@@ -281,6 +296,13 @@ pub trait Behaviour: Send {
     fn emcy(&self, code: u16) -> EmcyFrame {
         EmcyFrame { code, register: None, bytes: [0; 5] }
     }
+
+    /// The behaviour as [`Any`](core::any::Any), so its owner can reach the
+    /// concrete type at run time ([`PersonalityNode::behaviour_mut`]: the
+    /// SSD 630's enable input, a test's switches). `None`: not reachable.
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        None
+    }
 }
 
 /// What [`Behaviour::filter_rx`] does with a received frame.
@@ -333,6 +355,8 @@ pub fn node_config(info: &ProfileInfo, node_id: u8) -> NodeConfig {
     c.heartbeat_consumers = info.heartbeat_consumers;
     c.emcy_history = info.error_history;
     c.error_classes = u8::from(info.error_behaviour);
+    // 1015h only where the manual lists it (KC1 §8.1.2, AKD, iPOS lack it).
+    c.emcy_inhibit = info.emcy_inhibit;
     c.time = info.time;
     c.lss = info.lss;
     c.store_restore = true;
@@ -368,7 +392,7 @@ fn handlers(info: &ProfileInfo, behaviour: &dyn Behaviour) -> Vec<Box<dyn ModeHa
         v.push(Box::new(HomingMode::new(reg)));
     }
     if info.modes.contains(&op::IP) {
-        v.push(Box::new(IpMode::new(16)));
+        v.push(Box::new(behaviour.ip_mode()));
     }
     if info.modes.contains(&op::CSP) {
         v.push(Box::new(CspMode::new()));
@@ -408,13 +432,21 @@ fn apply_pdo(
         let id = if base & 0x7F == 0 { base + u32::from(node_id) } else { base };
         (c & 0xC000_0000) | id
     });
+    let cob_id = match (d.enabled, cob) {
+        // A valid pre-defined COB-ID stays node-relative (CiA 301 default).
+        (true, _) => None,
+        (false, Some(c)) => Some(c),
+        // Not assigned on EtherCAT (no COB-ID given): on CAN the PDO is
+        // there but invalid, the pre-defined COB-ID with bit 31 set (iPOS
+        // §2.3.7/§2.3.8: "disabled … by setting Bit31 to 1").
+        (false, None) => Some(drivebus_pdo::default_cob_id(cfg, kind, n) | drivebus_pdo::COB_INVALID),
+    };
     let pd = PdoDefaults {
         entries: d.mapping,
         transmission_type: d.transmission_type.unwrap_or(0xFF),
         inhibit_time: 0,
         event_timer: d.event_timer_ms,
-        // A valid pre-defined COB-ID stays node-relative (CiA 301 default).
-        cob_id: if d.enabled { None } else { cob },
+        cob_id,
     };
     set_defaults(od, cfg, kind, n, &pd)
 }
@@ -452,13 +484,46 @@ pub fn build_on_machine(
     build_custom(profile, node_id, storage, crate::behaviour::for_profile(profile), machine)
 }
 
+/// Options of a build beyond what the personality's manual describes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Serve the device's own EDS at 1021h "store EDS" with 1022h "storage
+    /// format" (CiA 301 §7.5.2.21/22), generated from the running
+    /// dictionary, even where the manual does not list the objects (only
+    /// `generic` has them by default): a tool can then read the emulated
+    /// drive's dictionary off the bus (`drivebus serve --eds-object`).
+    pub eds_object: bool,
+}
+
+/// [`build`] with [`BuildOptions`].
+pub fn build_with_options(
+    profile: Profile,
+    node_id: u8,
+    storage: Box<dyn Storage + Send>,
+    options: BuildOptions,
+) -> Result<PersonalityNode, BuildError> {
+    build_full(profile, node_id, storage, crate::behaviour::for_profile(profile), |_| {}, options)
+}
+
 /// The general form of [`build`]: explicit behaviour and machine.
 pub fn build_custom(
     profile: Profile,
     node_id: u8,
     storage: Box<dyn Storage + Send>,
+    behaviour: Box<dyn Behaviour>,
+    machine: impl FnOnce(&mut DriveConfig),
+) -> Result<PersonalityNode, BuildError> {
+    build_full(profile, node_id, storage, behaviour, machine, BuildOptions::default())
+}
+
+/// [`build_custom`] with [`BuildOptions`]: every argument explicit.
+pub fn build_full(
+    profile: Profile,
+    node_id: u8,
+    storage: Box<dyn Storage + Send>,
     mut behaviour: Box<dyn Behaviour>,
     machine: impl FnOnce(&mut DriveConfig),
+    options: BuildOptions,
 ) -> Result<PersonalityNode, BuildError> {
     let info = profile.info();
     // Quirk `node-id-0-is-1` (KC1 §6.2): rotary switches at 0 mean node 1.
@@ -472,6 +537,8 @@ pub fn build_custom(
         drivebus_eds::to_od(&parsed.eds, node_id).map_err(|e| BuildError::Eds(alloc::format!("{e:?}")))?;
     let mut nc = node_config(info, node_id);
     behaviour.adjust_node_config(&mut nc);
+    // An option adds to the personality; it never takes 1021h away.
+    nc.eds_object |= options.eds_object;
     let pdo_cfg = nc.pdo;
     let mut node = Node::with_dictionary(nc, od, storage);
 
@@ -548,6 +615,17 @@ impl Profile {
         storage: Box<dyn Storage + Send>,
     ) -> Result<PersonalityNode, BuildError> {
         build(*self, node_id, storage)
+    }
+
+    /// This personality with parameters in `storage` and [`BuildOptions`]
+    /// (e.g. the EDS at 1021h: `serve --eds-object`).
+    pub fn build_with_options(
+        &self,
+        node_id: u8,
+        storage: Box<dyn Storage + Send>,
+        options: BuildOptions,
+    ) -> Result<PersonalityNode, BuildError> {
+        build_with_options(*self, node_id, storage, options)
     }
 }
 

@@ -28,8 +28,8 @@ mod emcy_tables;
 mod profiles;
 
 pub use build::{
-    Action, Behaviour, BuildError, Context, EmcyFrame, FilterOutcome, PersonalityNode, Plain, Verdict, build,
-    build_custom, build_on_machine, build_with, parse_drive_spec,
+    Action, Behaviour, BuildError, BuildOptions, Context, EmcyFrame, FilterOutcome, PersonalityNode, Plain,
+    Verdict, build, build_custom, build_on_machine, build_with, parse_drive_spec,
 };
 
 pub use drivebus_eds::Parsed;

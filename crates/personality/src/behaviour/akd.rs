@@ -165,4 +165,8 @@ impl Behaviour for Akd {
     fn emcy(&self, code: u16) -> EmcyFrame {
         self.0.emcy(code)
     }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
+    }
 }

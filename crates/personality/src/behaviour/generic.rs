@@ -126,4 +126,8 @@ impl Behaviour for Generic {
             set_ident(od);
         }
     }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
+    }
 }

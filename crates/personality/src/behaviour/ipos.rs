@@ -144,6 +144,10 @@ impl Behaviour for Ipos {
         cfg.store_restore = false;
         cfg.heartbeat_consumers = 0;
         cfg.error_classes = 0;
+        // CAN-only objects the manual does not have (no CoE meaning).
+        cfg.sync_window = false;
+        cfg.sync_counter = false;
+        cfg.sdo_server_param = false;
     }
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
@@ -223,6 +227,10 @@ impl Behaviour for Ipos {
 
     fn emcy(&self, code: u16) -> EmcyFrame {
         EmcyFrame { code, register: Some(error_register(code)), bytes: [0; 5] }
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
     }
 }
 

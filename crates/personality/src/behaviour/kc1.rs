@@ -87,6 +87,12 @@ impl Behaviour for Kollmorgen {
         cfg.pdo.rtr_supported = k.rtr_supported;
         cfg.pdo.ignore_rtr_bit = k.ignore_rtr_bit;
         cfg.software_version = None;
+        // 1007h, 1019h and 1200h are in neither manual's object list (KC1
+        // §8.1.2, AKD §7.1.3): no window, SYNC without counter, the default
+        // SDO server on its pre-defined identifiers.
+        cfg.sync_window = false;
+        cfg.sync_counter = false;
+        cfg.sdo_server_param = false;
     }
 
     fn hooked_objects(&self) -> &'static [u16] {
@@ -272,6 +278,10 @@ impl Behaviour for Kollmorgen {
     fn emcy(&self, code: u16) -> EmcyFrame {
         let code = kollmorgen_code(code);
         EmcyFrame { code, register: Some(super::class_bit(code)), bytes: [EMCY_CATEGORY, 0, 0, 0, 0] }
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
     }
 }
 

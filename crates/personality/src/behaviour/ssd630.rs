@@ -19,7 +19,12 @@
 //!   state (… PDO not activated …)");
 //! * EMCY error register per code as in §9 Table 1 (03h, 05h, 09h, 21h, 81h);
 //! * 60FFh must be 0 before leaving profile velocity (§14.15 note): a mode
-//!   change with 60FFh ≠ 0 while in pv is refused with `0800 0022h`.
+//!   change with 60FFh ≠ 0 while in pv is refused with `0800 0022h`;
+//! * 2018h = 1 "NMT state (operational after power on)" (§11): after the
+//!   boot-up message the drive goes operational by itself (value as
+//!   loaded from storage at power-on). NMT Reset Node, which CiA 301
+//!   §7.3.2.1 defines as the application's power-on reset, does the same;
+//!   Reset Communication does not (it is no power-on).
 
 use drivebus_cia402::homing::{
     HomingConfig, HomingContext, HomingMethod, HomingRegistry, MethodStep, StandardMethod,
@@ -173,6 +178,7 @@ use crate::Profile;
 use crate::build::{Action, Behaviour, Context, EmcyFrame, Verdict};
 use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection};
 use drivebus_cia402::state_machine::State;
+use drivebus_nmt::NmtCommand;
 use drivebus_node::{NmtState, Node, NodeConfig, NodeEvent};
 use drivebus_od::{ObjectDictionary, SdoAbort, Value};
 
@@ -190,11 +196,13 @@ pub struct Ssd630 {
     nmt: NmtState,
     /// The statusword last shown.
     last: u16,
+    /// An NMT Reset Node is under way: the next boot is a power-on (2018h).
+    reset_node: bool,
 }
 
 impl Default for Ssd630 {
     fn default() -> Self {
-        Ssd630 { enable_input: true, nmt: NmtState::PreOperational, last: 0 }
+        Ssd630 { enable_input: true, nmt: NmtState::PreOperational, last: 0, reset_node: false }
     }
 }
 
@@ -254,6 +262,14 @@ impl Ssd630 {
         sw
     }
 
+    /// §11 2018h: 1 = "NMT state (operational after power on)": the local
+    /// Start that follows the boot-up message.
+    fn autostart(cx: &mut Context<'_>, od: &ObjectDictionary) {
+        if od.get_u32(0x2018, 0) == Some(1) {
+            cx.actions.push(Action::Nmt(NmtCommand::Start));
+        }
+    }
+
     fn pdo_comm_of(index: u16) -> Option<u16> {
         match index {
             0x1600..=0x1603 => Some(index - 0x200),
@@ -287,6 +303,10 @@ impl Behaviour for Ssd630 {
         cfg.error_classes = 0;
         // EX14.1: a missing index is answered with 0601 0000, not 0602 0000.
         cfg.sdo.missing_object = drivebus_od::SdoAbort::UNSUPPORTED_ACCESS;
+        // §4's object list has no 1007h, 1019h or 1200h.
+        cfg.sync_window = false;
+        cfg.sync_counter = false;
+        cfg.sdo_server_param = false;
     }
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
@@ -431,15 +451,26 @@ impl Behaviour for Ssd630 {
         }
     }
 
-    fn on_boot(&mut self, cx: &mut Context<'_>, _od: &mut ObjectDictionary) {
+    fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         // §9 transition 0: "After the initialisation … the message 'no
         // error' is being sent", manufacturer field "Vxxxx".
         cx.actions.push(Action::RawEmcy(EmcyFrame { code: 0, register: Some(0), bytes: FIRMWARE_TAG }));
+        // The stored values are loaded by now (node boot before on_boot).
+        Self::autostart(cx, od);
     }
 
-    fn on_event(&mut self, _cx: &mut Context<'_>, _od: &mut ObjectDictionary, event: &NodeEvent) {
-        if let NodeEvent::NmtState { to, .. } = *event {
-            self.nmt = to;
+    fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
+        match *event {
+            // Reported before the stored values are reloaded: decide at
+            // the end of the boot that follows.
+            NodeEvent::ResetApplication => self.reset_node = true,
+            NodeEvent::NmtState { from, to } => {
+                self.nmt = to;
+                if from.is_initialisation() && core::mem::take(&mut self.reset_node) {
+                    Self::autostart(cx, od);
+                }
+            }
+            _ => {}
         }
     }
 
@@ -464,5 +495,9 @@ impl Behaviour for Ssd630 {
     fn emcy(&self, code: u16) -> EmcyFrame {
         // §9 Table 1: the register per code; manufacturer bytes all 00h.
         EmcyFrame { code, register: error_register(code), bytes: [0; 5] }
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
     }
 }

@@ -189,6 +189,14 @@ impl PersonalityNode {
         self.drive.inject(what);
     }
 
+    /// The behaviour as its concrete type `T` (e.g.
+    /// [`crate::behaviour::ssd630::Ssd630`] to switch its enable input at
+    /// run time); `None` if it is another type or does not expose itself
+    /// ([`Behaviour::as_any_mut`]). A change takes effect at the next poll.
+    pub fn behaviour_mut<T: core::any::Any>(&mut self) -> Option<&mut T> {
+        self.behaviour.as_any_mut()?.downcast_mut::<T>()
+    }
+
     fn split(&mut self, now: Instant) -> (&mut Node, Composite<'_>) {
         let node_id = self.node.node_id();
         (
@@ -270,7 +278,7 @@ impl PersonalityNode {
 
     /// Carries out queued actions and the drive's EMCY requests; returns
     /// whether anything was queued for sending.
-    fn drain(&mut self, now: Instant) -> bool {
+    fn drain(&mut self, now: Instant, out: &mut impl TxSink) -> bool {
         let mut any = false;
         let reqs: Vec<EmcyRequest> = self.drive.take_emcy().collect();
         for r in reqs {
@@ -316,13 +324,29 @@ impl PersonalityNode {
                 Action::TpdoChangeMask { tpdo, mask } => {
                     self.node.set_tpdo_change_mask(tpdo, mask);
                 }
+                Action::Nmt(cmd) => {
+                    let (node, mut app) = self.split(now);
+                    // What is already queued goes first (the SSD 630's boot
+                    // EMCY before the PDOs of operational).
+                    node.poll(now, &mut app, out);
+                    node.nmt_command(cmd, now, &mut app, out);
+                }
             }
         }
         any
     }
 
     fn after(&mut self, now: Instant, out: &mut impl TxSink) -> Option<Instant> {
-        if self.drain(now) {
+        let mut any = false;
+        // An action may queue more (an NMT change the behaviour reacts to):
+        // a few rounds, bounded so a behaviour cannot loop the node.
+        for _ in 0..4 {
+            if !self.drain(now, out) {
+                break;
+            }
+            any = true;
+        }
+        if any {
             let (node, mut app) = self.split(now);
             return node.poll(now, &mut app, out);
         }
