@@ -205,3 +205,40 @@ fn modulo_axis_takes_the_short_way() {
     assert!((r.drive().position() + 10_000).abs() <= 360, "{}", r.drive().position());
     assert!((r.read(0x6064, 0) as i32 - 350_000).abs() <= 360);
 }
+
+/// `TargetReached::ActualInWindow`: with a wide position window bit 10
+/// sets before the trajectory ends, and a buffered set-point starts there
+/// (the acknowledge clears) instead of at the trajectory's end.
+#[test]
+fn reached_on_the_actual_position_alone() {
+    use drivebus_cia402::drive::{DriveConfig, TargetReached};
+    let t1 = trapezoid(360_000.0, f64::from(V), f64::from(A), f64::from(D));
+    let run = |rule: TargetReached| {
+        let cfg = DriveConfig { target_reached: rule, ..DriveConfig::default() };
+        let mut r = Rig::with_config(cfg);
+        r.write(0x6081, 0, &V.to_le_bytes());
+        r.write(0x6083, 0, &A.to_le_bytes());
+        r.write(0x6084, 0, &D.to_le_bytes());
+        r.write(0x6067, 0, &36_000u32.to_le_bytes()); // 36°
+        r.write(0x6068, 0, &0u16.to_le_bytes());
+        r.enable();
+        r.run_ms(1.0);
+        setpoint(&mut r, 360_000, 0);
+        r.run_us(200);
+        r.controlword(0x0F);
+        r.run_us(200);
+        setpoint(&mut r, 720_000, 0);
+        r.run_us(200);
+        r.controlword(0x0F);
+        r.run_us(200);
+        assert_ne!(sw(&r) & SW_ACK, 0, "buffered");
+        assert_eq!(sw(&r) & SW_REACHED, 0, "far from the target");
+        r.run_until(125, 2000.0, |r| sw(r) & SW_ACK == 0).unwrap() + 800e-6
+    };
+    let by_window = run(TargetReached::ActualInWindow);
+    let by_profile = run(TargetReached::ProfileDone);
+    assert!((by_profile - t1).abs() < 0.01 * t1, "profile rule: at the end {by_profile} vs {t1}");
+    // 36° before a target approached at D = 36 000°/s²: sqrt(2·36/36000) s early.
+    let early = (2.0 * 36.0 / 36_000.0f64).sqrt();
+    assert!((t1 - by_window - early).abs() < 0.003, "window rule: {by_window} = {t1} − ~{early}");
+}

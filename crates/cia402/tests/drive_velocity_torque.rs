@@ -129,3 +129,46 @@ fn vl_ramps_with_delta_speed_over_delta_time() {
     r.run_ms(2000.0);
     assert_eq!(r.read(0x6043, 0) as i16, -100);
 }
+
+/// 606Eh = 0 and 6070h = 0 (no window time): bits 10 and 12 follow the
+/// speed at once, and are clear while the speed is outside the windows.
+#[test]
+fn pv_windows_with_zero_time() {
+    let mut r = Rig::generic();
+    r.write(0x6060, 0, &[3]);
+    r.write(0x6083, 0, &36_000_000u32.to_le_bytes());
+    r.write(0x6084, 0, &72_000_000u32.to_le_bytes());
+    r.write(0x606D, 0, &30_000u16.to_le_bytes());
+    r.write(0x606E, 0, &0u16.to_le_bytes());
+    r.write(0x606F, 0, &30_000u16.to_le_bytes());
+    r.write(0x6070, 0, &0u16.to_le_bytes());
+    r.enable();
+    r.run_ms(2.0);
+    assert_eq!(sw(&r) & (SW_REACHED | SW_SPEED_ZERO), SW_REACHED | SW_SPEED_ZERO, "at rest");
+    r.write(0x60FF, 0, &3_600_000i32.to_le_bytes());
+    r.run_ms(20.0);
+    assert_eq!(sw(&r) & (SW_REACHED | SW_SPEED_ZERO), 0, "ramping: neither bit");
+    let t = r.run_until(125, 1000.0, |r| sw(r) & SW_REACHED != 0).unwrap() + 20e-3;
+    assert!((t - 0.1).abs() < 0.005, "reached at the end of the ramp: {t}");
+}
+
+/// `TargetReached::ActualInWindow`: bit 10 is judged on 606Ch alone, so a
+/// wide window reports "reached" while the ramp still runs.
+#[test]
+fn pv_reached_on_the_actual_value_alone() {
+    use drivebus_cia402::drive::{DriveConfig, TargetReached};
+    let cfg = DriveConfig { target_reached: TargetReached::ActualInWindow, ..DriveConfig::default() };
+    let mut r = Rig::with_config(cfg);
+    r.write(0x6060, 0, &[3]);
+    r.write(0x6083, 0, &36_000_000u32.to_le_bytes());
+    r.write(0x606D, 0, &60_000u16.to_le_bytes());
+    r.write(0x606E, 0, &0u16.to_le_bytes());
+    r.enable();
+    r.run_ms(2.0);
+    // Window 60 000 units/s around 3 600 000 at 36e6 units/s²: entered
+    // ~1.7 ms before the 100 ms ramp ends (plus the actual's lag).
+    r.write(0x60FF, 0, &3_600_000i32.to_le_bytes());
+    let t = r.run_until(125, 1000.0, |r| sw(r) & SW_REACHED != 0).unwrap();
+    assert!(t < 0.1 - 0.001, "reached while ramping: {t}");
+    assert!(r.read(0x606B, 0) as i32 != 3_600_000, "demand still ramping");
+}

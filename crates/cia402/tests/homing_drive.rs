@@ -78,3 +78,26 @@ fn method_1_with_limit_switches() {
     });
     home(&mut rig, 1, INDEX_DEG - 720.0);
 }
+
+/// Method 1 references the negative limit switch: reaching it is the
+/// method's event, not a limit. No stop, no warning (bit 7) and no
+/// internal limit (bit 11) while homing, whatever the limit-switch
+/// reaction outside homing.
+#[test]
+fn limit_switch_is_a_reference_while_homing() {
+    let mut rig = rig(|p| {
+        p.axis.negative_limit = Some(-1000.0);
+        p.axis.negative_stop = Some(-1200.0);
+    });
+    rig.write(0x6098, 0, &[1]);
+    rig.controlword(0x1F);
+    let mut on_switch = false;
+    let done = rig.run_until(1000, 10_000.0, |r| {
+        let sw = r.drive().statusword();
+        assert_eq!(sw & 0x0880, 0, "warning / internal limit while homing: {sw:04X}");
+        on_switch |= r.drive().model().switches().negative_limit;
+        sw & 0x3400 == 0x1400
+    });
+    assert!(done.is_some(), "homing did not complete: {:04X}", rig.statusword());
+    assert!(on_switch, "the search reached the switch");
+}

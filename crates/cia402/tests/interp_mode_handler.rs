@@ -153,3 +153,36 @@ fn ip_auto_push_consumes_60c1_at_each_sync() {
     assert_eq!(positions, [0.0, 100.0, 200.0, 300.0]);
     assert!(!m.engine().underflow() && !m.engine().overflow());
 }
+
+/// A drive without a set-point buffer (`IpMode::latest_only`, e.g. the
+/// DDS6): forwarded 60C1h writes are left to the dictionary (the drive
+/// stores them), the value in force at each SYNC is taken, several writes
+/// between two SYNCs count once, and a missing write is no underflow.
+#[test]
+fn ip_latest_only_takes_the_value_in_force() {
+    let (units, ev) = (Units::default(), StepEvents::default());
+    let mut p = params();
+    let mut m = IpMode::latest_only();
+    let bytes = 500i32.to_le_bytes();
+    assert_eq!(m.write_object(0x60C1, 1, &bytes, &units), Ok(false), "stored by the drive");
+    m.enter(op::IP, &io(0x0F, 0, &p, &units, &ev));
+    let mut positions = Vec::new();
+    // Two writes before the first SYNC (the first one is overwritten),
+    // then none for two periods.
+    for (k, data) in [(1, 300), (2, 400), (3, 400), (4, 400)] {
+        if k == 1 {
+            p.interpolation_data = 200;
+        }
+        p.interpolation_data = data;
+        m.on_sync(op::IP, &io(0x1F, 0, &p, &units, &ev));
+        let out = m.step(op::IP, &io(0x1F, 0, &p, &units, &ev), DT);
+        if let ModeCommand::Position { position, .. } = out.command {
+            positions.push(position);
+        }
+        for _ in 1..8 {
+            m.step(op::IP, &io(0x1F, 0, &p, &units, &ev), DT);
+        }
+    }
+    assert_eq!(positions, [0.0, 300.0, 400.0, 400.0]);
+    assert!(!m.engine().underflow() && !m.engine().overflow(), "no buffer, no buffer warnings");
+}

@@ -23,6 +23,8 @@
 mod common;
 mod manual;
 
+#[path = "../../personality/tests/replay_rig/trace.rs"]
+mod shared_trace;
 use drivebus_node::Node;
 use manual::*;
 
@@ -35,9 +37,7 @@ fn node() -> Node {
 /// The printed traces, shared with the personality replays
 /// (`crates/personality/traces/`): frame lines, comments dropped.
 fn trace(text: &'static str, frames: usize) -> Vec<&'static str> {
-    let v: Vec<_> = text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).collect();
-    assert_eq!(v.len(), frames, "printed frames in the trace");
-    v
+    shared_trace::timed_lines(text, frames)
 }
 const EX1: &str = include_str!("../../personality/traces/dds6_ex1.txt");
 const EX2: &str = include_str!("../../personality/traces/dds6_ex2.txt");

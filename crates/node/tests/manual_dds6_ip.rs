@@ -8,6 +8,8 @@
 mod common;
 mod manual;
 
+#[path = "../../personality/tests/replay_rig/trace.rs"]
+mod shared_trace;
 use drivebus_node::Node;
 use drivebus_od::Value;
 use manual::*;
@@ -23,10 +25,7 @@ const EX9_TEXT: &str = include_str!("../../personality/traces/dds6_ex9.txt");
 
 /// The trace lines of [`EX9_TEXT`] (comments and blank lines dropped).
 fn ex9() -> Vec<&'static str> {
-    let v: Vec<_> =
-        EX9_TEXT.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).collect();
-    assert_eq!(v.len(), 402, "EX9 has 402 printed frames");
-    v
+    shared_trace::timed_lines(EX9_TEXT, 402)
 }
 
 /// DDS6-EX9, §4.4.5: the whole printed trace (402 frames).

@@ -84,6 +84,21 @@ fn sync_rpdo_is_applied_at_next_sync_not_before() {
     assert_eq!(od.get_u64(0x6040, 0), Some(0x0F));
 }
 
+/// At a SYNC the synchronous TPDOs are sampled before the SYNC's RPDO data
+/// takes effect: a TPDO mapping the very object the RPDO writes reports
+/// the value in force up to the SYNC (DDS6-EX9, seed004 §4.4.5: the
+/// controlword sent after SYNC n shows in the TPDO of SYNC n + 2).
+#[test]
+fn sync_tpdo_is_sampled_before_the_sync_rpdo_applies() {
+    let (mut od, mut pdo) = node3();
+    remap(&mut od, &mut pdo, 0x1400, 0x203, 1, &[0x6040_0010]);
+    remap(&mut od, &mut pdo, 0x1800, 0x183, 1, &[0x6040_0010]);
+    rx(&mut pdo, &mut od, Frame::new(0x203, &[0x06, 0x00]), ms(1));
+    assert_eq!(sync(&mut pdo, &mut od, None, ms(2)), [Frame::new(0x183, &[0x00, 0x00])]);
+    assert_eq!(od.get_u64(0x6040, 0), Some(6), "applied at that SYNC");
+    assert_eq!(sync(&mut pdo, &mut od, None, ms(3)), [Frame::new(0x183, &[0x06, 0x00])]);
+}
+
 #[test]
 fn cyclic_sync_every_nth() {
     let (mut od, mut pdo) = node3();

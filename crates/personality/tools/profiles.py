@@ -118,3 +118,4 @@ for i in (0x3210, 0x3230, 0x3260, 0x3261, 0x3450, 0x3470):
     PROFILES["dds6"]["overrides"][(i, 0)] = ov(type=U8, access="const", why="sub 0 type/access lost; UNSIGNED8 const", sec="6.4")
 PROFILES["dds6"]["overrides"][(0x2360, 0)] = ov(default="5", why="sub 0 printed 06h but five sub-indices are described; 5 written", sec="6.4.3")
 PROFILES["dds6"]["overrides"][(0x2810, 0)] = ov(default="13", why="sub 0 printed 08h but sub-indices up to 0Dh are described; 13 written", sec="6.4.8")
+PROFILES["dds6"]["overrides"][(0x6087, 0)] = ov(default="10000", why="no default given; 10000 (1000 %/s) written, a 0 would never ramp", sec="6.5.29")

@@ -17,6 +17,22 @@ pub enum LimitSwitchReaction {
     Fault,
 }
 
+/// When pp and pv report statusword bit 10 "target reached" (CiA 402-2
+/// words it on the actual value alone; drives differ in whether the
+/// profile generator must have finished too).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TargetReached {
+    /// The profile has finished (pp trajectory done, pv ramp at the target)
+    /// and the actual value is within 6067h / 606Dh for 6068h / 606Eh. A
+    /// buffered pp set-point starts when the running trajectory ends.
+    #[default]
+    ProfileDone,
+    /// The actual value within the window for the window time is enough,
+    /// even while the profile still runs; a buffered pp set-point starts as
+    /// soon as the running one is reached this way (LAM DDS6 traces).
+    ActualInWindow,
+}
+
 /// Digital I/O layout (60FDh / 60FEh).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct IoConfig {
@@ -100,6 +116,8 @@ pub struct DriveConfig {
     pub remote: bool,
     /// Fault 8700h when SYNC stops while a cyclic mode (ip, csp, csv, cst) runs.
     pub sync_loss_fault: bool,
+    /// How statusword bit 10 "target reached" is judged in pp and pv.
+    pub target_reached: TargetReached,
     /// Initial mode of operation (6060h).
     pub initial_mode: i8,
     /// The personality hook: statusword bits 8/9/14/15 and write vetoes by
@@ -151,6 +169,7 @@ impl DriveConfig {
             io: IoConfig::default(),
             remote: true,
             sync_loss_fault: true,
+            target_reached: TargetReached::ProfileDone,
             initial_mode: op::PP,
             extension: super::Extension::none(),
         }

@@ -295,7 +295,12 @@ impl Drive {
         let torque_now = self.torque_per_mille(self.model.torque());
         match mode {
             op::PP => {
+                let by_window = self.cfg.target_reached == super::TargetReached::ActualInWindow;
+                let running_reached = by_window
+                    && self.pp.moving
+                    && (self.actual_pos_f() - self.pp.target).abs() <= f64::from(self.params.position_window);
                 let pin = PpIn {
+                    running_reached,
                     cw: self.cw,
                     target_raw: self.params.target_position,
                     lim: self.pp_limits(),
@@ -310,6 +315,8 @@ impl Drive {
                 self.dem.torque = torque_now;
                 let reached = if self.pp.halted {
                     v == 0.0
+                } else if by_window && self.pp.buffered.is_none() {
+                    self.in_window(self.pp.target)
                 } else if self.pp.moving || self.pp.buffered.is_some() {
                     self.window_timer = 0.0;
                     false
@@ -352,20 +359,24 @@ impl Drive {
                 self.dem.torque = torque_now;
                 // Bit 10: |v_actual − v_target| ≤ 606Dh for 606Eh (halt: v = 0).
                 let win = u.vel_to_pos(f64::from(self.extra.velocity_window));
-                if (actual_vel - target).abs() <= win && v == target {
+                let profile_done =
+                    v == target || self.cfg.target_reached == super::TargetReached::ActualInWindow;
+                let reached = if (actual_vel - target).abs() <= win && profile_done {
                     self.window_timer += dt;
+                    self.window_timer * 1000.0 + 1e-9 >= f64::from(self.extra.velocity_window_time)
                 } else {
                     self.window_timer = 0.0;
-                }
-                let reached = self.window_timer * 1000.0 >= f64::from(self.extra.velocity_window_time);
+                    false
+                };
                 // Bit 12: speed = 0, |v_actual| ≤ 606Fh for 6070h (CiA 402-2 §6.9).
                 let thr = u.vel_to_pos(f64::from(self.extra.velocity_threshold));
-                if actual_vel.abs() <= thr {
+                let zero = if actual_vel.abs() <= thr {
                     self.threshold_timer += dt;
+                    self.threshold_timer * 1000.0 + 1e-9 >= f64::from(self.extra.velocity_threshold_time)
                 } else {
                     self.threshold_timer = 0.0;
-                }
-                let zero = self.threshold_timer * 1000.0 >= f64::from(self.extra.velocity_threshold_time);
+                    false
+                };
                 self.status_bits = u16::from(reached) << 10 | u16::from(zero) << 12;
                 self.velocity_command(v, self.dem.acc)
             }
@@ -413,11 +424,11 @@ impl Drive {
         if w == u32::MAX {
             return true;
         }
-        if (self.actual_pos_f() - target).abs() <= f64::from(w) {
-            self.window_timer += self.dt;
-        } else {
+        if (self.actual_pos_f() - target).abs() > f64::from(w) {
             self.window_timer = 0.0;
+            return false;
         }
+        self.window_timer += self.dt;
         self.window_timer * 1000.0 + 1e-9 >= f64::from(self.params.position_window_time)
     }
 
@@ -596,9 +607,14 @@ impl Drive {
             let out = self.sm.controlword(self.cw & 0x80);
             self.after_transition(out);
         }
-        // Limit switches (60FDh bits 0/1).
+        // Limit switches (60FDh bits 0/1). While homing they are the
+        // method's reference signals (CiA 402-2 §6.6: methods 1, 2, 17, 18
+        // search them), not a limit: no stop, no warning.
         let sw = self.model.switches();
-        self.sup.limit_block = if sw.negative_limit {
+        let homing = enabled && self.mode == op::HM;
+        self.sup.limit_block = if homing {
+            0
+        } else if sw.negative_limit {
             -1
         } else if sw.positive_limit {
             1
@@ -614,7 +630,7 @@ impl Drive {
                 EventKind::PositiveLimit if e.active => self.dem.vel > 0.0,
                 _ => false,
             };
-            if toward && enabled {
+            if toward && enabled && !homing {
                 match self.cfg.io.limit_switch {
                     super::LimitSwitchReaction::Fault => fault = fault.or(Some(code::LIMIT_SWITCH)),
                     super::LimitSwitchReaction::StopAndWarn => self.limit_stop(),

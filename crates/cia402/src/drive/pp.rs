@@ -48,6 +48,10 @@ pub(crate) struct PpIn {
     pub soft_limits: (i32, i32),
     pub range: (i32, i32),
     pub dt: f64,
+    /// The running target counts as reached (actual in the position
+    /// window, [`TargetReached::ActualInWindow`](super::TargetReached)):
+    /// a buffered set-point starts now.
+    pub running_reached: bool,
 }
 
 /// Wraps `x` into the position range `[lo, hi]` (modulo axis, 607Bh).
@@ -160,6 +164,7 @@ impl Pp {
             self.t += i.dt;
             if let Some(b) = self.buffered
                 && (self.t >= self.traj.duration()
+                    || i.running_reached
                     || (b.change_on_setpoint && self.traj.decelerating(self.t)))
             {
                 // Next set-point of the set: bit 9 continues without stopping.

@@ -39,6 +39,8 @@ fn halt_deceleration(io: &ModeIo<'_>) -> f64 {
 pub struct IpMode {
     engine: Ip,
     auto_push: bool,
+    /// No buffer at all: 60C1h is a plain set-point sampled at SYNC.
+    latest_only: bool,
 }
 
 impl Default for IpMode {
@@ -50,7 +52,17 @@ impl Default for IpMode {
 impl IpMode {
     /// ip with a buffer of `max_buffer` records (60C4h:1).
     pub fn new(max_buffer: usize) -> Self {
-        IpMode { engine: Ip::new(max_buffer), auto_push: true }
+        IpMode { engine: Ip::new(max_buffer), auto_push: true, latest_only: false }
+    }
+
+    /// ip without a set-point buffer (drives without 60C4h): 60C1h:1 is
+    /// stored like any parameter and each SYNC with bit 4 set interpolates
+    /// towards its present value, so a set-point written twice between two
+    /// SYNCs counts once and no underflow exists.
+    pub fn latest_only() -> Self {
+        let mut engine = Ip::new(1);
+        engine.buffer_mut().set_organisation(1);
+        IpMode { engine, auto_push: true, latest_only: true }
     }
 
     /// The engine (buffer, warnings).
@@ -117,6 +129,8 @@ impl ModeHandler for IpMode {
         match (index, sub) {
             // 60C0h: 0 linear, −1 PT, −2 PVT (manufacturer sub-modes).
             (0x60C0, 0) => ok(SubMode::from_code(v as i16).is_some()),
+            // Stored by the drive, pushed at SYNC.
+            (0x60C1, _) if self.latest_only => Ok(false),
             (0x60C1, 1..=3) => {
                 self.auto_push = false;
                 let value = match sub {

@@ -118,14 +118,9 @@ impl Pdo {
         hooks: &mut H,
         out: &mut impl TxSink,
     ) {
-        for &n in &self.sync_rpdos {
-            if let Some(p) = self.rpdos.get_mut(usize::from(n))
-                && p.latched
-            {
-                p.latched = false;
-                apply(&p.s.plan, od, hooks, n, &mut self.events, &p.latch);
-            }
-        }
+        // Sample first: a synchronous TPDO reports the state at the SYNC,
+        // before this SYNC's RPDO data takes effect (a device acts on
+        // received data in its next cycle, not in the past).
         for &n in &self.sync_tpdos {
             let Some(t) = self.tpdos.get_mut(usize::from(n)) else { continue };
             let mut buf = [0u8; MAX_DATA_LEN];
@@ -152,6 +147,14 @@ impl Pdo {
             };
             if send {
                 t.emit(&buf, now, out);
+            }
+        }
+        for &n in &self.sync_rpdos {
+            if let Some(p) = self.rpdos.get_mut(usize::from(n))
+                && p.latched
+            {
+                p.latched = false;
+                apply(&p.s.plan, od, hooks, n, &mut self.events, &p.latch);
             }
         }
     }

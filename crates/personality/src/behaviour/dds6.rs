@@ -102,12 +102,12 @@ impl SpeedZero {
     /// One period: `|v|` and the threshold in velocity units (0.1 rpm),
     /// the threshold time in ms; returns the bit.
     pub fn update(&mut self, velocity: f64, threshold: u16, time_ms: u16, dt: f64) -> bool {
-        if velocity.abs() < f64::from(threshold) {
-            self.below_s += dt;
-        } else {
+        if velocity.abs() >= f64::from(threshold) {
             self.below_s = 0.0;
+            return false;
         }
-        self.below_s * 1000.0 >= f64::from(time_ms)
+        self.below_s += dt;
+        self.below_s * 1000.0 + 1e-9 >= f64::from(time_ms)
     }
 }
 
@@ -176,6 +176,11 @@ mod facts_tests {
         assert!(!bit);
         assert!(s.update(0.0, 60, 10, 0.001) || s.update(0.0, 60, 10, 0.001));
         assert!(!s.update(600.0, 60, 10, 0.001));
+        // 6070h = 0 (the DDS6 default): the bit follows the speed at once.
+        let mut s = SpeedZero::default();
+        assert!(!s.update(300.0, 60, 0, 0.001));
+        assert!(s.update(59.0, 60, 0, 0.001));
+        assert!(!s.update(60.0, 60, 0, 0.001));
     }
 
     #[test]
@@ -192,26 +197,33 @@ mod facts_tests {
 use crate::Profile;
 use crate::build::{Action, Behaviour, Context, EmcyFrame, FilterOutcome, Verdict};
 use drivebus_can::Frame;
-use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection};
+use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection, TargetReached};
+use drivebus_cia402::interp::IpMode;
 use drivebus_cia402::model::DriveParams;
 use drivebus_cia402::state_machine::State;
+use drivebus_node::Node;
 use drivebus_node::{NmtState, NodeEvent};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 
+/// In hm, bit 12 "homing attained" stays once homing completed (1633h
+/// in §4.4.4 EX7, captured on a homed axis; 0633h in EX8 from power-on).
+///
 /// Mode-specific statusword bits 10/12/13 the DDS6 shows while the drive
 /// function is disabled (inventory G.5, observed in every §4.4 trace:
 /// Switch on disabled 2650h in pp/ip, 3250h in pv, 0650h in hm, 0250h in
 /// tq; Ready to switch on 2631h / 3231h / 0631h; Switched on 2633h / 3633h
 /// / 0633h).
 ///
-/// In pv, Switched on shows bit 10 "target reached" when the target
-/// velocity 60FFh is within the velocity window of the (zero) speed: 3633h
-/// in §4.4.2 EX4 (60FFh = 0), 3233h in EX3 (60FFh = 300 written before).
-pub fn disabled_mode_bits(mode: i8, state: State, target_velocity_in_window: bool) -> u16 {
+/// In pv, Switched on shows bit 10 "target reached" once the enabling
+/// sequence has energised the motor and the target velocity 60FFh is
+/// within the velocity window of the (zero) speed: 3233h polled 7 ms after
+/// 000Fh (§4.4.2 EX3), 3633h just before 1637h (EX4).
+pub fn disabled_mode_bits(mode: i8, state: State, target_velocity_in_window: bool, homed: bool) -> u16 {
     match (mode, state) {
         (1 | 7, _) => 0x2400,
         (3, State::SwitchedOn) if target_velocity_in_window => 0x3400,
         (3, _) => 0x3000,
+        (6, _) if homed => 0x1400,
         (6, _) => 0x0400,
         _ => 0,
     }
@@ -238,7 +250,42 @@ pub struct Dds6 {
     /// Enable operation requested: the drive enters Operation enabled at
     /// this time (motor enabling sequence).
     enable_at: Option<drivebus_can::Instant>,
+    /// The enabling sequence has energised the motor (last part of it).
+    power_stage_on: bool,
+    /// 606Ch as the DDS6 shows it in open loop \[0.1 rpm\].
+    shown_velocity: f64,
+    /// pv statusword bit 10 from [`Dds6::shown_velocity`].
+    velocity_reached: bool,
+    /// 2410h:01 Feedback_MTNSTP as written (bit 0 closed loop, bit 3
+    /// encoder timing at every enable).
+    feedback: u8,
+    /// The closed-loop encoder timing (rotor alignment) has run since
+    /// power-on.
+    aligned: bool,
+    /// A homing completed since power-on (hm bit 12 while disabled).
+    homed: bool,
+    /// Operation enabled was entered in this control period, before the
+    /// drive evaluated the mode's bits: the DDS6 shows them at once (tq
+    /// 0637h, hm 0637h / 1637h straight after 0233h in §4.4.3–§4.4.4).
+    just_enabled: bool,
+    torque_target: i64,
+    torque_demand: i64,
 }
+
+/// The closed-loop enable with its "encoder timing" (rotor alignment,
+/// §4.4 / C.14): 000Fh → Operation enabled in ~515 ms (§4.4.3 EX6 517 ms,
+/// EX5 between 480 and 548 ms, §4.4.4 EX8 517 ms).
+pub const ENCODER_TIMING_MS: u64 = 515;
+
+/// EMCY 63A0h "configuration conflict" (class 8), sub-code 0701h: profile
+/// torque without closed loop (§4.4.3).
+pub const EMCY_CONFIGURATION: u16 = 0x63A0;
+
+/// Open loop the DDS6 has no speed sensor in the loop: 606Ch follows the
+/// commanded speed with a short lag, ~1.8 ms in the §4.4.2 EX4 trace (68
+/// at 8.6 ms and 208 at 22.6 ms of a 10 000 (0.1 rpm)/s ramp), smooth
+/// enough that bit 10 sets once and stays.
+pub const VELOCITY_LAG_S: f64 = 0.0018;
 
 /// Switched on → Operation enabled takes the current enable ramp
 /// (2410h:02, default 10 ms) plus the drive's own settling: 16 ms observed
@@ -246,6 +293,30 @@ pub struct Dds6 {
 /// §4.4.1 EX1: 2633h polled at 46.6 ms). The closed-loop ~550 ms of the
 /// torque/homing traces (encoder timing) is not emulated.
 pub const ENABLE_DELAY_MS: u64 = 16;
+
+/// The power stage is on this long before Operation enabled: pv shows bit
+/// 10 in Switched on for that last millisecond (§4.4.2 EX4: 3633h at
+/// 71.5 ms, 1637h at 72.0 ms; EX3 polls 3233h 7 ms after 000Fh).
+pub const POWER_STAGE_LEAD_MS: u64 = 1;
+
+/// TPDO change-of-state mask for a mapping: the bits of 6041h (§6.3.21:
+/// transmission type FFh is "triggered by Statusword change").
+pub fn statusword_mask(od: &ObjectDictionary, mapping: u16) -> [u8; 8] {
+    let mut mask = [0u8; 8];
+    let count = od.get_u32(mapping, 0).unwrap_or(0).min(64) as u8;
+    let mut bit = 0usize;
+    for i in 1..=count {
+        let e = od.get_u32(mapping, i).unwrap_or(0);
+        let len = (e & 0xFF) as usize;
+        if e >> 16 == 0x6041 {
+            for b in bit..(bit + len).min(64) {
+                mask[b / 8] |= 1 << (b % 8);
+            }
+        }
+        bit += len;
+    }
+    mask
+}
 
 impl Dds6 {
     /// The DDS6 as it powers up.
@@ -258,15 +329,31 @@ impl Dds6 {
         let mut sw = drive_sw;
         match state {
             State::OperationEnabled | State::QuickStopActive if mode == 3 => {
-                sw = (sw & !(1 << 12)) | (u16::from(self.speed_zero_bit) << 12);
+                sw = (sw & !(1 << 12 | 1 << 10))
+                    | (u16::from(self.speed_zero_bit) << 12)
+                    | (u16::from(self.velocity_reached) << 10);
+            }
+            State::OperationEnabled if self.just_enabled && matches!(mode, 4 | 6) => {
+                // tq: reached when the demand is the target (both 0 here);
+                // hm: "not started" (bit 10), attained kept when homed.
+                let tq_reached = self.torque_target == self.torque_demand;
+                let bits = match mode {
+                    4 => u16::from(tq_reached) << 10,
+                    _ => 0x0400 | u16::from(self.homed) << 12,
+                };
+                sw = (sw & !0x3400) | bits;
             }
             State::OperationEnabled
                 if matches!(mode, 1 | 7) && self.at_rest && (mode == 7 || sw & (1 << 12) == 0) =>
             {
                 // pp / ip at standstill report "target reached": 0637h right
-                // after enabling (§4.4.1 EX1), 1637h in ip while the
+                // after enabling (§4.4.1 EX1), 1716h in ip while the
                 // set-points stand still (§4.4.5 EX9). In pp only without a
-                // set-point being acknowledged.
+                // set-point being acknowledged. (EX9 also shows 1716h around
+                // the turning points, where the real axis is within a few
+                // units of the set-point; the rule behind it — probably the
+                // 3490h micro-interpolator's lag against 6067h — is not
+                // documented, so it is not emulated.)
                 sw |= 1 << 10;
             }
             State::SwitchOnDisabled | State::ReadyToSwitchOn | State::SwitchedOn => {
@@ -276,7 +363,8 @@ impl Dds6 {
                     sw = (sw | 0x10) & !0x20;
                 }
                 let tv = self.target_velocity.unsigned_abs();
-                sw = (sw & !0x3C00) | disabled_mode_bits(mode, state, tv < u32::from(self.velocity_window));
+                let in_window = self.power_stage_on && tv < u32::from(self.velocity_window);
+                sw = (sw & !0x3C00) | disabled_mode_bits(mode, state, in_window, self.homed);
             }
             _ => {}
         }
@@ -284,10 +372,20 @@ impl Dds6 {
     }
 
     fn publish(&mut self, cx: &Context<'_>, od: &mut ObjectDictionary) {
+        self.power_stage_on = self
+            .enable_at
+            .is_some_and(|t| cx.now + drivebus_can::Duration::from_millis(POWER_STAGE_LEAD_MS) >= t);
         self.at_rest = cx.drive.demand_velocity().abs() < 1e-6;
         self.target_velocity = od.get_i64(0x60FF, 0).unwrap_or(0) as i32;
+        self.torque_target = od.get_i64(0x6071, 0).unwrap_or(0);
+        self.torque_demand = od.get_i64(0x6074, 0).unwrap_or(0);
         self.velocity_window = od.get_u32(0x606D, 0).unwrap_or(100) as u16;
-        let sw = self.statusword(cx.drive.statusword(), cx.drive.state_machine().state(), cx.drive.mode());
+        let drive_sw = cx.drive.statusword();
+        if cx.drive.mode() == 6 && drive_sw & 0x6F == 0x27 && !self.just_enabled {
+            // Completed (bits 12 + 10) or restarted (bit 12 cleared).
+            self.homed = drive_sw & 0x3400 == 0x1400 || (self.homed && drive_sw & 0x1000 != 0);
+        }
+        let sw = self.statusword(drive_sw, cx.drive.state_machine().state(), cx.drive.mode());
         if let Ok(r) = od.find(0x6041, 0) {
             od.set_le(r, &sw.to_le_bytes());
         }
@@ -308,6 +406,16 @@ impl Dds6 {
 impl Behaviour for Dds6 {
     fn profile(&self) -> Profile {
         Profile::Dds6
+    }
+
+    fn adjust_node_config(&self, cfg: &mut drivebus_node::NodeConfig) {
+        // §6.3 lists neither 1007h nor 1019h (SYNC consumer only).
+        cfg.sync_window = false;
+        cfg.sync_counter = false;
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
     }
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
@@ -344,12 +452,41 @@ impl Behaviour for Dds6 {
         p.position_window = 10;
         p.position_window_time = 0;
         p.velocity_window = 100;
+        p.velocity_window_time = 0;
         p.velocity_threshold = 60;
+        p.velocity_threshold_time = 0;
         cfg.remote = true;
+        // §4.4.1/§4.4.2 traces: 0637h with the position still 9–10 units
+        // short of the target (6067h = 10), the next set-point of a set
+        // taken there; pv 0637h at 208 of 300 (606Dh = 100) while ramping.
+        cfg.target_reached = TargetReached::ActualInWindow;
+    }
+
+    fn ip_mode(&self) -> IpMode {
+        // No 60C4h: one set-point per period, the last one written (§4.4.5).
+        IpMode::latest_only()
+    }
+
+    fn finish(&mut self, node: &mut Node) {
+        // §6.5.31 homing speeds 600 / 60 (0.1 rpm).
+        let od = node.od_mut();
+        crate::build::set_default(od, 0x6099, 1, &drivebus_od::Value::U32(600));
+        crate::build::set_default(od, 0x6099, 2, &drivebus_od::Value::U32(60));
+        for n in 0..4u16 {
+            let mask = statusword_mask(node.od(), 0x1A00 + n);
+            node.set_tpdo_change_mask(n, Some(mask));
+        }
+    }
+
+    fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, _sub: u8) {
+        if (0x1A00..=0x1A03).contains(&index) {
+            let mask = statusword_mask(od, index);
+            cx.actions.push(Action::TpdoChangeMask { tpdo: index - 0x1A00, mask: Some(mask) });
+        }
     }
 
     fn hooked_objects(&self) -> &'static [u16] {
-        &[0x1010, 0x1011, 0x6040]
+        &[0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03]
     }
 
     fn filter_rx(&mut self, od: &ObjectDictionary, node_id: u8, frame: &Frame) -> FilterOutcome {
@@ -389,11 +526,31 @@ impl Behaviour for Dds6 {
                 // Enable operation: switched on now, enabled after the
                 // motor enabling sequence.
                 to_drive = cw & !0x08;
-                self.enable_at = Some(cx.now + drivebus_can::Duration::from_millis(ENABLE_DELAY_MS));
+                let closed = self.feedback & 1 != 0;
+                if cx.drive.mode() == 4 && !closed {
+                    // §4.4.3: torque needs the encoder loop.
+                    self.last_sub = 0x0701;
+                    cx.actions.push(Action::Inject(Injection::Fault(EMCY_CONFIGURATION)));
+                }
+                let timing = closed && (!self.aligned || self.feedback & 8 != 0);
+                let ms = if timing { ENCODER_TIMING_MS } else { ENABLE_DELAY_MS };
+                self.enable_at = Some(cx.now + drivebus_can::Duration::from_millis(ms));
             }
             drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, index, sub, &to_drive.to_le_bytes())?;
             self.publish(cx, od);
             return Ok(Verdict::Store);
+        }
+        if index == 0x2410 && sub == 1 {
+            // C.14: the feedback is chosen with the motor disabled.
+            if matches!(cx.drive.state_machine().state(), State::OperationEnabled | State::QuickStopActive) {
+                return Err(SdoAbort(STORE_REFUSED));
+            }
+            self.feedback = data.first().copied().unwrap_or(0);
+            self.aligned = false;
+        }
+        if index == 0x6083 {
+            // C.9: homing runs on the profile acceleration (no 609Ah).
+            drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x609A, 0, data)?;
         }
         if matches!(index, 0x1010 | 0x1011) {
             let enabled =
@@ -403,9 +560,13 @@ impl Behaviour for Dds6 {
         Ok(Verdict::Pass)
     }
 
-    fn on_event(&mut self, _cx: &mut Context<'_>, _od: &mut ObjectDictionary, event: &NodeEvent) {
+    fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
         if let NodeEvent::NmtState { to, .. } = *event {
             self.nmt_operational = to == NmtState::Operational;
+            // The drive reloads its parameters at boot: homing takes 6083h.
+            if let Some(acc) = od.get_u32(0x6083, 0) {
+                let _ = drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x609A, 0, &acc.to_le_bytes());
+            }
         }
     }
 
@@ -421,15 +582,44 @@ impl Behaviour for Dds6 {
             let cw = od.get_u32(0x6040, 0).unwrap_or(0) as u16;
             if cw & 0x8F == 0x0F && cx.drive.state_machine().state() == State::SwitchedOn {
                 let _ = drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x6040, 0, &cw.to_le_bytes());
+                self.aligned |= self.feedback & 1 != 0;
+                self.just_enabled = true;
             }
+        } else {
+            self.just_enabled = false;
         }
         let state = cx.drive.state_machine().state();
-        if matches!(state, State::OperationEnabled | State::QuickStopActive) && cx.drive.mode() == 3 {
+        let enabled = matches!(state, State::OperationEnabled | State::QuickStopActive);
+        let dt = cx.drive.control_period();
+        if enabled && cx.drive.mode() != 4 {
+            let demand = od.get_i64(0x606B, 0).unwrap_or(0) as f64;
+            self.shown_velocity += (demand - self.shown_velocity) * dt / (VELOCITY_LAG_S + dt);
+            if let Ok(r) = od.find(0x606C, 0) {
+                od.set_le(r, &(self.shown_velocity.round() as i32).to_le_bytes());
+            }
+        } else {
+            self.shown_velocity = od.get_i64(0x606C, 0).unwrap_or(0) as f64;
+        }
+        if enabled && cx.drive.mode() == 4 && self.feedback & 1 != 0 {
+            // Closed loop the current loop follows the ramped demand: 6077h
+            // shows 6074h (§4.4.3 EX6: C8h after the 400 ms ramp, F301h one
+            // step into the ramp down). The stepper model itself has no
+            // torque loop.
+            if let (Ok(d), Ok(a)) = (od.find(0x6074, 0), od.find(0x6077, 0)) {
+                let v = drivebus_od::le_i64(od.bytes(d)) as i16;
+                od.set_le(a, &v.to_le_bytes());
+            }
+        }
+        // §6.5.14: bit 10 in pv, |606Ch − 60FFh| within 606Dh (606Eh = 0).
+        let target = od.get_i64(0x60FF, 0).unwrap_or(0) as f64;
+        let window = f64::from(od.get_u32(0x606D, 0).unwrap_or(100));
+        self.velocity_reached = (self.shown_velocity.round() - target).abs() <= window;
+        if enabled && cx.drive.mode() == 3 {
             // §6.5.3 pv bit 12 "speed is equal 0".
             let v = od.get_i64(0x606C, 0).unwrap_or(0) as f64;
             let thr = od.get_u32(0x606F, 0).unwrap_or(60) as u16;
             let t = od.get_u32(0x6070, 0).unwrap_or(0) as u16;
-            self.speed_zero_bit = self.speed_zero.update(v, thr, t, cx.drive.control_period());
+            self.speed_zero_bit = self.speed_zero.update(v, thr, t, dt);
         } else {
             self.speed_zero = SpeedZero::default();
             self.speed_zero_bit = true;
@@ -438,7 +628,8 @@ impl Behaviour for Dds6 {
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
-        let bytes = if code == EMCY_NMT_WHILE_ENABLED { emcy_sub_code_bytes(self.last_sub) } else { [0; 5] };
+        let with_sub = matches!(code, EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION);
+        let bytes = if with_sub { emcy_sub_code_bytes(self.last_sub) } else { [0; 5] };
         EmcyFrame { code, register: None, bytes }
     }
 }
