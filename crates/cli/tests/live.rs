@@ -30,12 +30,16 @@ fn drive_commands_walk_the_state_machine_and_move() {
     db(&u, &["--node", "1", "drive", "move", "1000"]).failure().stderr(contains("not in operation enabled"));
     db(&u, &["--node", "1", "drive", "enable"]).success().stdout(contains("operation enabled"));
     db(&u, &["--node", "1", "drive", "home", "--method", "35"]).success().stdout(contains("homing attained"));
-    db(&u, &["--node", "1", "drive", "move", "90000"]).success().stdout(contains("target reached"));
+    // The AKD starts with 6081h = 10 units/s (§6.11.2.3): a commissioning
+    // move names its speed.
+    db(&u, &["--node", "1", "drive", "move", "90000", "--velocity", "360000"])
+        .success()
+        .stdout(contains("target reached"));
     let out = db(&u, &["--node", "1", "--json", "drive", "status"]).success().get_output().stdout.clone();
     let j: serde_json::Value = serde_json::from_slice(&out).unwrap();
     assert_eq!(j["state"], "operation enabled");
     assert!((j["position"].as_i64().unwrap() - 90_000).abs() <= 100, "{j}");
-    db(&u, &["--node", "1", "drive", "move", "-45000", "--relative"])
+    db(&u, &["--node", "1", "drive", "move", "-45000", "--relative", "--velocity", "360000"])
         .success()
         .stdout(contains("target reached"));
     db(&u, &["--node", "1", "drive", "velocity", "36000"])

@@ -216,6 +216,31 @@ var(0x60FF, "Target velocity", I32, "rww", "0", pdo=True)
 # pp, pv, tq, hm, ip, csp, csv, cst (bits 0, 2, 3, 5, 6, 7, 8, 9); no vl objects (6042h...) so no bit 1.
 var(0x6502, "Supported drive modes", U32, "ro", "0x000003ED", pdo=True)
 
+# Power-on values: CiA 402-2 gives no defaults for these, so the EDS states
+# the working values the drive really starts with (DriveConfig::servo on
+# DriveParams::servo_small: 0.001 degree position units, velocity limit of
+# the motor 36 000 000 units/s, ramps of 10x/40x it, homing speeds 1/4 and
+# 1/40 of 6081h; the generic behaviour's 16-record ip buffer). 607Bh/607Dh
+# 0/0 = no limit (CiA 402-2: a range or limit whose min equals its max is
+# not checked; drivebus treats 0/0 as "off").
+WORKING = {
+    (0x6065, 0): "0x00008CA0", (0x6066, 0): "0x0032", (0x6067, 0): "0x00000064",
+    (0x6068, 0): "0x000A", (0x606D, 0): "0x4E20", (0x606E, 0): "0x000A",
+    (0x606F, 0): "0x4E20", (0x6070, 0): "0x000A", (0x6072, 0): "0x0FA0",
+    (0x6073, 0): "0x0FA0", (0x6075, 0): "0x00000640", (0x6076, 0): "0x00000280",
+    (0x607B, 1): "0", (0x607B, 2): "0", (0x607D, 1): "0", (0x607D, 2): "0",
+    (0x607F, 0): "0x02255100", (0x6080, 0): "0x02255100", (0x6081, 0): "0x0112A880",
+    (0x6083, 0): "0x15752A00", (0x6084, 0): "0x15752A00", (0x6085, 0): "0x55D4A800",
+    (0x6087, 0): "0x00002710", (0x608F, 1): "0x00100000", (0x6090, 1): "0x00100000",
+    (0x6092, 1): "0x00057E40", (0x6099, 1): "0x0044AA20", (0x6099, 2): "0x0006DDD0",
+    (0x609A, 0): "0x15752A00", (0x60A8, 0): "0xFD410000", (0x60A9, 0): "0xFD410300",
+    (0x60AA, 0): "0xFD410357", (0x60C4, 2): "0x00000010", (0x60C4, 5): "4",
+    (0x60C4, 6): "1", (0x60C5, 0): "0xFFFFFFFF", (0x60C6, 0): "0xFFFFFFFF",
+    (0x60FE, 2): "0xFFFF0000",
+}
+for (i, s), v in WORKING.items():
+    objs[i].subs[s]["default"] = v
+
 cfg = {
     "product": "drivebus generic CiA 402 servo", "manual": "CiA 301 / CiA 402-2 (no vendor manual)",
     "tsv": "-", "description": "Generic CiA 402 servo drive with every mode, every CiA 301 service drivebus implements",

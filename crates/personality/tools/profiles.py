@@ -64,18 +64,25 @@ KC1_AKD_COMMON = {
     (0x100E, 0): ov(name="COB-ID node guarding", access="ro", why="object only listed as '(100E)' in the COB-ID table; kept read-only with 700h+node (pre-v4 DS301 object, our NMT service does not use it)", sec="KC1 6.2 / AKD 5.2"),
     (0x2100, 0): ov(name="Dummy mapping placeholder", type=U32, access="rw", pdo=True, why="referenced only as the 4-byte dummy of the shared-RPDO example (mapping 21000020h); UNSIGNED32 rw RPDO-mappable written", sec="KC1 8.2.2.1 / AKD 7.2.2.1"),
     (0x35D9, 0): ov(name="MT.CNTL (as referenced by FBUS.PARAM05 bit 6)", type=U32, access="rw", why="referenced only; the appendix lists MT.CNTL elsewhere (35AFh/35B9h); UNSIGNED32 rw written so the reference resolves", sec="KC1 5.4 / AKD 3.4"),
-    (0x6099, 1): ov(why="default 'equivalent of 60 rpm' depends on the unit settings; 0 written, behaviour pending", sec="KC1 7.10.2.3 / AKD 6.10.2.3"),
+    (0x6099, 1): ov(default="36000", why="default 'equivalent of 60 rpm': 60 rpm = 1 rev/s = 36000 velocity units (36000 position units per revolution, velocity units = units/s, example 9)", sec="KC1 7.10.2.3 / AKD 6.10.2.3"),
+    # Power-on values the tables leave empty: the EDS states what the drive
+    # starts with (behaviour/kc1.rs; DriveConfig::servo on the small servo).
+    (0x606D, 0): ov(default="20000", why="no default given; drivebus's working value 20000 velocity units (0.56 rev/s) written", sec="KC1 8.1.4 / AKD 7.1.5"),
+    (0x606E, 0): ov(default="10", why="no default given; drivebus's working value 10 ms written", sec="KC1 8.1.4 / AKD 7.1.5"),
+    (0x6092, 1): ov(default="36000", why="default: table gives 1 (the DS402 generic default) but the manual's own defaults need a sub-revolution unit: 6099h:1 'equivalent of 60 rpm' with :2 '1/8 (AKD: 50 %) of sub 1' and the 65535 speed limit example 9 shows are integers only at 36000 units per revolution (example 9: 8CA0h = one revolution); 36000 (feed per motor revolution) written", sec="KC1 7.5.3.3, 7.10.2.3, example 9 / AKD 6.5.3.3, 6.10.2.3"),
+    (0x6072, 0): ov(default="4000", why="no default given; drivebus's working value 4000 per mille (the motor's peak / rated current) written", sec="KC1 8.1.4 / AKD 7.1.5"),
 }
 
 PROFILES["kc1"]["overrides"] = dict(KC1_AKD_COMMON)
 PROFILES["kc1"]["overrides"].update({
     (0x60C2, 2): ov(type=I8, default="-3", why="type/default: table gives INTEGER16 default 1 (as printed); the §8.2 example writes FDh (-3) with a 1-byte SDO and CiA 402 defines INTEGER8: INTEGER8, default -3 (1 ms) chosen", sec="7.9.2.3; 8.1.4"),
-    (0x6099, 2): ov(why="default '1/8 of sub 1' is relative; 0 written", sec="7.10.2.3"),
+    (0x6099, 2): ov(default="4500", why="default '1/8 of sub 1': 36000 / 8 = 4500 written", sec="7.10.2.3"),
     (0x35B9, 1): ov(type=I32, why="type not given; INTEGER32 as the AKD appendix lists MT.CNTL (35B9h)", sec="7.11.2.1"),
 })
 PROFILES["akd"]["overrides"] = dict(KC1_AKD_COMMON)
 PROFILES["akd"]["overrides"].update({
-    (0x6099, 2): ov(why="default '50 % of sub 1' is relative; 0 written", sec="6.10.2.3"),
+    (0x6099, 2): ov(default="18000", why="default '50 % of sub 1': 36000 / 2 = 18000 written", sec="6.10.2.3"),
+    (0x6087, 0): ov(default="10000", why="no default given ('-'); drivebus's working value 10000 per mille/s written (above the ~2385 minimum)", sec="6.7.2.6; 7.1.5"),
     (0x60C1, 0): ov(why="sub 0 = 1 kept (body: linear interpolation only); subs 2 and 3 kept from the appendix as PVT remnants", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
 })
 PROFILES["ipos"]["overrides"] = {
@@ -86,13 +93,58 @@ PROFILES["ipos"]["overrides"] = {
     (0x1802, 1): ov(name="COB-ID used by TPDO3", access="rw", default="$NODEID+0x80000380", why="mentioned only ('disabled by setting bit 31'); CANopen-style COB-ID with bit 31 set written", sec="2.3.7"),
     (0x1803, 1): ov(name="COB-ID used by TPDO4", access="rw", default="$NODEID+0x80000480", why="mentioned only ('disabled by setting bit 31'); CANopen-style COB-ID with bit 31 set written", sec="2.3.8"),
 }
+PROFILES["ipos"]["overrides"].update({
+    (i, 0): ov(default=v, why=f"no default given ('-'); drivebus's working value {v}: {what}", sec=sec)
+    for i, v, what, sec in (
+        (0x6065, "2000", "one motor revolution (2000 increments)", "7.2.10"),
+        (0x6066, "50", "50 control loop periods (ms)", "7.2.11"),
+        (0x6067, "10", "10 increments", "7.2.12"),
+        (0x606D, "0xFFFF", "the widest window", "10.2.4"),
+        (0x606E, "10", "10 ms", "10.2.5"),
+        (0x606F, "0xFFFF", "the highest threshold", "10.2.6"),
+        (0x6081, "0x00210000", "33.0 IU (990 rpm at 2000 increments per revolution)", "7.2.2"),
+        (0x6083, "0x00010000", "1.0 IU", "7.2.3"),
+        (0x6085, "0x00040000", "4.0 IU", "7.2.4"),
+    )
+})
 PROFILES["ssd630"]["overrides"] = {
     (0x1008, 0): ov(default="631_402", why="device name of a 631 from the segmented-upload example", sec="14.7"),
     (0x1010, 1): ov(default="1", why="read value bit 0 = 1 (saves on command)", sec="7; 11"),
     (0x1011, 1): ov(default="1", why="read value bit 0 = 1 (restores on command); the 'load' signature bytes are misprinted (73h 61h 61h 64h), 0x64616F6C is what the node accepts", sec="7; 11"),
-    (0x60C2, 2): ov(type=I8, why="ip time index: table gives UNSIGNED8; CiA 402 defines INTEGER8 (negative exponents); INTEGER8 chosen", sec="12"),
+    (0x60C2, 2): ov(type=I8, default="-3", why="ip time index: table gives UNSIGNED8; CiA 402 defines INTEGER8 (negative exponents); INTEGER8 chosen. No default given; drivebus's working value -3 (with sub 1 = 1: 1 ms) written", sec="12"),
     (0x6502, 0): ov(default="0x00000067", why="value not given; derived from the evidenced modes pp, vl (6042h-6048h), pv, hm, ip = bits 0,1,2,5,6", sec="4; 12; 14"),
 }
+# Power-on values the manual does not give (§4 and §12 list the objects
+# without defaults): the EDS states what the drive starts with
+# (behaviour/ssd630.rs adjust_drive_config; velocities in min^-1,
+# accelerations in min^-1/s, positions in increments, 4096 per revolution).
+for (i, s_), v, what in (
+        ((0x6046, 2), "6000", "vl max amount = the motor's maximum speed in min^-1"),
+        ((0x6048, 1), "6000", "vl acceleration delta speed (min^-1)"),
+        ((0x6048, 2), "1", "vl acceleration delta time (s): 6000 min^-1 per second"),
+        ((0x605A, 0), "2", "quick stop option code 2 (stop on the quick stop ramp, then switch on disabled; CiA 402-2)"),
+        ((0x6065, 0), "4096", "following error window = one motor revolution (increments)"),
+        ((0x6067, 0), "10", "position window (increments)"),
+        ((0x607F, 0), "3000", "max profile velocity (min^-1)"),
+        ((0x6081, 0), "1000", "profile velocity (min^-1), the value of the §14.9 example"),
+        ((0x6083, 0), "10000", "profile acceleration (min^-1/s)"),
+        ((0x6084, 0), "10000", "profile deceleration (min^-1/s)"),
+        ((0x6085, 0), "30000", "quick stop deceleration (min^-1/s)"),
+        ((0x6099, 1), "250", "homing speed 1 (min^-1) = 1/4 of 6081h"),
+        ((0x6099, 2), "25", "homing speed 2 (min^-1) = 1/40 of 6081h (unused by the 630's own methods)"),
+        ((0x60C2, 1), "1", "ip time units: 1 x 10^-3 s"),
+        ((0x60C3, 2), "1", "ip sync every 1 event"),
+        ((0x60FE, 2), "0xFFFF0000", "digital outputs bit mask: the manufacturer outputs (bits 16-31) may be set"),
+):
+    PROFILES["ssd630"]["overrides"][(i, s_)] = ov(default=v, why=f"no default given; drivebus's working value {v}: {what}", sec="4; 12")
+# 6049h: printed as a second "6048h" in §4, no own entry in §12, which says
+# deceleration = acceleration in velocity mode: a record like 6048h.
+PROFILES["ssd630"]["overrides"].update({
+    (0x6049, 0): ov(name="number of entries", type=U8, access="ro", default="2", code=9, obj_name="vl velocity deceleration",
+                    why="§4 prints 6049h as a second '6048h' (VAR); §12: deceleration = acceleration in velocity mode, so a record like 6048h (sub 0 = 2)", sec="4; 12"),
+    (0x6049, 1): ov(name="delta speed", type=U32, access="rw", default="6000", why="no default given; drivebus's working value 6000 min^-1 (as 6048h:1)", sec="4; 12"),
+    (0x6049, 2): ov(name="delta time", type=U16, access="rw", default="1", why="no default given; drivebus's working value 1 s (as 6048h:2)", sec="4; 12"),
+})
 for i in range(0x2014, 0x2018):
     for s in (1, 2):
         PROFILES["ssd630"]["overrides"][(i, s)] = ov(default="0xFFFFFFFF", why="default 'all bits event-driven' = all mask bits set", sec="4; 11")

@@ -33,6 +33,71 @@ pub enum TargetReached {
     ActualInWindow,
 }
 
+/// Objects whose value 0 switches their supervision or limit off, as some
+/// manuals define (CiA 402-2 itself uses FFFFFFFFh for 6065h "off"). The
+/// dictionary keeps the 0 the master wrote; the drive works with
+/// `u32::MAX` (no window, no limit) while the object is 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ZeroMeansOff {
+    /// 6065h following error window 0 = following error monitoring off
+    /// (Kollmorgen KC1 §7.8.2.3, AKD §6.8.2.3).
+    pub following_error_window: bool,
+    /// 6080h max motor speed 0 = no speed limit (Technosoft iPOS §15.2.3:
+    /// "the speed limitation is activated when setting a value different
+    /// from zero").
+    pub max_motor_speed: bool,
+}
+
+impl ZeroMeansOff {
+    /// The value the drive works with for a written `v`.
+    pub(crate) fn effective(on: bool, v: u32) -> u32 {
+        if on && v == 0 { u32::MAX } else { v }
+    }
+}
+
+/// What a profile acceleration, deceleration or homing acceleration
+/// (6083h, 6084h, 609Ah) of 0 means. A zero ramp the drive works with
+/// refuses motion: pp does not acknowledge the set-point, pv holds velocity
+/// 0 (reached on the quick-stop ramp), hm reports a homing error (bit 13);
+/// a halt with 6084h = 0 uses 6085h. Likewise a torque slope 6087h of 0
+/// holds the tq torque demand at 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ZeroRamp {
+    /// Writes of 0 are refused (0609 0032): a ramp must be positive.
+    #[default]
+    Refused,
+    /// Writes of 0 are taken (a manual's value range from 0); the drive
+    /// then refuses motion as above.
+    RefusesMotion,
+    /// Writes of 0 are taken and select the drive's own ramp, in the
+    /// objects' units (Kollmorgen: 6083h/6084h are DRV.ACC/DRV.DEC in pv
+    /// and MT.ACC/MT.DEC otherwise, 609Ah HOME.ACC; the manuals' examples
+    /// jog and home at the default 0).
+    DriveRamp {
+        /// Used for 6083h = 0.
+        acceleration: u32,
+        /// Used for 6084h = 0.
+        deceleration: u32,
+        /// Used for 609Ah = 0.
+        homing: u32,
+    },
+}
+
+impl ZeroRamp {
+    /// The value the drive works with for a written ramp `v` of `index`.
+    pub(crate) fn effective(self, index: u16, v: u32) -> u32 {
+        match self {
+            ZeroRamp::DriveRamp { acceleration, deceleration, homing } if v == 0 => match index {
+                0x6083 => acceleration,
+                0x6084 => deceleration,
+                0x609A => homing,
+                _ => v,
+            },
+            _ => v,
+        }
+    }
+}
+
 /// Digital I/O layout (60FDh / 60FEh).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct IoConfig {
@@ -43,6 +108,11 @@ pub struct IoConfig {
     pub interlock: bool,
     /// 60FEh:2 bit mask default: which physical outputs the master may set.
     pub output_mask: u32,
+    /// 60FEh:1 keeps the command as written and the mask (sub 2) only
+    /// selects which bits reach the outputs, re-applied when the mask is
+    /// written (Technosoft iPOS §4.5.3: "outputs change when this
+    /// sub-index is written"). `false`: sub 1 stores the masked value.
+    pub keep_unmasked_command: bool,
 }
 
 impl Default for IoConfig {
@@ -51,6 +121,7 @@ impl Default for IoConfig {
             limit_switch: LimitSwitchReaction::StopAndWarn,
             interlock: false,
             output_mask: 0xFFFF_0000,
+            keep_unmasked_command: false,
         }
     }
 }
@@ -103,6 +174,11 @@ pub struct DriveConfig {
     pub modes: u32,
     /// Factor group power-on values (608Fh:1 is forced to the encoder).
     pub factor: FactorGroup,
+    /// The units stay at `factor` whatever 6091h/6092h/6096h/6097h hold:
+    /// those objects are stored set-up parameters (Technosoft iPOS §5.2.2:
+    /// the conversion is the position factor 6093h, which the set-up tool
+    /// computes from them; their defaults 1/1 describe internal units).
+    pub fixed_factor_group: bool,
     /// 60A8h–60ABh SI unit codes (position, velocity, acceleration, jerk).
     pub si_units: [u32; 4],
     /// Profile defaults.
@@ -120,6 +196,10 @@ pub struct DriveConfig {
     pub target_reached: TargetReached,
     /// Initial mode of operation (6060h).
     pub initial_mode: i8,
+    /// Objects whose 0 means "off" on this drive (none by default).
+    pub zero_means_off: ZeroMeansOff,
+    /// What 6083h / 6084h / 609Ah = 0 means.
+    pub zero_ramp: ZeroRamp,
     /// The personality hook: statusword bits 8/9/14/15 and write vetoes by
     /// drive state (see [`DriveExtension`](super::DriveExtension)). None by
     /// default.
@@ -162,6 +242,7 @@ impl DriveConfig {
                 | op::supported_bit(op::PV)
                 | op::supported_bit(op::TQ),
             factor,
+            fixed_factor_group: false,
             // SI codes (CiA 402-2 / ETG.1004 style): milli-degree, per second.
             si_units: [0xFD41_0000, 0xFD41_0300, 0xFD41_0357, 0],
             profile,
@@ -171,6 +252,8 @@ impl DriveConfig {
             sync_loss_fault: true,
             target_reached: TargetReached::ProfileDone,
             initial_mode: op::PP,
+            zero_means_off: ZeroMeansOff::default(),
+            zero_ramp: ZeroRamp::Refused,
             extension: super::Extension::none(),
         }
     }

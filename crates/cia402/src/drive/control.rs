@@ -242,6 +242,8 @@ impl Drive {
             // is approximated by it in the halt function).
             _ => p.quick_stop_deceleration,
         };
+        // A zero 6084h cannot stop the axis: the quick-stop ramp does.
+        let dec = if dec == 0 { p.quick_stop_deceleration } else { dec };
         self.units.acc_to_pos(f64::from(dec))
     }
 
@@ -339,8 +341,14 @@ impl Drive {
                 if halted || blocked {
                     target = 0.0;
                 }
-                let (up, down) = if halted || blocked {
-                    let d = if blocked {
+                // A zero 6083h/6084h refuses the motion: the target is 0,
+                // reached on the quick-stop ramp.
+                let zero_ramp = p.profile_acceleration == 0 || p.profile_deceleration == 0;
+                if zero_ramp {
+                    target = 0.0;
+                }
+                let (up, down) = if halted || blocked || zero_ramp {
+                    let d = if blocked || (zero_ramp && !halted) {
                         u.acc_to_pos(f64::from(p.quick_stop_deceleration))
                     } else {
                         self.halt_deceleration()
@@ -383,8 +391,14 @@ impl Drive {
             op::TQ => {
                 let p = &self.params;
                 let lim = f64::from(p.max_torque);
-                let target =
-                    if self.cw & 0x100 != 0 { 0.0 } else { f64::from(p.target_torque).clamp(-lim, lim) };
+                // A zero 6087h refuses torque motion (as a zero ramp does in
+                // pp/pv): the demand is 0.
+                let refused = self.extra.torque_slope == 0;
+                let target = if self.cw & 0x100 != 0 || refused {
+                    0.0
+                } else {
+                    f64::from(p.target_torque).clamp(-lim, lim)
+                };
                 let slope = f64::from(self.extra.torque_slope);
                 let t = self.torque_ramp.step(target, slope, slope, dt);
                 self.dem.torque = t;

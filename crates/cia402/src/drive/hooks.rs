@@ -1,5 +1,6 @@
 //! Write validation (SDO and RPDO) and the drive's copy of its parameters.
 
+use super::config::{ZeroMeansOff, ZeroRamp};
 use super::mode::op;
 use super::{Drive, Units};
 use drivebus_od::{ObjectDictionary, SdoAbort, WriteOutcome, le_i64, le_u64};
@@ -87,7 +88,10 @@ impl Drive {
                     return Err(if v < lo { SdoAbort::VALUE_TOO_LOW } else { SdoAbort::VALUE_TOO_HIGH });
                 }
             }
-            (0x6065, 0) => p.following_error_window = u32v,
+            (0x6065, 0) => {
+                p.following_error_window =
+                    ZeroMeansOff::effective(self.cfg.zero_means_off.following_error_window, u32v)
+            }
             (0x6066, 0) => p.following_error_timeout = u as u16,
             (0x6067, 0) => p.position_window = u32v,
             (0x6068, 0) => p.position_window_time = u as u16,
@@ -134,19 +138,29 @@ impl Drive {
                 self.retune_units()?;
             }
             (0x607F, 0) => p.max_profile_velocity = u32v,
-            (0x6080, 0) => p.max_motor_speed = u32v,
+            (0x6080, 0) => {
+                p.max_motor_speed = ZeroMeansOff::effective(self.cfg.zero_means_off.max_motor_speed, u32v)
+            }
             (0x6081, 0) => x.profile_velocity = u32v,
             (0x6082, 0) => x.end_velocity = u32v,
             (0x6083 | 0x6084 | 0x6085 | 0x60C5 | 0x60C6 | 0x609A, 0) => {
-                // A zero ramp would never reach its target.
-                range(u as i64, 1, i64::from(u32::MAX))?;
+                // A zero ramp would never reach its target; drives whose
+                // range includes 0 take it and refuse motion instead.
+                let zero = self.cfg.zero_ramp;
+                let lo = if zero != ZeroRamp::Refused && matches!(index, 0x6083 | 0x6084 | 0x609A) {
+                    0
+                } else {
+                    1
+                };
+                range(u as i64, lo, i64::from(u32::MAX))?;
+                let v = zero.effective(index, u32v);
                 match index {
-                    0x6083 => p.profile_acceleration = u32v,
-                    0x6084 => p.profile_deceleration = u32v,
-                    0x6085 => p.quick_stop_deceleration = u32v,
-                    0x60C5 => p.max_acceleration = u32v,
-                    0x60C6 => p.max_deceleration = u32v,
-                    _ => p.homing_acceleration = u32v,
+                    0x6083 => p.profile_acceleration = v,
+                    0x6084 => p.profile_deceleration = v,
+                    0x6085 => p.quick_stop_deceleration = v,
+                    0x60C5 => p.max_acceleration = v,
+                    0x60C6 => p.max_deceleration = v,
+                    _ => p.homing_acceleration = v,
                 }
             }
             (0x6086, 0) => {
@@ -159,6 +173,10 @@ impl Drive {
             (0x6087, 0) => x.torque_slope = u32v,
             // 6088h: only 0 (linear torque ramp) is implemented.
             (0x6088, 0) if s != 0 => return Err(SdoAbort::INVALID_VALUE),
+            (0x6091 | 0x6092 | 0x6096 | 0x6097, 1 | 2) if self.cfg.fixed_factor_group => {
+                // Stored set-up parameters: the units in force stay.
+                range(u as i64, 1, i64::from(u32::MAX))?;
+            }
             (0x6091 | 0x6092 | 0x6096 | 0x6097, 1 | 2) => {
                 range(u as i64, 1, i64::from(u32::MAX))?;
                 let f = &mut self.factor;
@@ -204,6 +222,7 @@ impl Drive {
                 range(s, -6, 0)?;
                 p.interpolation_period_index = s as i8;
             }
+            (0x60FE, 1) if self.cfg.io.keep_unmasked_command => x.outputs = u32v & x.output_mask,
             (0x60FE, 1) => {
                 // Only the outputs enabled in the bit mask (sub 2) follow.
                 x.outputs = u32v & x.output_mask;
@@ -213,7 +232,13 @@ impl Drive {
                 }
                 return Ok(WriteOutcome::Handled);
             }
-            (0x60FE, 2) => x.output_mask = u32v,
+            (0x60FE, 2) => {
+                x.output_mask = u32v;
+                if self.cfg.io.keep_unmasked_command {
+                    // The stored command takes effect through the new mask.
+                    x.outputs = od.get_u32(0x60FE, 1).unwrap_or(0) & u32v;
+                }
+            }
             (0x60FF, 0) => p.target_velocity = s as i32,
             (0x6042, 0) => x.vl_target = s as i16,
             (0x6046, 1 | 2) => {
@@ -301,20 +326,22 @@ impl Drive {
         p.homing_method = i(0x6098, 0) as i8;
         p.homing_speed_switch = u(0x6099, 1) as u32;
         p.homing_speed_zero = u(0x6099, 2) as u32;
-        p.homing_acceleration = u(0x609A, 0) as u32;
+        let ramp = self.cfg.zero_ramp;
+        p.homing_acceleration = ramp.effective(0x609A, u(0x609A, 0) as u32);
         p.home_offset = i(0x607C, 0) as i32;
         p.interpolation_sub_mode = i(0x60C0, 0) as i16;
         p.interpolation_data = i(0x60C1, 1) as i32;
         p.interpolation_period_value = u(0x60C2, 1) as u8;
         p.interpolation_period_index = i(0x60C2, 2) as i8;
-        p.following_error_window = u(0x6065, 0) as u32;
+        let zero = self.cfg.zero_means_off;
+        p.following_error_window = ZeroMeansOff::effective(zero.following_error_window, u(0x6065, 0) as u32);
         p.following_error_timeout = u(0x6066, 0) as u16;
         p.position_window = u(0x6067, 0) as u32;
         p.position_window_time = u(0x6068, 0) as u16;
         p.max_profile_velocity = u(0x607F, 0) as u32;
-        p.max_motor_speed = u(0x6080, 0) as u32;
-        p.profile_acceleration = u(0x6083, 0) as u32;
-        p.profile_deceleration = u(0x6084, 0) as u32;
+        p.max_motor_speed = ZeroMeansOff::effective(zero.max_motor_speed, u(0x6080, 0) as u32);
+        p.profile_acceleration = ramp.effective(0x6083, u(0x6083, 0) as u32);
+        p.profile_deceleration = ramp.effective(0x6084, u(0x6084, 0) as u32);
         p.quick_stop_deceleration = u(0x6085, 0) as u32;
         p.max_acceleration = u(0x60C5, 0) as u32;
         p.max_deceleration = u(0x60C6, 0) as u32;
@@ -343,10 +370,12 @@ impl Drive {
         x.vl_dec = (u(0x6049, 1) as u32, (u(0x6049, 2) as u16).max(1));
         self.probe.configure(x.probe_function);
         let f = &mut self.factor;
-        f.gear = pair(od, 0x6091);
-        f.feed = pair(od, 0x6092);
-        f.velocity_factor = pair(od, 0x6096);
-        f.acceleration_factor = pair(od, 0x6097);
+        if !self.cfg.fixed_factor_group {
+            f.gear = pair(od, 0x6091);
+            f.feed = pair(od, 0x6092);
+            f.velocity_factor = pair(od, 0x6096);
+            f.acceleration_factor = pair(od, 0x6097);
+        }
         f.polarity = od.get_u64(0x607E, 0).unwrap_or(0) as u8;
         if let Some(units) = Units::new(&self.factor) {
             self.units = units;

@@ -36,7 +36,9 @@ pub mod units;
 #[cfg(test)]
 mod tests;
 
-pub use config::{DriveConfig, IoConfig, LimitSwitchReaction, ProfileDefaults, TargetReached};
+pub use config::{
+    DriveConfig, IoConfig, LimitSwitchReaction, ProfileDefaults, TargetReached, ZeroMeansOff, ZeroRamp,
+};
 pub use extension::{DriveExtension, DriveView, Extension};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
 pub use node::{DriveNode, default_pdo_mapping, generic_drive, generic_drive_with};

@@ -125,7 +125,11 @@ impl Pp {
     /// demand.
     pub fn step(&mut self, i: &PpIn, p: f64, v: f64) -> (f64, f64, f64) {
         let halt = i.cw & 0x100 != 0;
-        if self.edge && !self.ack {
+        if self.edge && !self.ack && !i.lim.valid() {
+            // A zero 6081h/6083h/6084h cannot be planned: the set-point is
+            // refused (not acknowledged, no motion) rather than jumped to.
+            self.edge = false;
+        } else if self.edge && !self.ack {
             self.edge = false;
             let (t, limited) = self.absolute_target(i, p);
             self.limited = limited;
@@ -167,10 +171,13 @@ impl Pp {
                     || i.running_reached
                     || (b.change_on_setpoint && self.traj.decelerating(self.t)))
             {
-                // Next set-point of the set: bit 9 continues without stopping.
+                // Next set-point of the set: bit 9 continues without stopping
+                // (dropped if a ramp was set to 0 meanwhile).
                 self.buffered = None;
-                self.start(b.target, p, v, i);
-                self.t = i.dt;
+                if i.lim.valid() {
+                    self.start(b.target, p, v, i);
+                    self.t = i.dt;
+                }
             }
             if self.t >= self.traj.duration() {
                 self.moving = false;

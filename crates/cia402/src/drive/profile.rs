@@ -51,7 +51,8 @@ pub struct Limits {
 }
 
 impl Limits {
-    fn valid(&self) -> bool {
+    /// Every limit positive and finite: a motion can be planned.
+    pub(crate) fn valid(&self) -> bool {
         [self.velocity, self.acceleration, self.deceleration].iter().all(|x| x.is_finite() && *x > 0.0)
     }
 }

@@ -83,6 +83,7 @@ impl Default for Akd {
 const HOOKED: &[u16] = &[
     0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403, 0x1800,
     0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6071, 0x60FF,
+    0x60C4,
 ];
 
 impl Behaviour for Akd {
@@ -100,6 +101,11 @@ impl Behaviour for Akd {
     }
     fn finish(&mut self, node: &mut Node) {
         self.0.finish(node);
+        let od = node.od_mut();
+        // §6.10.2.3: 6099h:2 "50 % of 6099h:1" (the KC1's is 1/8).
+        crate::build::set_default(od, 0x6099, 2, &drivebus_od::Value::U32(super::kc1::UNITS_PER_REV / 2));
+        // §6.9.2.3: 60C2h:1 default 2 (with 60C2h:2 = -3: 2 ms).
+        crate::build::set_default(od, 0x60C2, 1, &drivebus_od::Value::U8(2));
     }
     fn homing_methods(&self) -> Vec<Box<dyn HomingMethod + Send>> {
         HOMING_ALIASES

@@ -36,9 +36,10 @@ pub const EMCY_PDO_LENGTH_ERROR: u16 = 0x8210;
 /// Bits of data one PDO carries at most (§1.6.3.1).
 pub const MAX_PDO_BITS: u32 = 64;
 
-/// Encoder increments per motor revolution of the emulated axis (a
-/// 2000-line encoder ×4; the manual's examples use drive-specific setups).
-pub const COUNTS_PER_REV: u32 = 8000;
+/// Encoder increments per motor revolution of the emulated axis: 608Fh:1
+/// default 2000 (§5.2.3), the "2000 counts per revolution" of the motion
+/// examples (§6.4, §7.3).
+pub const COUNTS_PER_REV: u32 = 2000;
 
 /// Sum of the lengths (bits) of mapping entries 1..=n of a mapping object.
 pub fn mapped_bits(od: &ObjectDictionary, map: u16, n: u8) -> u32 {
@@ -161,9 +162,14 @@ impl Behaviour for Ipos {
             acceleration_factor: (15_625, 1024),
             ..FactorGroup::increments(COUNTS_PER_REV)
         };
+        // §5.2.2: the conversion is the position factor 6093h (set by
+        // EasyMotion Studio); 6091h/6092h/6096h/6097h are stored set-up
+        // parameters, default 1/1 (§5.2.5, §5.2.8, §5.2.11).
+        cfg.fixed_factor_group = true;
         cfg.initial_mode = 0;
         let p = &mut cfg.profile;
-        // 1000 rpm = 8000·1000/60 inc/s = 133 333 inc/s = 133.3 IU ·65536.
+        // 133 IU = 133 increments per 1 ms sample = 4000 rpm at 2000
+        // increments per revolution.
         p.max_profile_velocity = 133 << 16;
         p.profile_velocity = 33 << 16;
         p.profile_acceleration = 1 << 16;
@@ -174,7 +180,46 @@ impl Behaviour for Ipos {
         p.position_window_time = 0;
         p.velocity_window = 0xFFFF;
         p.velocity_threshold = 0xFFFF;
+        // 6087h default 0 (§8.2.3). The manual does not say what 0 does:
+        // the drive refuses torque motion (tq demand 0) until the master
+        // sets a slope, as the §8.3 example does with 6075h and 6087h.
+        p.torque_slope = 0;
+        // 6080h default 0 = no speed limit (§15.2.3).
+        cfg.zero_means_off.max_motor_speed = true;
+        // 60A8h default 00B50100h (IU = increments), 60A9h/60AAh 0 (§5.2.1,
+        // §5.2.6, §5.2.9: informative only).
+        cfg.si_units = [0x00B5_0100, 0, 0, 0];
+        // 60FEh:2 bit mask default 0 (§4.5.3); sub 1 keeps the command, the
+        // outputs change when the mask is written.
+        cfg.io.output_mask = 0;
+        cfg.io.keep_unmasked_command = true;
         cfg.remote = true;
+    }
+
+    fn finish(&mut self, node: &mut drivebus_node::Node) {
+        use crate::build::set_default;
+        use drivebus_od::Value;
+        let od = node.od_mut();
+        // §8.2.2: 6075h motor rated current default 0 (set by the master,
+        // as in the §8.3 example; the drive computes with at least 1 mA).
+        set_default(od, 0x6075, 0, &Value::U32(0));
+        // §4.6.1: 607Dh defaults 80000000h / 7FFFFFFFh = check disabled.
+        set_default(od, 0x607D, 1, &Value::I32(i32::MIN));
+        set_default(od, 0x607D, 2, &Value::I32(i32::MAX));
+        // §15.2.3: 6080h default 0 (no limit, `zero_means_off`).
+        set_default(od, 0x6080, 0, &Value::U32(0));
+        // §6.3.5 / §6.3.6: homing speeds 1.0 IU (00010000h), homing
+        // acceleration 0.1 IU (0000199Ah).
+        set_default(od, 0x6099, 1, &Value::U32(0x0001_0000));
+        set_default(od, 0x6099, 2, &Value::U32(0x0001_0000));
+        set_default(od, 0x609A, 0, &Value::U32(0x0000_199A));
+        // §5.2.5, §5.2.8, §5.2.11: feed constant, velocity and acceleration
+        // factors 1/1 (stored; `fixed_factor_group` keeps internal units).
+        for index in [0x6092, 0x6096, 0x6097] {
+            for sub in [1, 2] {
+                set_default(od, index, sub, &Value::U32(1));
+            }
+        }
     }
 
     fn homing_methods(&self) -> Vec<Box<dyn HomingMethod + Send>> {
@@ -248,7 +293,7 @@ mod facts_tests {
             zero_speed: 10.0,
             acceleration: 1000.0,
             home_offset: 50.0,
-            units_per_rev: 8000.0,
+            units_per_rev: f64::from(COUNTS_PER_REV),
         };
         let ctx = |position: f64, events: &'static [HomingEvent]| HomingContext {
             config: &cfg,

@@ -22,7 +22,7 @@ use crate::Profile;
 extern crate alloc;
 use crate::build::{Action, Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
 use drivebus_can::Frame;
-use drivebus_cia402::drive::{DriveConfig, Injection};
+use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp};
 use drivebus_node::{Node, NodeConfig, NodeEvent};
 use drivebus_od::{ObjectDictionary, SdoAbort, Value, le_u64};
 use drivebus_pdo::PdoConfig;
@@ -74,6 +74,7 @@ impl Kollmorgen {
     pub const HOOKED: &'static [u16] = &[
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
+        0x60C4,
     ];
 }
 
@@ -103,6 +104,7 @@ impl Behaviour for Kollmorgen {
         kollmorgen_units(cfg);
         // SYNC loss is supervised only when FBUS.PARAM04 (36E8h) = 1.
         cfg.sync_loss_fault = false;
+        kollmorgen_power_on(cfg);
     }
 
     fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
@@ -122,8 +124,18 @@ impl Behaviour for Kollmorgen {
             let mask = tpdo_mask(node.od(), index);
             node.set_tpdo_change_mask(index - 0x2014, mask);
         }
-        // §7.10.2.3: 6099h:1 "equivalent 60 rpm", :2 1/8 of it.
         let od = node.od_mut();
+        // KC1 §7.7.2.4 / AKD §6.7.2.4: 6073h default 0. It limits only the
+        // torque of the stack's cyclic torque commands (cst), which neither
+        // drive offers; tq and the manufacturer modes use 6072h.
+        set_default(od, 0x6073, 0, &Value::U16(0));
+        // KC1 §7.9.2.4 / AKD §6.9.2.4: 60C4h:5 default 1 (records), 60C4h:6
+        // default 0. Both are write-only commands: the buffer itself starts
+        // with access enabled (example 12 sends records without a 60C4h:6
+        // write).
+        set_default(od, 0x60C4, 5, &Value::U8(1));
+        set_default(od, 0x60C4, 6, &Value::U8(0));
+        // §7.10.2.3: 6099h:1 "equivalent 60 rpm", :2 1/8 of it.
         set_default(od, 0x6099, 1, &Value::U32(UNITS_PER_REV));
         set_default(od, 0x6099, 2, &Value::U32(UNITS_PER_REV / 8));
         // §8.1.4: 608Fh:1/2 are RW on the Kollmorgen drives.
@@ -173,6 +185,16 @@ impl Behaviour for Kollmorgen {
             }
             // §8.2.2.1: the placeholder takes the RPDO bytes and ignores them.
             0x2100 => Ok(Verdict::Handled),
+            // §7.9.2.4: the size of a data record counts records; only 1 is
+            // possible for linear interpolation (the drive's ip engine counts
+            // bytes and is not asked).
+            0x60C4 if sub == 5 => {
+                if le_u64(data) == 1 {
+                    Ok(Verdict::Store)
+                } else {
+                    Err(SdoAbort::INVALID_VALUE)
+                }
+            }
             0x6099 if (1..=2).contains(&sub) && le_u64(data) > MAX_HOMING_SPEED => {
                 Err(SdoAbort::VALUE_TOO_HIGH)
             }
@@ -362,6 +384,32 @@ pub fn kollmorgen_units(cfg: &mut DriveConfig) {
     ] {
         *v = (*v / k).max(1);
     }
+}
+
+/// The power-on values the manuals' object tables give (KC1 §8.1.4 /
+/// AKD §7.1.5) where they differ from the generic servo's.
+fn kollmorgen_power_on(cfg: &mut DriveConfig) {
+    // 6065h default 0 = following error monitoring off (KC1 §7.8.2.3,
+    // AKD §6.8.2.3).
+    cfg.zero_means_off.following_error_window = true;
+    cfg.profile.following_error_window = 0;
+    // 60FEh:2 bit mask default 0 (KC1 §7.2.3.9, AKD §6.2.3.9): no output
+    // follows sub 1 until the master sets the mask.
+    cfg.io.output_mask = 0;
+    // 6083h/6084h/609Ah range 0..2^32-1, default 0 (KC1 §7.11.2.4/5,
+    // §7.10.2.4; AKD §6.11.2.4/5, §6.10.2.4). 0 selects the drive's own
+    // ramp: 6083h/6084h are DRV.ACC/DRV.DEC in pv, and examples 4 and 6 jog
+    // in pv, example 9 homes, all at the default 0.
+    let p = &mut cfg.profile;
+    cfg.zero_ramp = ZeroRamp::DriveRamp {
+        acceleration: p.profile_acceleration,
+        deceleration: p.profile_deceleration,
+        homing: p.profile_acceleration,
+    };
+    p.profile_acceleration = 0;
+    p.profile_deceleration = 0;
+    // 6081h default 10 (KC1 §7.11.2.3, AKD §6.11.2.3).
+    p.profile_velocity = 10;
 }
 
 /// KC1 §7.2.2.4 / AKD B.4: 2014h..2017h sub 1 masks TPDO bytes 0..3, sub 2
