@@ -5,9 +5,11 @@
 //! The drive is EtherCAT: its SDOs travel in CoE mailboxes with the CiA 301
 //! SDO command layout but no CAN frames and no node-ID, so the frames and
 //! confirmations here are derived from the printed (index, sub, value)
-//! content. Skipped with the reason in `replay_report.md`: the EtherCAT
-//! state machine, sync-manager PDO assignment (1C12h/1C13h), cyclic process
-//! data, FoE/EoE, TwinCAT GUI steps, TML code.
+//! content. The motion examples (E05, E06, E18–E23, E29/E30, E38–E41) are
+//! replayed with their process data as CAN PDOs and their motion in
+//! `replay_ipos_motion.rs`. Skipped with the reason in `replay_report.md`:
+//! the EtherCAT state machine, FoE/EoE, TwinCAT GUI steps, TML code, and
+//! what the personality does not emulate (PT/PVT, gearing, camming).
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};

@@ -8,24 +8,14 @@
 //! are always 8 bytes, so the examples file's corrected frames are replayed.
 //! Every other correction is marked `TYPO` with the printed bytes.
 
+#[path = "replay_rig/trace.rs"]
+mod shared_trace;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
-use drivebus_can::{CanId, Duration, Frame};
+use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
 use drivebus_personality::behaviour::ssd630::{COUNTS_PER_REV, Ssd630};
 use drivebus_personality::{PersonalityNode, Profile, build_with};
-
-/// `ID#HEX` or `ID#R<len>`.
-fn fr(s: &str) -> Frame {
-    let (id, data) = s.split_once('#').expect("ID#DATA");
-    let cid = CanId::Standard(u16::from_str_radix(id, 16).unwrap());
-    if let Some(n) = data.strip_prefix('R') {
-        return Frame::try_remote(cid, n.parse().unwrap_or(0)).unwrap();
-    }
-    let data: String = data.chars().filter(|c| !c.is_whitespace()).collect();
-    let bytes: Vec<u8> =
-        (0..data.len()).step_by(2).map(|i| u8::from_str_radix(&data[i..i + 2], 16).unwrap()).collect();
-    Frame::try_new(cid, &bytes).unwrap()
-}
+use shared_trace::fr;
 
 struct Rig {
     bus: Bus,

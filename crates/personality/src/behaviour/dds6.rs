@@ -18,7 +18,18 @@
 //! * error classes decide the reaction (§5): 0 warning, 2 quick stop,
 //!   4 quick stop then fault, 6 disable then fault, 8 fault until power cycle;
 //! * homing methods 1–14, 17–30, 33, 34, 37 (no 35, no manufacturer methods,
-//!   §4.4.4); modes pp, pv, tq, hm, ip (§6.5.4; no csp/csv/cst in FW 0.22).
+//!   §4.4.4) on the 6083h ramps; modes pp, pv, tq, hm, ip (§6.5.4; no
+//!   csp/csv/cst in FW 0.22);
+//! * TPDO type FFh sends on a statusword change only (§6.3.21);
+//! * "target reached" on the actual value alone, a set of set-points
+//!   advancing there (the §4.4.1/§4.4.2 traces);
+//! * enabling takes 16 ms open loop, ~515 ms with the closed loop
+//!   (2410h:01, encoder timing); profile torque needs the closed loop
+//!   (EMCY 63A0h / 0701h otherwise, §4.4.3);
+//! * ip has no set-point buffer (§4.4.5).
+//!
+//! The §4.4 traces replay against this behaviour in
+//! `tests/replay_dds6.rs` / `tests/replay_dds6_ip.rs`.
 
 use drivebus_cia402::homing::{HomingRegistry, StandardMethod};
 
@@ -205,9 +216,6 @@ use drivebus_node::Node;
 use drivebus_node::{NmtState, NodeEvent};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 
-/// In hm, bit 12 "homing attained" stays once homing completed (1633h
-/// in §4.4.4 EX7, captured on a homed axis; 0633h in EX8 from power-on).
-///
 /// Mode-specific statusword bits 10/12/13 the DDS6 shows while the drive
 /// function is disabled (inventory G.5, observed in every §4.4 trace:
 /// Switch on disabled 2650h in pp/ip, 3250h in pv, 0650h in hm, 0250h in
@@ -217,7 +225,9 @@ use drivebus_od::{ObjectDictionary, SdoAbort};
 /// In pv, Switched on shows bit 10 "target reached" once the enabling
 /// sequence has energised the motor and the target velocity 60FFh is
 /// within the velocity window of the (zero) speed: 3233h polled 7 ms after
-/// 000Fh (§4.4.2 EX3), 3633h just before 1637h (EX4).
+/// 000Fh (§4.4.2 EX3), 3633h just before 1637h (EX4). In hm, bit 12
+/// "homing attained" stays once a homing completed (1633h in §4.4.4 EX7,
+/// captured on a homed axis; 0633h in EX8 from power-on).
 pub fn disabled_mode_bits(mode: i8, state: State, target_velocity_in_window: bool, homed: bool) -> u16 {
     match (mode, state) {
         (1 | 7, _) => 0x2400,
@@ -290,8 +300,8 @@ pub const VELOCITY_LAG_S: f64 = 0.0018;
 /// Switched on → Operation enabled takes the current enable ramp
 /// (2410h:02, default 10 ms) plus the drive's own settling: 16 ms observed
 /// in the open-loop traces (§4.4.2 EX4: 3633h at 71.5 ms, 1637h 16 ms later;
-/// §4.4.1 EX1: 2633h polled at 46.6 ms). The closed-loop ~550 ms of the
-/// torque/homing traces (encoder timing) is not emulated.
+/// §4.4.1 EX1: 2633h polled at 46.6 ms); closed loop see
+/// [`ENCODER_TIMING_MS`].
 pub const ENABLE_DELAY_MS: u64 = 16;
 
 /// The power stage is on this long before Operation enabled: pv shows bit

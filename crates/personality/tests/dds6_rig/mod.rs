@@ -20,7 +20,7 @@
 mod shared_trace;
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
-use drivebus_can::{CanId, Duration, Frame};
+use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
 use drivebus_personality::behaviour::dds6::Dds6;
 use drivebus_personality::{PersonalityNode, Profile, build_with};
@@ -30,18 +30,7 @@ pub fn trace(text: &'static str, frames: usize) -> Vec<&'static str> {
     shared_trace::timed_lines(text, frames)
 }
 
-/// `ID#DATA` (hex, spaces allowed; `ID#R<n>` a remote frame).
-pub fn fr(s: &str) -> Frame {
-    let (id, data) = s.split_once('#').expect("ID#DATA");
-    let cid = CanId::Standard(u16::from_str_radix(id, 16).unwrap());
-    if let Some(n) = data.strip_prefix('R') {
-        return Frame::try_remote(cid, n.parse().unwrap_or(0)).unwrap();
-    }
-    let data: String = data.chars().filter(|c| !c.is_whitespace()).collect();
-    let bytes: Vec<u8> =
-        (0..data.len()).step_by(2).map(|i| u8::from_str_radix(&data[i..i + 2], 16).unwrap()).collect();
-    Frame::try_new(cid, &bytes).unwrap()
-}
+pub use shared_trace::fr;
 
 /// How one trace replayed.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]

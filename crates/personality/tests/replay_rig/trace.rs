@@ -14,6 +14,25 @@
 //! * `|skip`: printed incompletely, replayed by neither test.
 #![allow(dead_code)]
 
+use drivebus_can::{CanId, Frame};
+
+/// `ID#HEX` or `ID#R<len>`.
+pub fn fr(s: &str) -> Frame {
+    let (id, data) = s.split_once('#').expect("ID#DATA");
+    let cid = if id.len() == 8 {
+        CanId::Extended(u32::from_str_radix(id, 16).unwrap())
+    } else {
+        CanId::Standard(u16::from_str_radix(id, 16).unwrap())
+    };
+    if let Some(n) = data.strip_prefix('R') {
+        return Frame::try_remote(cid, n.parse().unwrap_or(0)).unwrap();
+    }
+    let data: String = data.chars().filter(|c| !c.is_whitespace()).collect();
+    let bytes: Vec<u8> =
+        (0..data.len()).step_by(2).map(|i| u8::from_str_radix(&data[i..i + 2], 16).unwrap()).collect();
+    Frame::try_new(cid, &bytes).unwrap()
+}
+
 /// One line of a trace file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Line {
