@@ -373,7 +373,20 @@ pub fn drive_config(info: &ProfileInfo) -> DriveConfig {
         .iter()
         .filter(|m| info.modes.contains(m))
         .fold(0, |acc, &m| acc | op::supported_bit(m));
-    DriveConfig { modes, initial_mode: 0, ..DriveConfig::default() }
+    use drivebus_cia402::drive::{IoConfig, profile_type};
+    let d = DriveConfig::default();
+    DriveConfig {
+        modes,
+        initial_mode: 0,
+        // The drive features a personality opts into in its
+        // `Behaviour::adjust_drive_config`: 6086h = 3 (S-curve) with 60A4h,
+        // 60D0h touch probe source. Off here, so each profile keeps the
+        // objects of its EDS and its manual's 6086h range.
+        motion_profile_types: profile_type::LINEAR | profile_type::SIN_SQUARED,
+        profile_jerk_object: false,
+        io: IoConfig { probe_source_object: false, ..d.io },
+        ..d
+    }
 }
 
 /// The mode handlers for the profile's hm, ip, csp, csv, cst.

@@ -98,6 +98,24 @@ impl ZeroRamp {
     }
 }
 
+/// The physical input behind a touch probe's "touch probe input"
+/// (60B8h bits 3–2 = 00, or 60D0h = 1 / 2). CiA 402-2 leaves the wiring
+/// to the device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ProbeInput {
+    /// The home switch (60FDh bit 2).
+    #[default]
+    HomeSwitch,
+    /// The positive limit switch (60FDh bit 1).
+    PositiveLimit,
+    /// The negative limit switch (60FDh bit 0).
+    NegativeLimit,
+    /// A dedicated probe input, driven by the application with
+    /// [`Drive::set_probe_input`](super::Drive::set_probe_input); an edge
+    /// latches the position at the control period it is seen in.
+    Dedicated,
+}
+
 /// Digital I/O layout (60FDh / 60FEh).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct IoConfig {
@@ -113,6 +131,17 @@ pub struct IoConfig {
     /// written (Technosoft iPOS §4.5.3: "outputs change when this
     /// sub-index is written"). `false`: sub 1 stores the masked value.
     pub keep_unmasked_command: bool,
+    /// What "touch probe 1 input" and "touch probe 2 input" are wired to
+    /// (default: the home switch for both, the behaviour before this
+    /// option existed).
+    pub probe_inputs: [ProbeInput; 2],
+    /// 60D0h touch probe source is installed and 60B8h trigger selection
+    /// 10b ("source per 60D0h") is honoured: 60D0h:k = 1 / 2 selects touch
+    /// probe input 1 / 2, 5 / 6 the hardware / software zero impulse of the
+    /// encoder (both the index here); other values (3 / 4 touch probe
+    /// inputs 3 / 4, manufacturer codes) are refused (0609 0030). `false`: no 60D0h from the drive, selection
+    /// 10b captures nothing (personalities keep this unless they opt in).
+    pub probe_source_object: bool,
 }
 
 impl Default for IoConfig {
@@ -122,6 +151,8 @@ impl Default for IoConfig {
             interlock: false,
             output_mask: 0xFFFF_0000,
             keep_unmasked_command: false,
+            probe_inputs: [ProbeInput::HomeSwitch; 2],
+            probe_source_object: true,
         }
     }
 }
@@ -159,6 +190,40 @@ pub struct ProfileDefaults {
     pub velocity_threshold_time: u16,
     /// 6087h torque slope \[per mille of rated torque per second\].
     pub torque_slope: u32,
+}
+
+/// 6086h motion profile types as bits of [`DriveConfig::motion_profile_types`]
+/// (bit n set: 6086h = n is accepted; CiA 402-2 codes).
+pub mod profile_type {
+    /// 0: linear ramp (trapezoidal profile).
+    pub const LINEAR: u32 = 1 << 0;
+    /// 1: sin² ramp.
+    pub const SIN_SQUARED: u32 = 1 << 1;
+    /// 3: jerk-limited ramp (S-curve, jerk from 60A4h or
+    /// [`Drive::set_profile_jerk`](crate::drive::Drive::set_profile_jerk)).
+    pub const JERK_LIMITED: u32 = 1 << 3;
+    /// Every type the drive implements (2, jerk-free ramp, is not).
+    pub const IMPLEMENTED: u32 = LINEAR | SIN_SQUARED | JERK_LIMITED;
+}
+
+/// The jerk of the jerk-limited ramp (6086h = 3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ProfileJerk {
+    /// Jerk rates in acceleration units per second (the acceleration
+    /// factor 6097h applies; CiA 402-2 60A4h "profile jerk", sub 1 while
+    /// the speed rises, sub 2 while it falls). Rates of 0 run the linear
+    /// ramp.
+    Rate {
+        /// 60A4h:1, speed rising.
+        acceleration: u32,
+        /// 60A4h:2, speed falling.
+        deceleration: u32,
+    },
+    /// The time \[s\] to build up the profile acceleration (and
+    /// deceleration): jerk = 6083h / t (6084h / t), so the S-curve follows
+    /// later changes of the ramps (Technosoft iPOS 2023h "jerk time",
+    /// seed002 §7.1.2). 0 or not finite runs the linear ramp.
+    Time(f64),
 }
 
 /// Everything fixed when a drive is built.
@@ -204,6 +269,31 @@ pub struct DriveConfig {
     /// drive state (see [`DriveExtension`](super::DriveExtension)). None by
     /// default.
     pub extension: super::Extension,
+    /// 6086h values accepted, as [`profile_type`] bits (others: 0609 0030).
+    /// [`DriveConfig::servo`]: linear, sin², jerk-limited.
+    pub motion_profile_types: u32,
+    /// 60A4h profile jerk (sub 0 = 2) is installed and hooked.
+    pub profile_jerk_object: bool,
+    /// Power-on jerk of the jerk-limited ramp (60A4h power-on value for a
+    /// [`ProfileJerk::Rate`]); changed at run time by 60A4h writes or
+    /// [`Drive::set_profile_jerk`](super::Drive::set_profile_jerk).
+    pub profile_jerk: ProfileJerk,
+    /// pp with 6086h = 3: a new set-point with controlword bit 5 (change
+    /// set immediately) is ignored (not acknowledged, no motion), this EMCY
+    /// code is raised and statusword bit 7 (warning) set until the next
+    /// fault reset (controlword bit 7 rising edge). Technosoft iPOS
+    /// (seed002 §7.1.2 / example E21): "with an S-curve, bit5 must be 0,
+    /// otherwise a command error is raised" — EMCY 9000h, 2000h bit 14.
+    /// `None` (CiA 402-2): the S-curve is re-planned from the present
+    /// position, velocity and acceleration, see
+    /// [`SCurve::plan`](super::profile::SCurve::plan).
+    pub scurve_forbids_change_immediately: Option<u16>,
+    /// Homing mode: after the reference is taken and the axis has braked,
+    /// move back to the home position (607Ch in the new coordinates) before
+    /// reporting homing completed (see
+    /// [`HomingMode::with_return_to_home`](crate::homing::HomingMode::with_return_to_home),
+    /// which sets the same per handler).
+    pub homing_return_to_home: bool,
 }
 
 impl DriveConfig {
@@ -255,6 +345,30 @@ impl DriveConfig {
             zero_means_off: ZeroMeansOff::default(),
             zero_ramp: ZeroRamp::Refused,
             extension: super::Extension::none(),
+            motion_profile_types: profile_type::IMPLEMENTED,
+            profile_jerk_object: true,
+            // The profile acceleration built up in 10 ms.
+            profile_jerk: ProfileJerk::Rate {
+                acceleration: profile.profile_acceleration.saturating_mul(100),
+                deceleration: profile.profile_deceleration.saturating_mul(100),
+            },
+            scurve_forbids_change_immediately: None,
+            homing_return_to_home: false,
+        }
+    }
+}
+
+impl DriveConfig {
+    /// The 60A4h:1/2 power-on values of [`DriveConfig::profile_jerk`] (a
+    /// jerk time is converted with the power-on ramps).
+    pub(crate) fn profile_jerk_rates(&self) -> (u32, u32) {
+        match self.profile_jerk {
+            ProfileJerk::Rate { acceleration, deceleration } => (acceleration, deceleration),
+            ProfileJerk::Time(t) if t.is_finite() && t > 0.0 => {
+                let r = |x: u32| (f64::from(x) / t).clamp(1.0, f64::from(u32::MAX)) as u32;
+                (r(self.profile.profile_acceleration), r(self.profile.profile_deceleration))
+            }
+            ProfileJerk::Time(_) => (u32::MAX, u32::MAX),
         }
     }
 }

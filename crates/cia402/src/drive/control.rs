@@ -34,6 +34,13 @@ impl Drive {
     /// A controlword arrived (SDO or RPDO): device control and the
     /// mode-specific edges, effective at once.
     pub(crate) fn controlword(&mut self, od: &mut ObjectDictionary, cw: u16) {
+        if cw & 0x80 != 0 && self.cw & 0x80 == 0 {
+            // Fault reset also resets a latched command error (iPOS: the
+            // latched bits of 2000h are reset by Fault Reset), in any state.
+            if let Some(c) = self.command_error.take() {
+                self.emcy.push(EmcyRequest::Clear(c));
+            }
+        }
         self.cw = cw;
         self.pp.controlword(cw);
         let out = self.sm.controlword(cw);
@@ -234,6 +241,33 @@ impl Drive {
         }
     }
 
+    /// The jerk of the jerk-limited ramp in position units/s³ for the
+    /// limits `lim` in force; `None` (linear ramp) for a zero jerk.
+    fn pp_jerk(&self, lim: &Limits) -> Option<super::profile::Jerk> {
+        let j = match self.jerk {
+            super::ProfileJerk::Rate { acceleration, deceleration } => super::profile::Jerk {
+                acceleration: self.units.acc_to_pos(f64::from(acceleration)),
+                deceleration: self.units.acc_to_pos(f64::from(deceleration)),
+            },
+            super::ProfileJerk::Time(t) => super::profile::Jerk {
+                acceleration: lim.acceleration / t,
+                deceleration: lim.deceleration / t,
+            },
+        };
+        j.valid().then_some(j)
+    }
+
+    /// A pp set-point was refused (S-curve with change set immediately):
+    /// warning bit 7 and the configured EMCY, latched until a fault reset.
+    fn command_error_raised(&mut self) {
+        if let Some(c) = self.cfg.scurve_forbids_change_immediately
+            && self.command_error.is_none()
+        {
+            self.command_error = Some(c);
+            self.emcy.push(EmcyRequest::Raise(c));
+        }
+    }
+
     fn halt_deceleration(&self) -> f64 {
         let p = &self.params;
         let dec = match self.sm.options().halt_reaction() {
@@ -278,6 +312,9 @@ impl Drive {
             let inc = e.counts.saturating_add(self.inc_offset);
             self.probe.on_event(&e, self.units.inc_to_pos(inc));
         }
+        if self.probe.dedicated_pending() {
+            self.probe.sample_dedicated(self.position());
+        }
         self.supervise();
         if let DriveFunction::Stopping(_) = self.sm.drive_function() {
             let still = self.model.velocity().abs() < 0.01 * self.model.params().motor.max_speed;
@@ -301,18 +338,28 @@ impl Drive {
                 let running_reached = by_window
                     && self.pp.moving
                     && (self.actual_pos_f() - self.pp.target).abs() <= f64::from(self.params.position_window);
+                let shape = self.shape();
+                let lim = self.pp_limits();
                 let pin = PpIn {
                     running_reached,
                     cw: self.cw,
                     target_raw: self.params.target_position,
-                    lim: self.pp_limits(),
-                    shape: super::shape_of(self.extra.profile_type),
+                    lim,
+                    shape,
+                    acc: self.dem.acc,
+                    // Only the S-curve needs the jerk (linear path untouched).
+                    jerk: if shape == super::profile::Shape::JerkLimited { self.pp_jerk(&lim) } else { None },
+                    forbid_change_immediately: self.cfg.scurve_forbids_change_immediately.is_some(),
                     halt_dec: self.halt_deceleration(),
                     soft_limits: self.params.software_limits,
                     range: self.params.position_range,
                     dt,
                 };
                 let (p, v, a) = self.pp.step(&pin, self.dem.pos, self.dem.vel);
+                if self.pp.rejected {
+                    self.pp.rejected = false;
+                    self.command_error_raised();
+                }
                 (self.dem.pos, self.dem.vel, self.dem.acc) = (p, v, a);
                 self.dem.torque = torque_now;
                 let reached = if self.pp.halted {
@@ -673,6 +720,7 @@ impl Drive {
             self.pp.buffered = None;
             self.pp.traj =
                 super::profile::Trajectory::plan(p, v, stop_at, lim, super::profile::Shape::Linear);
+            self.pp.s_curve = false;
             self.pp.t = 0.0;
             self.pp.moving = true;
         }
@@ -699,7 +747,7 @@ impl Drive {
     /// The statusword without the personality's bits.
     pub(crate) fn base_statusword(&self) -> u16 {
         let mut sw = self.sm.statusword();
-        sw |= u16::from(self.warning || self.mode_warning) << 7;
+        sw |= u16::from(self.warning || self.mode_warning || self.command_error.is_some()) << 7;
         sw |= u16::from(self.cfg.remote) << 9;
         if matches!(self.sm.state(), State::OperationEnabled | State::QuickStopActive) {
             sw |= self.status_bits & 0x3C00;

@@ -164,11 +164,31 @@ impl Drive {
                 }
             }
             (0x6086, 0) => {
-                // 0 linear ramp, 1 sin² ramp (CiA 402-2 §6.7.x).
-                if !(0..=1).contains(&s) {
+                // 0 linear ramp, 1 sin² ramp, 3 jerk-limited ramp (CiA
+                // 402-2 §6.7.x), as far as this drive offers them.
+                let types = self.cfg.motion_profile_types & super::profile_type::IMPLEMENTED;
+                if !(0..32).contains(&s) || types & (1u32 << s) == 0 {
                     return Err(SdoAbort::INVALID_VALUE);
                 }
                 x.profile_type = s as i16;
+            }
+            (0x60A4, 1 | 2) => {
+                // A jerk of 0 would never build up any acceleration.
+                range(u as i64, 1, i64::from(u32::MAX))?;
+                let other = od.get_u32(0x60A4, 3 - sub).unwrap_or(u32v);
+                let (acceleration, deceleration) = if sub == 1 { (u32v, other) } else { (other, u32v) };
+                self.jerk = super::ProfileJerk::Rate { acceleration, deceleration };
+            }
+            (0x60D0, 1 | 2) => {
+                // Touch probe source (CiA 402-2 / ETG.6010 coding, e.g.
+                // Beckhoff AX8000 60D0h:01): 1 / 2 touch probe input 1 / 2,
+                // 5 hardware and 6 software zero impulse of the position
+                // encoder (the same index here); 3 / 4 (touch probe inputs
+                // 3 / 4) and manufacturer codes are not wired.
+                if !matches!(s, 1 | 2 | 5 | 6) {
+                    return Err(SdoAbort::INVALID_VALUE);
+                }
+                self.probe.source[usize::from(sub) - 1] = s as i16;
             }
             (0x6087, 0) => x.torque_slope = u32v,
             // 6088h: only 0 (linear torque ramp) is implemented.
@@ -329,6 +349,7 @@ impl Drive {
         let ramp = self.cfg.zero_ramp;
         p.homing_acceleration = ramp.effective(0x609A, u(0x609A, 0) as u32);
         p.home_offset = i(0x607C, 0) as i32;
+        p.homing_return_to_home = self.cfg.homing_return_to_home;
         p.interpolation_sub_mode = i(0x60C0, 0) as i16;
         p.interpolation_data = i(0x60C1, 1) as i32;
         p.interpolation_period_value = u(0x60C2, 1) as u8;
@@ -361,6 +382,21 @@ impl Drive {
         x.rated_current = (u(0x6075, 0) as u32).max(1);
         x.rated_torque = (u(0x6076, 0) as u32).max(1);
         x.probe_function = u(0x60B8, 0) as u16;
+        if self.cfg.io.probe_source_object {
+            for k in 0..2 {
+                let v = i(0x60D0, k as u8 + 1) as i16;
+                self.probe.source[k] = if matches!(v, 1 | 2 | 5 | 6) { v } else { 0 };
+            }
+        }
+        // 60A4h (stored or restored values) sets the jerk rates; a jerk
+        // time (configured or set by the personality) stays in force until
+        // 60A4h itself is written.
+        if self.cfg.profile_jerk_object
+            && matches!(self.jerk, super::ProfileJerk::Rate { .. })
+            && let (Some(a), Some(d)) = (od.get_u32(0x60A4, 1), od.get_u32(0x60A4, 2))
+        {
+            self.jerk = super::ProfileJerk::Rate { acceleration: a, deceleration: d };
+        }
         x.output_mask = u(0x60FE, 2) as u32;
         x.outputs = u(0x60FE, 1) as u32 & x.output_mask;
         x.vl_target = i(0x6042, 0) as i16;

@@ -37,7 +37,8 @@ pub mod units;
 mod tests;
 
 pub use config::{
-    DriveConfig, IoConfig, LimitSwitchReaction, ProfileDefaults, TargetReached, ZeroMeansOff, ZeroRamp,
+    DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk, TargetReached,
+    ZeroMeansOff, ZeroRamp, profile_type,
 };
 pub use extension::{DriveExtension, DriveView, Extension};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
@@ -160,6 +161,12 @@ pub struct Drive {
     mode_warning: bool,
     /// EMCY codes the active handler raised, cleared with its warning.
     mode_emcy: Vec<u16>,
+    /// The jerk of the jerk-limited ramp in force.
+    jerk: ProfileJerk,
+    /// A pp set-point refused by
+    /// [`DriveConfig::scurve_forbids_change_immediately`]: its EMCY code,
+    /// latched (statusword bit 7) until a fault reset.
+    command_error: Option<u16>,
 }
 
 impl Drive {
@@ -227,12 +234,14 @@ impl Drive {
             sup: supervise::Supervision::default(),
             emcy: Vec::with_capacity(8),
             raised: Vec::with_capacity(8),
-            probe: supervise::Probe::default(),
+            probe: supervise::Probe::new(cfg.io.probe_inputs, cfg.io.probe_source_object),
             events: StepEvents::default(),
             interlock: false,
             operational: false,
             mode_warning: false,
             mode_emcy: Vec::with_capacity(4),
+            jerk: cfg.profile_jerk,
+            command_error: None,
             cfg,
         };
         d.reload(node.od_mut());
@@ -327,6 +336,39 @@ impl Drive {
     /// keeps the drive in Switch on disabled.
     pub fn set_interlock(&mut self, active: bool) {
         self.interlock = active;
+    }
+
+    /// Sets the jerk of the jerk-limited ramp (6086h = 3), e.g. from a
+    /// manufacturer object: a [`ProfileJerk::Time`] (Technosoft iPOS 2023h
+    /// jerk time) follows later 6083h/6084h changes; a [`ProfileJerk::Rate`]
+    /// is also shown in 60A4h:1/2 when the drive has that object (a time
+    /// stays in force until 60A4h is written). Takes effect at the next
+    /// planned move. Rates of 0 or a time of 0 run the linear ramp.
+    pub fn set_profile_jerk(&mut self, od: &mut ObjectDictionary, jerk: ProfileJerk) {
+        self.jerk = jerk;
+        if let ProfileJerk::Rate { acceleration, deceleration } = jerk
+            && self.cfg.profile_jerk_object
+        {
+            for (sub, v) in [(1u8, acceleration), (2, deceleration)] {
+                if let Ok(r) = od.find(0x60A4, sub) {
+                    od.set_le(r, &v.to_le_bytes());
+                }
+            }
+        }
+    }
+
+    /// The jerk of the jerk-limited ramp in force.
+    pub fn profile_jerk(&self) -> ProfileJerk {
+        self.jerk
+    }
+
+    /// Drives the dedicated touch probe input `probe` (0: touch probe 1,
+    /// 1: touch probe 2) of a probe wired to [`ProbeInput::Dedicated`]
+    /// ([`IoConfig::probe_inputs`]). An edge is latched at the actual
+    /// position of the next control period (the input is sampled at the
+    /// control rate). Out-of-range probes are ignored.
+    pub fn set_probe_input(&mut self, probe: usize, active: bool) {
+        self.probe.set_dedicated(probe, active);
     }
 
     /// What a [`DriveExtension`] sees (state, mode, statusword without the
@@ -466,6 +508,7 @@ impl Application for Drive {
                 }
                 self.fault_reset();
                 self.emcy.clear();
+                self.command_error = None;
                 self.sm = StateMachine::new(*self.sm.options());
                 self.sm.self_test_passed();
                 self.cw = 0;
@@ -488,7 +531,14 @@ impl Application for Drive {
     }
 }
 
-/// 6086h → ramp shape.
-const fn shape_of(profile_type: i16) -> Shape {
-    if profile_type == 1 { Shape::SinSquared } else { Shape::Linear }
+impl Drive {
+    /// 6086h → ramp shape. A stored 3 the drive was not configured for
+    /// (a personality that accepts it itself) keeps the linear ramp.
+    fn shape(&self) -> Shape {
+        match self.extra.profile_type {
+            1 => Shape::SinSquared,
+            3 if self.cfg.motion_profile_types & profile_type::JERK_LIMITED != 0 => Shape::JerkLimited,
+            _ => Shape::Linear,
+        }
+    }
 }

@@ -147,6 +147,9 @@ pub struct ModeParams {
     pub position_range: (i32, i32),
     /// 6072h max torque \[per mille\].
     pub max_torque: u16,
+    /// Homing returns to the home position after the reference is taken
+    /// ([`DriveConfig::homing_return_to_home`](super::DriveConfig::homing_return_to_home)).
+    pub homing_return_to_home: bool,
 }
 
 impl ModeParams {

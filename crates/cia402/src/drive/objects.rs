@@ -184,6 +184,17 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
         var(0x60FF, "Target velocity", T::Integer32, Rww, I32(0), MAP_HOOK),
         var(0x6502, "Supported drive modes", T::Unsigned32, Ro, U32(modes), PLAIN),
     ];
+    if cfg.profile_jerk_object {
+        // CiA 402-2 60A4h profile jerk (ARRAY, up to 6 entries): this drive
+        // uses two, sub 1 while the speed rises, sub 2 while it falls.
+        let (ja, jd) = cfg.profile_jerk_rates();
+        v.push(array(0x60A4, "Profile jerk", T::Unsigned32, Rw, &[U32(ja), U32(jd)], MAP_HOOK));
+    }
+    if cfg.io.probe_source_object {
+        // 60D0h touch probe source (ARRAY of INTEGER16), used with 60B8h
+        // trigger selection 10b.
+        v.push(array(0x60D0, "Touch probe source", T::Integer16, Rw, &[I16(1), I16(2)], HOOK));
+    }
     if modes & op::supported_bit(op::HM) != 0 {
         // 60E3h: the standard methods (CiA 402-2 §6.7.x: 1–14, 17–30, 33–35, 37).
         // A handler with a registry replaces it (`refresh_handler_objects`).

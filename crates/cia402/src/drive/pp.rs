@@ -4,8 +4,16 @@
 //! immediately) and set of set-points (one buffered), bit 6 relative, bit 9
 //! change on set-point, halt (bit 8, 605Dh), software limits 607Dh, position
 //! range 607Bh, target reached by 6067h/6068h.
+//!
+//! With 6086h = 3 the moves are S-curves ([`SCurve`]): a new set-point
+//! while moving (bit 5, or the next of a set with bit 9) is planned from
+//! the present position, velocity *and* acceleration, so change
+//! immediately stays jerk-limited (CiA 402-2 allows bit 5 with every
+//! profile type); a drive may refuse bit 5 with the S-curve instead
+//! ([`DriveConfig::scurve_forbids_change_immediately`](super::DriveConfig::scurve_forbids_change_immediately),
+//! Technosoft iPOS). Halt and the stop reactions keep their linear ramps.
 
-use super::profile::{Limits, Ramp, Shape, Trajectory};
+use super::profile::{Jerk, Limits, Ramp, SCurve, Shape, Trajectory};
 
 /// A buffered set-point.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -18,6 +26,10 @@ pub(crate) struct Pending {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct Pp {
     pub traj: Trajectory,
+    /// The S-curve of a jerk-limited move (in force while `s_curve`).
+    pub scurve: SCurve,
+    /// The running move is `scurve`, not `traj`.
+    pub s_curve: bool,
     /// Time into `traj` \[s\].
     pub t: f64,
     /// The target of the running (or last) move \[position units\].
@@ -36,6 +48,9 @@ pub(crate) struct Pp {
     pub halt_ramp: Ramp,
     /// A move is in progress (trajectory not finished).
     pub moving: bool,
+    /// A set-point was refused because bit 5 is not allowed with the
+    /// S-curve (`PpIn::forbid_change_immediately`); the drive takes it.
+    pub rejected: bool,
 }
 
 /// Inputs of one profile position period.
@@ -52,6 +67,13 @@ pub(crate) struct PpIn {
     /// window, [`TargetReached::ActualInWindow`](super::TargetReached)):
     /// a buffered set-point starts now.
     pub running_reached: bool,
+    /// Present acceleration demand (continuity of the jerk-limited ramp).
+    pub acc: f64,
+    /// Jerk for [`Shape::JerkLimited`]; `None` runs the linear ramp.
+    pub jerk: Option<Jerk>,
+    /// With [`Shape::JerkLimited`], a set-point with bit 5 is refused
+    /// ([`DriveConfig::scurve_forbids_change_immediately`](super::DriveConfig::scurve_forbids_change_immediately)).
+    pub forbid_change_immediately: bool,
 }
 
 /// Wraps `x` into the position range `[lo, hi]` (modulo axis, 607Bh).
@@ -115,7 +137,19 @@ impl Pp {
 
     fn start(&mut self, target: f64, p: f64, v: f64, i: &PpIn) {
         self.target = target;
-        self.traj = Trajectory::plan(p, v, target, i.lim, i.shape);
+        match (i.shape, i.jerk) {
+            // CiA 402-2 pp: a change of set-point on the fly re-plans the
+            // S-curve from the present position, velocity and acceleration
+            // (continuous in all three, see `SCurve::plan`).
+            (Shape::JerkLimited, Some(j)) => {
+                self.scurve = SCurve::plan(p, v, i.acc, target, i.lim, j);
+                self.s_curve = true;
+            }
+            _ => {
+                self.traj = Trajectory::plan(p, v, target, i.lim, i.shape);
+                self.s_curve = false;
+            }
+        }
         self.t = 0.0;
         self.moving = true;
     }
@@ -129,6 +163,16 @@ impl Pp {
             // A zero 6081h/6083h/6084h cannot be planned: the set-point is
             // refused (not acknowledged, no motion) rather than jumped to.
             self.edge = false;
+        } else if self.edge
+            && !self.ack
+            && i.forbid_change_immediately
+            && i.shape == Shape::JerkLimited
+            && self.edge_cw & 0x20 != 0
+        {
+            // Technosoft iPOS §7.1.2: with the S-curve bit 5 must be 0;
+            // the set-point is ignored (not acknowledged) and reported.
+            self.edge = false;
+            self.rejected = true;
         } else if self.edge && !self.ack {
             self.edge = false;
             let (t, limited) = self.absolute_target(i, p);
@@ -167,9 +211,9 @@ impl Pp {
         if self.moving {
             self.t += i.dt;
             if let Some(b) = self.buffered
-                && (self.t >= self.traj.duration()
+                && (self.t >= self.duration()
                     || i.running_reached
-                    || (b.change_on_setpoint && self.traj.decelerating(self.t)))
+                    || (b.change_on_setpoint && self.decelerating(self.t)))
             {
                 // Next set-point of the set: bit 9 continues without stopping
                 // (dropped if a ramp was set to 0 meanwhile).
@@ -179,10 +223,20 @@ impl Pp {
                     self.t = i.dt;
                 }
             }
-            if self.t >= self.traj.duration() {
+            if self.t >= self.duration() {
                 self.moving = false;
             }
         }
-        self.traj.at(self.t)
+        if self.s_curve { self.scurve.at(self.t) } else { self.traj.at(self.t) }
+    }
+
+    /// Duration of the running move \[s\].
+    fn duration(&self) -> f64 {
+        if self.s_curve { self.scurve.duration() } else { self.traj.duration() }
+    }
+
+    /// Whether the running move is in its final deceleration at `t`.
+    fn decelerating(&self, t: f64) -> bool {
+        if self.s_curve { self.scurve.decelerating(t) } else { self.traj.decelerating(t) }
     }
 }

@@ -22,6 +22,9 @@ use drivebus_od::SdoAbort;
 #[derive(Debug)]
 pub struct HomingMode {
     engine: Homing,
+    /// Return to the home position after the stop (besides
+    /// [`ModeParams::homing_return_to_home`](crate::drive::ModeParams::homing_return_to_home)).
+    return_to_home: bool,
 }
 
 impl Default for HomingMode {
@@ -33,7 +36,17 @@ impl Default for HomingMode {
 impl HomingMode {
     /// hm offering `registry`'s methods.
     pub fn new(registry: HomingRegistry) -> Self {
-        HomingMode { engine: Homing::new(registry) }
+        HomingMode { engine: Homing::new(registry), return_to_home: false }
+    }
+
+    /// After the reference is taken and the axis has braked, move back to
+    /// the home position (607Ch in the new coordinates) with 6099h:2 and
+    /// 609Ah, and only then report homing completed (bits 12 + 10). Also
+    /// switched on for every hm handler by
+    /// [`DriveConfig::homing_return_to_home`](crate::drive::DriveConfig::homing_return_to_home).
+    pub fn with_return_to_home(mut self, on: bool) -> Self {
+        self.return_to_home = on;
+        self
     }
 
     /// The engine (state, registry).
@@ -104,6 +117,7 @@ impl ModeHandler for HomingMode {
             switches: io.switches,
             events: events.as_slice(),
         };
+        self.engine.set_return_to_home(self.return_to_home || io.params.homing_return_to_home);
         let out = self.engine.step(io.controlword, &config(io), &input, dt);
         let command = match out.command {
             HomingCommand::Position { position, velocity, acceleration } => {

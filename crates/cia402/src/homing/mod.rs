@@ -26,6 +26,17 @@
 //! Interruption aborts the run; a new rising edge of bit 4 starts it again
 //! from the beginning (the method's search direction follows the switch
 //! states then).
+//!
+//! **Return to home** ([`Homing::set_return_to_home`], off by default):
+//! without it the axis comes to rest wherever the homing acceleration stops
+//! it after the reference, i.e. 607Ch plus the braking distance in the
+//! final direction. With it, once at rest the engine moves back to the home
+//! position (607Ch in the new coordinates) on a trapezoid with the zero
+//! search speed 6099h:2 and the homing acceleration 609Ah. Bit 12 (homing
+//! attained) is set when the reference is taken, bit 10 (target reached)
+//! only when the axis is at rest at the home position. A halt or bit 4
+//! dropped during the return stops the axis and reports "interrupted"
+//! (the new coordinates stay in force).
 
 mod adapter;
 pub mod method;
@@ -38,6 +49,7 @@ pub use method::{
 };
 pub use standard::StandardMethod;
 
+use crate::drive::profile::{Limits, Shape, Trajectory};
 use crate::model::Switches;
 
 /// Statusword 6041h bits of the homing mode.
@@ -159,6 +171,12 @@ pub struct Homing {
     profile: Profile,
     torque: Option<f64>,
     method: i8,
+    /// Move back to the home position after the stop.
+    return_to_home: bool,
+    /// The return is still due (reference taken with `return_to_home`).
+    return_pending: bool,
+    /// The return move and the time into it \[s\].
+    ret: Option<(Trajectory, f64)>,
 }
 
 impl Homing {
@@ -171,6 +189,32 @@ impl Homing {
             profile: Profile { position: 0.0, velocity: 0.0, target: 0.0 },
             torque: None,
             method: 0,
+            return_to_home: false,
+            return_pending: false,
+            ret: None,
+        }
+    }
+
+    /// After the reference is taken and the axis has stopped, move back to
+    /// the home position before reporting homing completed (see the module
+    /// docs). Applies from the next reference found.
+    pub fn set_return_to_home(&mut self, on: bool) {
+        self.return_to_home = on;
+    }
+
+    /// Whether the engine returns to the home position.
+    pub fn return_to_home(&self) -> bool {
+        self.return_to_home
+    }
+
+    /// Abandons a pending return: the axis decelerates from where it is.
+    fn cancel_return(&mut self) {
+        if self.return_pending {
+            self.return_pending = false;
+            self.ret = None;
+            if self.state == HomingState::Attained {
+                self.state = HomingState::Interrupted;
+            }
         }
     }
 
@@ -200,6 +244,7 @@ impl Homing {
         if self.state == HomingState::Running {
             self.state = HomingState::Interrupted;
         }
+        self.cancel_return();
     }
 
     /// The mode was left or the drive disabled: a run in progress is
@@ -208,6 +253,7 @@ impl Homing {
         if self.state == HomingState::Running {
             self.state = HomingState::Interrupted;
         }
+        self.cancel_return();
         self.profile.target = 0.0;
         self.profile.velocity = 0.0;
         self.torque = None;
@@ -216,7 +262,7 @@ impl Homing {
     /// The status bits 10 / 12 / 13 now.
     pub fn status(&self) -> u16 {
         use status::*;
-        let rest = self.profile.at_rest() && self.torque.is_none();
+        let rest = self.profile.at_rest() && self.torque.is_none() && !self.return_pending;
         let tr = if rest { TARGET_REACHED } else { 0 };
         match self.state {
             HomingState::Idle => TARGET_REACHED,
@@ -248,6 +294,11 @@ impl Homing {
             torque: input.torque,
         };
         let mut reset = None;
+        if self.return_pending && (halt || falling) {
+            // Halt / bit 4 1→0 during the return: stop on the homing
+            // acceleration from the present motion.
+            self.cancel_return();
+        }
         let request = if self.state == HomingState::Running {
             if halt || falling {
                 // Halt in hm: "stop axis with homing acceleration" (CiA 402-2 homing
@@ -285,13 +336,42 @@ impl Homing {
         let dt = if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
         let command = match self.torque {
             Some(t) => HomingCommand::Torque(t),
-            None => self.profile.step(accel, dt),
+            None => self.profile_step(config, accel, dt),
         };
         HomingOutput { command, status: self.status(), position_reset: reset }
     }
 
+    /// The velocity profile, or the return to the home position once the
+    /// axis has stopped after the reference.
+    fn profile_step(&mut self, config: &HomingConfig, accel: f64, dt: f64) -> HomingCommand {
+        if self.return_pending && self.ret.is_none() && self.profile.at_rest() {
+            let lim = Limits { velocity: config.zero_speed, acceleration: accel, deceleration: accel };
+            if lim.valid() && config.home_offset.is_finite() {
+                let traj =
+                    Trajectory::plan(self.profile.position, 0.0, config.home_offset, lim, Shape::Linear);
+                self.ret = Some((traj, 0.0));
+            } else {
+                // Parameters changed to unusable ones: stay where we are.
+                self.return_pending = false;
+            }
+        }
+        let Some((traj, t)) = &mut self.ret else { return self.profile.step(accel, dt) };
+        *t += dt;
+        let (position, velocity, acceleration) = traj.at(*t);
+        if *t >= traj.duration() {
+            self.ret = None;
+            self.return_pending = false;
+        }
+        // Keep the velocity profile in step, so a halt decelerates from here.
+        self.profile.position = position;
+        self.profile.velocity = velocity;
+        HomingCommand::Position { position, velocity, acceleration }
+    }
+
     fn start(&mut self, config: &HomingConfig, ctx: &HomingContext<'_>) -> Option<MethodStep> {
         self.method = config.method;
+        self.return_pending = false;
+        self.ret = None;
         if !config.is_valid() {
             self.state = HomingState::Error(HomingError::InvalidParameters);
             return None;
@@ -332,6 +412,7 @@ impl Homing {
             }
             MethodStep::Found(reference) if reference.is_finite() => {
                 self.state = HomingState::Attained;
+                self.return_pending = self.return_to_home;
                 // CiA 402-2 homing mode: the home position gets the home offset,
                 // so everything shifts by home offset − reference.
                 let shift = config.home_offset - reference;

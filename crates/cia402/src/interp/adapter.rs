@@ -5,7 +5,10 @@ use super::cyclic::{Cyclic, CyclicConfig, CyclicKind};
 use super::ip::{Ip, IpBufferError, IpConfig, Organisation, SubMode, WARNING};
 use crate::drive::Units;
 use crate::drive::mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, op};
+use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use drivebus_od::{SdoAbort, le_i64};
+
+extern crate alloc;
 
 /// Cycle time when 60C2h is 0 or out of range \[s\].
 const DEFAULT_PERIOD: f64 = 1e-3;
@@ -41,6 +44,58 @@ pub struct IpMode {
     auto_push: bool,
     /// No buffer at all: 60C1h is a plain set-point sampled at SYNC.
     latest_only: bool,
+    /// Shared with the owner: the buffer fill after every step and write.
+    monitor: Option<IpMonitor>,
+    /// Buffer under/overflow raise statusword bit 7 and EMCY FF01h/FF02h.
+    buffer_warnings: bool,
+}
+
+/// A read-only view of an [`IpMode`]'s buffer for whoever built the
+/// handler (the handler itself is owned by the drive): records waiting,
+/// actual size, the underflow condition. Updated after every control step,
+/// SYNC and forwarded write. Cloning shares the view.
+#[derive(Debug, Clone, Default)]
+pub struct IpMonitor(alloc::sync::Arc<MonitorCell>);
+
+#[derive(Debug, Default)]
+struct MonitorCell {
+    len: AtomicUsize,
+    size: AtomicUsize,
+    underflow: AtomicBool,
+}
+
+impl IpMonitor {
+    /// A view not attached yet (everything 0 until the handler updates it).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Records waiting in the buffer.
+    pub fn len(&self) -> usize {
+        self.0.len.load(Ordering::Relaxed)
+    }
+
+    /// Whether no record is waiting.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The actual buffer size (60C4h:2).
+    pub fn size(&self) -> usize {
+        self.0.size.load(Ordering::Relaxed)
+    }
+
+    /// The buffer ran empty while ip was active and no record came since
+    /// (the engine's underflow condition).
+    pub fn underflow(&self) -> bool {
+        self.0.underflow.load(Ordering::Relaxed)
+    }
+
+    fn update(&self, ip: &Ip) {
+        self.0.len.store(ip.buffer().len(), Ordering::Relaxed);
+        self.0.size.store(ip.buffer().size(), Ordering::Relaxed);
+        self.0.underflow.store(ip.underflow(), Ordering::Relaxed);
+    }
 }
 
 impl Default for IpMode {
@@ -52,7 +107,35 @@ impl Default for IpMode {
 impl IpMode {
     /// ip with a buffer of `max_buffer` records (60C4h:1).
     pub fn new(max_buffer: usize) -> Self {
-        IpMode { engine: Ip::new(max_buffer), auto_push: true, latest_only: false }
+        IpMode {
+            engine: Ip::new(max_buffer),
+            auto_push: true,
+            latest_only: false,
+            monitor: None,
+            buffer_warnings: true,
+        }
+    }
+
+    /// Reports the buffer fill to `monitor` (a personality that keeps its
+    /// own buffer status object, e.g. a manufacturer status word).
+    pub fn with_monitor(mut self, monitor: IpMonitor) -> Self {
+        monitor.update(&self.engine);
+        self.monitor = Some(monitor);
+        self
+    }
+
+    /// No statusword bit 7 and no EMCY FF01h/FF02h on buffer under- or
+    /// overflow (a personality that signals the buffer state its own way):
+    /// an overflowing record is still dropped, an empty buffer still holds.
+    pub fn without_buffer_warnings(mut self) -> Self {
+        self.buffer_warnings = false;
+        self
+    }
+
+    fn report(&self) {
+        if let Some(m) = &self.monitor {
+            m.update(&self.engine);
+        }
     }
 
     /// ip without a set-point buffer (drives without 60C4h): 60C1h:1 is
@@ -62,7 +145,7 @@ impl IpMode {
     pub fn latest_only() -> Self {
         let mut engine = Ip::new(1);
         engine.buffer_mut().set_organisation(1);
-        IpMode { engine, auto_push: true, latest_only: true }
+        IpMode { engine, auto_push: true, latest_only: true, monitor: None, buffer_warnings: true }
     }
 
     /// The engine (buffer, warnings).
@@ -105,10 +188,13 @@ impl ModeHandler for IpMode {
             let _ = self.engine.write_data(1, f64::from(io.params.interpolation_data));
         }
         self.engine.on_sync(io.controlword, &Self::config(io));
+        self.report();
     }
 
     fn step(&mut self, _mode: i8, io: &ModeIo<'_>, dt: f64) -> ModeOutput {
         let out = self.engine.step(io.controlword, &Self::config(io), dt);
+        self.report();
+        let warnings = self.buffer_warnings;
         ModeOutput {
             command: ModeCommand::Position {
                 position: out.position,
@@ -116,13 +202,37 @@ impl ModeHandler for IpMode {
                 acceleration: out.acceleration,
             },
             status: out.status & ModeOutput::STATUS_MASK,
-            warning: out.status & WARNING != 0,
-            emcy: out.emcy,
+            warning: warnings && out.status & WARNING != 0,
+            emcy: out.emcy.filter(|_| warnings),
             ..ModeOutput::default()
         }
     }
 
     fn write_object(&mut self, index: u16, sub: u8, data: &[u8], units: &Units) -> Result<bool, SdoAbort> {
+        let r = self.write_forwarded(index, sub, data, units);
+        self.report();
+        r
+    }
+
+    fn read_object(&self, index: u16, sub: u8) -> Option<i64> {
+        let b = self.engine.buffer();
+        match (index, sub) {
+            (0x60C4, 1) => Some(b.max_size() as i64),
+            (0x60C4, 2) => Some(b.size() as i64),
+            (0x60C4, 3) => Some(match b.organisation() {
+                Organisation::Fifo => 0,
+                Organisation::Ring => 1,
+            }),
+            (0x60C4, 4) => Some(b.position() as i64),
+            (0x60C4, 6) => Some(i64::from(b.access_enabled())),
+            _ => None,
+        }
+    }
+}
+
+impl IpMode {
+    /// A forwarded write (60C0h, 60C1h:1–3, 60C4h:2–6).
+    fn write_forwarded(&mut self, index: u16, sub: u8, data: &[u8], units: &Units) -> Result<bool, SdoAbort> {
         let v = le_i64(data);
         let buf = self.engine.buffer_mut();
         let ok = |b: bool| if b { Ok(true) } else { Err(SdoAbort::INVALID_VALUE) };
@@ -177,21 +287,6 @@ impl ModeHandler for IpMode {
                 r
             }
             _ => Ok(false),
-        }
-    }
-
-    fn read_object(&self, index: u16, sub: u8) -> Option<i64> {
-        let b = self.engine.buffer();
-        match (index, sub) {
-            (0x60C4, 1) => Some(b.max_size() as i64),
-            (0x60C4, 2) => Some(b.size() as i64),
-            (0x60C4, 3) => Some(match b.organisation() {
-                Organisation::Fifo => 0,
-                Organisation::Ring => 1,
-            }),
-            (0x60C4, 4) => Some(b.position() as i64),
-            (0x60C4, 6) => Some(i64::from(b.access_enabled())),
-            _ => None,
         }
     }
 }
@@ -362,3 +457,30 @@ cyclic_mode!(
     op::CST,
     "Cyclic synchronous torque (10): 6071h + 60B2h at SYNC \\[per mille\\]."
 );
+
+#[cfg(test)]
+mod monitor_tests {
+    use super::*;
+
+    #[test]
+    fn monitor_follows_writes_and_warnings_can_be_off() {
+        let m = IpMonitor::new();
+        let mut ip = IpMode::new(4).with_monitor(m.clone()).without_buffer_warnings();
+        assert_eq!((m.len(), m.size(), m.underflow()), (0, 4, false));
+        let u = Units::default();
+        assert_eq!(ip.write_object(0x60C4, 2, &[2], &u), Ok(true));
+        assert_eq!((m.len(), m.size()), (0, 2));
+        for p in [10i32, 20, 30] {
+            // The third overflows the 2-record buffer and is dropped.
+            assert_eq!(ip.write_object(0x60C1, 1, &p.to_le_bytes(), &u), Ok(true));
+        }
+        assert_eq!(m.len(), 2);
+        assert!(!m.is_empty());
+        assert!(ip.engine().overflow());
+        // Clearing the buffer (60C4h:6 = 0) empties the view too.
+        assert_eq!(ip.write_object(0x60C4, 6, &[0], &u), Ok(true));
+        assert!(m.is_empty());
+        assert!(!ip.buffer_warnings);
+        assert!(IpMode::new(4).buffer_warnings);
+    }
+}

@@ -14,6 +14,6 @@ mod adapter;
 pub mod cyclic;
 pub mod ip;
 
-pub use adapter::{CspMode, CstMode, CsvMode, IpMode};
+pub use adapter::{CspMode, CstMode, CsvMode, IpMode, IpMonitor};
 pub use cyclic::{Cyclic, CyclicConfig, CyclicKind, CyclicOutput, FollowingWatch, Interpolator, Sample};
 pub use ip::{Ip, IpBuffer, IpBufferError, IpConfig, IpOutput, IpRecord, Organisation, SubMode};
