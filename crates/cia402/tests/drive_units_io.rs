@@ -105,6 +105,32 @@ fn limit_switch_stops_and_flags_internal_limit() {
     assert_eq!(r.drive().statusword() & 0x0880, 0);
 }
 
+/// With the limit-switch function off (`Drive::set_limit_switches`) the
+/// input still shows in 60FDh, but the motor runs on through it and bits
+/// 7/11 stay clear; switched on again, the next approach stops.
+#[test]
+fn limit_switch_function_can_be_switched_off() {
+    let mut r = switch_rig();
+    r.drive_mut().set_limit_switches(false);
+    r.write(0x6060, 0, &[3]);
+    r.enable();
+    r.write(0x60FF, 0, &360_000i32.to_le_bytes()); // 360°/s
+    r.run_ms(300.0);
+    assert_eq!(r.read(0x60FD, 0) & 0x2, 0b010, "the input is read");
+    assert_eq!(r.drive().statusword() & 0x0880, 0, "no warning, no internal limit");
+    let p = r.read(0x6064, 0) as i32;
+    assert!(p > 95_000, "ran through the switch at 90°: {p}");
+    r.write(0x60FF, 0, &0i32.to_le_bytes());
+    r.run_ms(100.0);
+    r.write(0x60FF, 0, &(-360_000i32).to_le_bytes());
+    r.run_ms(100.0);
+    r.drive_mut().set_limit_switches(true);
+    r.write(0x60FF, 0, &360_000i32.to_le_bytes());
+    r.run_ms(400.0);
+    assert_eq!(r.drive().statusword() & 0x0880, 0x0880, "stops again");
+    assert!(r.drive().model().velocity().abs() < 1.0);
+}
+
 #[test]
 fn limit_switch_fault_option() {
     let mut p = DriveParams::servo_small();

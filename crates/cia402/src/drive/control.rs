@@ -673,7 +673,7 @@ impl Drive {
         // search them), not a limit: no stop, no warning.
         let sw = self.model.switches();
         let homing = enabled && self.mode == op::HM;
-        self.sup.limit_block = if homing {
+        self.sup.limit_block = if homing || self.limit_switches_off {
             0
         } else if sw.negative_limit {
             -1
@@ -691,7 +691,7 @@ impl Drive {
                 EventKind::PositiveLimit if e.active => self.dem.vel > 0.0,
                 _ => false,
             };
-            if toward && enabled && !homing {
+            if toward && enabled && !homing && !self.limit_switches_off {
                 match self.cfg.io.limit_switch {
                     super::LimitSwitchReaction::Fault => fault = fault.or(Some(code::LIMIT_SWITCH)),
                     super::LimitSwitchReaction::StopAndWarn => self.limit_stop(),

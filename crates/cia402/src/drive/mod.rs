@@ -155,6 +155,8 @@ pub struct Drive {
     probe: supervise::Probe,
     events: StepEvents,
     interlock: bool,
+    /// The limit-switch function is off (inputs still read in 60FDh).
+    limit_switches_off: bool,
     /// NMT operational (for [`DriveView::operational`]).
     operational: bool,
     /// The active handler's warning (statusword bit 7).
@@ -237,6 +239,7 @@ impl Drive {
             probe: supervise::Probe::new(cfg.io.probe_inputs, cfg.io.probe_source_object),
             events: StepEvents::default(),
             interlock: false,
+            limit_switches_off: false,
             operational: false,
             mode_warning: false,
             mode_emcy: Vec::with_capacity(4),
@@ -295,6 +298,12 @@ impl Drive {
     pub fn statusword(&self) -> u16 {
         self.statusword_value()
     }
+    /// The latched command error (an S-curve set-point with "change set
+    /// immediately", [`DriveConfig::scurve_forbids_change_immediately`])
+    /// until the next fault reset: its EMCY code.
+    pub fn command_error(&self) -> Option<u16> {
+        self.command_error
+    }
     /// Position demand \[position units\] (6062h, unrounded).
     pub fn demand_position(&self) -> f64 {
         self.dem.pos
@@ -336,6 +345,14 @@ impl Drive {
     /// keeps the drive in Switch on disabled.
     pub fn set_interlock(&mut self, active: bool) {
         self.interlock = active;
+    }
+
+    /// Switches the limit-switch function off or on again: off, an active
+    /// 60FDh bit 0/1 neither stops the motor nor sets statusword bits 7/11
+    /// (e.g. Technosoft iPOS 60B8h bit 6, which frees the limit inputs for
+    /// the touch probes). On by default.
+    pub fn set_limit_switches(&mut self, on: bool) {
+        self.limit_switches_off = !on;
     }
 
     /// Sets the jerk of the jerk-limited ramp (6086h = 3), e.g. from a

@@ -26,6 +26,20 @@ impl DriveModel {
         }
     }
 
+    /// The switch levels at `th` coming from `old`: an active limit switch
+    /// releases only the hysteresis back inside its edge.
+    pub(super) fn switch_levels_from(&self, old: Switches, th: f64) -> Switches {
+        let mut s = self.switch_levels(th);
+        let h = self.d.limit_hysteresis;
+        if old.negative_limit {
+            s.negative_limit = self.d.neg_limit.is_some_and(|b| th <= b + h);
+        }
+        if old.positive_limit {
+            s.positive_limit = self.d.pos_limit.is_some_and(|b| th >= b - h);
+        }
+        s
+    }
+
     fn edge(&mut self, kind: EventKind, active: bool, th0: f64, th1: f64, at: f64) {
         let mut e = self.event_at(kind, active, at, frac(th0, th1, at));
         e.positive_direction = th1 > th0;
@@ -39,14 +53,15 @@ impl DriveModel {
         }
         let up = th1 > th0;
         let old = self.switches;
-        let new = self.switch_levels(th1);
-        let neg_changed = old.negative_limit != new.negative_limit;
-        if let Some(b) = self.d.neg_limit.filter(|_| neg_changed) {
-            self.edge(EventKind::NegativeLimit, new.negative_limit, th0, th1, b);
+        let new = self.switch_levels_from(old, th1);
+        let h = self.d.limit_hysteresis;
+        if let Some(b) = self.d.neg_limit.filter(|_| old.negative_limit != new.negative_limit) {
+            let at = if new.negative_limit { b } else { b + h };
+            self.edge(EventKind::NegativeLimit, new.negative_limit, th0, th1, at);
         }
-        let pos_changed = old.positive_limit != new.positive_limit;
-        if let Some(b) = self.d.pos_limit.filter(|_| pos_changed) {
-            self.edge(EventKind::PositiveLimit, new.positive_limit, th0, th1, b);
+        if let Some(b) = self.d.pos_limit.filter(|_| old.positive_limit != new.positive_limit) {
+            let at = if new.positive_limit { b } else { b - h };
+            self.edge(EventKind::PositiveLimit, new.positive_limit, th0, th1, at);
         }
         if let Some((lo, hi)) = self.d.home {
             // Each boundary on its own, so passing the whole switch inside

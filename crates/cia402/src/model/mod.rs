@@ -103,6 +103,8 @@ struct Derived {
     rad_per_unit: f64,
     neg_limit: Option<f64>,
     pos_limit: Option<f64>,
+    /// Limit switch hysteresis \[rad\].
+    limit_hysteresis: f64,
     home: Option<(f64, f64)>,
     neg_stop: Option<f64>,
     pos_stop: Option<f64>,
@@ -202,6 +204,7 @@ impl DriveModel {
             rad_per_unit,
             neg_limit: opt_rad(a.negative_limit, rad_per_unit, "axis.negative_limit")?,
             pos_limit: opt_rad(a.positive_limit, rad_per_unit, "axis.positive_limit")?,
+            limit_hysteresis: a.limit_hysteresis * rad_per_unit.abs(),
             home,
             neg_stop: opt_rad(a.negative_stop, rad_per_unit, "axis.negative_stop")?,
             pos_stop: opt_rad(a.positive_stop, rad_per_unit, "axis.positive_stop")?,
@@ -308,7 +311,7 @@ impl DriveModel {
             }
             self.prev_counts = self.counts;
             self.vel_meas = velocity;
-            self.switches = self.switch_levels(position);
+            self.switches = self.switch_levels_from(self.switches, position);
         }
         ok
     }

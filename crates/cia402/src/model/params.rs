@@ -150,6 +150,11 @@ pub struct AxisParams {
     pub negative_limit: Option<f64>,
     /// Positive limit switch, active at or above this position \[units\].
     pub positive_limit: Option<f64>,
+    /// Hysteresis of both limit switches \[units\]: an active switch is
+    /// released only this far back inside its edge (a real switch's
+    /// differential travel), so an axis held at the edge does not make the
+    /// input chatter. 0 = an ideal switch.
+    pub limit_hysteresis: f64,
     /// Home switch, active inside `[a, b]` \[units\].
     pub home_switch: Option<(f64, f64)>,
     /// Negative mechanical end stop \[units\].
@@ -223,6 +228,7 @@ impl AxisParams {
             load: LoadTorque::None,
             negative_limit: None,
             positive_limit: None,
+            limit_hysteresis: 0.0,
             home_switch: None,
             negative_stop: None,
             positive_stop: None,
@@ -504,6 +510,7 @@ impl DriveParams {
                 finite(f, v)?;
             }
         }
+        range("axis.limit_hysteresis", a.limit_hysteresis, 0.0, 1e12)?;
         if let Some((lo, hi)) = a.home_switch {
             finite("axis.home_switch", lo)?;
             finite("axis.home_switch", hi)?;

@@ -91,6 +91,34 @@ fn switch_edges_located_within_one_count() {
     assert!(!m.switches().home);
 }
 
+/// A limit switch with hysteresis turns on at its edge and off only the
+/// hysteresis back inside it, where the release edge is reported.
+#[test]
+fn limit_switch_hysteresis() {
+    let mut p = switched_axis();
+    p.axis.limit_hysteresis = 1.0;
+    let mut m = DriveModel::new(p).unwrap();
+    let deg = |d: f64| d * PI / 180.0;
+    let cpr = m.counts_per_rad();
+    let at = |m: &mut DriveModel, d: f64| {
+        m.set_motion(m.position(), (deg(d) - m.position()) / DT);
+        let ev: Vec<_> = m.step(DT).iter().filter(|e| e.kind == EventKind::PositiveLimit).copied().collect();
+        m.set_motion(m.position(), 0.0);
+        ev
+    };
+    at(&mut m, 89.5);
+    let on = at(&mut m, 90.5);
+    assert_eq!(on.len(), 1);
+    assert!(on[0].active && (on[0].counts as f64 - deg(90.0) * cpr).abs() <= 1.0);
+    assert!(at(&mut m, 89.5).is_empty(), "still active inside the hysteresis");
+    assert!(m.switches().positive_limit);
+    let off = at(&mut m, 88.5);
+    assert_eq!(off.len(), 1);
+    assert!(!off[0].active && (off[0].counts as f64 - deg(89.0) * cpr).abs() <= 1.0);
+    assert!(at(&mut m, 89.8).is_empty(), "not active again before the edge");
+    assert!(!m.switches().positive_limit);
+}
+
 #[test]
 fn hard_stop_stalls_the_motor() {
     let mut p = DriveParams::servo_small();

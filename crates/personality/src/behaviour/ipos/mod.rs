@@ -30,13 +30,22 @@
 
 use crate::Profile;
 use crate::build::{Action, Behaviour, Context, EmcyFrame, Verdict};
-use drivebus_cia402::drive::{DriveConfig, FactorGroup};
-use drivebus_cia402::homing::{HomingContext, HomingMethod, MethodStep};
+use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, profile_type};
+use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::{IpMode, IpMonitor};
-use drivebus_cia402::model::EventKind;
 use drivebus_cia402::state_machine::State;
+
+mod gearing;
+mod homing;
+mod interp;
+
 use drivebus_node::{NodeConfig, NodeEvent};
 use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort};
+use gearing::Gear;
+pub use gearing::{MASTER_FULL_RANGE, master_increment};
+pub use homing::MechanicalLimitHoming;
+use interp::Legacy;
+pub use interp::{AUX_LINEAR_IP, EMCY_IP_STATUS, IP_BUFFER_DEFAULT, IP_BUFFER_MAX, LegacyPoint, ip_status};
 
 /// EMCY 8220h "PDO length exceeded" (Table 3.1.3).
 pub const EMCY_PDO_LENGTH_EXCEEDED: u16 = 0x8220;
@@ -76,209 +85,13 @@ pub fn error_register(code: u16) -> u8 {
     }
 }
 
-/// The iPOS homing methods on a mechanical limit (§6): −1 / −2 run into the
-/// negative / positive limit, then reverse at 6099h:2 to the first index
-/// pulse; −3 / −4 run into the limit, then travel |607Ch| back, and that
-/// point reports 607Ch (so the limit is 0). The limit is detected when the
-/// axis hits its end stop or stalls (the manual's current threshold
-/// 207Bh/207Ch, or the control error of an open-loop stepper, is what such
-/// a contact produces on the real drive).
-#[derive(Debug, Clone, Copy)]
-pub struct MechanicalLimitHoming {
-    code: i8,
-    /// Where the limit was met (position units), once met.
-    limit: Option<f64>,
-}
-
-impl MechanicalLimitHoming {
-    /// Method −1..−4; `None` otherwise.
-    pub fn new(code: i8) -> Option<Self> {
-        (-4..=-1).contains(&code).then_some(MechanicalLimitHoming { code, limit: None })
-    }
-
-    fn towards_positive(&self) -> bool {
-        matches!(self.code, -2 | -4)
-    }
-
-    fn with_index(&self) -> bool {
-        matches!(self.code, -1 | -2)
-    }
-}
-
-impl HomingMethod for MechanicalLimitHoming {
-    fn code(&self) -> i8 {
-        self.code
-    }
-
-    fn begin(&mut self, ctx: &HomingContext<'_>) -> MethodStep {
-        self.limit = None;
-        let v = ctx.config.switch_speed;
-        MethodStep::Move(if self.towards_positive() { v } else { -v })
-    }
-
-    fn update(&mut self, ctx: &HomingContext<'_>) -> MethodStep {
-        let away = if self.towards_positive() { -1.0 } else { 1.0 };
-        let slow = ctx.config.zero_speed * away;
-        match self.limit {
-            None => {
-                if let Some(e) =
-                    ctx.events.iter().find(|e| matches!(e.kind, EventKind::HardStop | EventKind::Stall))
-                {
-                    self.limit = Some(e.position);
-                    return MethodStep::Move(slow);
-                }
-                let v = ctx.config.switch_speed;
-                MethodStep::Move(if self.towards_positive() { v } else { -v })
-            }
-            Some(at) => {
-                if self.with_index() {
-                    if let Some(e) = ctx.events.iter().find(|e| e.kind == EventKind::Index) {
-                        return MethodStep::Found(e.position);
-                    }
-                } else if (ctx.position - at).abs() >= ctx.config.home_offset.abs() {
-                    return MethodStep::Found(ctx.position);
-                }
-                MethodStep::Move(slow)
-            }
-        }
-    }
-}
-
-/// EMCY FF01h "generic interpolated position mode error (PVT / PT
-/// error)": a 2072h status bit changed or a point was refused (§3.1.3,
-/// §9.2.3, §9.2.8); 2072h in bytes 3–4.
-pub const EMCY_IP_STATUS: u16 = 0xFF01;
+/// EMCY 9000h "command error" (§7.1.2: a set-point with controlword bit 5
+/// while 6086h = 3; Table 3.1.3).
+pub const EMCY_COMMAND_ERROR: u16 = 0x9000;
 /// EMCY 5443h "positive limit switch active" (§4.3.1, Table 3.1.3).
 pub const EMCY_LSP: u16 = 0x5443;
 /// EMCY 5442h "negative limit switch active" (§4.3.1, Table 3.1.3).
 pub const EMCY_LSN: u16 = 0x5442;
-/// Largest ip buffer length 2073h: "The maximum is 000Fh" (§9.4 step 13,
-/// §9.5 step 13).
-pub const IP_BUFFER_MAX: u16 = 15;
-/// 2073h default buffer length (§9.2.4).
-pub const IP_BUFFER_DEFAULT: u16 = 7;
-
-/// 2072h bits (Table 9.2.1).
-pub mod ip_status {
-    /// Buffer empty.
-    pub const EMPTY: u16 = 1 << 15;
-    /// Buffer low (points ≤ the 2074h low limit).
-    pub const LOW: u16 = 1 << 14;
-    /// Buffer full.
-    pub const FULL: u16 = 1 << 13;
-    /// Integrity counter error.
-    pub const INTEGRITY: u16 = 1 << 12;
-    /// PVT: quick stop after the buffer ran empty with a last velocity ≠ 0.
-    pub const PVT_QUICK_STOP: u16 = 1 << 11;
-    /// The status bits whose change sends EMCY FF01h (bits 0–6 are the
-    /// counter, 7–10 reserved).
-    pub const CHANGE_MASK: u16 = 0xF800;
-}
-
-/// One legacy interpolation point decoded from 60C1h:01 (X1) and 60C1h:02
-/// (X2) (§9.2.2.2, §9.2.2.3, Figures 9.2.2/9.2.3 as the examples pack them).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct LegacyPoint {
-    /// Position \[increments\] (PT: 32 bits; PVT: 24 bits, signed).
-    pub position: i32,
-    /// PVT end velocity \[increments/sample\] in 16.8 fixed point (24 bits,
-    /// signed); 0 for PT.
-    pub velocity_16_8: i32,
-    /// Segment time \[samples\] (PT: 16 bits; PVT: 9 bits).
-    pub time: u16,
-    /// Integrity counter (7 bits).
-    pub counter: u8,
-}
-
-impl LegacyPoint {
-    /// PT: X1 = position; X2 = time (bits 0–15), 0 (16–23), counter in
-    /// byte 3 bits 1–7 (§9.2.2.2 remarks; E26: X2 = 020003E8h = IC 1,
-    /// 1000 samples).
-    pub fn pt(x1: u32, x2: u32) -> Self {
-        LegacyPoint { position: x1 as i32, velocity_16_8: 0, time: x2 as u16, counter: (x2 >> 25) as u8 }
-    }
-
-    /// PVT: X1 = position bits 16–23 (byte 3) | velocity bits 0–7 (byte 2) |
-    /// position bits 0–15; X2 = counter (byte 3 bits 1–7) | time bit 8
-    /// (byte 3 bit 0) | time bits 0–7 (byte 2) | velocity bits 8–23
-    /// (§9.2.2.3; E27 P3: X1 = 00A80BA6h, X2 = 07860006h = 2982 counts,
-    /// 6.66 IU, 390 samples, IC 3).
-    pub fn pvt(x1: u32, x2: u32) -> Self {
-        let pos24 = ((x1 >> 24) << 16) | (x1 & 0xFFFF);
-        let vel24 = ((x2 & 0xFFFF) << 8) | ((x1 >> 16) & 0xFF);
-        let sext24 = |v: u32| ((v << 8) as i32) >> 8;
-        LegacyPoint {
-            position: sext24(pos24),
-            velocity_16_8: sext24(vel24),
-            time: ((x2 >> 16) & 0x1FF) as u16,
-            counter: (x2 >> 25) as u8,
-        }
-    }
-}
-
-/// The legacy (PT/PVT) interpolation state of the iPOS (§9.2).
-#[derive(Debug, Clone, Default)]
-struct Legacy {
-    /// The next integrity counter expected (2074h bits 0–6 set it).
-    counter: u8,
-    /// 2074h bit 14: integrity checking off.
-    unchecked: bool,
-    /// 2074h bit 12: absolute motion starts from the position demand
-    /// instead of 2079h.
-    from_demand: bool,
-    /// Buffer low limit (2074h bits 8–11 with bit 7).
-    low: u16,
-    /// Integrity counter error in force.
-    integrity_error: bool,
-    /// The PVT quick stop after an empty buffer happened.
-    quick_stopped: bool,
-    /// Where the drive's absolute positions stand relative to the
-    /// master's (absolute) and the last target (relative): set at the
-    /// first point after a buffer reset.
-    origin: Option<(f64, f64)>,
-    /// End velocity of the last point loaded \[16.8 IU\].
-    last_velocity: i32,
-    /// 2072h as last published (`None` before the first publication).
-    shown: Option<u16>,
-}
-
-/// Electronic gearing slave state (§11).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Gear {
-    /// Ratio in force: computed when 2013h:02 is written (§11.2.3).
-    ratio: f64,
-    /// Controlword bit 4 as last seen in gearing (the 0 → 1 edge starts).
-    bit4: bool,
-    /// Following the master (after the 0 → 1 edge of bit 4).
-    engaged: bool,
-    /// Master position the last increment was taken from.
-    master: i64,
-    /// Slave position reference \[increments, fractional\].
-    reference: f64,
-    /// In the gearing mode at the last step.
-    active: bool,
-}
-
-impl Default for Gear {
-    fn default() -> Self {
-        Gear { ratio: 1.0, bit4: false, engaged: false, master: 0, reference: 0.0, active: false }
-    }
-}
-
-/// 2012h "non-cyclic (full 32-bit range)" master resolution (§11.2.2).
-pub const MASTER_FULL_RANGE: u32 = 0x8000_0001;
-
-/// The master position increment between two readings of a master of
-/// `resolution` increments per revolution (2012h): the shorter way round a
-/// cyclic master, the 32-bit difference of a non-cyclic one (§11.1).
-pub fn master_increment(from: i64, to: i64, resolution: u32) -> i64 {
-    if resolution == MASTER_FULL_RANGE || resolution == 0 || resolution > i32::MAX as u32 {
-        return i64::from((to as i32).wrapping_sub(from as i32));
-    }
-    let r = i64::from(resolution);
-    let d = (to - from).rem_euclid(r);
-    if d > r / 2 { d - r } else { d }
-}
 
 /// The iPOS quirks around the CiA 402 drive.
 #[derive(Debug, Clone, Default)]
@@ -311,138 +124,6 @@ impl Ipos {
     /// next step.
     pub fn set_second_encoder(&mut self, count: i64) {
         self.second_encoder = Some(count);
-    }
-
-    /// 60C0h (iPOS codes) and 208Eh bit 8 → the drive's ip sub-mode:
-    /// 208Eh bit 8 = 1 with 60C0h = 0 is the CiA 402 linear interpolation,
-    /// bit 8 = 0 the legacy PT (0) and PVT (−1) (§9.2.1). PVT with bit 8 =
-    /// 1 is not described; it is run as PVT.
-    pub fn drive_sub_mode(ipos: i16, aux: u16) -> Option<i16> {
-        match (ipos, aux & AUX_LINEAR_IP != 0) {
-            (0, true) => Some(0),
-            (0, false) => Some(-1),
-            (-1, _) => Some(-2),
-            _ => None,
-        }
-    }
-
-    fn legacy_mode(od: &ObjectDictionary) -> Option<bool> {
-        let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
-        match Self::drive_sub_mode(od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux)? {
-            -1 => Some(false),
-            -2 => Some(true),
-            _ => None,
-        }
-    }
-
-    /// Tells the drive the sub-mode the dictionary's 60C0h/208Eh select.
-    fn sync_sub_mode(
-        cx: &mut Context<'_>,
-        od: &mut ObjectDictionary,
-        ipos: i16,
-        aux: u16,
-    ) -> Result<(), SdoAbort> {
-        let code = Self::drive_sub_mode(ipos, aux).ok_or(SdoAbort::INVALID_VALUE)?;
-        cx.drive.on_write(od, 0x60C0, 0, &code.to_le_bytes()).map(|_| ())
-    }
-
-    /// ip is active (mode 7, Operation enabled, controlword bit 4).
-    fn ip_active(cx: &Context<'_>) -> bool {
-        let v = cx.drive.view();
-        v.mode == 7 && v.state == State::OperationEnabled && v.controlword & 0x10 != 0
-    }
-
-    /// Clears the drive's ip buffer and restarts the point reference.
-    fn clear_buffer(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        let _ = cx.drive.on_write(od, 0x60C4, 6, &[0]);
-        let _ = cx.drive.on_write(od, 0x60C4, 6, &[1]);
-        self.legacy.origin = None;
-        self.legacy.quick_stopped = false;
-    }
-
-    /// 2072h from the buffer and the counter state; EMCY FF01h when a
-    /// status bit changed (or `force`: a refused point).
-    fn publish_ip_status(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, force: bool) {
-        let l = &self.legacy;
-        let n = self.ip.len() as u16;
-        let mut v = u16::from(l.counter & 0x7F);
-        if n == 0 {
-            v |= ip_status::EMPTY;
-        }
-        if n <= l.low {
-            v |= ip_status::LOW;
-        }
-        if n >= self.ip.size() as u16 {
-            v |= ip_status::FULL;
-        }
-        if l.integrity_error {
-            v |= ip_status::INTEGRITY;
-        }
-        if l.quick_stopped {
-            v |= ip_status::PVT_QUICK_STOP;
-        }
-        if let Ok(r) = od.find(0x2072, 0) {
-            od.set_le(r, &v.to_le_bytes());
-        }
-        let changed = self.legacy.shown.is_some_and(|s| (s ^ v) & ip_status::CHANGE_MASK != 0);
-        self.legacy.shown = Some(v);
-        if changed || force {
-            let [a, b] = v.to_le_bytes();
-            let reg = od.get_u32(0x1001, 0).unwrap_or(0) as u8;
-            cx.actions.push(Action::RawEmcy(EmcyFrame {
-                code: EMCY_IP_STATUS,
-                register: Some(reg),
-                bytes: [a, b, 0, 0, 0],
-            }));
-        }
-    }
-
-    /// A legacy point completed by its X2 write (§9.2.8): integrity
-    /// check, then the point goes into the drive's buffer in drive
-    /// positions.
-    fn load_point(
-        &mut self,
-        cx: &mut Context<'_>,
-        od: &mut ObjectDictionary,
-        pvt: bool,
-        x2: u32,
-    ) -> Result<(), SdoAbort> {
-        let x1 = od.get_u32(0x60C1, 1).unwrap_or(0);
-        let mut p = if pvt { LegacyPoint::pvt(x1, x2) } else { LegacyPoint::pt(x1, x2) };
-        let l = &mut self.legacy;
-        if !l.unchecked && p.counter != l.counter {
-            // The same number again: ignored with an EMCY; lower or more
-            // than one ahead: ignored, integrity counter error (§9.2.8).
-            if p.counter != l.counter.wrapping_sub(1) & 0x7F {
-                l.integrity_error = true;
-            }
-            self.publish_ip_status(cx, od, true);
-            return Ok(());
-        }
-        l.integrity_error = false;
-        l.counter = (p.counter + 1) & 0x7F;
-        // 207Ah: a fixed segment time replaces the point's (§9.2.7).
-        let fixed = od.get_u32(0x207A, 0).unwrap_or(0) as u16;
-        if fixed != 0 {
-            p.time = fixed;
-        }
-        let relative = cx.drive.view().controlword & 0x40 != 0;
-        let demand = cx.drive.demand_position();
-        let (offset, last) = *l.origin.get_or_insert_with(|| {
-            let initial = if l.from_demand { demand } else { od.get_i64(0x2079, 0).unwrap_or(0) as f64 };
-            (demand - initial, demand)
-        });
-        let target = if relative { last + f64::from(p.position) } else { f64::from(p.position) + offset };
-        l.origin = Some((offset, target));
-        l.last_velocity = p.velocity_16_8;
-        // The drive's record: time [ms] = samples × 1 ms, velocity in
-        // 16.16 IU, then the position commits it.
-        let time_ms = (f64::from(p.time) * SLOW_LOOP_S * 1000.0) as i64;
-        cx.drive.on_write(od, 0x60C1, 3, &time_ms.to_le_bytes())?;
-        cx.drive.on_write(od, 0x60C1, 2, &(i64::from(p.velocity_16_8) << 8).to_le_bytes())?;
-        cx.drive.on_write(od, 0x60C1, 1, &(target.round() as i64).to_le_bytes())?;
-        self.publish_ip_status(cx, od, false);
-        Ok(())
     }
 
     /// Per step: limit switch EMCYs (§4.3.1), the PVT stop on an empty
@@ -489,61 +170,11 @@ impl Ipos {
         self.publish_ip_status(cx, od, false);
     }
 
-    /// Gearing (§11.1): at each master position update the slave
-    /// reference moves by the master increment × the gear ratio; the drive
-    /// (csp stand-in) takes it at the next SYNC.
-    fn gear_update(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, master: i64) {
-        // 2017h shows the master position whatever the mode (§11.2.4).
-        if let Ok(r) = od.find(0x2017, 0) {
-            od.set_le(r, &(master as i32).to_le_bytes());
-        }
-        let res = od.get_u32(0x2012, 0).unwrap_or(MASTER_FULL_RANGE);
-        let d = master_increment(self.gear.master, master, res);
-        if let Ok(r) = od.find(0x2018, 0) {
-            od.set_le(r, &(d.clamp(-32768, 32767) as i16).to_le_bytes());
-        }
-        self.gear.master = master;
-        if self.gear.active && self.gear.engaged {
-            self.gear.reference += d as f64 * self.gear.ratio;
-            Self::gear_target(cx, od, self.gear.reference);
-        }
-    }
-
-    fn gear_target(cx: &mut Context<'_>, od: &mut ObjectDictionary, reference: f64) {
-        let t = reference.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
-        let _ = cx.drive.on_write(od, 0x607A, 0, &t.to_le_bytes());
-    }
-
-    /// Per step in mode −1: entry holds the position; the 0 → 1 edge of
-    /// controlword bit 4 engages (§11.1.1); statusword bit 10 is 0 while
-    /// not halted (Table 11.1.2).
-    fn gear_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        let view = cx.drive.view();
-        let active = od.get_i64(0x6061, 0) == Some(-1) && view.state == State::OperationEnabled;
-        let bit4 = view.controlword & 0x10 != 0;
-        if active && !self.gear.active {
-            // The stand-in holds where the axis is until engaged.
-            self.gear.engaged = false;
-            self.gear.bit4 = bit4;
-            self.gear.reference = cx.drive.demand_position();
-            Self::gear_target(cx, od, self.gear.reference);
-        }
-        self.gear.active = active;
-        if !active {
-            return;
-        }
-        if bit4 && !self.gear.bit4 && !self.gear.engaged {
-            // "The slave executes a relative move, which starts from its
-            // actual position" (§11.1): from the reference it holds.
-            self.gear.engaged = true;
-        }
-        self.gear.bit4 = bit4;
-        if view.controlword & 0x100 == 0
-            && let Ok(r) = od.find(0x6041, 0)
-        {
-            let sw = od.get_u32(0x6041, 0).unwrap_or(0) as u16 & !(1 << 10) & !(1 << 12);
-            od.set_le(r, &sw.to_le_bytes());
-        }
+    /// 2023h jerk time (ms, §7.2.5: the S-curve's time to reach the
+    /// profile acceleration) → the drive's jerk = 6083h / t.
+    fn sync_jerk(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let ms = od.get_u32(0x2023, 0).unwrap_or(0);
+        cx.drive.set_profile_jerk(od, ProfileJerk::Time(f64::from(ms) * 1e-3));
     }
 
     /// kₜ × 6075h: the torque the drive's ‰ refer to (§8.2.1: 6071h, 6072h,
@@ -557,10 +188,6 @@ impl Ipos {
         let _ = cx.drive.on_write(od, 0x6076, 0, &mnm.to_le_bytes());
     }
 }
-
-/// 208Eh bit 8: 1 = CiA 402 linear interpolation, 0 = legacy PT/PVT
-/// (§4.9.11, §9.2.1; default 0100h).
-pub const AUX_LINEAR_IP: u16 = 1 << 8;
 
 impl Behaviour for Ipos {
     fn profile(&self) -> Profile {
@@ -625,6 +252,16 @@ impl Behaviour for Ipos {
         // outputs change when the mask is written.
         cfg.io.output_mask = 0;
         cfg.io.keep_unmasked_command = true;
+        // §16: touch probe 1's own input is LSP, touch probe 2's LSN.
+        cfg.io.probe_inputs = [ProbeInput::PositiveLimit, ProbeInput::NegativeLimit];
+        // §7.2.6: 6086h = 0 trapezoidal or 3 jerk-limited (S-curve, jerk
+        // time 2023h); 1 and 2 are reserved. §7.1.2: with the S-curve a
+        // set-point with controlword bit 5 is a command error (EMCY 9000h).
+        cfg.motion_profile_types = profile_type::LINEAR | profile_type::JERK_LIMITED;
+        cfg.scurve_forbids_change_immediately = Some(EMCY_COMMAND_ERROR);
+        // §6 / E18: "6064h = 607Ch" at the end of a homing: the drive
+        // moves back to the home position after braking.
+        cfg.homing_return_to_home = true;
         cfg.remote = true;
     }
 
@@ -684,7 +321,7 @@ impl Behaviour for Ipos {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x6076, 0x60C0,
-            0x60C1, 0x2073, 0x2074, 0x208E, 0x201E, 0x2013,
+            0x60C1, 0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8,
         ]
     }
 
@@ -773,12 +410,6 @@ impl Behaviour for Ipos {
             }
             _ => {}
         }
-        if index == 0x6086 && data.first() == Some(&3) {
-            // §7.3.3/§7.3.4 (E21/E22): 6086h = 3 selects the jerk-limited
-            // S-curve (jerk time 2023h). Accepted and stored; the drive
-            // keeps its own ramp shape (S-curve not emulated).
-            return Ok(Verdict::Store);
-        }
         if matches!(index, 0x1600..=0x1603 | 0x1A00..=0x1A03) && sub == 0 {
             let n = data.first().copied().unwrap_or(0);
             if n > 0 && mapped_bits(od, index, n) > MAX_PDO_BITS {
@@ -798,6 +429,9 @@ impl Behaviour for Ipos {
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
         match (index, sub) {
             (0x6075, 0) => Self::sync_torque_reference(cx, od),
+            (0x2023, 0) => Self::sync_jerk(cx, od),
+            // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
+            (0x60B8, 0) => cx.drive.set_limit_switches(od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 == 0),
             (0x2013, 2) => {
                 // §11.2.3: the ratio is computed when sub 2 is written; a
                 // denominator 0 leaves the ratio as it was.
@@ -832,6 +466,7 @@ impl Behaviour for Ipos {
                 let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
                 let _ = Self::sync_sub_mode(cx, od, od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux);
                 Self::sync_torque_reference(cx, od);
+                Self::sync_jerk(cx, od);
                 if self.gear.active {
                     Self::gear_target(cx, od, self.gear.reference);
                 }
@@ -847,6 +482,7 @@ impl Behaviour for Ipos {
             // reference of the power-on 6075h.
             let _ = cx.drive.on_write(od, 0x60C4, 2, &u64::from(IP_BUFFER_DEFAULT).to_le_bytes());
             Self::sync_torque_reference(cx, od);
+            Self::sync_jerk(cx, od);
         }
         // §11.2.6: 201Dh = 3, the master is the digital input (here the
         // second encoder; pulse & direction is not emulated).
@@ -859,6 +495,18 @@ impl Behaviour for Ipos {
         }
         self.gear_step(cx, od);
         self.watch(cx, od);
+        // §7.1.2 / Table 4.4.2: a command error sets 2000h bit 14, and the
+        // S-curve update refused 2002h bit 9, until the fault reset.
+        let err = cx.drive.command_error().is_some();
+        for (index, bit) in [(0x2000u16, 14u16), (0x2002, 9)] {
+            let v = od.get_u32(index, 0).unwrap_or(0) as u16;
+            let n = if err { v | 1 << bit } else { v & !(1 << bit) };
+            if n != v
+                && let Ok(r) = od.find(index, 0)
+            {
+                od.set_le(r, &n.to_le_bytes());
+            }
+        }
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
@@ -873,7 +521,8 @@ impl Behaviour for Ipos {
 #[cfg(test)]
 mod facts_tests {
     use super::*;
-    use drivebus_cia402::homing::{HomingConfig, HomingEvent};
+    use drivebus_cia402::homing::{HomingConfig, HomingContext, HomingEvent, MethodStep};
+    use drivebus_cia402::model::EventKind;
 
     #[test]
     fn mechanical_limit_minus_3_travels_the_offset() {

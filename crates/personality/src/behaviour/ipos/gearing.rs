@@ -1,0 +1,101 @@
+//! iPOS electronic gearing (§11): the slave follows the master position
+//! × the gear ratio on the drive's csp.
+
+use super::*;
+
+/// Electronic gearing slave state (§11).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Gear {
+    /// Ratio in force: computed when 2013h:02 is written (§11.2.3).
+    pub(super) ratio: f64,
+    /// Controlword bit 4 as last seen in gearing (the 0 → 1 edge starts).
+    bit4: bool,
+    /// Following the master (after the 0 → 1 edge of bit 4).
+    pub(super) engaged: bool,
+    /// Master position the last increment was taken from.
+    pub(super) master: i64,
+    /// Slave position reference \[increments, fractional\].
+    pub(super) reference: f64,
+    /// In the gearing mode at the last step.
+    pub(super) active: bool,
+}
+
+impl Default for Gear {
+    fn default() -> Self {
+        Gear { ratio: 1.0, bit4: false, engaged: false, master: 0, reference: 0.0, active: false }
+    }
+}
+
+/// 2012h "non-cyclic (full 32-bit range)" master resolution (§11.2.2).
+pub const MASTER_FULL_RANGE: u32 = 0x8000_0001;
+
+/// The master position increment between two readings of a master of
+/// `resolution` increments per revolution (2012h): the shorter way round a
+/// cyclic master, the 32-bit difference of a non-cyclic one (§11.1).
+pub fn master_increment(from: i64, to: i64, resolution: u32) -> i64 {
+    if resolution == MASTER_FULL_RANGE || resolution == 0 || resolution > i32::MAX as u32 {
+        return i64::from((to as i32).wrapping_sub(from as i32));
+    }
+    let r = i64::from(resolution);
+    let d = (to - from).rem_euclid(r);
+    if d > r / 2 { d - r } else { d }
+}
+
+impl Ipos {
+    /// Gearing (§11.1): at each master position update the slave
+    /// reference moves by the master increment × the gear ratio; the drive
+    /// (csp stand-in) takes it at the next SYNC.
+    pub(super) fn gear_update(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, master: i64) {
+        // 2017h shows the master position whatever the mode (§11.2.4).
+        if let Ok(r) = od.find(0x2017, 0) {
+            od.set_le(r, &(master as i32).to_le_bytes());
+        }
+        let res = od.get_u32(0x2012, 0).unwrap_or(MASTER_FULL_RANGE);
+        let d = master_increment(self.gear.master, master, res);
+        if let Ok(r) = od.find(0x2018, 0) {
+            od.set_le(r, &(d.clamp(-32768, 32767) as i16).to_le_bytes());
+        }
+        self.gear.master = master;
+        if self.gear.active && self.gear.engaged {
+            self.gear.reference += d as f64 * self.gear.ratio;
+            Self::gear_target(cx, od, self.gear.reference);
+        }
+    }
+
+    pub(super) fn gear_target(cx: &mut Context<'_>, od: &mut ObjectDictionary, reference: f64) {
+        let t = reference.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+        let _ = cx.drive.on_write(od, 0x607A, 0, &t.to_le_bytes());
+    }
+
+    /// Per step in mode −1: entry holds the position; the 0 → 1 edge of
+    /// controlword bit 4 engages (§11.1.1); statusword bit 10 is 0 while
+    /// not halted (Table 11.1.2).
+    pub(super) fn gear_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let view = cx.drive.view();
+        let active = od.get_i64(0x6061, 0) == Some(-1) && view.state == State::OperationEnabled;
+        let bit4 = view.controlword & 0x10 != 0;
+        if active && !self.gear.active {
+            // The stand-in holds where the axis is until engaged.
+            self.gear.engaged = false;
+            self.gear.bit4 = bit4;
+            self.gear.reference = cx.drive.demand_position();
+            Self::gear_target(cx, od, self.gear.reference);
+        }
+        self.gear.active = active;
+        if !active {
+            return;
+        }
+        if bit4 && !self.gear.bit4 && !self.gear.engaged {
+            // "The slave executes a relative move, which starts from its
+            // actual position" (§11.1): from the reference it holds.
+            self.gear.engaged = true;
+        }
+        self.gear.bit4 = bit4;
+        if view.controlword & 0x100 == 0
+            && let Ok(r) = od.find(0x6041, 0)
+        {
+            let sw = od.get_u32(0x6041, 0).unwrap_or(0) as u16 & !(1 << 10) & !(1 << 12);
+            od.set_le(r, &sw.to_le_bytes());
+        }
+    }
+}
