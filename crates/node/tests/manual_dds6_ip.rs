@@ -8,8 +8,7 @@
 mod common;
 mod manual;
 
-#[path = "../../personality/tests/replay_rig/trace.rs"]
-mod shared_trace;
+use common::trace as shared_trace;
 use drivebus_node::Node;
 use drivebus_od::Value;
 use manual::*;

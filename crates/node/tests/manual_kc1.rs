@@ -18,8 +18,7 @@
 
 mod common;
 mod manual;
-#[path = "../../personality/tests/replay_rig/trace.rs"]
-mod trace;
+use common::trace;
 
 use common::*;
 use drivebus_node::{Identity, Node};

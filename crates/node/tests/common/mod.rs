@@ -3,26 +3,14 @@
 #![allow(dead_code)]
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
-use drivebus_can::{CanId, Duration, Frame, Instant};
+use drivebus_can::{Duration, Frame, Instant};
 use drivebus_node::{Node, NodeConfig, SimNode};
 use drivebus_od::NoHooks;
 
-/// `ID#HEX` or `ID#R<len>` (3 hex digits: standard, 8: extended).
-pub fn fr(s: &str) -> Frame {
-    let (id, data) = s.split_once('#').expect("ID#DATA");
-    let cid = if id.len() == 8 {
-        CanId::Extended(u32::from_str_radix(id, 16).unwrap())
-    } else {
-        CanId::Standard(u16::from_str_radix(id, 16).unwrap())
-    };
-    if let Some(n) = data.strip_prefix('R') {
-        return Frame::try_remote(cid, n.parse().unwrap_or(0)).unwrap();
-    }
-    let data: String = data.chars().filter(|c| !c.is_whitespace() && *c != '.').collect();
-    let bytes: Vec<u8> =
-        (0..data.len()).step_by(2).map(|i| u8::from_str_radix(&data[i..i + 2], 16).unwrap()).collect();
-    Frame::try_new(cid, &bytes).unwrap()
-}
+/// The candump-style frame parser shared with the manual traces.
+#[path = "../../../personality/tests/replay_rig/trace.rs"]
+pub mod trace;
+pub use trace::fr;
 
 /// Frames from a list of strings.
 pub fn frs(list: &[&str]) -> Vec<Frame> {

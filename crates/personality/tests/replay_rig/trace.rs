@@ -1,6 +1,8 @@
 //! The printed manual traces of `crates/personality/traces/*.txt`, shared by
-//! the CiA 301 replays (`crates/node/tests/manual_*.rs`, included there with
-//! `#[path]`) and the personality replays (`crates/personality/tests/`).
+//! the CiA 301 replays (`crates/node/tests/manual_*.rs`, through
+//! `common::trace`, included there with `#[path]`) and the personality
+//! replays (`crates/personality/tests/`); with them the candump-style frame
+//! parser [`fr`] every rig uses.
 //!
 //! One frame a line: `KEY|>ID#DATA` (to the drive) or `KEY|<ID#DATA` (from
 //! it); `#` starts a comment line. KEY is the frame's time in ms (DDS6) or
@@ -27,7 +29,8 @@ pub fn fr(s: &str) -> Frame {
     if let Some(n) = data.strip_prefix('R') {
         return Frame::try_remote(cid, n.parse().unwrap_or(0)).unwrap();
     }
-    let data: String = data.chars().filter(|c| !c.is_whitespace()).collect();
+    // Spaces and dots (`05.20.00`) only separate bytes.
+    let data: String = data.chars().filter(|c| !c.is_whitespace() && *c != '.').collect();
     let bytes: Vec<u8> =
         (0..data.len()).step_by(2).map(|i| u8::from_str_radix(&data[i..i + 2], 16).unwrap()).collect();
     Frame::try_new(cid, &bytes).unwrap()
