@@ -16,34 +16,18 @@ mod manual;
 use common::trace;
 
 use common::*;
-use drivebus_node::{Identity, Node};
+use drivebus_node::Node;
 use drivebus_od::Value;
-use drivebus_pdo::PdoConfig;
+use manual::kollmorgen::*;
 use manual::*;
-use trace::{akd, every_2nd_and_3rd};
+use trace::akd;
 
 /// An AKD (seed001 inventory): device type 0002_0192h (§6.2.1.1), vendor-ID
 /// 6Ah, product code / device name 4 ASCII characters, revision 0014_0000h
 /// (§6.2.1.18 example), byte-granular PDOs with 8 entries and the default
 /// mappings of §6.3.1.3/§6.3.2.3, no block SDO.
 fn node_id(id: u8) -> Node {
-    let ident = Identity {
-        vendor_id: 0x6A,
-        product_code: u32::from_le_bytes(*b"M006"),
-        revision: 0x0014_0000,
-        serial: 1,
-    };
-    let mut cfg = drive_config(id, ident, "M006");
-    cfg.pdo = PdoConfig::kollmorgen(id);
-    // The drive has no RTR on TPDOs but acknowledges TPDO COB-IDs with bit 30
-    // clear (bit ignored): `kollmorgen()` sets `rtr_supported = false` and
-    // `ignore_rtr_bit = true`, pinned by `*_rtr_unsupported_*` below.
-    cfg.sdo.block_transfer = false;
-    cfg.emcy_history = 10;
-    let mut n = Node::new(cfg);
-    kollmorgen_objects(&mut n);
-    kollmorgen_default_mappings(&mut n, 0x60FF_0020);
-    n
+    kollmorgen_node(id, None)
 }
 
 fn node() -> Node {
@@ -70,12 +54,8 @@ fn akd_s1_free_mapping_of_tpdo1() {
 /// §7.2.1.2 (section 3): state machine by SDO.
 #[test]
 fn akd_s3_state_machine_by_sdo() {
-    let t = akd(3);
     let mut r = rig(node());
-    set(&mut r, 0x6041, 0, Value::U16(0x0240));
-    replay(&mut r, &t.steps(1, 6));
-    set(&mut r, 0x6041, 0, Value::U16(0x0233));
-    replay(&mut r, &t.steps(7, 8));
+    state_machine_by_sdo(&mut r, &akd(3));
 }
 
 /// §7.2.1.3 (section 4): jog by SDO.
@@ -173,14 +153,8 @@ fn akd_s9_profile_position() {
 /// bytes of each printed reply (typos corrected in the trace).
 #[test]
 fn akd_s10_ascii_channel() {
-    let t = akd(10);
     let mut r = rig(node_id(1));
-    replay(&mut r, &t.steps(1, 6));
-    for (req, resp) in t.steps(7, 16) {
-        let chunk = String::from_utf8(fr(resp[0]).data()[4..].to_vec()).unwrap();
-        set(&mut r, 0x2026, 2, Value::Str(chunk));
-        r.exchange(req, resp);
-    }
+    ascii_channel(&mut r, &akd(10));
 }
 
 /// §7.2.1.10 (section 11): TPDO1 (6064h) every 2nd SYNC, TPDO2 (6041h +
@@ -191,19 +165,9 @@ fn akd_s11_sync_every_nth() {
     let mut r = rig(node());
     replay(&mut r, &t.steps(5948, 5986));
     // TPDO3/4 are still valid and event-driven: they go out when the node
-    // becomes operational (no NMT start is printed; PDOs need it).
-    set(&mut r, 0x6064, 0, Value::I32(0x1234));
-    set(&mut r, 0x6041, 0, Value::U16(0x0237));
-    set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
-    r.send("000#01 03");
-    r.take();
-    // Line 5991 (SYNC) and the pattern of its comment, on 183h/283h.
-    let sync = t.frame(5991);
-    let tpdo1 = "183#34 12 00 00";
-    let tpdo2 = "283#37 02 00 00 03 44";
-    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
-        r.exchange(sync, &tpdos);
-    }
+    // becomes operational (no NMT start is printed; PDOs need it). Line 5991
+    // (SYNC) and the pattern of its comment, on 183h/283h.
+    sync_every_nth(&mut r, &t, 5991);
 }
 
 /// Sections 11b and 13k: EMCY frames of node 1. The registers printed (08h,
@@ -214,12 +178,7 @@ fn akd_s11_sync_every_nth() {
 fn akd_s11_s13_emcy_frames() {
     let (t11, t13) = (akd(11), akd(13));
     let mut r = rig(node_id(1));
-    raw_emcy(&mut r, 0x4310, 0x08, [0x01, 0, 0, 0, 0]);
-    assert_eq!(r.take(), frs(&[t13.frame(6190)]));
-    raw_emcy(&mut r, 0x0000, 0x08, [0; 5]);
-    assert_eq!(r.take(), frs(&[t13.frame(6191)]));
-    raw_emcy(&mut r, 0x0000, 0x88, [0; 5]);
-    assert_eq!(r.take(), frs(&[t11.frame(6000)]));
+    emcy_frames(&mut r, t13.frame(6190), t13.frame(6191), t11.frame(6000));
 }
 
 /// §7.2.2.1 (section 13), axis 1 (node 1): RPDO2 → 60C1h:1 + dummy 2100h,
@@ -231,21 +190,13 @@ fn akd_s13_ip_axis1() {
     replay(&mut r, &t.steps_on(6038, 6133, "601"));
     // 13h: NMT start of node 1. The event-driven TPDO1 goes out on entering
     // operational (as printed in 9f); 13h prints no frame: not asserted.
-    r.send(t.frame(6146));
-    r.take();
     // 13i: controlwords by RPDO1 (the TPDO1 state answers are issue 3).
-    for (cw, _) in t.steps(6151, 6158) {
-        r.exchange(cw, &[]);
-    }
-    assert_eq!(r.node().od().get_value(0x6040, 0), Some(Value::U16(0x001F)));
+    ip_axis1_enable(&mut r, &t, 6146, (6151, 6158));
     // 13j: the set-points are applied at the SYNC (synchronous RPDO2).
     replay(&mut r, &t.steps(6167, 6167));
     assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(0)));
-    set(&mut r, 0x6063, 0, Value::I32(0x123));
-    set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
     // Line 6181 (printed on 181h, INCONSISTENT) is on 281h in the trace.
-    r.exchange(t.frame(6177), &[t.frame(6181)]);
-    assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(500)));
+    ip_tpdo2_at_sync(&mut r, &t, 6177, 6181, 0x123, 500);
 }
 
 /// §7.2.2.1, axis 2 (node 2): RPDO2 on 301h with the set-point in bytes 4–7.
@@ -273,11 +224,8 @@ fn akd_s13_ip_axis2() {
     r.send("000#01 02");
     r.take();
     replay(&mut r, &t.steps(6167, 6167));
-    set(&mut r, 0x6063, 0, Value::I32(0x2A5));
-    set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
     // Line 6182 (printed on 182h, INCONSISTENT) is on 282h in the trace.
-    r.exchange(t.frame(6177), &[t.frame(6182)]);
-    assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(1000)));
+    ip_tpdo2_at_sync(&mut r, &t, 6177, 6182, 0x2A5, 1000);
 }
 
 /// §7.2.1.5 lines 5585–5596 on an AKD configured as documented, without RTR

@@ -21,37 +21,18 @@ mod manual;
 use common::trace;
 
 use common::*;
-use drivebus_node::{Identity, Node};
+use drivebus_node::Node;
 use drivebus_od::Value;
-use drivebus_pdo::PdoConfig;
+use manual::kollmorgen::*;
 use manual::*;
-use trace::{every_2nd_and_3rd, kc1};
+use trace::kc1;
 
 /// A KC1 (seed000 inventory): device type 0002_0192h (§7.2.1.1), vendor-ID
 /// 6Ah (§7.2.1.17), product code / device name as 4 ASCII characters
 /// ("M006", §7.2.1.7/§7.2.1.17), 4+4 PDOs with byte granularity and 8
 /// entries (§7.3), no block SDO, a 10-deep error history (1003h).
 fn node_id(id: u8) -> Node {
-    let ident = Identity {
-        vendor_id: 0x6A,
-        product_code: u32::from_le_bytes(*b"M006"),
-        revision: 0x0014_0000,
-        serial: 1,
-    };
-    let mut cfg = drive_config(id, ident, "M006");
-    cfg.software_version = Some("1.9".into());
-    cfg.pdo = PdoConfig::kollmorgen(id);
-    // The drive has no RTR on TPDOs but acknowledges TPDO COB-IDs with bit 30
-    // clear (bit ignored): `kollmorgen()` sets `rtr_supported = false` and
-    // `ignore_rtr_bit = true`, pinned by `*_rtr_unsupported_*` below.
-    cfg.sdo.block_transfer = false;
-    cfg.emcy_history = 10;
-    let mut n = Node::new(cfg);
-    // Application objects the examples read, write or map (seed000 tsv).
-    kollmorgen_objects(&mut n);
-    // Default mappings, all PDOs valid, type 255 (§7.3.1.3, §7.3.2.3).
-    kollmorgen_default_mappings(&mut n, 0x60FF_0020);
-    n
+    kollmorgen_node(id, Some("1.9"))
 }
 
 /// Node 3, the id of most chapter 8.2.1 examples.
@@ -81,12 +62,8 @@ fn kc1_ex01_free_mapping_of_tpdo1() {
 #[test]
 fn kc1_ex03_status_machine_by_sdo() {
     let mut r = rig(node());
-    set(&mut r, 0x6041, 0, Value::U16(0x0240));
-    let t = kc1(3);
-    replay(&mut r, &t.steps(1, 6));
     // 0x0233 is the 402 state machine's answer (issue 3): set as printed.
-    set(&mut r, 0x6041, 0, Value::U16(0x0233));
-    replay(&mut r, &t.steps(7, 8));
+    state_machine_by_sdo(&mut r, &kc1(3));
 }
 
 /// Example 4, §8.2.1.3: jog (profile velocity) by SDO — every download confirmed.
@@ -218,14 +195,8 @@ fn kc1_ex09_profile_position_pdo_configuration() {
 /// ">No faults active\n\r\n").
 #[test]
 fn kc1_ex10_ascii_channel() {
-    let t = kc1(10);
     let mut r = rig(node_id(1));
-    replay(&mut r, &t.steps(1, 6));
-    for (req, resp) in t.steps(7, 16) {
-        let chunk: Vec<u8> = fr(resp[0]).data()[4..].to_vec();
-        set(&mut r, 0x2026, 2, Value::Str(String::from_utf8(chunk).unwrap()));
-        r.exchange(req, resp);
-    }
+    ascii_channel(&mut r, &kc1(10));
 }
 
 /// Example 11, §8.2.1.10: RPDO2 → 607Ah + 6081h, TPDO1 → 6064h every 2nd
@@ -245,19 +216,9 @@ fn kc1_ex11_sync_every_nth() {
     unprinted(&mut r, 3, 0x1801, 1, 0x283);
     // The example sends SYNCs without showing NMT start; PDOs need operational.
     // The still valid, event-driven TPDO3/4 go out on entering operational
-    // (as TPDO1 does in example 9): not printed, not asserted.
-    set(&mut r, 0x6064, 0, Value::I32(0x1234));
-    set(&mut r, 0x6041, 0, Value::U16(0x0237));
-    set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
-    r.send("000#01 03");
-    r.take();
-    // Frame 27 (SYNC) and the pattern its comment describes, on 183h/283h.
-    let sync = t.frame(27);
-    let tpdo1 = "183#34 12 00 00";
-    let tpdo2 = "283#37 02 00 00 03 44";
-    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
-        r.exchange(sync, &tpdos);
-    }
+    // (as TPDO1 does in example 9): not printed, not asserted. Frame 27
+    // (SYNC) and the pattern its comment describes, on 183h/283h.
+    sync_every_nth(&mut r, &t, 27);
 }
 
 /// Examples 11 and 12: the EMCY frames of node 1. Their error register has
@@ -268,15 +229,11 @@ fn kc1_ex11_sync_every_nth() {
 fn kc1_ex12_emcy_frames() {
     let (t11, t12) = (kc1(11), kc1(12));
     let mut r = rig(node_id(1));
-    // §8.2.2.1 prints 8 bytes: code 4310h, register 08h, category 01h.
-    raw_emcy(&mut r, 0x4310, 0x08, [0x01, 0, 0, 0, 0]);
-    assert_eq!(r.take(), frs(&[t12.frame(60)]));
-    raw_emcy(&mut r, 0x0000, 0x08, [0; 5]);
-    assert_eq!(r.take(), frs(&[t12.frame(61)]));
-    // §8.2.1.10 prints the same frames with 7 bytes (category column lost):
-    // read as the 8-byte layout of §6.4.4.2, register 88h in the reset frame.
-    raw_emcy(&mut r, 0x0000, 0x88, [0; 5]);
-    assert_eq!(r.take(), frs(&[t11.frame(29)]));
+    // §8.2.2.1 prints 8 bytes: code 4310h, register 08h, category 01h
+    // (frames 60, 61). §8.2.1.10 prints the same frames with 7 bytes
+    // (category column lost): read as the 8-byte layout of §6.4.4.2,
+    // register 88h in the reset frame (frame 29).
+    emcy_frames(&mut r, t12.frame(60), t12.frame(61), t11.frame(29));
 }
 
 /// Example 12, §8.2.2.1, axis 1 (node 1): RPDO2 → 60C1h:1 + dummy 2100h,
@@ -294,22 +251,14 @@ fn kc1_ex12_ip_two_axes_axis1() {
     unprinted(&mut r, 1, 0x1801, 1, 0x281);
     // Frame 47, NMT start. The event-driven TPDO1 (statusword) goes out on
     // entering operational, as in example 9; not printed here, not asserted.
-    r.send(t.frame(47));
-    r.take();
     // Frames 48–55: controlwords by RPDO1; the TPDO1 state answers are the
     // 402 state machine's (issue 3).
-    for (cw, _) in t.steps(48, 55) {
-        r.exchange(cw, &[]);
-    }
-    assert_eq!(r.node().od().get_value(0x6040, 0), Some(Value::U16(0x001F)));
+    ip_axis1_enable(&mut r, &t, 47, (48, 55));
     replay(&mut r, &t.steps(56, 56));
-    set(&mut r, 0x6063, 0, Value::I32(0x123));
-    set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
     // RPDO2 is synchronous: applied at the SYNC. Frame 58 (TPDO2 printed on
     // 181h, INCONSISTENT) is on 281h in the trace.
     assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(0)));
-    r.exchange(t.frame(57), &[t.frame(58)]);
-    assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(500)));
+    ip_tpdo2_at_sync(&mut r, &t, 57, 58, 0x123, 500);
 }
 
 /// Example 12, axis 2 (node 2): the same RPDO2 COB-ID 301h as axis 1, the
@@ -337,11 +286,8 @@ fn kc1_ex12_ip_two_axes_axis2() {
     r.send("000#01 02");
     r.take();
     replay(&mut r, &t.steps(56, 56));
-    set(&mut r, 0x6063, 0, Value::I32(0x2A5));
-    set(&mut r, 0x1002, 0, Value::U32(0x4403_0000));
     // Frame 59 (printed on 182h, INCONSISTENT) is on 282h in the trace.
-    r.exchange(t.frame(57), &[t.frame(59)]);
-    assert_eq!(r.node().od().get_value(0x60C1, 1), Some(Value::I32(1000)));
+    ip_tpdo2_at_sync(&mut r, &t, 57, 59, 0x2A5, 1000);
 }
 
 /// Example 13, §8.2.2.2: PVT set-up of node 1. The manual prints requests

@@ -18,23 +18,18 @@ mod replay_rig;
 use drivebus_node::MemoryStorage;
 use drivebus_od::Value;
 use drivebus_personality::{Profile, build_on_machine};
-use replay_rig::trace::{akd as trace, every_2nd_and_3rd};
+use replay_rig::kollmorgen::*;
+use replay_rig::trace::akd as trace;
 use replay_rig::*;
 
 /// An AKD as node `id`, booted: the only power-on frame is the boot-up
 /// message (§7.2.1.7: `703 00`).
 fn akd(id: u8) -> Rig {
-    let (r, boot) = Rig::new(Profile::Akd, id);
-    assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]), "boot-up");
-    r
+    booted(Profile::Akd, id)
 }
 
 fn node() -> Rig {
     akd(3)
-}
-
-fn value(r: &Rig, index: u16, sub: u8) -> Option<Value> {
-    r.node().od().get_value(index, sub)
 }
 
 /// §0: the store / restore signatures of §6.2.1.12/13 as SDO frames (derived
@@ -57,11 +52,8 @@ fn akd_s1_free_mapping_of_tpdo1() {
 /// §7.2.1.2 (section 3): state machine by SDO.
 #[test]
 fn akd_s3_state_machine_by_sdo() {
-    let t = trace(3);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 6));
-    r.run_ms(1);
-    replay(&mut r, &t.steps(7, 8));
+    state_machine_by_sdo(&mut r, &trace(3));
 }
 
 /// §7.2.1.3 (section 4): jog by SDO.
@@ -69,13 +61,8 @@ fn akd_s3_state_machine_by_sdo() {
 fn akd_s4_jog_mode_by_sdo() {
     let t = trace(4);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 12));
-    r.run_ms(500);
-    let v = r.velocity();
-    assert!((v - 0x4100).abs() < 0x4100 / 20, "jog velocity {v}");
-    replay(&mut r, &t.steps(13, 14));
-    r.run_ms(500);
-    assert_eq!(r.velocity(), 0, "halted");
+    jog_by_sdo_start(&mut r, &t);
+    jog_by_sdo_halt(&mut r, &t);
 }
 
 /// §7.2.1.4 (section 5): torque by SDO.
@@ -83,9 +70,7 @@ fn akd_s4_jog_mode_by_sdo() {
 fn akd_s5_torque_mode_by_sdo() {
     let t = trace(5);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 12));
-    r.run_ms(20);
-    assert!(r.velocity() > 0, "torque accelerates the axis");
+    torque_by_sdo_start(&mut r, &t);
     replay(&mut r, &t.steps(13, 14));
 }
 
@@ -106,16 +91,8 @@ fn akd_s6_jog_mode_by_pdo() {
     // TPDO1 at the SYNC, in form: the printed values are the manual's running
     // axis; here it runs 1 s first (velocity at the set-point, position ≈ 1 s
     // of it).
-    r.run_ms(1000);
-    r.take();
-    r.send(t.frame(5622));
-    let f = r.take();
-    assert_form(&f[0], t.line(5623));
-    let d = f[0].data();
-    let pos = i32::from_le_bytes([d[0], d[1], d[2], d[3]]);
-    let vel = i32::from_le_bytes([d[4], d[5], d[6], d[7]]);
-    assert!((vel - 0x4000).abs() < 0x4000 / 20, "velocity {vel}");
-    assert!(pos > 0x4000 * 8 / 10 && pos < 0x4000, "position {pos}");
+    let f = after_sync(&mut r, 1000, t.frame(5622));
+    assert_jog_tpdo1(&f[0], t.line(5623));
     replay(&mut r, &t.steps(5624, 5625));
 }
 
@@ -127,13 +104,8 @@ fn akd_s7_torque_mode_by_pdo() {
     replay(&mut r, &t.steps(5633, 5679));
     assert_eq!(value(&r, 0x6071, 0), Some(Value::I16(530)));
     // TPDO1 at the SYNC, in form: 6077h follows the 530 ‰ demand (printed 537).
-    r.run_ms(60);
-    r.take();
-    r.send(t.frame(5680));
-    let f = r.take();
-    assert_form(&f[0], t.line(5681));
-    let tq = i16::from_le_bytes([f[0].data()[0], f[0].data()[1]]);
-    assert!((i32::from(tq) - 530).abs() < 530 / 20, "torque actual {tq}");
+    let f = after_sync(&mut r, 60, t.frame(5680));
+    assert_torque_tpdo1(&f[0], t.line(5681), 530);
     replay(&mut r, &t.steps(5682, 5683));
 }
 
@@ -155,9 +127,7 @@ fn home_switch_machine(id: u8) -> Rig {
         c.params.axis.home_switch = Some((-20.0, -5.0));
     })
     .unwrap();
-    let (r, boot) = Rig::with(pn);
-    assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]));
-    r
+    booted_with(pn, id)
 }
 
 /// §7.2.1.8 (section 9): profile position, every frame in order — PDO
@@ -169,54 +139,28 @@ fn home_switch_machine(id: u8) -> Rig {
 fn akd_s9_profile_position() {
     let t = trace(9);
     let mut r = home_switch_machine(3);
-    replay(&mut r, &t.steps(5756, 5835));
-    // 9f: NMT start; TPDO1 (event-driven) sends the statusword at once.
-    replay(&mut r, &t.steps(5840, 5841));
-    // Lines 5847–5852, incl. the 0609 0031 abort of 6099h:1.
-    replay(&mut r, &t.steps(5847, 5852));
-    // Lines 5853–5861: the state machine, each step answered by TPDO1.
-    for (req, resp) in t.steps(5853, 5861) {
-        r.exchange_ms(req, 1, resp);
-    }
+    // Lines 5756–5835: PDO set-up; 9f (5840/5841): NMT start, TPDO1
+    // (event-driven) sends the statusword at once; lines 5847–5852, incl.
+    // the 0609 0031 abort of 6099h:1; lines 5853–5861: the state machine,
+    // each step answered by TPDO1.
+    pp_setup(&mut r, &t, (5756, 5835), (5840, 5841), (5847, 5852), (5853, 5861));
     // Lines 5862–5865: homing (method 12 on the machine's home switch) ends
     // with 1637h (homing attained); 5864 (0637h) in form: the sequence is
     // checked to end in 1637h.
-    r.exchange(t.frame(5862), &[t.frame(5863)]);
-    r.run_ms(20_000);
-    let sws: Vec<u16> = r
-        .take()
-        .into_iter()
-        .filter(|f| f.std_id() == Some(0x183))
-        .map(|f| u16::from_le_bytes([f.data()[0], f.data()[1]]))
-        .collect();
-    assert!(t.line(5864).form());
-    assert_eq!(sws.last(), Some(&0x1637), "homing attained: {sws:04X?}");
-    // 9h: controlword by RPDO1 (default mapping 6040h), bit 4 cleared.
-    r.send(t.frame(5870));
-    r.run_ms(1);
-    r.take();
-    replay(&mut r, &t.steps(5876, 5881));
-    r.run_ms(1);
-    r.take();
-    replay(&mut r, &t.steps(5886, 5886));
-    assert_eq!(value(&r, 0x607A, 0), Some(Value::I32(36_000)));
-    assert_eq!(value(&r, 0x6081, 0), Some(Value::U32(20_000)));
+    pp_homing(&mut r, &t, 5862);
+    // 9h: controlword by RPDO1 (default mapping 6040h), bit 4 cleared; 9i
+    // (5876–5881) and RPDO2 (5886).
+    pp_parameters(&mut r, &t, 5870, (5876, 5881), 5886);
     // 9j: TPDO2 at SYNC, in form (printed with 4 of its 8 bytes).
     r.send(t.frame(5887));
     let f = r.take();
     assert_form(&f[0], t.line(5888));
     // 9k: set-point handshake by RPDO1, then target reached (6083h/6084h = 50
     // taken as acceleration units: ≈ 54 s for one revolution).
-    r.exchange_ms(t.frame(5893), 1, &[t.frame(5898)]);
-    r.exchange_ms(t.frame(5903), 1, &[t.frame(5904)]);
-    r.run_ms(60_000);
-    let last = r.take().into_iter().rfind(|f| f.std_id() == Some(0x183));
+    let last =
+        pp_move(&mut r, &t, (5893, 5898), (5903, 5904)).into_iter().rfind(|f| f.std_id() == Some(0x183));
     assert_eq!(last, Some(fr(t.frame(5909))), "target reached");
-    r.send(t.frame(5910));
-    let f = r.take();
-    assert_form(&f[0], t.line(5911));
-    let pos = i32::from_le_bytes([f[0].data()[0], f[0].data()[1], f[0].data()[2], f[0].data()[3]]);
-    assert!((pos - 36_000).abs() <= 2, "position {pos}");
+    pp_final_position(&mut r, &t, 5910, 5911);
 }
 
 /// §7.2.1.9 (section 10): ASCII channel 2026h, node 1; the reply is the
@@ -231,22 +175,12 @@ fn akd_s10_ascii_channel() {
 /// 1002h) every 3rd SYNC; RPDO2 → 607Ah + 6081h.
 #[test]
 fn akd_s11_sync_every_nth() {
-    let t = trace(11);
     let mut r = node();
-    replay(&mut r, &t.steps(5948, 5986));
-    // TPDO3/4 are still valid and event-driven: they go out when the node
-    // becomes operational (no NMT start is printed; PDOs need it).
-    r.send("000#01 03");
-    r.run_ms(1);
-    r.take();
-    // Line 5991 (SYNC) and the pattern of its comment, on 183h/283h. Axis at
-    // rest: position 0, statusword 0240h, 1002h 0.
-    let sync = t.frame(5991);
-    let tpdo1 = "183#00 00 00 00";
-    let tpdo2 = "283#40 02 00 00 00 00";
-    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
-        r.exchange(sync, &tpdos);
-    }
+    // Lines 5948–5986; TPDO3/4 are still valid and event-driven: they go out
+    // when the node becomes operational (no NMT start is printed; PDOs need
+    // it). Line 5991 (SYNC) and the pattern of its comment, on 183h/283h.
+    // Axis at rest: position 0, statusword 0240h, 1002h 0.
+    sync_every_nth(&mut r, &trace(11), (5948, 5986), 5991);
 }
 
 /// Sections 11b and 13k: a drive fault raises the AKD EMCY: code, error
@@ -258,15 +192,9 @@ fn akd_s11_sync_every_nth() {
 fn akd_s11_s13_emcy_frames() {
     let (t11, t13) = (trace(11), trace(13));
     let mut r = akd(1);
-    r.pn_mut().inject(drivebus_cia402::drive::Injection::Fault(0x4310));
-    r.run_ms(1);
-    assert_eq!(r.take(), frs(&[t13.frame(6190)]));
+    emcy_fault(&mut r, t13.frame(6190));
     assert!(t11.line(6000).form() && t13.line(6191).form());
-    r.exchange_ms(
-        "601#2B 40 60 00 80 00 00 00",
-        1,
-        &["581#60 40 60 00 00 00 00 00", "081#00 00 00 00 00 00 00 00"],
-    );
+    emcy_reset(&mut r);
 }
 
 /// §7.2.2.1 (section 13), axis 1 (node 1): RPDO2 → 60C1h:1 + dummy 2100h,
@@ -275,14 +203,11 @@ fn akd_s11_s13_emcy_frames() {
 fn akd_s13_ip_axis1() {
     let t = trace(13);
     let mut r = akd_ip_axis(1);
-    replay(&mut r, &t.steps_on(6038, 6133, "601"));
-    // 13h: NMT start of node 1. The event-driven TPDO1 goes out on entering
-    // operational with 0240h (as printed in 9f; 13h prints no frame).
-    r.exchange(t.frame(6146), &["181#40 02"]);
-    // 13i (lines 6151–6158): controlwords by RPDO1, answered by TPDO1.
-    for (req, resp) in t.steps(6151, 6158) {
-        r.exchange_ms(req, 1, resp);
-    }
+    // Lines 6038–6133 (to 601h). 13h: NMT start of node 1. The event-driven
+    // TPDO1 goes out on entering operational with 0240h (as printed in 9f;
+    // 13h prints no frame). 13i (lines 6151–6158): controlwords by RPDO1,
+    // answered by TPDO1.
+    ip_axis1_start(&mut r, &t, (6038, 6133), 6146, (6151, 6158));
     // 13j: the set-points are applied at the SYNC (synchronous RPDO2).
     replay(&mut r, &t.steps(6167, 6167));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(0)));
@@ -292,14 +217,7 @@ fn akd_s13_ip_axis1() {
     let f = r.take();
     assert_form(&f[0], t.line(6181));
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(500)));
-    for _ in 0..200 {
-        r.run_ms(1);
-        r.send(t.frame(6167));
-        r.send(t.frame(6177));
-    }
-    r.run_ms(100);
-    let p = r.position();
-    assert!((p - 500).abs() <= 2, "ip position {p}");
+    ip_axis1_follows(&mut r, &t, 6167, 6177);
 }
 
 /// §7.2.2.1, axis 2 (node 2): RPDO2 on 301h with the set-point in bytes 4–7.
@@ -346,9 +264,7 @@ fn akd_ip_axis(id: u8) -> Rig {
         Box::new(Akd::new().with_dc_bus_before_switch_on(true)),
     )
     .unwrap();
-    let (r, boot) = Rig::with(pn);
-    assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]));
-    r
+    booted_with(pn, id)
 }
 
 /// §7.2.1.5 lines 5585–5596: the AKD has no RTR on TPDOs yet acknowledges

@@ -17,24 +17,19 @@ mod replay_rig;
 use drivebus_node::MemoryStorage;
 use drivebus_od::Value;
 use drivebus_personality::{Profile, build_on_machine};
-use replay_rig::trace::{every_2nd_and_3rd, kc1 as trace};
+use replay_rig::kollmorgen::*;
+use replay_rig::trace::kc1 as trace;
 use replay_rig::*;
 
 /// A KC1 as node `id`, booted: the only power-on frame is the boot-up
 /// message (§8.2.1.7 frame 1: `703 00`).
 fn kc1(id: u8) -> Rig {
-    let (r, boot) = Rig::new(Profile::Kc1, id);
-    assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]), "boot-up");
-    r
+    booted(Profile::Kc1, id)
 }
 
 /// Node 3, the id of most §8.2.1 examples.
 fn node() -> Rig {
     kc1(3)
-}
-
-fn value(r: &Rig, index: u16, sub: u8) -> Option<Value> {
-    r.node().od().get_value(index, sub)
 }
 
 // ---------------------------------------------------------------- facts
@@ -171,11 +166,8 @@ fn kc1_ex01_free_mapping_of_tpdo1() {
 /// shutdown and switch on by SDO → 0233h, all from the drive.
 #[test]
 fn kc1_ex03_status_machine_by_sdo() {
-    let t = trace(3);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 6));
-    r.run_ms(1);
-    replay(&mut r, &t.steps(7, 8));
+    state_machine_by_sdo(&mut r, &trace(3));
 }
 
 /// Example 4, §8.2.1.3: jog (profile velocity) by SDO; the axis turns at
@@ -184,15 +176,10 @@ fn kc1_ex03_status_machine_by_sdo() {
 fn kc1_ex04_jog_mode_by_sdo() {
     let t = trace(4);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 12));
-    r.run_ms(500);
-    let v = r.velocity();
-    assert!((v - 0x4100).abs() < 0x4100 / 20, "jog velocity {v}");
+    jog_by_sdo_start(&mut r, &t);
     let p0 = r.position();
     assert!(p0 > 0);
-    replay(&mut r, &t.steps(13, 14));
-    r.run_ms(500);
-    assert_eq!(r.velocity(), 0, "halted");
+    jog_by_sdo_halt(&mut r, &t);
     assert_eq!(r.statusword() & 0x6F, 0x27, "still operation enabled");
 }
 
@@ -202,9 +189,7 @@ fn kc1_ex04_jog_mode_by_sdo() {
 fn kc1_ex05_torque_mode_by_sdo() {
     let t = trace(5);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 12));
-    r.run_ms(20);
-    assert!(r.velocity() > 0, "torque accelerates the axis");
+    torque_by_sdo_start(&mut r, &t);
     let t6077 = r.node().od().get_i64(0x6077, 0).unwrap();
     assert!(t6077 > 100, "torque actual {t6077}");
     replay(&mut r, &t.steps(13, 14));
@@ -228,17 +213,9 @@ fn kc1_ex06_jog_mode_by_pdo() {
     // Frame 40: TPDO1 at the SYNC with 6064h + 606Ch, in form; here the axis
     // runs for 1 s first and the frame carries our motion: velocity at the
     // set-point, position advanced by about 1 s × 4000h.
-    r.run_ms(1000);
-    r.take();
-    r.send(t.frame(39));
-    let f = r.take();
+    let f = after_sync(&mut r, 1000, t.frame(39));
     assert_eq!(f.len(), 1);
-    assert_form(&f[0], t.line(40));
-    let d = f[0].data();
-    let pos = i32::from_le_bytes([d[0], d[1], d[2], d[3]]);
-    let vel = i32::from_le_bytes([d[4], d[5], d[6], d[7]]);
-    assert!((vel - 0x4000).abs() < 0x4000 / 20, "velocity {vel}");
-    assert!(pos > 0x4000 * 8 / 10 && pos < 0x4000, "position {pos}");
+    assert_jog_tpdo1(&f[0], t.line(40));
     replay(&mut r, &t.steps(41, 42));
 }
 
@@ -252,14 +229,9 @@ fn kc1_ex07_torque_mode_by_pdo() {
     // Frame 38: TPDO1 at the SYNC, 6077h torque actual, in form: the actual
     // value follows the 0212h demand (after the 6087h torque slope); checked
     // within 5 % (the manual prints 0219h).
-    r.run_ms(60);
-    r.take();
-    r.send(t.frame(37));
-    let f = r.take();
+    let f = after_sync(&mut r, 60, t.frame(37));
     assert_eq!(f.len(), 1);
-    assert_form(&f[0], t.line(38));
-    let tq = i16::from_le_bytes([f[0].data()[0], f[0].data()[1]]);
-    assert!((i32::from(tq) - 0x212).abs() < 0x212 / 20, "torque actual {tq}");
+    assert_torque_tpdo1(&f[0], t.line(38), 0x212);
     replay(&mut r, &t.steps(39, 40));
 }
 
@@ -273,9 +245,7 @@ fn homing_machine(id: u8, neg_limit: Option<f64>, home: Option<(f64, f64)>) -> R
         c.params.axis.home_switch = home;
     })
     .unwrap();
-    let (r, boot) = Rig::with(pn);
-    assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]));
-    r
+    booted_with(pn, id)
 }
 
 /// Example 8, §8.2.1.7: homing by SDO. Statusword 0240h before, 0237h while
@@ -308,40 +278,18 @@ fn kc1_ex08_homing_by_sdo() {
 fn kc1_ex09_profile_position() {
     let t = trace(9);
     let mut r = homing_machine(3, None, Some((-20.0, -5.0)));
-    replay(&mut r, &t.steps(1, 36));
-    // Frames 37/38: NMT start, the event-driven TPDO1 with 0240h at once.
-    replay(&mut r, &t.steps(37, 38));
-    // Frames 39–44, incl. the 0609 0031 abort of 6099h:1.
-    replay(&mut r, &t.steps(39, 44));
-    // Frames 45–53: the state machine by SDO, each step answered by TPDO1.
-    for (req, resp) in t.steps(45, 53) {
-        r.exchange_ms(req, 1, resp);
-    }
+    // Frames 1–36: PDO set-up; 37/38: NMT start, the event-driven TPDO1
+    // with 0240h at once; 39–44, incl. the 0609 0031 abort of 6099h:1;
+    // 45–53: the state machine by SDO, each step answered by TPDO1.
+    pp_setup(&mut r, &t, (1, 36), (37, 38), (39, 44), (45, 53));
     // Frames 54–57: start homing; the manual prints 0637h (frame 56, form)
     // then 1637h (homing attained). Here homing takes its time on the
-    // machine; the TPDO1 sequence ends with 1637h.
-    r.exchange(t.frame(54), &[t.frame(55)]);
-    // Through the switch at 6099h:2 (1/8 rev/s) to the next index pulse.
-    r.run_ms(20_000);
-    let tpdo1: Vec<u16> = r
-        .take()
-        .into_iter()
-        .filter(|f| f.std_id() == Some(0x183))
-        .map(|f| u16::from_le_bytes([f.data()[0], f.data()[1]]))
-        .collect();
-    assert!(t.line(56).form());
-    assert_eq!(tpdo1.last(), Some(&0x1637), "homing attained: {tpdo1:04X?}");
-    // Frame 58: controlword by RPDO1, bit 4 cleared.
-    r.send(t.frame(58));
-    r.run_ms(1);
-    r.take();
-    replay(&mut r, &t.steps(59, 64));
-    r.run_ms(1);
-    r.take();
-    // Frame 65 (RPDO2, corrected to 8 bytes in the trace).
-    replay(&mut r, &t.steps(65, 65));
-    assert_eq!(value(&r, 0x607A, 0), Some(Value::I32(0x8CA0)));
-    assert_eq!(value(&r, 0x6081, 0), Some(Value::U32(0x4E20)));
+    // machine (20 s: through the switch at 6099h:2, 1/8 rev/s, to the next
+    // index pulse); the TPDO1 sequence ends with 1637h.
+    pp_homing(&mut r, &t, 54);
+    // Frame 58: controlword by RPDO1, bit 4 cleared; 59–64; frame 65 (RPDO2,
+    // corrected to 8 bytes in the trace): 607Ah = 8CA0h, 6081h = 4E20h.
+    pp_parameters(&mut r, &t, 58, (59, 64), 65);
     // Frames 66/67: TPDO2 at SYNC, in form (printed with 4 of its 8 bytes);
     // the axis stands at the homed position.
     r.send(t.frame(66));
@@ -349,21 +297,17 @@ fn kc1_ex09_profile_position() {
     assert_eq!(f.len(), 1);
     assert_form(&f[0], t.line(67));
     // Frames 68–72: new set-point handshake, then target reached.
-    r.exchange_ms(t.frame(68), 1, &[t.frame(69)]);
-    r.exchange_ms(t.frame(70), 1, &[t.frame(71)]);
     // 6083h/6084h = 50 are taken as CiA 402 acceleration units (position
     // units/s², the manual's "50 ms" is a ramp-time unit setting it does not
     // name): the move of 36000 units takes 2·√(36000/50) ≈ 54 s.
-    r.run_ms(60_000);
-    let tpdo1: Vec<Vec<u8>> =
-        r.take().into_iter().filter(|f| f.std_id() == Some(0x183)).map(|f| f.data().to_vec()).collect();
+    let tpdo1: Vec<Vec<u8>> = pp_move(&mut r, &t, (68, 69), (70, 71))
+        .into_iter()
+        .filter(|f| f.std_id() == Some(0x183))
+        .map(|f| f.data().to_vec())
+        .collect();
     assert_eq!(tpdo1.last().map(|d| d.as_slice()), Some(&[0x37u8, 0x06][..]), "target reached");
     // Frames 73/74: the second SYNC: position at the target 8CA0h.
-    r.send(t.frame(73));
-    let f = r.take();
-    assert_form(&f[0], t.line(74));
-    let pos = i32::from_le_bytes([f[0].data()[0], f[0].data()[1], f[0].data()[2], f[0].data()[3]]);
-    assert!((pos - 0x8CA0).abs() <= 2, "position {pos}");
+    pp_final_position(&mut r, &t, 73, 74);
 }
 
 /// Example 10, §8.2.1.9: the ASCII channel 2026h of node 1, the drive's
@@ -378,22 +322,12 @@ fn kc1_ex10_ascii_channel() {
 /// SYNC, TPDO2 → 6041h + 1002h every 3rd SYNC; all remapped while valid.
 #[test]
 fn kc1_ex11_sync_every_nth() {
-    let t = trace(11);
     let mut r = node();
-    replay(&mut r, &t.steps(1, 26));
-    // The example sends SYNCs without showing NMT start; PDOs need
-    // operational. TPDO3/4 (still event-driven) go out on entering it.
-    r.send("000#01 03");
-    r.run_ms(1);
-    r.take();
+    // Frames 1–26. The example sends SYNCs without showing NMT start; PDOs
+    // need operational. TPDO3/4 (still event-driven) go out on entering it.
     // Frame 27 (SYNC) and the pattern its comment describes, on 183h/283h:
     // position 0 (axis at rest), statusword 0240h, 1002h 0.
-    let sync = t.frame(27);
-    let tpdo1 = "183#00 00 00 00";
-    let tpdo2 = "283#40 02 00 00 00 00";
-    for (sync, tpdos) in every_2nd_and_3rd(sync, tpdo1, tpdo2) {
-        r.exchange(sync, &tpdos);
-    }
+    sync_every_nth(&mut r, &trace(11), (1, 26), 27);
 }
 
 /// Examples 11/12 (§8.2.1.10, §8.2.2.1): a drive fault raises the KC1 EMCY:
@@ -402,20 +336,14 @@ fn kc1_ex11_sync_every_nth() {
 #[test]
 fn kc1_ex11_ex12_emcy_frames() {
     let mut r = kc1(1);
-    r.pn_mut().inject(drivebus_cia402::drive::Injection::Fault(0x4310));
-    r.run_ms(1);
-    assert_eq!(r.take(), frs(&[trace(12).frame(60)]));
+    emcy_fault(&mut r, trace(12).frame(60));
     assert_eq!(r.read_u32(1, 0x1001, 0), 0x08);
     // Fault reset (controlword bit 7): the error goes, EMCY 0000h. The
     // manual prints the reset frame with register 08h (§8.2.2.1 frame 61)
     // or 88h (§8.2.1.10 frame 29, other errors pending): both in form; with
     // no error left it is 00h here.
     assert!(trace(12).line(61).form() && trace(11).line(29).form());
-    r.exchange_ms(
-        "601#2B 40 60 00 80 00 00 00",
-        1,
-        &["581#60 40 60 00 00 00 00 00", "081#00 00 00 00 00 00 00 00"],
-    );
+    emcy_reset(&mut r);
 }
 
 /// Example 12's drives: the DC bus is charged before switch on (TPDO1
@@ -430,9 +358,7 @@ fn kc1_ip_axis(id: u8) -> Rig {
         Box::new(kc1_behaviour().with_dc_bus_before_switch_on(true)),
     )
     .unwrap();
-    let (r, boot) = Rig::with(pn);
-    assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]));
-    r
+    booted_with(pn, id)
 }
 
 /// Example 12, §8.2.2.1, axis 1 (node 1): RPDO2 → 60C1h:1 + dummy 2100h,
@@ -443,14 +369,10 @@ fn kc1_ip_axis(id: u8) -> Rig {
 fn kc1_ex12_ip_two_axes_axis1() {
     let t = trace(12);
     let mut r = kc1_ip_axis(1);
-    replay(&mut r, &t.steps_on(1, 46, "601"));
-    // Frame 47: NMT start; the event-driven TPDO1 goes out with 0240h
-    // (not printed in this example; as example 9 frame 38).
-    r.exchange(t.frame(47), &["181#40 02"]);
-    // Frames 48–55: the state machine by RPDO1, each answered by TPDO1.
-    for (req, resp) in t.steps(48, 55) {
-        r.exchange_ms(req, 1, resp);
-    }
+    // Frames 1–46 (to 601h). Frame 47: NMT start; the event-driven TPDO1
+    // goes out with 0240h (not printed in this example; as example 9 frame
+    // 38). Frames 48–55: the state machine by RPDO1, each answered by TPDO1.
+    ip_axis1_start(&mut r, &t, (1, 46), 47, (48, 55));
     // Frames 56–58: set-point 500 (bytes 4–7 go to the dummy 2100h) and
     // SYNC; TPDO2 carries 6063h and 1002h, in form (printed on 181h, see the
     // trace; the printed 6063h value is the manual's axis: here the axis
@@ -463,14 +385,7 @@ fn kc1_ex12_ip_two_axes_axis1() {
     assert_eq!(value(&r, 0x60C1, 1), Some(Value::I32(500)));
     assert_eq!(value(&r, 0x2100, 0), Some(Value::U32(0)), "dummy ignores 03E8h");
     // Keep feeding the set-point at 1 ms SYNCs: the axis reaches 500.
-    for _ in 0..200 {
-        r.run_ms(1);
-        r.send(t.frame(56));
-        r.send(t.frame(57));
-    }
-    r.run_ms(100);
-    let p = r.position();
-    assert!((p - 500).abs() <= 2, "ip position {p}");
+    ip_axis1_follows(&mut r, &t, 56, 57);
 }
 
 /// Example 12, axis 2 (node 2): the same RPDO2 COB-ID 301h as axis 1, the

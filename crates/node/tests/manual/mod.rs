@@ -2,6 +2,8 @@
 //! drive-like node and replaying a printed frame sequence.
 #![allow(dead_code)]
 
+pub mod kollmorgen;
+
 use crate::common::Rig;
 use drivebus_node::{Identity, Node, NodeConfig};
 use drivebus_od::{Access, DataType, Object, SubObject, Value};
