@@ -10,7 +10,7 @@
 //!
 //! ```
 //! use drivebus_personality::Profile;
-//! let kc1 = Profile::Kc1.build(3).unwrap(); // a drivebus_bus::BusNode
+//! let kc1 = Profile::Kc1.build(3).unwrap(); // a drivebus_can::Device
 //! assert_eq!(kc1.node.od().get_u32(0x6502, 0), Some(0xE5));
 //! ```
 //!
@@ -28,8 +28,8 @@ mod emcy_tables;
 mod profiles;
 
 pub use build::{
-    Action, Behaviour, BuildError, BuildOptions, Context, EmcyFrame, FilterOutcome, PersonalityNode, Plain,
-    Verdict, build, build_custom, build_on_machine, build_with, parse_drive_spec,
+    Behaviour, BuildError, BuildOptions, Context, EmcyFrame, FilterOutcome, Personality, PersonalityDevice,
+    Plain, Verdict, build, build_custom, build_on_machine, build_with, parse_drive_spec,
 };
 
 pub use drivebus_eds::Parsed;

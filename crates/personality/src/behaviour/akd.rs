@@ -25,7 +25,7 @@ use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, op};
 use drivebus_cia402::homing::{HomingContext, HomingMethod, MethodStep, StandardMethod};
 use drivebus_node::{Node, NodeConfig, NodeEvent};
-use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort};
+use drivebus_od::{ObjectDictionary, SdoAbort};
 
 extern crate alloc;
 

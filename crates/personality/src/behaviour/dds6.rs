@@ -206,14 +206,14 @@ mod facts_tests {
 // The behaviour.
 
 use crate::Profile;
-use crate::build::{Action, Behaviour, Context, EmcyFrame, FilterOutcome, Verdict};
+use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict};
 use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection, TargetReached};
 use drivebus_cia402::interp::IpMode;
 use drivebus_cia402::model::DriveParams;
 use drivebus_cia402::state_machine::State;
 use drivebus_node::Node;
-use drivebus_node::{NmtState, NodeEvent};
+use drivebus_node::{NmtState, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 
 /// Mode-specific statusword bits 10/12/13 the DDS6 shows while the drive
@@ -491,7 +491,7 @@ impl Behaviour for Dds6 {
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, _sub: u8) {
         if (0x1A00..=0x1A03).contains(&index) {
             let mask = statusword_mask(od, index);
-            cx.actions.push(Action::TpdoChangeMask { tpdo: index - 0x1A00, mask: Some(mask) });
+            cx.request(Request::TpdoChangeMask { tpdo: index - 0x1A00, mask: Some(mask) });
         }
     }
 
@@ -540,13 +540,13 @@ impl Behaviour for Dds6 {
                 if cx.drive.mode() == 4 && !closed {
                     // §4.4.3: torque needs the encoder loop.
                     self.last_sub = 0x0701;
-                    cx.actions.push(Action::Inject(Injection::Fault(EMCY_CONFIGURATION)));
+                    cx.drive.inject(Injection::Fault(EMCY_CONFIGURATION));
                 }
                 let timing = closed && (!self.aligned || self.feedback & 8 != 0);
                 let ms = if timing { ENCODER_TIMING_MS } else { ENABLE_DELAY_MS };
                 self.enable_at = Some(cx.now + drivebus_can::Duration::from_millis(ms));
             }
-            drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, index, sub, &to_drive.to_le_bytes())?;
+            cx.drive.on_write(od, index, sub, &to_drive.to_le_bytes())?;
             self.publish(cx, od);
             return Ok(Verdict::Store);
         }
@@ -560,7 +560,7 @@ impl Behaviour for Dds6 {
         }
         if index == 0x6083 {
             // C.9: homing runs on the profile acceleration (no 609Ah).
-            drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x609A, 0, data)?;
+            cx.drive.on_write(od, 0x609A, 0, data)?;
         }
         if matches!(index, 0x1010 | 0x1011) {
             let enabled =
@@ -575,7 +575,7 @@ impl Behaviour for Dds6 {
             self.nmt_operational = to == NmtState::Operational;
             // The drive reloads its parameters at boot: homing takes 6083h.
             if let Some(acc) = od.get_u32(0x6083, 0) {
-                let _ = drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x609A, 0, &acc.to_le_bytes());
+                let _ = cx.drive.on_write(od, 0x609A, 0, &acc.to_le_bytes());
             }
         }
     }
@@ -583,7 +583,7 @@ impl Behaviour for Dds6 {
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         if let Some(sub) = self.pending_nmt_error.take() {
             self.last_sub = sub;
-            cx.actions.push(Action::Inject(Injection::Fault(EMCY_NMT_WHILE_ENABLED)));
+            cx.drive.inject(Injection::Fault(EMCY_NMT_WHILE_ENABLED));
         }
         if let Some(t) = self.enable_at
             && cx.now >= t
@@ -591,7 +591,7 @@ impl Behaviour for Dds6 {
             self.enable_at = None;
             let cw = od.get_u32(0x6040, 0).unwrap_or(0) as u16;
             if cw & 0x8F == 0x0F && cx.drive.state_machine().state() == State::SwitchedOn {
-                let _ = drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x6040, 0, &cw.to_le_bytes());
+                let _ = cx.drive.on_write(od, 0x6040, 0, &cw.to_le_bytes());
                 self.aligned |= self.feedback & 1 != 0;
                 self.just_enabled = true;
             }

@@ -20,10 +20,10 @@
 use crate::Profile;
 
 extern crate alloc;
-use crate::build::{Action, Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
+use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
 use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp};
-use drivebus_node::{Node, NodeConfig, NodeEvent};
+use drivebus_node::{Node, NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort, Value, le_u64};
 use drivebus_pdo::PdoConfig;
 
@@ -112,7 +112,7 @@ impl Behaviour for Kollmorgen {
         // the first SYNC is fault F125 (EMCY 8780h, §7.1); 0 (the CANopen
         // default) leaves it unsupervised.
         if matches!(event, NodeEvent::SyncTimeout) && self.sync_seen && od.get_u32(0x36E8, 0) == Some(1) {
-            cx.actions.push(crate::build::Action::Inject(Injection::Fault(0x8780)));
+            cx.drive.inject(Injection::Fault(0x8780));
         }
         if matches!(event, NodeEvent::ResetCommunication | NodeEvent::ResetApplication) {
             self.sync_seen = false;
@@ -142,7 +142,9 @@ impl Behaviour for Kollmorgen {
         for sub in [1, 2] {
             if let Some(e) = od.get_mut(0x608F, sub) {
                 e.access = drivebus_od::Access::Rw;
-                e.hooked = true;
+                // Owned by this behaviour: its writes come here.
+                e.owner = crate::build::BEHAVIOUR;
+                e.live = true;
             }
         }
     }
@@ -225,7 +227,7 @@ impl Behaviour for Kollmorgen {
                         self.lifted = Some((comm, cob));
                     }
                     // Put back if the service refused the write.
-                    cx.actions.push(crate::build::Action::Restore {
+                    cx.request(Request::Restore {
                         index: comm,
                         sub: 1,
                         value: cob,
@@ -260,7 +262,7 @@ impl Behaviour for Kollmorgen {
 
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, _sub: u8) {
         if let 0x2014..=0x2017 = index {
-            cx.actions.push(Action::TpdoChangeMask { tpdo: index - 0x2014, mask: tpdo_mask(od, index) });
+            cx.request(Request::TpdoChangeMask { tpdo: index - 0x2014, mask: tpdo_mask(od, index) });
         }
         // Valid again before the PDO service re-reads the PDO.
         if let Some((comm, cob)) = self.lifted.take()

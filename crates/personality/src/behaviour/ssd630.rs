@@ -175,11 +175,11 @@ mod facts_tests {
 // The behaviour.
 
 use crate::Profile;
-use crate::build::{Action, Behaviour, Context, EmcyFrame, Verdict};
+use crate::build::{Behaviour, Context, EmcyFrame, Verdict};
 use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection};
 use drivebus_cia402::state_machine::State;
 use drivebus_nmt::NmtCommand;
-use drivebus_node::{NmtState, Node, NodeConfig, NodeEvent};
+use drivebus_node::{NmtState, Node, NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort, Value};
 
 /// Encoder increments per motor revolution of the emulated 630 (the manual
@@ -266,7 +266,7 @@ impl Ssd630 {
     /// Start that follows the boot-up message.
     fn autostart(cx: &mut Context<'_>, od: &ObjectDictionary) {
         if od.get_u32(0x2018, 0) == Some(1) {
-            cx.actions.push(Action::Nmt(NmtCommand::Start));
+            cx.request(Request::Nmt(NmtCommand::Start));
         }
     }
 
@@ -392,7 +392,7 @@ impl Behaviour for Ssd630 {
                     if let Ok(r) = od.find(comm, 1) {
                         od.set_raw(r, &(cob | 0x8000_0000).to_le_bytes());
                     }
-                    cx.actions.push(Action::Restore {
+                    cx.request(Request::Restore {
                         index: comm,
                         sub: 1,
                         value: cob,
@@ -411,7 +411,7 @@ impl Behaviour for Ssd630 {
             0x6040 => {
                 // The drive takes the controlword now; the statusword it
                 // publishes is put in the 630's form before a TPDO samples it.
-                drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, index, sub, data)?;
+                cx.drive.on_write(od, index, sub, data)?;
                 self.publish(cx, od);
                 Ok(Verdict::Store)
             }
@@ -419,7 +419,7 @@ impl Behaviour for Ssd630 {
                 // §12: 6099h:2 "is unused with modes -24..-1": the drive runs
                 // the zero-pulse search at 6099h:1 as well (the SsdHoming
                 // methods do), and 6099h:2 must not block the start.
-                let _ = drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x6099, 2, data);
+                let _ = cx.drive.on_write(od, 0x6099, 2, data);
                 Ok(Verdict::Pass)
             }
             _ => Ok(Verdict::Pass),
@@ -441,7 +441,7 @@ impl Behaviour for Ssd630 {
             };
             if v > 0 {
                 for (sub, b) in [(1u8, v as u8), (2u8, i as u8)] {
-                    if drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x60C2, sub, &[b]).is_ok()
+                    if cx.drive.on_write(od, 0x60C2, sub, &[b]).is_ok()
                         && let Ok(r) = od.find(0x60C2, sub)
                     {
                         od.set_raw(r, &[b]);
@@ -454,7 +454,7 @@ impl Behaviour for Ssd630 {
     fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         // §9 transition 0: "After the initialisation … the message 'no
         // error' is being sent", manufacturer field "Vxxxx".
-        cx.actions.push(Action::RawEmcy(EmcyFrame { code: 0, register: Some(0), bytes: FIRMWARE_TAG }));
+        cx.request(EmcyFrame { code: 0, register: Some(0), bytes: FIRMWARE_TAG }.raw());
         // The stored values are loaded by now (node boot before on_boot).
         Self::autostart(cx, od);
     }
@@ -482,10 +482,10 @@ impl Behaviour for Ssd630 {
                 // disabled, 1 = FAULT (EMCY 5441h, Table 1).
                 if od.get_u32(0x2019, 0).unwrap_or(0) == 1 {
                     if state != State::FaultReactionActive {
-                        cx.actions.push(Action::Inject(Injection::Fault(0x5441)));
+                        cx.drive.inject(Injection::Fault(0x5441));
                     }
                 } else {
-                    let _ = drivebus_od::ObjectHooks::on_write(&mut *cx.drive, od, 0x6040, 0, &[0, 0]);
+                    let _ = cx.drive.on_write(od, 0x6040, 0, &[0, 0]);
                 }
             }
         }

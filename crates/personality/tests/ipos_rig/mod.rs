@@ -8,7 +8,7 @@ pub use drivebus_can::{Duration, Frame};
 pub use drivebus_cia402::drive::DriveConfig;
 use drivebus_node::MemoryStorage;
 pub use drivebus_personality::behaviour::ipos::Ipos;
-pub use drivebus_personality::{PersonalityNode, Profile, build_custom};
+pub use drivebus_personality::{PersonalityDevice, Profile, build_custom};
 
 /// Encoder counts per motor revolution: a 500-line quadrature encoder
 /// (§6.4 step 5, §7.3.1 step 6: "500 lines … 20 rotations … 9C40h").
@@ -94,8 +94,8 @@ impl Rig {
         Rig::on(|_| {})
     }
 
-    pub fn dn(&self) -> &PersonalityNode {
-        self.bus.node::<PersonalityNode>(self.dut).unwrap()
+    pub fn dn(&self) -> &PersonalityDevice {
+        self.bus.node::<PersonalityDevice>(self.dut).unwrap()
     }
 
     /// Runs the bus for `us` µs, sorting what the drive sent.
@@ -204,12 +204,12 @@ impl Rig {
 
     /// Motor shaft position \[revolutions\] of the model.
     pub fn motor_revs(&self) -> f64 {
-        self.dn().drive.model().position() / (2.0 * core::f64::consts::PI)
+        self.dn().app.drive.model().position() / (2.0 * core::f64::consts::PI)
     }
 
     /// Motor speed \[rpm\] of the model.
     pub fn motor_rpm(&self) -> f64 {
-        self.dn().drive.model().velocity() * 60.0 / (2.0 * core::f64::consts::PI)
+        self.dn().app.drive.model().velocity() * 60.0 / (2.0 * core::f64::consts::PI)
     }
 
     /// A live value straight from the dictionary (what the master's

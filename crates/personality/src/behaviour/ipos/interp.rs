@@ -180,11 +180,7 @@ impl Ipos {
         if changed || force {
             let [a, b] = v.to_le_bytes();
             let reg = od.get_u32(0x1001, 0).unwrap_or(0) as u8;
-            cx.actions.push(Action::RawEmcy(EmcyFrame {
-                code: EMCY_IP_STATUS,
-                register: Some(reg),
-                bytes: [a, b, 0, 0, 0],
-            }));
+            cx.request(EmcyFrame { code: EMCY_IP_STATUS, register: Some(reg), bytes: [a, b, 0, 0, 0] }.raw());
         }
     }
 

@@ -29,7 +29,7 @@
 //! * no 1010h/1011h: 2076h saves, 2080h resets (§4.9.6).
 
 use crate::Profile;
-use crate::build::{Action, Behaviour, Context, EmcyFrame, Verdict};
+use crate::build::{Behaviour, Context, EmcyFrame, Verdict};
 use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, profile_type};
 use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::{IpMode, IpMonitor};
@@ -39,8 +39,8 @@ mod gearing;
 mod homing;
 mod interp;
 
-use drivebus_node::{NodeConfig, NodeEvent};
-use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort};
+use drivebus_node::{NodeConfig, NodeEvent, Request};
+use drivebus_od::{ObjectDictionary, SdoAbort};
 use gearing::Gear;
 pub use gearing::{MASTER_FULL_RANGE, master_increment};
 pub use homing::MechanicalLimitHoming;
@@ -143,14 +143,12 @@ impl Ipos {
                     od.set_le(r, &mer.to_le_bytes());
                 }
                 if now && !silent {
-                    cx.actions.push(Action::Raise(EmcyFrame {
-                        code,
-                        register: Some(error_register(code)),
-                        bytes: [0; 5],
-                    }));
+                    cx.request(
+                        EmcyFrame { code, register: Some(error_register(code)), bytes: [0; 5] }.raise(),
+                    );
                 } else if !now {
                     // §4.3.1: "the emergency error code 0x0000 will be sent".
-                    cx.actions.push(Action::Clear(code));
+                    cx.request(Request::ClearEmcy(code));
                 }
             }
         }
@@ -415,11 +413,9 @@ impl Behaviour for Ipos {
             if n > 0 && mapped_bits(od, index, n) > MAX_PDO_BITS {
                 // §1.6.3.1: the drive sends an EMCY and ignores the mapping.
                 let reg = error_register(EMCY_PDO_LENGTH_EXCEEDED);
-                cx.actions.push(Action::RawEmcy(EmcyFrame {
-                    code: EMCY_PDO_LENGTH_EXCEEDED,
-                    register: Some(reg),
-                    bytes: [0; 5],
-                }));
+                cx.request(
+                    EmcyFrame { code: EMCY_PDO_LENGTH_EXCEEDED, register: Some(reg), bytes: [0; 5] }.raw(),
+                );
                 return Ok(Verdict::Handled);
             }
         }
