@@ -503,6 +503,11 @@ impl ObjectDictionary {
     #[inline]
     pub fn set_raw(&mut self, r: EntryRef, data: &[u8]) {
         let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        // The usual numeric sizes: one word compare and store.
+        if let Some(changed) = s.value.set_inline(data) {
+            self.generation = self.generation.wrapping_add(u64::from(changed & s.marked));
+            return;
+        }
         if !same_bytes(&s.value, data) {
             if s.value.len() == data.len() {
                 copy_small(s.value.as_mut_slice(), data);
