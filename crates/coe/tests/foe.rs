@@ -61,7 +61,13 @@ impl IposFiles {
 }
 
 impl FileHandler for IposFiles {
-    fn begin_write(&mut self, name: &[u8], password: u32, state: EsmState, now: Instant) -> Result<(), FoeError> {
+    fn begin_write(
+        &mut self,
+        name: &[u8],
+        password: u32,
+        state: EsmState,
+        now: Instant,
+    ) -> Result<(), FoeError> {
         let name = core::str::from_utf8(name).map_err(|_| FoeError::NOT_FOUND)?;
         let (stem, ext) = name.rsplit_once('.').unwrap_or((name, ""));
         let kind = if stem.starts_with("FOESW_") {
@@ -305,7 +311,8 @@ impl FileHandler for Log {
 #[test]
 fn reading_a_file() {
     for len in [0, 5, 116, 300, 348] {
-        let mut r = Rig::new(MailboxConfig::default(), (test_od(), NoHooks), Log(pattern(len, 2), Vec::new()));
+        let mut r =
+            Rig::new(MailboxConfig::default(), (test_od(), NoHooks), Log(pattern(len, 2), Vec::new()));
         // NUL-terminated names are accepted.
         assert_eq!(soem::foe_read(&mut r, "log.txt\0", 0), Ok(pattern(len, 2)), "{len} bytes");
         assert_eq!(r.files.1, [FoeEnd::Completed]);

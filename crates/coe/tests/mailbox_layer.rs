@@ -227,8 +227,14 @@ fn poll_reports_deadlines() {
 #[test]
 fn mailbox_sizes_are_checked() {
     for bad in [0, MIN_MAILBOX_SIZE - 1, MAX_MAILBOX_SIZE + 1] {
-        assert_eq!(MailboxServer::new(MailboxConfig::with_sizes(bad, 128)).err(), Some(ConfigError { size: bad }));
-        assert_eq!(MailboxServer::new(MailboxConfig::with_sizes(128, bad)).err(), Some(ConfigError { size: bad }));
+        assert_eq!(
+            MailboxServer::new(MailboxConfig::with_sizes(bad, 128)).err(),
+            Some(ConfigError { size: bad })
+        );
+        assert_eq!(
+            MailboxServer::new(MailboxConfig::with_sizes(128, bad)).err(),
+            Some(ConfigError { size: bad })
+        );
     }
     let mut r = rig();
     assert!(r.server.set_mailbox_sizes(16, 16, &mut r.files).is_err());

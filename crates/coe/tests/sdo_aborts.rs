@@ -85,7 +85,10 @@ fn segmented_download_refusals() {
     seg.extend_from_slice(&[0; 51]);
     assert_eq!(abort_of(&mut r, &seg), (0x2000, 0, SdoAbort::DATA_TOO_LONG));
     ok(&mut r, &normal(0x2000, 0, 150, &pattern(100, 1)));
-    assert_eq!(abort_of(&mut r, &[0x00, 0x20, 0x01 | (2 << 1), 1, 2, 3, 4, 5, 0, 0]).2, SdoAbort::DATA_TOO_SHORT);
+    assert_eq!(
+        abort_of(&mut r, &[0x00, 0x20, 0x01 | (2 << 1), 1, 2, 3, 4, 5, 0, 0]).2,
+        SdoAbort::DATA_TOO_SHORT
+    );
     ok(&mut r, &normal(0x2000, 0, 150, &pattern(100, 1)));
     assert_eq!(abort_of(&mut r, &[0x00, 0x20, 0x10, 1, 2, 3, 4, 5, 6, 7]).2, SdoAbort::TOGGLE_NOT_ALTERNATED);
     // None of these stored anything.
