@@ -80,7 +80,7 @@ impl FileHandler for Files {
     }
     fn write(&mut self, offset: u32, data: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
         self.calls += 1;
-        if self.calls % 3 == 0 {
+        if self.calls.is_multiple_of(3) {
             return Ok(FoeProgress::Busy { done: 1, entire: 2 });
         }
         assert_eq!(offset as usize, self.data.len());
@@ -92,7 +92,7 @@ impl FileHandler for Files {
     }
     fn finish_write(&mut self, _: Instant) -> Result<FoeProgress, FoeError> {
         self.calls += 1;
-        if self.calls % 3 == 0 {
+        if self.calls.is_multiple_of(3) {
             Ok(FoeProgress::Busy { done: 2, entire: 2 })
         } else {
             Ok(FoeProgress::Ready)
