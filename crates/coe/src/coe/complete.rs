@@ -212,14 +212,17 @@ pub(crate) fn download<A: ObjectAccess + ?Sized>(
         };
         let b = entry_bits(dt)?;
         let mut value = [0u8; 8];
+        // Checked reads: the length was verified against the layout, but a
+        // device whose writes change the object's shape must not make us
+        // index past the image.
         let len = if b == 1 {
-            value[0] = (data[bitpos / 8] >> (bitpos % 8)) & 1;
+            value[0] = (data.get(bitpos / 8).ok_or(SdoAbort::DATA_TOO_SHORT)? >> (bitpos % 8)) & 1;
             bitpos += 1;
             1
         } else {
             let start = bitpos.div_ceil(8);
             let len = b / 8;
-            value[..len].copy_from_slice(&data[start..start + len]);
+            value[..len].copy_from_slice(data.get(start..start + len).ok_or(SdoAbort::DATA_TOO_SHORT)?);
             bitpos = (start + len) * 8;
             len
         };
