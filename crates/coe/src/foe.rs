@@ -434,3 +434,62 @@ impl FoeServer {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mailbox::ResponseQueue;
+    use alloc::vec::Vec;
+
+    #[derive(Default)]
+    struct Keep(Vec<u8>, Vec<FoeEnd>);
+    impl FileHandler for Keep {
+        fn begin_write(&mut self, name: &[u8], pw: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+            if name == b"ok" && pw == 7 { Ok(()) } else { Err(FoeError::NO_RIGHTS) }
+        }
+        fn write(&mut self, _: u32, data: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
+            self.0.extend_from_slice(data);
+            Ok(FoeProgress::Ready)
+        }
+        fn finish_write(&mut self, _: Instant) -> Result<FoeProgress, FoeError> {
+            Ok(FoeProgress::Ready)
+        }
+        fn end(&mut self, how: FoeEnd) {
+            self.1.push(how);
+        }
+    }
+
+    fn run(s: &mut FoeServer, k: &mut Keep, body: &[u8]) -> Vec<u8> {
+        let mut q = ResponseQueue::new(4, 32);
+        s.handle(body, Instant::ZERO, EsmState::PreOp, 26, k, &mut Out { q: &mut q, cap: 26 });
+        let mut m = Vec::new();
+        q.pop_into(&mut m);
+        m.get(6..).map(<[u8]>::to_vec).unwrap_or_default()
+    }
+
+    #[test]
+    fn write_in_two_packets() {
+        let (mut s, mut k) = (FoeServer::new(Duration::from_secs(1)), Keep::default());
+        // Name with a trailing NUL, as some masters send it.
+        assert_eq!(run(&mut s, &mut k, &[2, 0, 7, 0, 0, 0, b'o', b'k', 0]), [4, 0, 0, 0, 0, 0]);
+        // Full packet: 26 − 6 = 20 bytes.
+        let mut d = alloc::vec![3, 0, 1, 0, 0, 0];
+        d.extend_from_slice(&[1; 20]);
+        assert_eq!(run(&mut s, &mut k, &d), [4, 0, 1, 0, 0, 0]);
+        assert_eq!(run(&mut s, &mut k, &[3, 0, 2, 0, 0, 0, 9]), [4, 0, 2, 0, 0, 0]);
+        assert!(s.is_idle());
+        assert_eq!((k.0.len(), k.1.as_slice()), (21, &[FoeEnd::Completed][..]));
+        // Refused by the handler: ERR with the standard text cut to the mailbox.
+        let e = run(&mut s, &mut k, &[2, 0, 0, 0, 0, 0, b'x']);
+        assert_eq!(e, [5, 0, 0x0A, 0x80, 0, 0, b'N', b'o', b' ', b'r', b'i', b'g', b'h', b't', b's']);
+    }
+
+    #[test]
+    fn names_and_codes() {
+        assert_eq!(trim_nul(b"a\0\0"), b"a");
+        assert_eq!(trim_nul(b"\0"), b"");
+        assert_eq!(FoeError::BOOTSTRAP_ONLY.description(), Some("Bootstrap only"));
+        assert_eq!(FoeError(0x9000).description(), None);
+        assert_eq!(alloc::format!("{:?}", FoeError::NOT_FOUND), "FoeError(0x8001 Not found)");
+    }
+}

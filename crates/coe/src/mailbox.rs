@@ -184,6 +184,10 @@ pub(crate) struct ResponseQueue {
     head: usize,
     len: usize,
     tx_size: usize,
+    /// Written instead of a queued slot if the queue is full, and dropped:
+    /// never reached (callers check for room and a request yields at most
+    /// one response), but a full queue must not overwrite its head.
+    overflow: Vec<u8>,
 }
 
 impl ResponseQueue {
@@ -191,14 +195,14 @@ impl ResponseQueue {
     pub(crate) fn new(n: usize, tx_size: usize) -> Self {
         let n = n.max(2);
         let slots = (0..n).map(|_| Vec::with_capacity(tx_size)).collect();
-        ResponseQueue { slots, head: 0, len: 0, tx_size }
+        ResponseQueue { slots, head: 0, len: 0, tx_size, overflow: Vec::with_capacity(tx_size) }
     }
 
     /// Change the mailbox size (drops queued responses).
     pub(crate) fn resize(&mut self, tx_size: usize) {
         self.clear();
         self.tx_size = tx_size;
-        for s in &mut self.slots {
+        for s in self.slots.iter_mut().chain(core::iter::once(&mut self.overflow)) {
             s.clear();
             s.reserve(tx_size);
         }
@@ -229,7 +233,8 @@ impl ResponseQueue {
     /// Callers check [`Self::has_room`] first.
     pub(crate) fn begin(&mut self) -> &mut Vec<u8> {
         let n = self.slots.len();
-        let slot = &mut self.slots[(self.head + self.len) % n];
+        let slot =
+            if self.len < n { &mut self.slots[(self.head + self.len) % n] } else { &mut self.overflow };
         slot.clear();
         slot.extend_from_slice(&[0; HEADER_LEN]);
         slot
@@ -239,6 +244,7 @@ impl ResponseQueue {
     /// (the counter is set when the response leaves, see [`Self::pop_into`]).
     pub(crate) fn commit(&mut self, mailbox_type: MailboxType) {
         if self.len >= self.slots.len() {
+            debug_assert!(false, "response queue overflow");
             return;
         }
         let n = self.slots.len();

@@ -359,3 +359,30 @@ impl MailboxServer {
         self.foe.expire(now, files);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::foe::NoFiles;
+    use drivebus_od::{Access, DataType, NoHooks, Object, ObjectDictionary, Value};
+
+    #[test]
+    fn emergency_mailbox_and_counters() {
+        let mut s = MailboxServer::new(MailboxConfig::default()).unwrap();
+        assert!(!s.has_response());
+        s.queue_emergency(0xFF01, 0x81, [9, 8, 7, 6, 5]).unwrap();
+        assert!(s.has_response());
+        let m = s.next_response(Instant::ZERO).unwrap().to_vec();
+        assert_eq!(m, [10, 0, 0, 0, 0, 0x13, 0x00, 0x10, 0x01, 0xFF, 0x81, 9, 8, 7, 6, 5]);
+        assert_eq!(s.last_response(), Some(&m[..]));
+        assert_eq!(s.next_response(Instant::ZERO), None);
+        // The next response takes the next counter.
+        let mut dev = (ObjectDictionary::new(), NoHooks);
+        dev.0.insert(Object::var(0x1000, "t", DataType::Unsigned8, Access::Ro, Value::U8(5)));
+        let req = [10, 0, 0, 0, 0, 0x03, 0x00, 0x20, 0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0];
+        s.handle_request(&req, Instant::ZERO, EsmState::PreOp, &mut dev, &mut NoFiles);
+        let m = s.next_response(Instant::ZERO).unwrap();
+        assert_eq!(m, [10, 0, 0, 0, 0, 0x23, 0x00, 0x30, 0x4F, 0x00, 0x10, 0x00, 5, 0, 0, 0]);
+        assert_eq!(s.stats().requests, 1);
+    }
+}

@@ -289,3 +289,96 @@ fn entry_description<A: ObjectAccess + ?Sized>(
     put_text(w, &s.name, limit);
     out.q.commit(MailboxType::Coe);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mailbox::ResponseQueue;
+    use drivebus_od::{Access, DataType, NoHooks, ObjectDictionary, SubObject, Value};
+
+    fn od(n: u16) -> (ObjectDictionary, NoHooks) {
+        let mut od = ObjectDictionary::new();
+        for i in 0..n {
+            od.insert(Object::var(0x2000 + i, "x", DataType::Unsigned8, Access::Rw, Value::U8(0)));
+        }
+        (od, NoHooks)
+    }
+
+    fn drain(q: &mut ResponseQueue) -> Vec<Vec<u8>> {
+        let mut all = Vec::new();
+        let mut m = Vec::new();
+        while q.pop_into(&mut m) {
+            all.push(m.clone());
+        }
+        all
+    }
+
+    #[test]
+    fn od_list_is_cut_at_even_offsets_with_fragments_counting_down() {
+        // 32-byte mailbox: 26 bytes of service data, 20 of them list.
+        let dev = od(15);
+        let mut q = ResponseQueue::new(4, 32);
+        let mut f = Fragments::default();
+        f.handle(&[0x00, 0x80, 0x01, 0, 0, 0, 0x01, 0x00], &dev, &mut Out { q: &mut q, cap: 26 });
+        while f.next(&mut Out { q: &mut q, cap: 26 }) {}
+        let frags = drain(&mut q);
+        // 2 + 30 bytes: 20 + 12.
+        assert_eq!(frags.len(), 2);
+        assert_eq!(frags[0][6..12], [0x00, 0x80, 0x82, 0x00, 0x01, 0x00]);
+        assert_eq!(frags[0][12..14], [0x01, 0x00], "list type first");
+        assert_eq!(frags[0].len(), 6 + 6 + 20);
+        assert_eq!(frags[1][6..12], [0x00, 0x80, 0x02, 0x00, 0x00, 0x00]);
+        assert_eq!(frags[1][12..], [0x09, 0x20, 0x0A, 0x20, 0x0B, 0x20, 0x0C, 0x20, 0x0D, 0x20, 0x0E, 0x20]);
+        assert!(!f.pending());
+    }
+
+    #[test]
+    fn unknown_list_type_and_opcode_are_info_errors() {
+        let dev = od(1);
+        let mut q = ResponseQueue::new(4, 32);
+        let mut f = Fragments::default();
+        f.handle(&[0x00, 0x80, 0x01, 0, 0, 0, 0x06, 0x00], &dev, &mut Out { q: &mut q, cap: 26 });
+        f.handle(&[0x00, 0x80, 0x09, 0, 0, 0], &dev, &mut Out { q: &mut q, cap: 26 });
+        let r = drain(&mut q);
+        assert_eq!(r[0][6..], [0x00, 0x80, 0x07, 0, 0, 0, 0x00, 0x00, 0x01, 0x06]);
+        assert_eq!(r[1][6..], [0x00, 0x80, 0x07, 0, 0, 0, 0x01, 0x00, 0x04, 0x05]);
+    }
+
+    #[test]
+    fn descriptions_fit_the_mailbox() {
+        let mut dev = od(0);
+        let long: String = core::iter::repeat_n('n', 40).collect();
+        dev.0.insert(Object::var(
+            0x2100,
+            long.clone(),
+            DataType::VisibleString,
+            Access::Rw,
+            Value::Str(long.clone()),
+        ));
+        let mut q = ResponseQueue::new(4, 32);
+        object_description(0x2100, &dev, &mut Out { q: &mut q, cap: 26 });
+        // Default asked but 40 bytes do not fit: not given, name cut.
+        entry_description(0x2100, 0, 0x10, &dev, &mut Out { q: &mut q, cap: 26 });
+        let r = drain(&mut q);
+        assert_eq!(r[0].len(), 32);
+        assert_eq!(r[0][12..18], [0x00, 0x21, 0x09, 0x00, 0x00, 0x07]);
+        assert_eq!(r[1].len(), 32);
+        assert_eq!(r[1][15], 0x00, "no optional field given");
+        assert_eq!(u16::from_le_bytes([r[1][18], r[1][19]]), 8 * 40);
+    }
+
+    #[test]
+    fn object_data_types() {
+        let rec = |i| Object::record(i, "r");
+        assert_eq!(object_data_type(&rec(0x1018)), 0x23);
+        assert_eq!(object_data_type(&rec(0x1200)), 0x22);
+        assert_eq!(object_data_type(&rec(0x1800)), 0x20);
+        assert_eq!(object_data_type(&rec(0x1A00)), 0x21);
+        assert_eq!(object_data_type(&rec(0x2000)), 0);
+        let arr = Object::array(0x2001, "a", DataType::Integer16, Access::Rw, 2, Value::I16(0));
+        assert_eq!((object_data_type(&arr), object_code(&arr)), (0x03, 8));
+        let s =
+            SubObject::new(0, "s", DataType::OctetString, Access::Rw, Value::Bytes(vec![0; 3])).max_len(10);
+        assert_eq!(bit_length(&s), 80);
+    }
+}

@@ -279,3 +279,47 @@ fn unsized_len<A: ObjectAccess + ?Sized>(objects: &A, mux: Mux) -> usize {
         .filter(|n| (1..=4).contains(n))
         .unwrap_or(4)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mailbox::ResponseQueue;
+    use drivebus_od::{Access, DataType, NoHooks, Object, ObjectDictionary, Value};
+
+    fn first(q: &mut ResponseQueue) -> alloc::vec::Vec<u8> {
+        let mut m = alloc::vec::Vec::new();
+        assert!(q.pop_into(&mut m));
+        m
+    }
+
+    #[test]
+    fn upload_response_kinds_by_size() {
+        // 32-byte mailbox: 26 bytes of service data, 16 of data after the
+        // normal initiate header.
+        let mut q = ResponseQueue::new(6, 32);
+        let mux = Mux { index: 0x2000, sub: 1, ca: false };
+        let mut out = Out { q: &mut q, cap: 26 };
+        assert_eq!(upload_response(&mut out, mux, &[]), None);
+        assert_eq!(upload_response(&mut out, mux, &[1, 2, 3]), None);
+        assert_eq!(upload_response(&mut out, Mux { ca: true, ..mux }, &[1, 2, 3, 4]), None);
+        assert_eq!(upload_response(&mut out, mux, &[7; 16]), None);
+        assert_eq!(upload_response(&mut out, mux, &[7; 17]), Some(16));
+        assert_eq!(first(&mut q)[6..], [0x00, 0x30, 0x41, 0x00, 0x20, 0x01, 0, 0, 0, 0]);
+        assert_eq!(first(&mut q)[6..], [0x00, 0x30, 0x47, 0x00, 0x20, 0x01, 1, 2, 3, 0]);
+        assert_eq!(first(&mut q)[6..], [0x00, 0x30, 0x53, 0x00, 0x20, 0x01, 1, 2, 3, 4]);
+        assert_eq!(first(&mut q).len(), 32);
+    }
+
+    #[test]
+    fn unsized_expedited_length_follows_the_entry() {
+        let mut od = ObjectDictionary::new();
+        od.insert(Object::var(0x2000, "a", DataType::Unsigned16, Access::Rw, Value::U16(0)));
+        od.insert(Object::var(0x2001, "b", DataType::Unsigned64, Access::Rw, Value::U64(0)));
+        let dev = (od, NoHooks);
+        let m = |index, ca| Mux { index, sub: 0, ca };
+        assert_eq!(unsized_len(&dev, m(0x2000, false)), 2);
+        assert_eq!(unsized_len(&dev, m(0x2001, false)), 4);
+        assert_eq!(unsized_len(&dev, m(0x2002, false)), 4);
+        assert_eq!(unsized_len(&dev, m(0x2000, true)), 4);
+    }
+}
