@@ -1,6 +1,6 @@
 //! The EtherCAT state machine states, as the ESC layer passes them in.
 
-/// An ESM state (AL status bits 0-3, ETG.1000.6 §6.4.1).
+/// An ESM state (AL status bits 0-3; ETG.1000.6, EtherCAT state machine).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum EsmState {
     /// INIT (1): no mailbox.

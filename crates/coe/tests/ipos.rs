@@ -162,10 +162,10 @@ fn every_object_listed_described_and_read() {
 
 #[test]
 fn ethercrab_reads_every_readable_entry() {
-    // ethercrab 0.7.1 reads expedited (<= 4 bytes) and normal uploads; with
-    // a 512-byte mailbox every iPOS value is normal (no segments), and the
-    // whole OD list is one fragment.
-    let mut r = rig(512);
+    // ethercrab 0.7.1 reads expedited (<= 4 bytes) and normal uploads (it
+    // cannot decode an upload segment response, command specifier 0). With
+    // a 128-byte mailbox every iPOS value is expedited or normal.
+    let mut r = rig(128);
     let od = r.dev.od.clone();
     for o in od.objects() {
         for s in o.subs().iter().filter(|s| s.access.readable()) {
@@ -182,10 +182,14 @@ fn ethercrab_reads_every_readable_entry() {
             assert_eq!(value, s.bytes(), "{:04X}:{}", o.index, s.sub);
         }
     }
+    // ethercrab reads an OD list exactly when it is one fragment: SM1 of at
+    // least 6 + 6 + 2 + 2 × objects bytes.
+    let need = 14 + 2 * od.objects().len();
+    let mut r = rig(need);
     let c = r.counter();
     r.send(&ethercrab::od_list(c, 1));
     let f = r.read().unwrap();
-    assert_eq!(r.read(), None, "one fragment");
+    assert_eq!(r.read(), None, "one fragment in {need} bytes");
     assert_eq!(ethercrab::parse_od_list(&[f]), od.objects().iter().map(|o| o.index).collect::<Vec<_>>());
 }
 

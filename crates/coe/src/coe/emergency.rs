@@ -1,4 +1,4 @@
-//! CoE emergency (ETG.1000.6 §5.6.4): the CiA 301 EMCY message carried in
+//! CoE emergency (ETG.1000.6 §5.6, emergency service): the CiA 301 EMCY message carried in
 //! a mailbox of its own, and the bounded queue it waits in.
 
 use alloc::vec::Vec;

@@ -53,7 +53,7 @@ pub mod list_type {
 }
 
 /// Value-info bits of Get Entry Description: which optional fields follow
-/// the fixed ones (§5.6.3.6). Bit 3 (unit type) is never given: the
+/// the fixed ones (§5.6.3, Get Entry Description). Bit 3 (unit type) is never given: the
 /// dictionary holds no units.
 mod value_info {
     pub const DEFAULT: u8 = 0x10;
@@ -168,7 +168,7 @@ fn in_list<A: ObjectAccess + ?Sized>(list: u16, o: &Object, objects: &A) -> bool
     o.subs().iter().any(|s| objects.object_access(o.index, s.sub) & bit != 0)
 }
 
-/// Answer with an SDO Info error request carrying an abort code (§5.6.3.8).
+/// Answer with an SDO Info error request carrying an abort code (§5.6.3).
 fn info_error(out: &mut Out<'_>, code: SdoAbort) {
     let w = out.q.begin();
     w.extend_from_slice(&COE_SDO_INFO);
@@ -214,7 +214,7 @@ fn put_text(w: &mut Vec<u8>, text: &str, limit: usize) {
 }
 
 /// Get Object Description: index, data type, highest sub-index, object
-/// code, name (§5.6.3.5).
+/// code, name (§5.6.3, Get Object Description).
 fn object_description<A: ObjectAccess + ?Sized>(index: u16, objects: &A, out: &mut Out<'_>) {
     let Some(o) = objects.dictionary().object(index) else {
         return info_error(out, SdoAbort::NO_OBJECT);
@@ -245,7 +245,7 @@ fn bit_length(s: &SubObject) -> u16 {
 
 /// Get Entry Description: index, sub-index, value info, data type, bit
 /// length, object access, the optional fields asked for and available
-/// (default, minimum, maximum; no unit type), then the name (§5.6.3.6).
+/// (default, minimum, maximum; no unit type), then the name (§5.6.3).
 fn entry_description<A: ObjectAccess + ?Sized>(
     index: u16,
     sub: u8,
