@@ -28,7 +28,8 @@
 //! (one per request, in request order), the next fragment of an SDO
 //! Information answer, then emergencies. Emergencies are **held while an
 //! SDO conversation of several mailboxes is under way** (segmented
-//! transfer, fragmented OD list) and released when it ends or times out.
+//! transfer, fragmented OD list) and released when it ends or times out;
+//! they are also held while the last request came in BOOT (FoE only).
 //! Why: a master reads SM1 right after writing a request and takes what
 //! it finds as the answer. ethercrab 0.7.1 asserts that this is not an
 //! emergency (`mailbox/coe/mod.rs`), and inside a segmented transfer an

@@ -188,6 +188,8 @@ pub(crate) struct ResponseQueue {
     /// never reached (callers check for room and a request yields at most
     /// one response), but a full queue must not overwrite its head.
     overflow: Vec<u8>,
+    /// Mailbox error replies queued so far.
+    pub(crate) errors: u64,
 }
 
 impl ResponseQueue {
@@ -195,7 +197,7 @@ impl ResponseQueue {
     pub(crate) fn new(n: usize, tx_size: usize) -> Self {
         let n = n.max(2);
         let slots = (0..n).map(|_| Vec::with_capacity(tx_size)).collect();
-        ResponseQueue { slots, head: 0, len: 0, tx_size, overflow: Vec::with_capacity(tx_size) }
+        ResponseQueue { slots, head: 0, len: 0, tx_size, overflow: Vec::with_capacity(tx_size), errors: 0 }
     }
 
     /// Change the mailbox size (drops queued responses).
@@ -267,6 +269,7 @@ impl ResponseQueue {
         }
         self.begin().extend_from_slice(&error_body(code));
         self.commit(MailboxType::Error);
+        self.errors += 1;
         true
     }
 

@@ -120,6 +120,9 @@ pub struct MailboxServer {
     rx_counter: u8,
     /// Counter of the last response.
     tx_counter: u8,
+    /// ESM state of the last request: in BOOT no CoE goes out, emergencies
+    /// included.
+    state: EsmState,
     stats: MailboxStats,
 }
 
@@ -145,6 +148,7 @@ impl MailboxServer {
             foe: FoeServer::new(config.foe_timeout),
             rx_counter: 0,
             tx_counter: 0,
+            state: EsmState::Init,
             stats: MailboxStats::default(),
         })
     }
@@ -156,7 +160,7 @@ impl MailboxServer {
 
     /// Counters since creation.
     pub fn stats(&self) -> MailboxStats {
-        self.stats
+        MailboxStats { mailbox_errors: self.responses.errors, ..self.stats }
     }
 
     /// Change the SM0/SM1 lengths (the bootstrap mailbox of BOOT has its
@@ -203,12 +207,14 @@ impl MailboxServer {
     }
 
     fn emergency_due(&self) -> bool {
-        self.emergencies.len() > 0 && !self.coe.busy()
+        self.emergencies.len() > 0 && !self.coe.busy() && self.state != EsmState::Boot
     }
 
     /// Queue a CoE emergency. It is handed out by [`Self::next_response`]
-    /// after every pending response and never while an SDO conversation
-    /// of several mailboxes is under way (see the crate documentation).
+    /// after every pending response, never while an SDO conversation of
+    /// several mailboxes is under way (see the crate documentation) and not
+    /// while the last request came in BOOT, where the mailbox carries FoE
+    /// only.
     pub fn queue_emergency(
         &mut self,
         code: u16,
@@ -242,6 +248,7 @@ impl MailboxServer {
         F: FileHandler + ?Sized,
     {
         self.stats.requests += 1;
+        self.state = state;
         self.expire(now, files);
         if !state.has_mailbox() {
             // ETG.1000.6: no mailbox in INIT; an ESC would not deliver it.
@@ -290,9 +297,7 @@ impl MailboxServer {
     }
 
     fn error(&mut self, code: MailboxErrorCode) {
-        if self.responses.push_error(code) {
-            self.stats.mailbox_errors += 1;
-        }
+        self.responses.push_error(code);
     }
 
     /// The next mailbox for SM1, with its counter set: queued responses
@@ -309,7 +314,7 @@ impl MailboxServer {
             }
         }
         if !got
-            && !self.coe.busy()
+            && self.emergency_due()
             && let Some(e) = self.emergencies.pop()
         {
             let body = e.body();

@@ -65,6 +65,8 @@ fn malformed_mailboxes() {
     // SDO Info header cut short.
     assert_eq!(r.one(&mbx(0x03, 7, &[0x00, 0x80, 0x01, 0x00]))[8], 0x06);
     assert_eq!(r.one(&mbx(0x03, 1, &[0x00, 0x80, 0x05, 0x00, 0, 0, 0x00, 0x10]))[8], 0x06);
+    // Every one of them counted, the CoE ones included.
+    assert_eq!(r.server.stats().mailbox_errors, 16);
 }
 
 #[test]
@@ -143,14 +145,17 @@ fn esm_state_gates_the_mailbox() {
     r.send(&ethercrab::upload(1, 0x1000, Some(0)));
     assert_eq!(r.read(), None);
     assert_eq!(r.server.stats().ignored, 1);
-    // BOOT: FoE only.
+    // BOOT: FoE only, emergencies wait.
     r.state = EsmState::Boot;
+    r.server.queue_emergency(0x5000, 0, [0; 5]).unwrap();
     assert_eq!(r.one(&ethercrab::upload(2, 0x1000, Some(0))), mbx_error(1, 0x02));
+    assert_eq!(r.read(), None);
     for s in [EsmState::PreOp, EsmState::SafeOp, EsmState::Op] {
         r.state = s;
         let c = r.counter();
         assert_eq!(body(&r.one(&ethercrab::upload(c, 0x1000, Some(0))))[2], 0x43);
     }
+    assert_eq!(body(&r.read().unwrap())[..4], [0x00, 0x10, 0x00, 0x50]);
 }
 
 #[test]
