@@ -53,6 +53,22 @@
 //! complete-access image, the OD list), reusing the capacity of earlier
 //! transfers; segments, fragments and FoE packets do not allocate.
 //!
+//! # What the SII should announce, and mailbox sizes
+//!
+//! Mailbox protocols CoE and FoE (not EoE). CoE details: SDO, SDO
+//! Information, PDO assignment, PDO configuration and, when
+//! [`MailboxConfig::complete_access`] is on, complete access (SOEM then
+//! reads 1C12h/1C13h and the mapping objects by complete access). The
+//! bootstrap mailbox (BOOT) may have other SM sizes:
+//! [`MailboxServer::set_mailbox_sizes`].
+//!
+//! ethercrab 0.7.1 cannot decode an upload segment response (its
+//! `CoeCommand` has no command specifier 0) and keeps `length − 8` bytes of
+//! every OD-list fragment, one index short after the first fragment. Both
+//! are avoided by an SM1 of at least 16 bytes more than the largest value
+//! and 14 + 2 × (number of objects) bytes: 394 for the iPOS twin's 190
+//! objects. SOEM and TwinCAT take every size.
+//!
 //! # EoE
 //!
 //! EoE (and AoE, SoE, VoE) is answered with the mailbox error
