@@ -10,7 +10,7 @@ mod support;
 use proptest::prelude::*;
 
 fn corpus(name: &str) -> Vec<u8> {
-    let path = format!("{}/../../fuzz/corpus/coe_mailbox/{name}", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/../../fuzz/seeds/coe_mailbox/{name}", env!("CARGO_MANIFEST_DIR"));
     std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 

@@ -1,7 +1,7 @@
 //! The decoding shared by the `coe_mailbox` fuzz target
 //! (`fuzz/fuzz_targets/coe_mailbox.rs`) and `tests/random_input.rs`, which
 //! runs it under proptest on stable and over every file of
-//! `fuzz/corpus/coe_mailbox/`.
+//! `fuzz/seeds/coe_mailbox/`.
 //!
 //! Input: byte 0 picks the mailbox size and options; then records
 //! `[tag, len (u16 LE), payload...]`:
