@@ -135,16 +135,16 @@ impl EsiObject {
         for s in &self.subs {
             if s.sub == 0 {
                 offs.push(at);
-                at += s.bits().max(16).next_multiple_of(8);
+                at = at.saturating_add(s.bits().max(16).checked_next_multiple_of(8).unwrap_or(u32::MAX));
                 continue;
             }
             if s.data_type != DataType::Boolean {
-                at = at.next_multiple_of(8);
+                at = at.checked_next_multiple_of(8).unwrap_or(at);
             }
             offs.push(at);
-            at += s.bits();
+            at = at.saturating_add(s.bits());
         }
-        (offs, at.next_multiple_of(8))
+        (offs, at.checked_next_multiple_of(8).unwrap_or(at))
     }
 }
 

@@ -344,7 +344,7 @@ fn object(o: &Element, types: &HashMap<&str, &Element>) -> Result<EsiObject, Rea
         let count: usize = num(ainfo.child_text("Elements"), &format!("{at}: ArrayInfo/Elements"))?;
         let lbound: u8 = num(ainfo.child_text("LBound").or(Some("1")), &format!("{at}: ArrayInfo/LBound"))?;
         let total: u32 = num(item.child_text("BitSize").or(Some("0")), &format!("{at}: Elements/BitSize"))?;
-        let elem_bits = if count == 0 { 0 } else { total / count as u32 };
+        let elem_bits = u32::try_from(count).ok().filter(|c| *c > 0).map_or(0, |c| total / c);
         let base = arr.child_text("BaseType").unwrap_or_default();
         let Some((dt, len)) = parse_type_name(base, Some(elem_bits)) else {
             return fail(&at, format!("unknown array base type {base:?}"));

@@ -88,7 +88,7 @@ pub fn parse_type_name(name: &str, bit_size: Option<u32>) -> Option<(DataType, u
     }
     if let Some(chars) = sized("UNICODE_STRING") {
         // The bit size keeps an odd byte count the name cannot.
-        return Some((UnicodeString, bit_size.map_or(chars * 2, |b| b as usize / 8)));
+        return Some((UnicodeString, bit_size.map_or(chars.saturating_mul(2), |b| b as usize / 8)));
     }
     if let Some(len) = sized("OCTET_STRING") {
         return Some((OctetString, len));
@@ -96,7 +96,7 @@ pub fn parse_type_name(name: &str, bit_size: Option<u32>) -> Option<(DataType, u
     if let Some(rest) = n.strip_prefix("ARRAY [0..").and_then(|r| r.strip_suffix("] OF BYTE")) {
         let hi: usize = rest.trim().parse().ok()?;
         // ARRAY [0..0] is one byte, or none when the bit size says so.
-        let len = if bit_size == Some(0) { 0 } else { hi + 1 };
+        let len = if bit_size == Some(0) { 0 } else { hi.checked_add(1)? };
         return Some((OctetString, len));
     }
     None
@@ -104,7 +104,7 @@ pub fn parse_type_name(name: &str, bit_size: Option<u32>) -> Option<(DataType, u
 
 /// Bits a value of `dt` with `len` bytes takes (BOOLEAN: 1).
 pub fn bit_size(dt: DataType, len: usize) -> u32 {
-    if dt == DataType::Boolean { 1 } else { 8 * len as u32 }
+    if dt == DataType::Boolean { 1 } else { u32::try_from(len.saturating_mul(8)).unwrap_or(u32::MAX) }
 }
 
 /// How a value is written in `Info`: a number (`DefaultValue`, `MinValue`,
