@@ -397,3 +397,79 @@ pub fn check_eds(d: &SlaveDescription, eds: &Eds, opts: &CheckOptions) -> Vec<Fi
     compare_objects(&mut r, d, &want, opts.names);
     r.out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::description::DeviceFacts;
+    use drivebus_od::{Access, Value};
+
+    fn od() -> ObjectDictionary {
+        let mut od = ObjectDictionary::new();
+        od.insert(Object::var(
+            0x1000,
+            "Device type",
+            DataType::Unsigned32,
+            Access::Ro,
+            Value::U32(0x0002_0192),
+        ));
+        od.insert(
+            Object::record(0x1018, "Identity")
+                .with_sub(SubObject::new(1, "Vendor", DataType::Unsigned32, Access::Ro, Value::U32(9)))
+                .with_sub(SubObject::new(2, "Product", DataType::Unsigned32, Access::Ro, Value::U32(8)))
+                .with_sub(SubObject::new(3, "Revision", DataType::Unsigned32, Access::Ro, Value::U32(7))),
+        );
+        od.insert(Object::var(0x2000, "Gain", DataType::Real32, Access::Rw, Value::F32(1.5)));
+        od
+    }
+
+    #[test]
+    fn identity_profile_and_values_are_compared() {
+        let od = od();
+        let d = SlaveDescription::new(&od, &DeviceFacts::new(9, "v", 8, 7, "p"));
+        assert_eq!(check_dictionary(&d, &od, &CheckOptions::default()), Vec::new());
+        let mut bad = d.clone();
+        bad.revision = u32::from_be_bytes(*b"515J");
+        bad.profile.add_info = 6;
+        bad.objects[2].subs[0].default = 2.5f32.to_le_bytes().to_vec();
+        bad.objects[2].name = "gain".into();
+        let got: Vec<String> =
+            check_dictionary(&bad, &od, &CheckOptions::default()).iter().map(|f| f.to_string()).collect();
+        assert_eq!(
+            got,
+            [
+                "1018h:03 revision number: ESI #x3531354A (\"515J\"); dictionary #x00000007",
+                "1000h:00 AddInfo: ESI 6; dictionary 2",
+                "2000h name: ESI \"gain\"; dictionary \"Gain\"",
+                "2000h:00 default: ESI data 00002040; dictionary data 0000C03F",
+            ]
+        );
+        let quiet = CheckOptions { names: false, ..CheckOptions::default() };
+        assert_eq!(check_dictionary(&bad, &od, &quiet).len(), 3);
+    }
+
+    #[test]
+    fn the_eds_is_checked_as_written() {
+        let text = "[DeviceInfo]\nVendorNumber=9\nProductNumber=8\nRevisionNumber=7\nVendorName=v\nProductName=p\n\
+            [1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x20192\n\
+            [1018]\nParameterName=Identity\nObjectType=0x9\nSubNumber=4\n\
+            [1018sub0]\nParameterName=n\nObjectType=0x7\nDataType=0x0005\nAccessType=const\nDefaultValue=4\n\
+            [1018sub1]\nParameterName=Vendor\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=9\n\
+            [1018sub2]\nParameterName=Product\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=8\n\
+            [1018sub3]\nParameterName=Revision\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=7\n\
+            [2000]\nParameterName=Gain\nObjectType=0x7\nDataType=0x0008\nAccessType=rw\nDefaultValue=1.5\n";
+        let eds = drivebus_eds::parse(text).unwrap().eds;
+        let od = od();
+        let d = SlaveDescription::new(&od, &DeviceFacts::new(9, "v", 8, 7, "p"));
+        // 1018h:00 is 4 in the file; the dictionary (with_sub) keeps it at 3.
+        let got: Vec<String> =
+            check_eds(&d, &eds, &CheckOptions::default()).iter().map(|f| f.to_string()).collect();
+        assert_eq!(
+            got,
+            [
+                "1018h:00 name: ESI \"Highest sub-index supported\"; EDS \"n\"",
+                "1018h:00 default: ESI #x03; EDS #x04"
+            ]
+        );
+    }
+}

@@ -236,3 +236,114 @@ fn mailbox_sizes(r: &mut Report, d: &SlaveDescription) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::description::DeviceFacts;
+    use drivebus_od::{Access, DataType, Object, ObjectCode, SubObject, Value};
+
+    fn od(sm3_type: u8, map: &[u32]) -> ObjectDictionary {
+        let mut od = ObjectDictionary::new();
+        let mut c = Object::array(0x1C00, "SM types", DataType::Unsigned8, Access::Ro, 4, Value::U8(1));
+        for (i, t) in [1u8, 2, 3, sm3_type].into_iter().enumerate() {
+            c.subs_mut()[i + 1].default = vec![t];
+        }
+        od.insert(c);
+        od.insert(
+            Object::record(0x1018, "Identity")
+                .with_sub(SubObject::new(1, "v", DataType::Unsigned32, Access::Ro, Value::U32(1)))
+                .with_sub(SubObject::new(2, "p", DataType::Unsigned32, Access::Ro, Value::U32(1)))
+                .with_sub(SubObject::new(3, "r", DataType::Unsigned32, Access::Ro, Value::U32(1)))
+                .with_sub(SubObject::new(4, "s", DataType::Unsigned32, Access::Ro, Value::U32(1))),
+        );
+        od.insert(Object::var(0x6041, "Statusword", DataType::Unsigned16, Access::Ro, Value::U16(0)));
+        let mut cw = Object::var(0x6040, "Controlword", DataType::Unsigned16, Access::Rww, Value::U16(0));
+        cw.subs_mut()[0].pdo_mappable = true;
+        od.insert(cw);
+        for (assign, first) in [(0x1C12u16, 0x1600u16), (0x1C13, 0x1A00)] {
+            let mut a =
+                Object::array(assign, "assign", DataType::Unsigned16, Access::Rw, 1, Value::U16(first));
+            a.subs_mut()[0].access = Access::Rw;
+            od.insert(a);
+        }
+        for index in [0x1600u16, 0x1A00] {
+            let mut o = Object::with_code(index, ObjectCode::Record, "map").with_sub(SubObject::new(
+                0,
+                "n",
+                DataType::Unsigned8,
+                Access::Rw,
+                Value::U8(map.len() as u8),
+            ));
+            for (k, v) in map.iter().enumerate() {
+                o = o.with_sub(SubObject::new(
+                    k as u8 + 1,
+                    "e",
+                    DataType::Unsigned32,
+                    Access::Rw,
+                    Value::U32(*v),
+                ));
+            }
+            od.insert(o);
+        }
+        od
+    }
+
+    fn found(od: &ObjectDictionary, opts: &CheckOptions) -> Vec<String> {
+        let d = SlaveDescription::new(od, &DeviceFacts::new(1, "v", 1, 1, "p"));
+        check_ethercat(&d, od, opts).iter().map(ToString::to_string).collect()
+    }
+
+    #[test]
+    fn a_complete_dictionary_passes() {
+        let od = od(4, &[0x6040_0010]);
+        // 1A00h maps the controlword too, which is not TxPDO-mappable.
+        assert_eq!(
+            found(&od, &CheckOptions::default()),
+            ["1A00h:01 default entry: dictionary 6040:00 not mappable; EtherCAT needs TxPDO-mappable"]
+        );
+    }
+
+    #[test]
+    fn each_need_reports() {
+        let od = od(3, &[0x6040_0020, 0x7000_0008, 0x0005_0008]);
+        let opts =
+            CheckOptions { mapping_entries: Some(4), max_pdo_bits: Some(40), ..CheckOptions::default() };
+        let got = found(&od, &opts);
+        for want in [
+            "1C00h:04 default: dictionary 3; EtherCAT needs 4 (SM3 is Inputs)",
+            "1600h sub-indices: dictionary 4 missing; EtherCAT needs 1–4",
+            "1600h:01 default entry: dictionary 6040:00 32 bits; EtherCAT needs 16 bits",
+            "1600h:02 default entry: dictionary 7000:00; EtherCAT needs an existing object",
+            "1600h default mapping: dictionary 48 bits; EtherCAT needs at most 40",
+        ] {
+            assert!(got.iter().any(|g| g.starts_with(want)), "{want:?} not in {got:#?}");
+        }
+        assert!(!got.iter().any(|g| g.contains("0005")), "dummy entries are fine: {got:#?}");
+    }
+
+    #[test]
+    fn mailbox_sizes_and_ranges() {
+        let od = od(4, &[0x6041_0010]);
+        let mut f = DeviceFacts::new(1, "v", 1, 1, "p");
+        f.mailbox_area = Some(crate::description::MailboxArea {
+            rx_start: 0x1000,
+            rx_size: 16,
+            tx_start: 0x1100,
+            tx_size: 20,
+        });
+        let d = SlaveDescription::new(&od, &f);
+        let got: Vec<String> =
+            check_ethercat(&d, &od, &CheckOptions::default()).iter().map(ToString::to_string).collect();
+        assert!(
+            got.iter().any(|g| g.starts_with("SM0 size: dictionary 16; EtherCAT needs 32..=1486")),
+            "{got:#?}"
+        );
+        assert!(
+            got.iter().any(|g| g.starts_with("SM1 size: dictionary 20; EtherCAT needs at least 30")),
+            "{got:#?}"
+        );
+        assert_eq!(missing(&d, 0x1018, 6).as_deref(), Some("5–6"));
+        assert_eq!(missing(&d, 0x1018, 4), None);
+    }
+}

@@ -440,3 +440,118 @@ fn sub_with_values(
         max: value("MaxValue", "MaxData")?,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flags(xml: &str) -> u16 {
+        access_word(Some(&parse(xml).unwrap()))
+    }
+
+    #[test]
+    fn flags_to_access_words() {
+        assert_eq!(flags("<Flags><Access>ro</Access></Flags>"), READ);
+        assert_eq!(
+            flags("<Flags><Access>RW</Access><PdoMapping>TR</PdoMapping></Flags>"),
+            READ | WRITE | RXPDO | TXPDO
+        );
+        assert_eq!(
+            flags(
+                r#"<Flags><Access WriteRestrictions="PreOP">rw</Access><Backup>1</Backup><Setting>true</Setting></Flags>"#
+            ),
+            READ | WRITE_PREOP | BACKUP | SETTINGS
+        );
+        assert_eq!(
+            flags(r#"<Flags><Access ReadRestrictions="PreOP_OP">ro</Access></Flags>"#),
+            READ_PREOP | READ_OP
+        );
+        assert_eq!(flags("<Flags><Access>wo</Access><PdoMapping>r</PdoMapping></Flags>"), WRITE | RXPDO);
+        assert_eq!(access_word(None), READ);
+    }
+
+    /// A file in another vendor's style: decimal and `0x` numbers, a
+    /// group without LcId, an array with the elements' names in `Info`,
+    /// records matched by name, `DefaultData` for a REAL.
+    #[test]
+    fn reads_other_spellings() {
+        let xml = r##"<?xml version="1.0"?>
+<EtherCATInfo Version="1.2">
+  <Vendor><Id>2</Id><Name>V &amp; Co</Name></Vendor>
+  <Descriptions>
+    <Groups><Group><Type>G</Type><Name>Group</Name></Group></Groups>
+    <Devices>
+      <Device Physics="YY">
+        <Type ProductCode="0x10" RevisionNo="17">T1</Type>
+        <Name LcId="1031">Geraet</Name><Name LcId="1033">Device</Name>
+        <GroupType>G</GroupType>
+        <Profile><ProfileNo>402</ProfileNo><AddInfo>2</AddInfo><Dictionary>
+          <DataTypes>
+            <DataType><Name>UINT</Name><BitSize>16</BitSize></DataType>
+            <DataType><Name>DT1C12ARR</Name><BaseType>UINT</BaseType><BitSize>32</BitSize>
+              <ArrayInfo><LBound>1</LBound><Elements>2</Elements></ArrayInfo></DataType>
+            <DataType><Name>DT1C12</Name><BitSize>48</BitSize>
+              <SubItem><SubIdx>0</SubIdx><Name>Count</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs>
+                <Flags><Access>rw</Access></Flags></SubItem>
+              <SubItem><Name>Elements</Name><Type>DT1C12ARR</Type><BitSize>32</BitSize><BitOffs>16</BitOffs>
+                <Flags><Access WriteRestrictions="PreOP">rw</Access></Flags></SubItem></DataType>
+            <DataType><Name>DT2000</Name><BitSize>48</BitSize>
+              <SubItem><SubIdx>0</SubIdx><Name>n</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs></SubItem>
+              <SubItem><SubIdx>1</SubIdx><Name>gain</Name><Type>REAL</Type><BitSize>32</BitSize><BitOffs>16</BitOffs>
+                <Flags><Access>rw</Access></Flags></SubItem></DataType>
+          </DataTypes>
+          <Objects>
+            <Object><Index>#x2000</Index><Name>Tuning</Name><Type>DT2000</Type><BitSize>48</BitSize>
+              <Info><SubItem><Name>gain</Name><Info><DefaultData>0000C03F</DefaultData></Info></SubItem></Info></Object>
+            <Object><Index>#x1c12</Index><Name>Assign</Name><Type>DT1C12</Type><BitSize>48</BitSize>
+              <Info><SubItem><Name>Count</Name><Info><DefaultValue>1</DefaultValue></Info></SubItem>
+                <SubItem><Name>First</Name><Info><DefaultValue>0x1600</DefaultValue></Info></SubItem></Info></Object>
+            <Object><Index>4096</Index><Name>Device type</Name><Type>UDINT</Type><BitSize>32</BitSize>
+              <Info><DefaultValue>131474</DefaultValue></Info><Flags><Access>ro</Access><Category>m</Category></Flags></Object>
+          </Objects></Dictionary></Profile>
+        <Sm StartAddress="#x1000" ControlByte="#x26" Enable="1" DefaultSize="128">MBoxOut</Sm>
+        <Mailbox><CoE SdoInfo="1" CompleteAccess="0"/></Mailbox>
+      </Device>
+    </Devices>
+  </Descriptions>
+</EtherCATInfo>"##;
+        let d = read(xml).unwrap();
+        assert_eq!(
+            (d.vendor_id, d.vendor_name.as_str(), d.product_code, d.revision),
+            (2, "V & Co", 0x10, 17)
+        );
+        assert_eq!((d.name.as_str(), d.group_name.as_str()), ("Device", "Group"));
+        assert_eq!(d.objects.iter().map(|o| o.index).collect::<Vec<_>>(), [0x1000, 0x1C12, 0x2000]);
+        let a = d.object(0x1C12).unwrap();
+        assert_eq!(a.kind, ObjectKind::Array);
+        assert_eq!(
+            a.subs.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
+            ["Count", "First", "SubIndex 002"]
+        );
+        assert_eq!(a.subs[1].default, vec![0x00, 0x16]);
+        assert_eq!(a.subs[2].default, vec![0, 0], "no Info: zero");
+        assert_eq!(a.subs[1].access, READ | WRITE_PREOP);
+        let r = d.object(0x2000).unwrap();
+        assert_eq!(r.subs[1].default, 1.5f32.to_le_bytes());
+        assert_eq!(r.subs[0].access, READ, "no Flags: read-only");
+        assert_eq!(d.object(0x1000).unwrap().subs[0].default, 0x20192u32.to_le_bytes());
+        assert!(d.mailbox.is_some_and(|m| m.coe.is_some_and(|c| c.sdo_info && !c.complete_access)));
+        assert_eq!(d.sync_managers[0].default_size, Some(128));
+    }
+
+    #[test]
+    fn errors_say_where() {
+        let e = read("<EtherCATInfo><Vendor><Id>x</Id></Vendor></EtherCATInfo>").unwrap_err();
+        assert_eq!(e.at, "Vendor/Id");
+        let e = read("<Other/>").unwrap_err();
+        assert!(e.message.contains("EtherCATInfo"));
+        let bad_default = "<EtherCATInfo><Vendor><Id>1</Id></Vendor><Descriptions><Devices><Device>\
+            <Type ProductCode='1' RevisionNo='1'>t</Type><Profile><Dictionary><Objects><Object><Index>#x6040</Index>\
+            <Name>cw</Name><Type>UINT</Type><BitSize>16</BitSize><Info><DefaultValue>70000</DefaultValue></Info>\
+            </Object></Objects></Dictionary></Profile></Device></Devices></Descriptions></EtherCATInfo>";
+        let e = read(bad_default).unwrap_err();
+        assert_eq!(e.at, "Object #x6040 sub 0");
+        assert!(e.message.contains("70000"), "{e}");
+        assert!(read("<EtherCATInfo><Vendor><Id>1</Id></Vendor><Descriptions><Devices/></Descriptions></EtherCATInfo>").is_err());
+    }
+}

@@ -305,3 +305,94 @@ fn dictionary(v: &mut V, dict: &Element, at: &str) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEAD: &str = "<EtherCATInfo><Vendor><Id>#x2</Id></Vendor><Descriptions><Groups><Group><Type>G</Type>\
+        <Name>g</Name></Group></Groups><Devices>";
+    const TAIL: &str = "</Devices></Descriptions></EtherCATInfo>";
+
+    fn problems(device: &str) -> Vec<String> {
+        validate(&format!("{HEAD}<Device>{device}</Device>{TAIL}"))
+            .into_iter()
+            .map(|p| format!("{}: {}", if p.error { "E" } else { "W" }, p.message))
+            .collect()
+    }
+
+    const OK: &str = "<Type ProductCode='#x1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType>\
+        <Eeprom><ByteSize>256</ByteSize><ConfigData>0504</ConfigData></Eeprom>";
+
+    #[test]
+    fn a_minimal_device_is_valid() {
+        assert_eq!(problems(OK), Vec::<String>::new());
+        assert!(validate("<a>").iter().all(|p| p.error && p.message.contains("well-formed")));
+        assert!(validate("<a/>")[0].message.contains("EtherCATInfo"));
+    }
+
+    #[test]
+    fn each_rule_reports() {
+        let cases: &[(&str, &str)] = &[
+            ("<Name>n</Name><GroupType>G</GroupType>", "Type missing"),
+            (
+                "<Type ProductCode='x' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType>",
+                "\"x\" is not a number",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>H</GroupType>",
+                "names no Groups/Group",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><GroupType>G</GroupType><Name>n</Name>",
+                "ETG.2000 order",
+            ),
+            (
+                &format!("{OK}<Sm StartAddress='#x1000' ControlByte='#x26'>MBoxOut</Sm>"),
+                "needs a DefaultSize",
+            ),
+            (&format!("{OK}<Sm StartAddress='#x1000' ControlByte='#x26'>Mailbox</Sm>"), "is not MBoxOut"),
+            (&format!("{OK}<Mailbox><CoE/></Mailbox>"), "needs MBoxOut and MBoxIn"),
+            (&format!("{OK}<RxPdo Sm='0'><Index>#x1600</Index></RxPdo>"), "without an Outputs Fmmu"),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType><Fmmu>Outputs</Fmmu>\
+                 <Sm StartAddress='#x1000' ControlByte='#x20'>Inputs</Sm><RxPdo Sm='0'><Index>#x1600</Index>\
+                 <Entry><Index>#x6040</Index><SubIndex>0</SubIndex><BitLen>16</BitLen></Entry></RxPdo>",
+                "SM0 is not an Outputs sync manager",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType><Fmmu>Outputs</Fmmu>\
+                 <RxPdo><Index>#x1600</Index><Entry><Index>#x6040</Index><SubIndex>0</SubIndex><BitLen>16</BitLen></Entry></RxPdo>",
+                "DataType missing",
+            ),
+            (
+                &format!("{OK}<Dc><OpMode><Name>DC</Name><AssignActivate>on</AssignActivate></OpMode></Dc>"),
+                "\"on\" is not a number",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType>\
+                 <Eeprom><ByteSize>256</ByteSize><ConfigData>000102030405060708090A0B0C0D0E</ConfigData></Eeprom>",
+                "at most 14 hex bytes",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType>\
+                 <Eeprom><ByteSize>300</ByteSize><ConfigData>00</ConfigData></Eeprom>",
+                "not a power of two",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType><Profile><Dictionary>\
+                 <Objects><Object><Index>#x2000</Index><Name>x</Name><Type>DT2000</Type><BitSize>8</BitSize></Object>\
+                 </Objects></Dictionary></Profile>",
+                "neither a base type nor in DataTypes",
+            ),
+            (
+                "<Type ProductCode='1' RevisionNo='1'>t</Type><Name>n</Name><GroupType>G</GroupType>",
+                "Eeprom missing",
+            ),
+        ];
+        for (device, want) in cases {
+            let p = problems(device);
+            assert!(p.iter().any(|m| m.contains(want)), "{want:?} not in {p:?}");
+        }
+    }
+}
