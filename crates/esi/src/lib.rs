@@ -19,7 +19,7 @@
 //!   [`SlaveDescription::new`] builds it from an [`ObjectDictionary`] and
 //!   [`DeviceFacts`] (identity, names, ESC layout, protocols, DC, EEPROM);
 //!   [`ipos::facts`] gives the Technosoft iPOS twin's facts.
-//! * [`write`] gives the XML (deterministic, schema element order,
+//! * [`write()`] gives the XML (deterministic, schema element order,
 //!   escaped by `quick-xml`); [`read`] reads it back; [`validate`] checks
 //!   a file has what ETG.2000 and the masters (TwinCAT, SOEM, ethercrab)
 //!   need.
@@ -58,6 +58,29 @@
 //!
 //! E-bus current is 0 (MII ports). ethercrab reads only the General, FMMU
 //! and SM categories of a CoE device and takes its PDOs over CoE.
+//!
+//! # What is simplified, and why
+//!
+//! * One device per file, English names only (`LcId` 1033); no modules,
+//!   slots, images, `Category`, PDO `Exclude` or vendor-specific parts:
+//!   a drivebus device has none of them.
+//! * What ETG.2000 cannot say is written the nearest way and compared that
+//!   way: node-ID-relative defaults are written evaluated; `const` is `ro`;
+//!   a VAR's value has the object's name; an ARRAY whose elements differ in
+//!   type or access (or has gaps) is written as a record; dummy mapping
+//!   entries (0001h–0007h) become gaps (`Index` 0); the serial number is
+//!   not in the file.
+//! * Type names follow the Beckhoff slave code tool: `DTxxxx` for arrays
+//!   and records, `DTxxxxARR` for array elements, `STRING(n)`,
+//!   `ARRAY [0..n-1] OF BYTE` for octet strings; the reader also takes
+//!   IEC-style array names.
+//! * The dictionary knows no ESM states: read/write restrictions come from
+//!   [`DeviceFacts::state_rules`] (the iPOS: 1C12h/1C13h in PRE-OP only).
+//! * DC op modes carry `AssignActivate` and SYNC0/SYNC1 cycle and shift,
+//!   not op-mode-specific SM or PDO assignments.
+//! * The reader reads what the writer writes and the usual variants of
+//!   other vendors' files; [`validate`] checks what the masters need, it is
+//!   not a full XML-schema validator.
 //!
 //! [`ObjectDictionary`]: drivebus_od::ObjectDictionary
 

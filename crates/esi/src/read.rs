@@ -342,7 +342,6 @@ fn object(o: &Element, types: &HashMap<&str, &Element>) -> Result<EsiObject, Rea
             )?);
         }
         let count: usize = num(ainfo.child_text("Elements"), &format!("{at}: ArrayInfo/Elements"))?;
-        let lbound: u8 = num(ainfo.child_text("LBound").or(Some("1")), &format!("{at}: ArrayInfo/LBound"))?;
         let total: u32 = num(item.child_text("BitSize").or(Some("0")), &format!("{at}: Elements/BitSize"))?;
         let elem_bits = u32::try_from(count).ok().filter(|c| *c > 0).map_or(0, |c| total / c);
         let base = arr.child_text("BaseType").unwrap_or_default();
@@ -351,7 +350,9 @@ fn object(o: &Element, types: &HashMap<&str, &Element>) -> Result<EsiObject, Rea
         };
         let access = access_word(item.child("Flags"));
         for k in 0..count {
-            let Some(sub) = u8::try_from(k).ok().and_then(|k| k.checked_add(lbound)) else {
+            // Elements are subs 1..=n whatever LBound the array type names
+            // (SSC writes 1, IEC-style names such as `ARRAY [0..3] OF UINT` 0).
+            let Some(sub) = u8::try_from(k).ok().and_then(|k| k.checked_add(1)) else {
                 return fail(&at, "more than 255 array elements");
             };
             let isub = info_subs.get(subs.len());
@@ -471,7 +472,8 @@ mod tests {
     }
 
     /// A file in another vendor's style: decimal and `0x` numbers, a
-    /// group without LcId, an array with the elements' names in `Info`,
+    /// group without LcId, an IEC-named array type with LBound 0 and the
+    /// elements' names in `Info`,
     /// records matched by name, `DefaultData` for a REAL.
     #[test]
     fn reads_other_spellings() {
@@ -488,12 +490,12 @@ mod tests {
         <Profile><ProfileNo>402</ProfileNo><AddInfo>2</AddInfo><Dictionary>
           <DataTypes>
             <DataType><Name>UINT</Name><BitSize>16</BitSize></DataType>
-            <DataType><Name>DT1C12ARR</Name><BaseType>UINT</BaseType><BitSize>32</BitSize>
-              <ArrayInfo><LBound>1</LBound><Elements>2</Elements></ArrayInfo></DataType>
+            <DataType><Name>ARRAY [0..1] OF UINT</Name><BaseType>UINT</BaseType><BitSize>32</BitSize>
+              <ArrayInfo><LBound>0</LBound><Elements>2</Elements></ArrayInfo></DataType>
             <DataType><Name>DT1C12</Name><BitSize>48</BitSize>
               <SubItem><SubIdx>0</SubIdx><Name>Count</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs>
                 <Flags><Access>rw</Access></Flags></SubItem>
-              <SubItem><Name>Elements</Name><Type>DT1C12ARR</Type><BitSize>32</BitSize><BitOffs>16</BitOffs>
+              <SubItem><Name>Elements</Name><Type>ARRAY [0..1] OF UINT</Type><BitSize>32</BitSize><BitOffs>16</BitOffs>
                 <Flags><Access WriteRestrictions="PreOP">rw</Access></Flags></SubItem></DataType>
             <DataType><Name>DT2000</Name><BitSize>48</BitSize>
               <SubItem><SubIdx>0</SubIdx><Name>n</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs></SubItem>
