@@ -241,16 +241,16 @@ fn store_restore(
     if value != signature {
         return Err(SdoAbort::CANNOT_STORE);
     }
-    for &slot in slots(at.sub) {
-        let r = if save {
-            let image = encode_image(od, group(slot));
-            storage.save(slot, &image)
-        } else {
-            // Restored defaults take effect at the next reset (§7.5.2.14).
-            storage.erase(slot)
-        };
-        r.map_err(|_| SdoAbort::HARDWARE_ERROR)?;
-    }
+    // One commit for every group the sub-index covers: a crash in the
+    // middle of "save all" must not leave a mix of old and new groups.
+    let images: Vec<(Slot, Option<Vec<u8>>)> = slots(at.sub)
+        .iter()
+        // Restored defaults take effect at the next reset (§7.5.2.14).
+        .map(|&slot| (slot, save.then(|| encode_image(od, group(slot)))))
+        .collect();
+    let changes: Vec<(Slot, Option<&[u8]>)> =
+        images.iter().map(|(slot, image)| (*slot, image.as_deref())).collect();
+    storage.commit(&changes).map_err(|_| SdoAbort::HARDWARE_ERROR)?;
     // The object keeps reading its capability (1: on command), not the signature.
     Ok(WriteOutcome::Handled)
 }
