@@ -184,8 +184,9 @@ impl SyncManager {
         }
         let start = usize::from(self.start);
         if l == 1 {
-            let effect = write.then_some(SmEffect::Written(side));
-            return SmAccess { phys: Some(start), effect };
+            // Nothing to buffer: every access is a complete one.
+            let effect = if write { SmEffect::Written(side) } else { SmEffect::Read(side) };
+            return SmAccess { phys: Some(start), effect: Some(effect) };
         }
         let first = off == 0;
         let last = off + len >= l;
