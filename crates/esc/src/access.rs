@@ -437,7 +437,7 @@ impl Esc {
         self.clock.sample(now, e, interval);
         self.dc_last_sample = Some(now);
         let depth = u32::from(self.mem[0x0934] & 0x0F);
-        self.dc_mean += (e.saturating_sub(self.dc_mean)) / (1i64 << depth);
+        self.dc_mean = self.dc_mean.saturating_add(e.saturating_sub(self.dc_mean) / (1i64 << depth));
         self.mem[0x092C..0x0930].copy_from_slice(&diff_register(self.dc_mean).to_le_bytes());
         let speed =
             (self.clock.correction_ppb() / 100).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16;

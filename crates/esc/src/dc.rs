@@ -78,7 +78,8 @@ impl LocalClock {
         LocalClock {
             anchor_t: 0,
             anchor_local: cfg.offset_ns,
-            drift: i64::from(cfg.drift_ppb),
+            // ±10 %: beyond that no oscillator would be called a clock.
+            drift: i64::from(cfg.drift_ppb).clamp(-100_000_000, 100_000_000),
             freq: 0,
             pending: 0,
             slew: 0,
@@ -90,15 +91,15 @@ impl LocalClock {
     }
 
     fn slewed(&self, dt: u64) -> i64 {
-        let max = (i128::from(dt) * i128::from(self.slew) / PPB) as i64;
-        self.pending.signum() * self.pending.abs().min(max)
+        let max = (i128::from(dt) * i128::from(self.slew) / PPB).min(i128::from(i64::MAX)) as i64;
+        self.pending.signum() * self.pending.saturating_abs().min(max)
     }
 
     /// Local time at caller time `t` (t before the last anchor is clamped).
     pub fn local(&self, t: Instant) -> u64 {
         let dt = t.as_nanos().saturating_sub(self.anchor_t);
         let base = (i128::from(dt) * self.rate() / PPB) as i64;
-        self.anchor_local.wrapping_add((base + self.slewed(dt)) as u64)
+        self.anchor_local.wrapping_add(base.wrapping_add(self.slewed(dt)) as u64)
     }
 
     /// Moves the anchor to `t`, consuming the slew done so far.
@@ -121,7 +122,7 @@ impl LocalClock {
         let sign = i128::from(self.pending.signum());
         let slope1 = rate + sign * i128::from(self.slew);
         let t_end =
-            if self.slew > 0 { i128::from(self.pending.abs()) * PPB / i128::from(self.slew) } else { 0 };
+            if self.slew > 0 { i128::from(self.pending.unsigned_abs()) * PPB / i128::from(self.slew) } else { 0 };
         let gain1 = t_end * slope1 / PPB;
         let dt = if delta <= gain1 && slope1 > 0 {
             (delta * PPB + slope1 - 1) / slope1
@@ -144,11 +145,12 @@ impl LocalClock {
     pub fn sample(&mut self, t: Instant, e: i64, interval: u64) {
         self.reanchor(t);
         let interval = interval.clamp(MIN_INTERVAL_NS, MAX_INTERVAL_NS);
-        let df = (i128::from(e) * PPB / 8 / i128::from(interval)) as i64;
-        self.freq = (self.freq.saturating_add(df)).clamp(-MAX_FREQ_PPB, MAX_FREQ_PPB);
+        let df = (i128::from(e) * PPB / 8 / i128::from(interval))
+            .clamp(-2 * i128::from(MAX_FREQ_PPB), 2 * i128::from(MAX_FREQ_PPB)) as i64;
+        self.freq = (self.freq + df).clamp(-MAX_FREQ_PPB, MAX_FREQ_PPB);
         self.pending = e / 2;
-        let wanted = (i128::from(self.pending.abs()) * PPB / i128::from(interval)) as i64;
-        self.slew = wanted.clamp(1, MAX_SLEW_PPB);
+        let wanted = (i128::from(self.pending.unsigned_abs()) * PPB / i128::from(interval)).min(i128::from(MAX_SLEW_PPB));
+        self.slew = (wanted as i64).max(1);
     }
 
     /// Forgets the loop state (0x0930 write).
