@@ -391,8 +391,20 @@ impl Esc {
             _ => {}
         }
         self.mem[0x0805 + n * 8] = self.sms[n].status();
-        self.update_al_event();
-        self.update_ecat_event();
+        self.sm_irq_bits(n);
+    }
+
+    /// Mirrors SM `n`'s interrupt state into the AL and ECAT event request
+    /// registers (the frame-path version of a full recompute).
+    fn sm_irq_bits(&mut self, n: usize) {
+        let (pdi, ecat) = (self.sms[n].pdi_irq(), self.sms[n].ecat_irq());
+        let byte = 0x0221 + n / 8;
+        let bit = 1u8 << (n % 8);
+        self.mem[byte] = if pdi { self.mem[byte] | bit } else { self.mem[byte] & !bit };
+        if n < 8 {
+            let (byte, bit) = (0x0210 + (n + 4) / 8, 1u8 << ((n + 4) % 8));
+            self.mem[byte] = if ecat { self.mem[byte] | bit } else { self.mem[byte] & !bit };
+        }
     }
 
     pub(crate) fn trigger_pd_watchdog(&mut self) {

@@ -30,9 +30,8 @@
 //! untouched.
 
 use crate::esc::{Esc, FrameReport, FrameTiming};
-use crate::frame::{
-    self, Command, DATAGRAM_HEADER_LEN, DatagramHeader, ECAT_HEADER_LEN, MAX_DATA_LEN, TYPE_DLPDU,
-};
+use crate::fmmu::Fmmu;
+use crate::frame::{self, Command, DATAGRAM_HEADER_LEN, DatagramHeader, ECAT_HEADER_LEN, TYPE_DLPDU};
 use crate::registers::REGISTER_SPACE;
 use crate::sm::Side;
 use drivebus_can::Instant;
@@ -149,7 +148,6 @@ impl Esc {
     }
 
     fn physical(&mut self, cmd: Command, me: bool, ado: usize, data: &mut [u8]) -> u16 {
-        let mut tmp = [0u8; MAX_DATA_LEN + 1];
         let n = data.len();
         match cmd {
             Command::Aprd | Command::Fprd if me => u16::from(self.read(Side::Ecat, ado, data) > 0),
@@ -157,20 +155,20 @@ impl Esc {
                 u16::from(self.write(Side::Ecat, ado, data) > 0)
             }
             Command::Aprw | Command::Fprw if me => {
+                let mut tmp = core::mem::take(&mut self.scratch);
                 tmp[..n].copy_from_slice(data);
                 let r = self.read(Side::Ecat, ado, data) > 0;
                 let w = self.write(Side::Ecat, ado, &tmp[..n]) > 0;
+                self.scratch = tmp;
                 u16::from(r) + 2 * u16::from(w)
             }
-            Command::Brd => {
+            Command::Brd | Command::Brw => {
+                let mut tmp = core::mem::take(&mut self.scratch);
+                tmp[..n].fill(0);
                 let r = self.read(Side::Ecat, ado, &mut tmp[..n]) > 0;
+                let w = cmd == Command::Brw && self.write(Side::Ecat, ado, data) > 0;
                 data.iter_mut().zip(&tmp[..n]).for_each(|(d, t)| *d |= *t);
-                u16::from(r)
-            }
-            Command::Brw => {
-                let r = self.read(Side::Ecat, ado, &mut tmp[..n]) > 0;
-                let w = self.write(Side::Ecat, ado, data) > 0;
-                data.iter_mut().zip(&tmp[..n]).for_each(|(d, t)| *d |= *t);
+                self.scratch = tmp;
                 u16::from(r) + 2 * u16::from(w)
             }
             Command::Armw | Command::Frmw => {
@@ -191,8 +189,18 @@ impl Esc {
             _ => (true, true),
         };
         let n = data.len();
-        let mut snapshot = [0u8; MAX_DATA_LEN + 1];
-        if want_read && want_write {
+        // LRW: the writes use the datagram as it arrived, the reads replace
+        // it; keep a copy (on the stack) only when both happen.
+        let hits = |f: &Fmmu| f.map(addr, n).is_some();
+        let both = want_read
+            && want_write
+            && (0..self.fmmu_n).any(|k| self.fmmus[usize::from(self.fmmu_active[k])].write)
+            && (0..self.fmmu_n).any(|k| {
+                let f = &self.fmmus[usize::from(self.fmmu_active[k])];
+                f.read && hits(f)
+            });
+        let mut snapshot = core::mem::take(&mut self.scratch);
+        if both {
             snapshot[..n].copy_from_slice(data);
         }
         let mut read_hit = false;
@@ -215,7 +223,7 @@ impl Esc {
             }
         }
         if want_write {
-            let src: &[u8] = if want_read { &snapshot[..n] } else { data };
+            let src: &[u8] = if both { &snapshot[..n] } else { data };
             for k in 0..self.fmmu_n {
                 let f = self.fmmus[usize::from(self.fmmu_active[k])];
                 if !f.write {
@@ -231,6 +239,7 @@ impl Esc {
                 }
             }
         }
+        self.scratch = snapshot;
         u16::from(read_hit) + 2 * u16::from(write_hit)
     }
 }

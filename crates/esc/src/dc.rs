@@ -121,8 +121,11 @@ impl LocalClock {
         let rate = self.rate();
         let sign = i128::from(self.pending.signum());
         let slope1 = rate + sign * i128::from(self.slew);
-        let t_end =
-            if self.slew > 0 { i128::from(self.pending.unsigned_abs()) * PPB / i128::from(self.slew) } else { 0 };
+        let t_end = if self.slew > 0 {
+            i128::from(self.pending.unsigned_abs()) * PPB / i128::from(self.slew)
+        } else {
+            0
+        };
         let gain1 = t_end * slope1 / PPB;
         let dt = if delta <= gain1 && slope1 > 0 {
             (delta * PPB + slope1 - 1) / slope1
@@ -149,7 +152,8 @@ impl LocalClock {
             .clamp(-2 * i128::from(MAX_FREQ_PPB), 2 * i128::from(MAX_FREQ_PPB)) as i64;
         self.freq = (self.freq + df).clamp(-MAX_FREQ_PPB, MAX_FREQ_PPB);
         self.pending = e / 2;
-        let wanted = (i128::from(self.pending.unsigned_abs()) * PPB / i128::from(interval)).min(i128::from(MAX_SLEW_PPB));
+        let wanted = (i128::from(self.pending.unsigned_abs()) * PPB / i128::from(interval))
+            .min(i128::from(MAX_SLEW_PPB));
         self.slew = (wanted as i64).max(1);
     }
 

@@ -141,6 +141,8 @@ pub struct Esc {
     pub(crate) eeprom_loaded: bool,
     pub(crate) frame_no: u64,
     pub(crate) reset_stage: (u8, u64),
+    /// Scratch for read-write datagrams (allocated once, never on the frame path).
+    pub(crate) scratch: Vec<u8>,
 }
 
 impl Esc {
@@ -179,6 +181,7 @@ impl Esc {
             eeprom_loaded: false,
             frame_no: 0,
             reset_stage: (0, 0),
+            scratch: vec![0; crate::frame::MAX_DATA_LEN + 1],
         };
         esc.power_on();
         esc

@@ -14,8 +14,8 @@ use drivebus_ethercat::dio::{self, DioConfig};
 use drivebus_ethercat::probe::{self, ScenarioConfig};
 use drivebus_ethercat::{BoxDevice, Clock, Host, link};
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, Timeouts};
-use pcap_file::pcapng::{Block, PcapNgReader};
 use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketOption;
+use pcap_file::pcapng::{Block, PcapNgReader};
 use std::io::Write;
 use std::sync::{Arc, Mutex};
 
@@ -41,7 +41,12 @@ async fn session(storage: &'static Storage, dc: bool) -> Vec<Vec<u8>> {
     let cfgs: Vec<DioConfig> = [8u8, 16, 8]
         .iter()
         .enumerate()
-        .map(|(i, &channels)| DioConfig { channels, mask: 0x5A ^ i as u32, serial: i as u32, ..DioConfig::default() })
+        .map(|(i, &channels)| DioConfig {
+            channels,
+            mask: 0x5A ^ i as u32,
+            serial: i as u32,
+            ..DioConfig::default()
+        })
         .collect();
     let devices: Vec<BoxDevice> = cfgs.iter().map(|c| Box::new(dio::slave(c)) as BoxDevice).collect();
     let host = Host::line(devices, clock.clone());
@@ -63,10 +68,15 @@ async fn session(storage: &'static Storage, dc: bool) -> Vec<Vec<u8>> {
         watchdog_units: 1000,
     };
     let h = host.clone();
-    let r = probe::run(&md, move || clk.ethercat_ns(), &cfg, move |d| {
-        h.advance(d);
-        std::future::ready(())
-    })
+    let r = probe::run(
+        &md,
+        move || clk.ethercat_ns(),
+        &cfg,
+        move |d| {
+            h.advance(d);
+            std::future::ready(())
+        },
+    )
     .await
     .expect("scenario");
     assert_eq!(r.bad_wkc + r.bad_data, 0, "{}", r.summary());

@@ -100,12 +100,17 @@ mod tests {
         let mut got = Vec::new();
         while let Some(b) = r.next_block() {
             if let Block::EnhancedPacket(p) = b.unwrap() {
-                got.push((p.data.to_vec(), p.timestamp.as_nanos() as u64, p.options.clone()));
+                let flags = p.options.iter().find_map(|o| match o {
+                    EnhancedPacketOption::Flags(f) => Some(*f),
+                    _ => None,
+                });
+                got.push((p.data.to_vec(), p.timestamp.as_nanos() as u64, flags));
             }
         }
         assert_eq!(got.len(), 2);
         assert_eq!(got[0].0, [1, 2, 3]);
         assert_eq!(got[0].1, 1_700_000_000_123_456_789);
-        assert_eq!(got[1].2, vec![EnhancedPacketOption::Flags(2)]);
+        assert_eq!(got[0].2, Some(1), "inbound");
+        assert_eq!(got[1].2, Some(2), "outbound");
     }
 }

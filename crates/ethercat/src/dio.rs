@@ -200,7 +200,7 @@ mod tests {
         let mut i = [0u8; 1];
         a.inputs(&mut i, Instant::ZERO);
         assert_eq!(i, [0x0F]);
-        a.outputs(&[0xA0], Instant::ZERO);
+        SlaveApp::outputs(&mut a, &[0xA0], Instant::ZERO);
         a.inputs(&mut i, Instant::ZERO);
         assert_eq!(i, [0xAF]);
     }

@@ -125,9 +125,11 @@ fn ethercrab_over_veth_in_a_network_namespace() {
         .collect();
     let host = Host::line(devices, Clock::real());
     let stop = Arc::new(AtomicBool::new(false));
+    // Bind before the master starts, so its first frame is not lost.
+    let sock = server::RawSocket::open(&a).unwrap_or_else(|e| panic!("AF_PACKET socket on {a}: {e}"));
     let server = {
-        let (host, stop, a) = (host.clone(), stop.clone(), a.clone());
-        std::thread::spawn(move || server::serve(&a, &host, &stop))
+        let (host, stop) = (host.clone(), stop.clone());
+        std::thread::spawn(move || server::serve_socket(&sock, &host, &stop))
     };
 
     let (free_ok, free_out) = probe(&ns, &b, &[], Duration::from_secs(120));

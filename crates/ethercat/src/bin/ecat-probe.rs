@@ -91,7 +91,14 @@ fn main() -> ExitCode {
     std::thread::spawn(move || async_io::block_on(task));
     let md = MainDevice::new(
         pdu_loop,
-        Timeouts { mailbox_response: std::time::Duration::from_secs(1), ..Timeouts::default() },
+        // Generous: a loaded 2-core VM can stall a process for tens of ms;
+        // a lost frame still fails the run, a late one does not.
+        Timeouts {
+            pdu: std::time::Duration::from_secs(1),
+            eeprom: std::time::Duration::from_millis(200),
+            mailbox_response: std::time::Duration::from_secs(1),
+            ..Timeouts::default()
+        },
         MainDeviceConfig { dc_static_sync_iterations: a.dc_static, ..MainDeviceConfig::default() },
     );
     let result = async_io::block_on(probe::run(&md, ethercat_now, &a.cfg, |d| async move {
