@@ -162,3 +162,18 @@ fn sync1_follows_sync0_by_its_cycle_time() {
     assert!(evs.iter().any(|e| matches!(e, EscEvent::Sync1 { system_time: 1_250_000, .. })));
     assert_eq!(rd(&mut e, 0x098F, 1).0, [1]);
 }
+
+#[test]
+fn writing_the_start_time_activates_with_auto_activation() {
+    let mut e = dc_esc(0, 0);
+    wr(&mut e, 0x09A0, &500_000u32.to_le_bytes());
+    wr(&mut e, 0x0981, &[0x0A]); // auto-activation + SYNC0, cyclic off
+    assert_eq!(e.poll(Instant::ZERO), e.wd.pdi_deadline, "nothing scheduled yet");
+    wr(&mut e, 0x0990, &1_000_000u64.to_le_bytes());
+    assert_eq!(rd(&mut e, 0x0981, 1).0, [0x0B], "activation bit set by the start time write");
+    let d = e.poll(Instant::ZERO).unwrap();
+    assert_eq!(e.system_time(d), 1_000_000);
+    assert_eq!(rd(&mut e, 0x0984, 1).0, [1], "first pulse pending");
+    e.poll(d);
+    assert_eq!(rd(&mut e, 0x0984, 1).0, [0]);
+}
