@@ -434,10 +434,12 @@ impl SiiBuilder {
         self
     }
 
-    /// Sets group, order (device name for ethercrab) and long name strings.
+    /// Sets the order (device name), group and long name strings. The order
+    /// string becomes string 1, as on ETG devices: ethercrab names a device
+    /// after the General "order" index, SOEM after string 1.
     pub fn names(mut self, group: &str, order: &str, name: &str) -> Self {
-        let g = self.add_string(group);
         let o = self.add_string(order);
+        let g = self.add_string(group);
         let n = self.add_string(name);
         let general = self.content.general.get_or_insert_with(General::default);
         general.group_idx = g;
