@@ -20,7 +20,10 @@
 //!   trigger is generated"): accesses go straight to memory.
 //!
 //! Accesses from the wrong side (ECAT reading a write SM, the PDI writing
-//! it) are ignored and do not count in the working counter.
+//! it) are ignored and do not count in the working counter. A disabled SM
+//! (0x0806 bit 0 = 0) guards nothing: its area is plain memory for both
+//! sides, as on the ESC. An SM the PDI deactivated (0x0807 bit 0) refuses
+//! master accesses to its window (no data, no working counter).
 
 /// Which side of the ESC accesses memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -134,7 +134,10 @@ impl Host {
         if self.clock.is_simulated() {
             self.clock.advance_to(r.returns_at + g.turnaround);
         }
-        g.next = earliest(g.next, g.segment.poll(r.returns_at.max(now)));
+        // Devices ran at their own arrival instants inside the segment; this
+        // only refreshes the deadline (never moves a device back in time).
+        let after = self.clock.now();
+        g.next = earliest(g.next, g.segment.poll(after));
         r
     }
 

@@ -20,6 +20,7 @@ struct App {
     error: Option<(AlStatusCode, AlState)>,
     watchdog: u32,
     states: Vec<(AlState, AlState)>,
+    boot: bool,
 }
 
 impl SlaveApp for App {
@@ -28,6 +29,9 @@ impl SlaveApp for App {
     }
     fn sync_support(&self) -> SyncSupport {
         self.support.unwrap_or_default()
+    }
+    fn bootstrap_supported(&self) -> bool {
+        self.boot
     }
     fn state_changed(&mut self, from: AlState, to: AlState, _now: Instant) {
         self.states.push((from, to));
@@ -68,6 +72,12 @@ fn image() -> SiiImage {
             crate::sii::MailboxConfig { rx_offset: 0x1000, rx_size: 64, tx_offset: 0x1080, tx_size: 64 },
             4,
         )
+        .bootstrap_mailbox(crate::sii::MailboxConfig {
+            rx_offset: 0x1400,
+            rx_size: 128,
+            tx_offset: 0x1600,
+            tx_size: 128,
+        })
         .fmmus(&[fmmu_usage::OUTPUTS, fmmu_usage::INPUTS])
         .sync_manager(SiiSyncManager { start: 0x1000, length: 64, control: 0x26, enable: 1, sm_type: 1 })
         .sync_manager(SiiSyncManager { start: 0x1080, length: 64, control: 0x22, enable: 1, sm_type: 2 })
@@ -395,4 +405,24 @@ fn leaving_to_init_resets_the_mailbox() {
     r.rd(0x1080, 64);
     r.wr(0x1000, &msg(1, b"y"));
     assert_eq!(&r.rd(0x1080, 64).0[6..7], b"y");
+}
+
+#[test]
+fn bootstrap_uses_its_own_mailbox_and_leaves_only_to_init() {
+    let mut r = Rig::new();
+    r.s.app_mut().boot = true;
+    r.mailbox_sms(64);
+    assert_eq!(r.request(3), (0x11, 0x0015), "standard mailbox SMs are not the bootstrap ones");
+    r.wr(0x0806, &[0]);
+    r.wr(0x080E, &[0]);
+    r.wr(0x0800, &[0x00, 0x14, 128, 0, 0x26, 0, 1, 0]);
+    r.wr(0x0808, &[0x00, 0x16, 128, 0, 0x22, 0, 1, 0]);
+    assert_eq!(r.request(0x13), (0x03, 0));
+    // The bootstrap mailbox works (the application sees FoE-style traffic).
+    let mut m = msg(1, b"boot");
+    m.resize(128, 0);
+    r.wr(0x1400, &m);
+    assert_eq!(&r.rd(0x1600, 128).0[6..10], b"boot");
+    assert_eq!(r.request(2), (0x13, 0x0011), "BOOT -> PRE-OP is not allowed");
+    assert_eq!(r.request(0x11), (0x01, 0));
 }
