@@ -2,11 +2,23 @@
 //! side effects of the ESC data sheet (Section II) and the sync manager
 //! rules for process RAM.
 //!
-//! Counting (for the working counter): a register byte counts when it is
-//! implemented, even if read-only (the write is then ignored), except a
-//! master write to AL control while the PDI has not read the previous one
-//! (see below). A RAM byte counts when it lies outside every active sync
-//! manager or the sync manager accepted it.
+//! Counting (for the working counter; ESC data sheet Section I: the
+//! counter is incremented if at least one byte of the datagram was
+//! successfully read or written):
+//!
+//! * A register byte counts whenever it is implemented, even when the write
+//!   only hit read-only bits. Real ESCs treat the register block as memory
+//!   with per-bit write masks: writes to read-only bits are dropped, the
+//!   access itself succeeds, and unused registers read 0 with the access
+//!   still counted ("unused register access allowed", 0x0008 bit 1 = 0).
+//!   The exceptions are accesses that the ESC *refuses*: a master write to
+//!   AL control while the PDI has not read the previous one (below) and
+//!   blocks this configuration does not implement (DC registers without
+//!   DC, FMMUs/SMs beyond the configured count) — ethercrab relies on the
+//!   latter when it counts DC slaves with `BWR 0x0900`.
+//! * A RAM byte counts when it lies outside every active sync manager or
+//!   the sync manager accepted it (see `sm.rs`); bytes past the end of the
+//!   process RAM never count.
 //!
 //! AL control (0x0120) behaves like a mailbox when device emulation is off
 //! (0x0141 bit 0 = 0), per the data sheet note on 0x0120: after the master
