@@ -131,8 +131,10 @@ impl Esc {
                 self.physical(cmd, adp == 0, ado, data)
             }
             Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
-                let alias_on = self.mem[0x0103] & 1 != 0;
-                let me = adp == self.station_address() || (alias_on && adp == self.peek_u16(0x0012));
+                let station = u16::from_le_bytes([self.mem[0x0010], self.mem[0x0011]]);
+                let me = adp == station
+                    || (self.mem[0x0103] & 1 != 0
+                        && adp == u16::from_le_bytes([self.mem[0x0012], self.mem[0x0013]]));
                 self.physical(cmd, me, ado, data)
             }
             Command::Brd | Command::Bwr | Command::Brw => {
