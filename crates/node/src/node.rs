@@ -89,6 +89,20 @@ impl Node {
         let generated = build_dictionary(&cfg, node_id);
         crate::dictionary::merge_services(&mut od, &generated);
         mark_node_relative(&cfg, &generated, node_id, &mut od);
+        // CiA 305 §3.2: the LSS address is 1018h:01h–04h. A dictionary
+        // from elsewhere (an EDS) keeps its own 1018h, so the identity is
+        // read back from it: one source for SDO and LSS.
+        let ident = &mut cfg.identity;
+        for (sub, part) in [
+            (1, &mut ident.vendor_id),
+            (2, &mut ident.product_code),
+            (3, &mut ident.revision),
+            (4, &mut ident.serial),
+        ] {
+            if let Some(v) = od.get_u32(0x1018, sub) {
+                *part = v;
+            }
+        }
         let s = Services {
             nmt: Nmt::new(cfg.nmt),
             pdo: Pdo::new(&cfg.pdo, &od),

@@ -233,7 +233,7 @@ pub struct ProfileInfo {
     pub emcy_inhibit: bool,
     /// 1003h history length (0 = no 1003h).
     pub error_history: u8,
-    /// LSS (CiA 305). None of the five drives supports it.
+    /// LSS slave (CiA 305). None of the five drives supports it; `generic` does.
     pub lss: bool,
     /// Manufacturer behaviours to reproduce.
     pub quirks: &'static [Quirk],
