@@ -238,6 +238,14 @@ impl Node {
         self.s.emcy.clear_all(&mut self.od, now)
     }
 
+    /// Record an entry in the 1003h history without an EMCY frame (a
+    /// personality that sends its own frame with [`Node::send_raw_emcy`]):
+    /// low 16 bits the error code, high 16 bits additional information.
+    pub fn record_emcy_history(&mut self, entry: u32) {
+        self.dirty = true;
+        self.s.emcy.record(&mut self.od, entry)
+    }
+
     /// Send an EMCY outside the error bookkeeping (personality quirks).
     pub fn send_raw_emcy(&mut self, code: u16, register: u8, bytes: [u8; 5], now: Instant) {
         self.dirty = true;
