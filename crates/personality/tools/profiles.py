@@ -149,6 +149,7 @@ for i in range(0x2014, 0x2018):
     for s in (1, 2):
         PROFILES["ssd630"]["overrides"][(i, s)] = ov(default="0xFFFFFFFF", why="default 'all bits event-driven' = all mask bits set", sec="4; 11")
 PROFILES["dds6"]["overrides"] = {
+    (0x1008, 0): ov(default="DDS6244", why="device name: §6.3.5 gives no value; the model whose product code 1018h:02 reports (00624400h = DDS6244, §6.3.16 table) written", sec="6.3.5; 6.3.16"),
     (0x1016, 0): ov(default="4", why="sub 0 printed 02h but four consumer entries are described; 4 written", sec="6.3.14"),
     (0x1018, 2): ov(default="0x00624400", why="product code is per model; DDS6244 (digital + analog I/O + encoder, all modes incl. torque) chosen", sec="6.3.16"),
     (0x2310, 0): ov(type=U8, access="const", why="type/access lost in extraction; UNSIGNED8 const like the other sub 0s", sec="6.4.1"),
