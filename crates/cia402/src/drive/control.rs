@@ -109,7 +109,7 @@ impl Drive {
     }
 
     fn actual_pos_f(&self) -> f64 {
-        self.units.inc_to_pos_f(self.position_increments() as f64)
+        self.units.inc_to_pos_f(self.model.position_counts() as f64 + self.inc_offset_f())
     }
 
     fn actual_vel_frame(&self) -> f64 {
@@ -219,7 +219,7 @@ impl Drive {
     fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
         let u = &self.units;
         Command::Position {
-            position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset as f64),
+            position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset_f()),
             velocity: u.pos_to_rad(v),
             acceleration: u.pos_to_rad(a),
         }
@@ -310,7 +310,7 @@ impl Drive {
         for i in 0..self.events.len() {
             let e = self.events.as_slice()[i];
             let inc = e.counts.saturating_add(self.inc_offset);
-            self.probe.on_event(&e, self.units.inc_to_pos(inc));
+            self.probe.on_event(&e, self.units.inc_frac_to_pos(inc, self.inc_frac));
         }
         if self.probe.dedicated_pending() {
             self.probe.sample_dedicated(self.position());
@@ -520,10 +520,13 @@ impl Drive {
         }
         if let Some(r) = out.position_reset {
             // Shift the reference so the actual position reads `r`; the
-            // demand moves with it (no motion).
-            let want = self.units.pos_to_inc(r);
+            // demand moves with it (no motion). The shift keeps its part of
+            // an increment: `r` is exact even in units finer than the
+            // encoder (CiA 402-2 homing: home position = 607Ch).
+            let (want, frac) = self.units.pos_to_inc_exact(r);
             let delta_pos = r as f64 - pos as f64;
             self.inc_offset = self.inc_offset.saturating_add(want.saturating_sub(inc));
+            self.inc_frac = frac;
             self.dem.pos += delta_pos;
         }
         if let Some(c) = out.fault {
@@ -765,7 +768,7 @@ impl Drive {
         let Some(r) = self.refs else { return };
         let sw = self.statusword_value();
         let inc = self.position_increments();
-        let pos = self.units.inc_to_pos(inc);
+        let pos = self.units.inc_frac_to_pos(inc, self.inc_frac);
         let (lo, hi) = self.params.position_range;
         let pos_shown = if lo < hi { wrap(pos as f64, lo, hi) as i64 } else { pos };
         let vel_act = self.units.frame_to_velocity(self.actual_vel_frame());

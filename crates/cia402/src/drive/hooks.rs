@@ -324,6 +324,9 @@ impl Drive {
         let u = Units::new(&self.factor).ok_or(SdoAbort::INVALID_VALUE)?;
         // Keep the position where it is: the demand is in user units.
         let inc = self.units.pos_to_inc_f(self.dem.pos);
+        // The reference shift's fraction, over the new denominator.
+        let frac = self.units.frac_to_inc_f(self.inc_frac) * u.position_ratio().den as f64;
+        self.inc_frac = (libm::floor(frac) as i128).clamp(0, u.position_ratio().den as i128 - 1);
         self.units = u;
         self.dem.pos = self.units.inc_to_pos_f(inc);
         self.dem.vel = 0.0;

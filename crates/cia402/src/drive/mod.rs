@@ -139,6 +139,10 @@ pub struct Drive {
     mode_active: bool,
     dem: Demand,
     inc_offset: i64,
+    /// The part of an increment the reference shift adds beyond
+    /// `inc_offset`, as `Units::pos_to_inc_exact` gives it: a home position
+    /// is exact in position units finer than an increment.
+    inc_frac: i128,
     pp: pp::Pp,
     vel_ramp: Ramp,
     torque_ramp: Ramp,
@@ -224,6 +228,7 @@ impl Drive {
             mode_active: false,
             dem: Demand::default(),
             inc_offset: 0,
+            inc_frac: 0,
             pp: pp::Pp::default(),
             vel_ramp: Ramp::default(),
             torque_ramp: Ramp::default(),
@@ -322,7 +327,12 @@ impl Drive {
     }
     /// Position actual value \[position units\] (6064h before range wrap).
     pub fn position(&self) -> i64 {
-        self.units.inc_to_pos(self.position_increments())
+        self.units.inc_frac_to_pos(self.position_increments(), self.inc_frac)
+    }
+
+    /// The reference shift in increments, its fraction included.
+    pub(crate) fn inc_offset_f(&self) -> f64 {
+        self.inc_offset as f64 + self.units.frac_to_inc_f(self.inc_frac)
     }
 
     /// Applies a fault injection; faults show at the next control period.
