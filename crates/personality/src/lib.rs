@@ -192,7 +192,8 @@ pub struct ProfileInfo {
     pub device_type: u32,
     /// CAN or EtherCAT.
     pub transport: Transport,
-    /// Bit rates in kbit/s (empty for EtherCAT).
+    /// CAN bit rates in kbit/s (an EtherCAT drive: those it takes when
+    /// served on CAN).
     pub baud_rates_kbit: &'static [u32],
     /// 6502h supported drive modes as the drive reports it (which may
     /// disagree with `modes`; the quirks say so).

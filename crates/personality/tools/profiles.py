@@ -28,7 +28,7 @@ PROFILES = {
         "description": "Technosoft iPOS intelligent drive, CoE (CiA 301/402 over EtherCAT) (drivebus personality)",
         "vendor": "Technosoft S.A.", "vendor_number": 0x1A3,
         "product": "iPOS360x VX-CAT", "product_number": 28002021, "revision_number": 0x30313030,
-        "baud": (), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (1, 2, 3, 4, 5, 6, 7),
+        "baud": (125, 250, 500, 1000), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (2, 3, 4, 5, 6, 7),
         "overrides": {},
     },
     "ssd630": {
@@ -107,6 +107,51 @@ PROFILES["ipos"]["overrides"].update({
         (0x6085, "0x00040000", "4.0 IU", "7.2.4"),
     )
 })
+# The iPOS on CAN (drivebus serves the CoE drive on CAN too): the CiA 301
+# objects the CAN services answer with, which the CoE manual has no reason
+# to list (EtherCAT has no COB-IDs): 1005h/1006h (SYNC), 1014h (EMCY), the
+# PDO communication records 1400h-1403h/1800h-1803h. Valid exactly where
+# the PDO is assigned in 1C12h/1C13h (§2.3.7, §2.3.8: "disabled by setting
+# bit 31"), so the CAN and the EtherCAT view of the defaults agree.
+CAN_ONLY = "CAN only (the CoE manual lists no COB-IDs)"
+for (i, name, default) in ((0x1005, "COB-ID SYNC message", "0x00000080"),
+                           (0x1006, "Communication cycle period", "0"),
+                           (0x1014, "COB-ID EMCY", "$NODEID+0x80")):
+    PROFILES["ipos"]["overrides"][(i, 0)] = ov(name=name, type=U32, access="rw", default=default,
+                                               why=f"{name}: the object the CAN service answers with; CiA 301 type and default", sec=CAN_ONLY)
+for n, (valid, base) in enumerate(((True, 0x200), (False, 0x300), (False, 0x400), (False, 0x500))):
+    i = 0x1400 + n
+    cob = f"$NODEID+0x{base:X}" if valid else f"$NODEID+0x{0x80000000 | base:X}"
+    o = PROFILES["ipos"]["overrides"]
+    o[(i, 0)] = ov(obj_name=f"RPDO{n + 1} communication parameter", name="Highest sub-index supported", type=U8,
+                   access="ro", default="5", why=f"RPDO{n + 1} communication record: valid = assigned in 1C12h ({'yes' if valid else 'no'}, §2.3.10)", sec=CAN_ONLY)
+    o[(i, 1)] = ov(name=f"COB-ID used by RPDO{n + 1}", type=U32, access="rw", default=cob, sec=CAN_ONLY)
+    o[(i, 2)] = ov(name="Transmission type", type=U8, access="rw", default="0xFF", sec=CAN_ONLY)
+    o[(i, 3)] = ov(name="Inhibit time (not used)", type=U16, access="rw", default="0", sec=CAN_ONLY)
+    o[(i, 5)] = ov(name="Event timer (deadline)", type=U16, access="rw", default="0", sec=CAN_ONLY)
+for n, (valid, base) in enumerate(((True, 0x180), (True, 0x280), (False, 0x380), (False, 0x480))):
+    i = 0x1800 + n
+    cob = f"$NODEID+0x{base:X}" if valid else f"$NODEID+0x{0x80000000 | base:X}"
+    o = PROFILES["ipos"]["overrides"]
+    o[(i, 0)] = ov(obj_name=f"TPDO{n + 1} communication parameter", name="Highest sub-index supported", type=U8,
+                   access="ro", default="6", why=f"TPDO{n + 1} communication record: valid = assigned in 1C13h ({'yes' if valid else 'no'}, §2.3.11)", sec=CAN_ONLY)
+    o[(i, 1)] = ov(name=f"COB-ID used by TPDO{n + 1}", type=U32, access="rw", default=cob, sec=CAN_ONLY)
+    o[(i, 2)] = ov(name="Transmission type", type=U8, access="rw", default="0xFF", sec=CAN_ONLY)
+    o[(i, 3)] = ov(name="Inhibit time", type=U16, access="rw", default="0", sec=CAN_ONLY)
+    o[(i, 5)] = ov(name="Event timer", type=U16, access="rw", default="0", sec=CAN_ONLY)
+    o[(i, 6)] = ov(name="SYNC start value", type=U8, access="rw", default="0", low="0", high="0xF0", sec=CAN_ONLY)
+# §2.4: "sub-indexes (1-8)": every mapping record has 8 entries; the table
+# lists only the default ones.
+for i in (0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03):
+    for k in range(1, 9):
+        PROFILES["ipos"]["overrides"].setdefault((i, k), ov(name=f"Mapped object {k}", type=U32, access="rw", default="0x00000000",
+                                                        if_missing=True, sec="2.4"))
+    PROFILES["ipos"]["overrides"][(i, 8)]["why"] = "entries up to sub 8 added (§2.4: 'sub-indexes (1-8)'; the table lists the default ones)"
+# 60C1h X1/X2 "interpolated mode dependent (32-bit)": linear ip puts a
+# signed target position in X1; CiA 402-2 types 60C1h INTEGER32.
+for k in (1, 2):
+    PROFILES["ipos"]["overrides"][(0x60C1, k)] = ov(type=I32, why="type: 'interpolated mode dependent (32-bit)'; X1 carries a signed position in linear ip; INTEGER32 (CiA 402-2) written", sec="9.2.2")
+
 PROFILES["ssd630"]["overrides"] = {
     (0x1008, 0): ov(default="631_402", why="device name of a 631 from the segmented-upload example", sec="14.7"),
     (0x1010, 1): ov(default="1", why="read value bit 0 = 1 (saves on command)", sec="7; 11"),

@@ -364,6 +364,8 @@ def build(name, cfg):
     for (index, sub), ov in cfg.get("overrides", {}).items():
         ov = dict(ov)
         o = objs.setdefault(index, Obj(index))
+        if ov.pop("if_missing", False) and sub in o.subs:
+            continue
         why = ov.pop("why", None)
         if "obj_name" in ov:
             o.name = ov.pop("obj_name")
@@ -410,7 +412,7 @@ def build(name, cfg):
             n = e["name"]
             if " / " in n and slash:
                 n = n.split(" / ", 1)[1]
-            elif colon:
+            elif colon and ": " in n:
                 n = n.split(": ", 1)[1]
             elif s == 0 and re.search(r": (number|Number)", n):
                 n = n.split(": ", 1)[1]
@@ -502,6 +504,13 @@ def write_eds(name, cfg, objs):
     man = [i for i in sorted(objs) if 0x2000 <= i <= 0x5FFF]
     for title, lst in (("MandatoryObjects", mand), ("OptionalObjects", opt), ("ManufacturerObjects", man)):
         sec(title, [f"SupportedObjects={len(lst)}"] + [f"{k + 1}=0x{i:04X}" for k, i in enumerate(lst)])
+    # The data type entries of the dummy types (CiA 301 §7.4.7.1): DEFTYPE,
+    # the size in bits, as the node's PDO service installs them. Not in any
+    # object list (CiA 306 lists no data type objects there).
+    bits = {1: 1, 2: 8, 3: 16, 4: 32, 5: 8, 6: 16, 7: 32}
+    for t in sorted(cfg.get("dummies", ())):
+        sec(f"{t:04X}", [f"ParameterName={TYPE_NAME[t]}", "ObjectType=0x5", "DataType=0x0007", "AccessType=const",
+                         f"DefaultValue=0x{bits[t]:08X}", "PDOMapping=0"])
     for i in sorted(objs):
         for title, kv in fmt_obj_sections(objs[i]):
             sec(title, kv)
