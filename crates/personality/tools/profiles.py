@@ -73,6 +73,8 @@ KC1_AKD_COMMON = {
     (0x6072, 0): ov(default="4000", why="no default given; drivebus's working value 4000 per mille (the motor's peak / rated current) written", sec="KC1 8.1.4 / AKD 7.1.5"),
 }
 
+KC1_AKD_COMMON[(0x6063, 0)] = ov(default="0", why="default: the table prints 2^20 ('as printed'), the increments of one turn (PRBASE 20, §7.8.2.1), not a position; the drive starts at 0 increments (what the running drive reads)", sec="KC1 7.8.2.1 / AKD 6.8.2.1")
+
 PROFILES["kc1"]["overrides"] = dict(KC1_AKD_COMMON)
 PROFILES["kc1"]["overrides"].update({
     (0x60C2, 2): ov(type=I8, default="-3", why="type/default: table gives INTEGER16 default 1 (as printed); the §8.2 example writes FDh (-3) with a 1-byte SDO and CiA 402 defines INTEGER8: INTEGER8, default -3 (1 ms) chosen", sec="7.9.2.3; 8.1.4"),
@@ -80,10 +82,11 @@ PROFILES["kc1"]["overrides"].update({
     (0x35B9, 1): ov(type=I32, why="type not given; INTEGER32 as the AKD appendix lists MT.CNTL (35B9h)", sec="7.11.2.1"),
 })
 PROFILES["akd"]["overrides"] = dict(KC1_AKD_COMMON)
+PROFILES["akd"]["remove_subs"] = [(0x60C1, 2), (0x60C1, 3)]
 PROFILES["akd"]["overrides"].update({
     (0x6099, 2): ov(default="18000", why="default '50 % of sub 1': 36000 / 2 = 18000 written", sec="6.10.2.3"),
     (0x6087, 0): ov(default="10000", why="no default given ('-'); drivebus's working value 10000 per mille/s written (above the ~2385 minimum)", sec="6.7.2.6; 7.1.5"),
-    (0x60C1, 0): ov(why="sub 0 = 1 kept (body: linear interpolation only); subs 2 and 3 kept from the appendix as PVT remnants", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
+    (0x60C1, 0): ov(why="sub 0 = 1 (body: linear interpolation only); subs 2 and 3 of the appendix are remnants of the PVT mode removed in edition M and left out, so sub 0 is the highest sub-index", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
 })
 PROFILES["ipos"]["overrides"] = {
     (0x1000, 0): ov(default="0x00060192", why="default: table prints '60192' meaning hex; 0x00060192 written", sec="4.8.1"),
@@ -158,6 +161,9 @@ PROFILES["ssd630"]["overrides"] = {
     (0x1011, 1): ov(default="1", why="read value bit 0 = 1 (restores on command); the 'load' signature bytes are misprinted (73h 61h 61h 64h), 0x64616F6C is what the node accepts", sec="7; 11"),
     (0x60C2, 2): ov(type=I8, default="-3", why="ip time index: table gives UNSIGNED8; CiA 402 defines INTEGER8 (negative exponents); INTEGER8 chosen. No default given; drivebus's working value -3 (with sub 1 = 1: 1 ms) written", sec="12"),
     (0x6502, 0): ov(default="0x00000067", why="value not given; derived from the evidenced modes pp, vl (6042h-6048h), pv, hm, ip = bits 0,1,2,5,6", sec="4; 12; 14"),
+    (0x100B, 0): ov(default="$NODEID", why="node-ID: the drive reads its own node-ID (§14.6 reads 4 on node 4; the table's 1 is the lowest), $NODEID written", sec="4; 11; 14.6"),
+    (0x6080, 1): ov(default="3000", why="no default given; the drive's power-on limit, 3000 min^-1 (= 607Fh), for both directions", sec="12"),
+    (0x6080, 2): ov(default="3000", why="no default given; the drive's power-on limit, 3000 min^-1 (= 607Fh), for both directions", sec="12"),
 }
 # Power-on values the manual does not give (§4 and §12 list the objects
 # without defaults): the EDS states what the drive starts with
@@ -216,4 +222,5 @@ for i in (0x3210, 0x3230, 0x3260, 0x3261, 0x3450, 0x3470):
     PROFILES["dds6"]["overrides"][(i, 0)] = ov(type=U8, access="const", why="sub 0 type/access lost; UNSIGNED8 const", sec="6.4")
 PROFILES["dds6"]["overrides"][(0x2360, 0)] = ov(default="5", why="sub 0 printed 06h but five sub-indices are described; 5 written", sec="6.4.3")
 PROFILES["dds6"]["overrides"][(0x2810, 0)] = ov(default="13", why="sub 0 printed 08h but sub-indices up to 0Dh are described; 13 written", sec="6.4.8")
+PROFILES["dds6"]["overrides"][(0x6061, 0)] = ov(default="1", why="no default given; the display of the power-on mode 6060h = 1 (pp, §6.5.4)", sec="6.5.4; 6.5.5")
 PROFILES["dds6"]["overrides"][(0x6087, 0)] = ov(default="10000", why="no default given; 10000 (1000 %/s) written, a 0 would never ramp", sec="6.5.29")

@@ -378,6 +378,8 @@ def build(name, cfg):
             log(index, sub, why, ov.get("sec", ""))
     for index in cfg.get("remove", []):
         objs.pop(index, None)
+    for index, sub in cfg.get("remove_subs", []):
+        objs[index].subs.pop(sub, None)
 
     # Finish objects: names, object codes, sub 0.
     for index, o in objs.items():

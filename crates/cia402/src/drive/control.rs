@@ -778,25 +778,31 @@ impl Drive {
             if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
         };
         let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
-        od.set_le(r.statusword, &sw.to_le_bytes());
-        od.set_le(r.error_code, &self.sm.fault_code().to_le_bytes());
-        od.set_le(r.mode_display, &self.mode.to_le_bytes());
-        od.set_le(r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
-        od.set_le(r.pos_internal, &(inc as i32).to_le_bytes());
-        od.set_le(r.pos_actual, &(pos_shown as i32).to_le_bytes());
-        od.set_le(r.vel_demand, &i32s(vel_dem).to_le_bytes());
-        od.set_le(r.vel_actual, &i32s(vel_act).to_le_bytes());
-        od.set_le(r.torque_demand, &i16s(self.dem.torque).to_le_bytes());
-        od.set_le(r.torque_actual, &i16s(self.torque_per_mille(self.model.torque())).to_le_bytes());
-        od.set_le(r.current_actual, &i16s(self.model.current() / rated_i * 1000.0).to_le_bytes());
+        // Objects the device lacks are not published (`withdraw_object`).
+        let put = |od: &mut ObjectDictionary, r: Option<drivebus_od::EntryRef>, b: &[u8]| {
+            if let Some(r) = r {
+                od.set_le(r, b);
+            }
+        };
+        put(od, r.statusword, &sw.to_le_bytes());
+        put(od, r.error_code, &self.sm.fault_code().to_le_bytes());
+        put(od, r.mode_display, &self.mode.to_le_bytes());
+        put(od, r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
+        put(od, r.pos_internal, &(inc as i32).to_le_bytes());
+        put(od, r.pos_actual, &(pos_shown as i32).to_le_bytes());
+        put(od, r.vel_demand, &i32s(vel_dem).to_le_bytes());
+        put(od, r.vel_actual, &i32s(vel_act).to_le_bytes());
+        put(od, r.torque_demand, &i16s(self.dem.torque).to_le_bytes());
+        put(od, r.torque_actual, &i16s(self.torque_per_mille(self.model.torque())).to_le_bytes());
+        put(od, r.current_actual, &i16s(self.model.current() / rated_i * 1000.0).to_le_bytes());
         let mv = (self.model.bus_voltage() * 1000.0).clamp(0.0, f64::from(u32::MAX)) as u32;
-        od.set_le(r.dc_link, &mv.to_le_bytes());
-        od.set_le(r.following_error, &i32s(self.dem.pos - pos as f64).to_le_bytes());
+        put(od, r.dc_link, &mv.to_le_bytes());
+        put(od, r.following_error, &i32s(self.dem.pos - pos as f64).to_le_bytes());
         let di = self.digital_inputs();
-        od.set_le(r.inputs, &di.to_le_bytes());
-        od.set_le(r.probe_status, &self.probe.status.to_le_bytes());
+        put(od, r.inputs, &di.to_le_bytes());
+        put(od, r.probe_status, &self.probe.status.to_le_bytes());
         for k in 0..4 {
-            od.set_le(r.probe_pos[k], &self.probe.pos[k].to_le_bytes());
+            put(od, r.probe_pos[k], &self.probe.pos[k].to_le_bytes());
         }
         if let (Some(d), Some(a)) = (r.vl_demand, r.vl_actual) {
             let rpm_act = self.model.velocity_measured() * 60.0 / (2.0 * PI);
