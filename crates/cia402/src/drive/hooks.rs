@@ -66,6 +66,12 @@ impl Drive {
             }
             (0x6060, 0) => {
                 let m = s as i8;
+                // CiA 402-2 6060h: 0 is "no mode change / no mode
+                // assigned" (the power-on value of a drive without a
+                // default mode): stored, the mode in force stays.
+                if m == 0 {
+                    return Ok(WriteOutcome::Store);
+                }
                 if op::supported_bit(m) & self.modes == 0 {
                     // CiA 402-2 §6.3.2: an unsupported mode is refused.
                     return Err(SdoAbort::INVALID_VALUE);

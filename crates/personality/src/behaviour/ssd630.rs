@@ -382,6 +382,13 @@ impl Behaviour for Ssd630 {
                 cx.drive.on_write(od, 0x6080, 0, &limit.to_le_bytes())?;
                 Ok(Verdict::Store)
             }
+            // Writing back what a PDO object holds modifies nothing: taken
+            // in any NMT state.
+            0x1400..=0x1403 | 0x1600..=0x1603 | 0x1800..=0x1803 | 0x1A00..=0x1A03
+                if od.get_u64(index, sub) == Some(drivebus_od::le_u64(data)) =>
+            {
+                Ok(Verdict::Handled)
+            }
             0x1400..=0x1403 | 0x1600..=0x1603 | 0x1800..=0x1803 | 0x1A00..=0x1A03 => {
                 // §7: "Modifications of the PDO definitions are permitted in
                 // operating state Pre-operational only" — elsewhere §5's

@@ -65,6 +65,12 @@ impl ObjectHooks for Composite<'_> {
             Verdict::Pass => {}
         }
         match (index, sub) {
+            // CiA 402-2 6060h: 0 "no mode change" (the drive's power-on
+            // value where the manual gives no default mode): the mode in
+            // force stays, a manufacturer mode included.
+            (0x6060, 0) if data.first().copied().unwrap_or(0) == 0 => {
+                return self.drive.on_write(od, index, sub, data);
+            }
             (0x6060, 0) => {
                 let m = data.first().copied().unwrap_or(0) as i8;
                 if !self.state.modes.contains(&m) {

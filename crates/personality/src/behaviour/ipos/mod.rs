@@ -335,6 +335,13 @@ impl Behaviour for Ipos {
     ) -> Result<Verdict, SdoAbort> {
         let le = |d: &[u8]| drivebus_od::le_u64(d);
         match (index, sub) {
+            (0x6075, 0) => {
+                // §8.2.2: default 0, set by the master; the drive computes
+                // with at least 1 mA (the generic drive refuses 0).
+                let ma = (le(data) as u32).max(1);
+                cx.drive.on_write(od, 0x6075, 0, &ma.to_le_bytes())?;
+                return Ok(Verdict::Store);
+            }
             (0x60C0, 0) => {
                 let v = le(data) as i16;
                 let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
