@@ -115,6 +115,8 @@ impl Node {
             comm_changed: false,
             pending_nmt: None,
             now: Instant::ZERO,
+            #[cfg(feature = "std")]
+            eds_info: (cfg.lss, cfg.eds_device_info.clone()),
         };
         let lss = cfg.lss.then(|| {
             let id = cfg.identity;

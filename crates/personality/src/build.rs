@@ -552,6 +552,8 @@ pub fn build_full(
     // What the drive must answer with, after the build (`conform`).
     let described = od.clone();
     let mut nc = node_config(info, node_id);
+    // The EDS served at 1021h says what the shipped one says.
+    nc.eds_device_info = Some(parsed.eds.device_info.clone());
     behaviour.adjust_node_config(&mut nc);
     // An option adds to the personality; it never takes 1021h away.
     nc.eds_object |= options.eds_object;

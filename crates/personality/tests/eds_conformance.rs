@@ -3,7 +3,8 @@
 //! serves at 1021h (CiA 301 §7.5.2.21, generated from its dictionary) and
 //! the running dictionary itself agree object by object — existence,
 //! object code, and per sub-index existence, data type, access, PDO
-//! mappability, default and low/high limits.
+//! mappability, default and low/high limits — and the two EDS files have
+//! the same `[DeviceInfo]` and `[DummyUsage]`.
 //!
 //! The only difference allowed: 1021h/1022h, which the drives other than
 //! `generic` have only with `BuildOptions::eds_object` (the manuals do not
@@ -86,6 +87,24 @@ fn shipped_served_and_running_agree() {
         let text = r.upload(NODE, 0x1021, 0).unwrap_or_else(|a| panic!("{p}: 1021h aborts {a:08X}h"));
         let text = String::from_utf8(text).unwrap();
         let served = drivebus_eds::parse(&text).unwrap_or_else(|e| panic!("{p}: served EDS: {e}")).eds;
+        // [DeviceInfo] and [DummyUsage] too (CiA 306 §4.4, §4.5): names,
+        // numbers, bit rates, PDO counts, granularity, LSS.
+        let shipped_eds = p.parse_eds().eds;
+        if served.device_info != shipped_eds.device_info {
+            bad.push(format!(
+                "{p} [DeviceInfo]: shipped {:?} / served {:?}",
+                shipped_eds.device_info, served.device_info
+            ));
+        }
+        if served.dummy_usage[1..] != shipped_eds.dummy_usage[1..] {
+            bad.push(format!(
+                "{p} [DummyUsage]: shipped {:?} / served {:?}",
+                shipped_eds.dummy_usage, served.dummy_usage
+            ));
+        }
+        if shipped_eds.device_info.lss_supported != p.info().lss {
+            bad.push(format!("{p}: LSS_Supported is not ProfileInfo::lss"));
+        }
         let served = described(&drivebus_eds::to_od(&served, NODE).unwrap(), optional);
         bad.extend(
             differences("shipped", &shipped, "served", &served).into_iter().map(|d| format!("{p} {d}")),

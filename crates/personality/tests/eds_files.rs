@@ -74,7 +74,8 @@ fn device_info_matches_the_profile() {
         assert_eq!(d.product_number, info.product_code, "{p}");
         assert_eq!(d.revision_number, info.revision, "{p}");
         assert_eq!(d.granularity, info.granularity, "{p}");
-        assert!(!d.lss_supported, "{p}: none of the drives supports LSS");
+        // LSS (CiA 305): only `generic` is an LSS slave.
+        assert_eq!(d.lss_supported, info.lss, "{p}: LSS_Supported");
         assert_eq!((d.nr_of_rx_pdo, d.nr_of_tx_pdo), (4, 4), "{p}");
         let mut bauds: Vec<u32> = info.baud_rates_kbit.iter().copied().filter(|b| *b != 100).collect();
         bauds.sort_unstable();

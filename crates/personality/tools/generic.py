@@ -257,7 +257,7 @@ cfg = {
     "tsv": "-", "description": "Generic CiA 402 servo drive with every mode, every CiA 301 service drivebus implements",
     "vendor": "drivebus", "vendor_number": 0, "product_number": 0x402, "revision_number": 0x00010000,
     "baud": (10, 20, 50, 125, 250, 500, 800, 1000), "granularity": 1, "nr_rx": 4, "nr_tx": 4,
-    "dummies": (2, 3, 4, 5, 6, 7),
+    "dummies": (2, 3, 4, 5, 6, 7), "lss": 1,
     "header": "; Written from CiA 301 and CiA 402-2 (no vendor manual); uncertain defaults: docs/personalities.md",
 }
 write_eds("generic", cfg, objs)

@@ -496,7 +496,7 @@ def write_eds(name, cfg, objs):
         di.append(f"BaudRate_{b}={1 if b in cfg['baud'] else 0}")
     di += ["SimpleBootUpMaster=0", "SimpleBootUpSlave=1", f"Granularity={cfg['granularity']}",
            "DynamicChannelsSupported=0", "GroupMessaging=0", f"NrOfRXPDO={cfg['nr_rx']}",
-           f"NrOfTXPDO={cfg['nr_tx']}", "LSS_Supported=0"]
+           f"NrOfTXPDO={cfg['nr_tx']}", f"LSS_Supported={cfg.get('lss', 0)}"]
     sec("DeviceInfo", di)
     sec("DummyUsage", [f"Dummy{i:04X}={1 if i in cfg.get('dummies', ()) else 0}" for i in range(1, 8)])
     comments = cfg.get("comments", [])
