@@ -17,6 +17,10 @@ pub struct Parsed {
 
 const BAUD_RATES: [u32; 9] = [10, 20, 50, 125, 250, 500, 800, 1000, 0];
 
+/// The `[DeviceComissioning]` keys [`Commissioning`] has fields for.
+const COMMISSIONING_KEYS: [&str; 7] =
+    ["nodeid", "nodename", "baudrate", "netnumber", "networkname", "canopenmanager", "lss_serialnumber"];
+
 enum Kind {
     Object(u16),
     Sub(u16, u8),
@@ -182,8 +186,24 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
         None => r.warn(0, "[DeviceInfo] missing".into()),
     }
     if let Some(s) = ini.section("DummyUsage") {
-        for (i, slot) in eds.dummy_usage.iter_mut().enumerate() {
-            *slot = r.flag(s, &format!("Dummy{i:04X}"));
+        for e in &s.entries {
+            let index = e
+                .key
+                .split_at_checked(5)
+                .filter(|(p, t)| p.eq_ignore_ascii_case("dummy") && t.len() == 4)
+                .filter(|(_, t)| t.chars().all(|c| c.is_ascii_hexdigit()))
+                .and_then(|(_, t)| u16::from_str_radix(t, 16).ok());
+            match (index, parse_int(&e.value)) {
+                (Some(i), Some(v)) => {
+                    eds.dummy_usage.insert(i, v != 0);
+                }
+                (Some(_), None) => {
+                    r.err(e.line, format!("[DummyUsage] {}={:?} is not a valid number", e.key, e.value))
+                }
+                (None, _) => {
+                    r.warn(e.line, format!("[DummyUsage] key {:?} is not DummyXXXX; ignored", e.key))
+                }
+            }
         }
     }
     if let Some(s) = ini.section("Comments") {
@@ -212,6 +232,12 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
             network_name: Reader::text(s, "NetworkName"),
             canopen_manager: r.flag(s, "CANopenManager"),
             lss_serial_number: r.num(s, "LSS_SerialNumber"),
+            other: s
+                .entries
+                .iter()
+                .filter(|e| !COMMISSIONING_KEYS.contains(&e.key.to_ascii_lowercase().as_str()))
+                .map(|e| (e.key.clone(), e.value.clone()))
+                .collect(),
         });
     }
 

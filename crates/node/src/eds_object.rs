@@ -48,7 +48,7 @@ pub(crate) fn generate(
     }
     let mut eds = from_od(&described, info, node_id, false);
     for t in 1..=7u16 {
-        eds.dummy_usage[t as usize] = pdo.dummy_supported(t);
+        eds.dummy_usage.insert(t, pdo.dummy_supported(t));
     }
     write(&eds)
 }

@@ -96,7 +96,7 @@ fn shipped_served_and_running_agree() {
                 shipped_eds.device_info, served.device_info
             ));
         }
-        if served.dummy_usage[1..] != shipped_eds.dummy_usage[1..] {
+        if served.dummy_usage != shipped_eds.dummy_usage {
             bad.push(format!(
                 "{p} [DummyUsage]: shipped {:?} / served {:?}",
                 shipped_eds.dummy_usage, served.dummy_usage
