@@ -419,6 +419,16 @@ fn object(r: &mut Reader, sec: &Section, index: u16) -> Option<EdsObject> {
     Some(o)
 }
 
+/// Whether sub 0 of `index` is "highest sub-index supported" (CiA 301
+/// §7.4.3), so its DefaultValue must reach the sub-objects described. Not
+/// so where CiA 301 gives sub 0 a value of its own and the sub-objects are
+/// the room for it: 1003h (number of errors, §7.5.2.5) and the PDO mapping
+/// records (number of mapped objects, §7.5.2.36/38; a default mapping
+/// uses fewer entries than the record has).
+fn sub0_is_highest(index: u16) -> bool {
+    !matches!(index, 0x1003 | 0x1600..=0x17FF | 0x1A00..=0x1BFF)
+}
+
 /// Expand compact objects and check sub-index 0 against the sub-objects.
 fn finish_object(r: &mut Reader, o: &mut EdsObject) {
     if !matches!(o.object_type, ObjectCode::Array | ObjectCode::Record) || o.compact_sub_obj.is_some() {
@@ -457,7 +467,7 @@ fn finish_object(r: &mut Reader, o: &mut EdsObject) {
             let v = s0.default.as_deref().and_then(parse_int);
             if s0.data_type != DataType::Unsigned8 as u16 {
                 r.warn(s0.line, format!("object {:04X} sub 0 is not UNSIGNED8", o.index));
-            } else if v.is_some_and(|v| v < highest as i128) {
+            } else if sub0_is_highest(o.index) && v.is_some_and(|v| v < highest as i128) {
                 r.warn(
                     s0.line,
                     format!("object {:04X} sub 0 default is below the highest sub-index {highest}", o.index),

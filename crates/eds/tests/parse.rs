@@ -215,3 +215,27 @@ fn dcf_of_a_device_holds_its_values() {
     assert_eq!(got.get_u32(0x1017, 0), Some(250));
     assert!(check(&back).iter().all(|f| f.severity != Severity::Error), "{:#?}", check(&back));
 }
+
+/// Sub 0 of an ARRAY/RECORD is the highest sub-index supported (CiA 301
+/// §7.4.3): a DefaultValue below the sub-objects described is a warning —
+/// except where sub 0 counts something of its own, 1003h (number of
+/// errors, §7.5.2.5) and the PDO mapping records (mapped objects,
+/// §7.5.2.36/38).
+#[test]
+fn sub_0_below_the_highest_sub_index() {
+    let obj = |index: &str, n: u8| {
+        format!(
+            "[{index}]\nParameterName=x\nObjectType=0x8\nSubNumber=3\n[{index}sub0]\nParameterName=n\nDataType=0x0005\nAccessType=rw\nDefaultValue={n}\n[{index}sub1]\nParameterName=a\nDataType=0x0007\nAccessType=rw\nDefaultValue=0\n[{index}sub2]\nParameterName=b\nDataType=0x0007\nAccessType=rw\nDefaultValue=0\n"
+        )
+    };
+    let warned = |index: &str, n: u8| {
+        let w = parse(&obj(index, n)).unwrap().warnings;
+        w.iter().any(|d| d.message.contains("below the highest sub-index"))
+    };
+    assert!(warned("2000", 1));
+    assert!(warned("1016", 0));
+    assert!(!warned("2000", 2));
+    for index in ["1003", "1600", "17FF", "1A00", "1BFF"] {
+        assert!(!warned(index, 0), "{index}");
+    }
+}

@@ -86,7 +86,23 @@ fn shipped_served_and_running_agree() {
         let (mut r, _) = Rig::with(pn);
         let text = r.upload(NODE, 0x1021, 0).unwrap_or_else(|a| panic!("{p}: 1021h aborts {a:08X}h"));
         let text = String::from_utf8(text).unwrap();
-        let served = drivebus_eds::parse(&text).unwrap_or_else(|e| panic!("{p}: served EDS: {e}")).eds;
+        let parsed = drivebus_eds::parse(&text).unwrap_or_else(|e| panic!("{p}: served EDS: {e}"));
+        // Read and checked like the shipped file: no reader warning, the
+        // checker's findings those of the shipped file.
+        if !parsed.warnings.is_empty() {
+            bad.push(format!("{p}: served EDS reader warnings {:?}", parsed.warnings));
+        }
+        let findings = |e: &drivebus_eds::Eds| -> Vec<String> {
+            drivebus_eds::check(e).into_iter().map(|f| format!("{:?} {}", f.severity, f.message)).collect()
+        };
+        if findings(&parsed.eds) != findings(&p.parse_eds().eds) {
+            bad.push(format!(
+                "{p}: served EDS checker {:?} / shipped {:?}",
+                findings(&parsed.eds),
+                findings(&p.parse_eds().eds)
+            ));
+        }
+        let served = parsed.eds;
         // [DeviceInfo] and [DummyUsage] too (CiA 306 §4.4, §4.5): names,
         // numbers, bit rates, PDO counts, granularity, LSS.
         let shipped_eds = p.parse_eds().eds;
