@@ -424,9 +424,10 @@ fn object(r: &mut Reader, sec: &Section, index: u16) -> Option<EdsObject> {
 /// so where CiA 301 gives sub 0 a value of its own and the sub-objects are
 /// the room for it: 1003h (number of errors, §7.5.2.5) and the PDO mapping
 /// records (number of mapped objects, §7.5.2.36/38; a default mapping
-/// uses fewer entries than the record has).
+/// uses fewer entries than the record has), and the EtherCAT sync manager
+/// PDO assignments 1C10h–1C2Fh (number of assigned PDOs, ETG.1000.6).
 fn sub0_is_highest(index: u16) -> bool {
-    !matches!(index, 0x1003 | 0x1600..=0x17FF | 0x1A00..=0x1BFF)
+    !matches!(index, 0x1003 | 0x1600..=0x17FF | 0x1A00..=0x1BFF | 0x1C10..=0x1C2F)
 }
 
 /// Expand compact objects and check sub-index 0 against the sub-objects.

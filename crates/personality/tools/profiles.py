@@ -150,6 +150,16 @@ for i in (0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03):
         PROFILES["ipos"]["overrides"].setdefault((i, k), ov(name=f"Mapped object {k}", type=U32, access="rw", default="0x00000000",
                                                         if_missing=True, sec="2.4"))
     PROFILES["ipos"]["overrides"][(i, 8)]["why"] = "entries up to sub 8 added (§2.4: 'sub-indexes (1-8)'; the table lists the default ones)"
+# The EtherCAT side (ETG.1000.6 sync managers), as the manual means it.
+o = PROFILES["ipos"]["overrides"]
+o[(0x1C00, 4)] = ov(default="4", why="SM3 communication type: printed 3, but the value range of the same entry gives 4 = process data input, and ETG.1000.6 has SM3 inputs = 4", sec="2.3.9")
+for i, first, n_pdo, kind in ((0x1C12, 0x1600, 4, "RxPDO"), (0x1C13, 0x1A00, 4, "TxPDO")):
+    o[(i, 0)] = ov(access="rw", why=f"{i:04X}h:00: printed RO, but the text and every example (§2.4, E10, E11) write 0, the entries, then the count (in pre-operational)", sec="2.3.10; 2.3.11; 2.4")
+    for k in range(1, n_pdo + 1):
+        o.setdefault((i, k), ov(name=f"PDO Mapping object index of assigned {kind} ({k})", type=U16, access="rw", default="0x0000",
+                                if_missing=True, sec="2.3.10; 2.3.11"))
+    o[(i, n_pdo)]["why"] = f"{i:04X}h: entries up to sub {n_pdo}, one per {kind} (range 1-4; E10/E11 write sub {n_pdo}); the table lists the default ones"
+
 # 60C1h X1/X2 "interpolated mode dependent (32-bit)": linear ip puts a
 # signed target position in X1; CiA 402-2 types 60C1h INTEGER32.
 for k in (1, 2):
