@@ -132,7 +132,11 @@ pub(crate) static PARAMS: &[Param] = &[
         option_check,
         option_apply,
     ),
-    plain(0x6061, |_, _| Some(var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(0), true))),
+    // The display starts with the power-on mode the drive enters.
+    plain(0x6061, |c, modes| {
+        let m = if op::supported_bit(c.initial_mode) & modes != 0 { c.initial_mode } else { 0 };
+        Some(var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(m), true))
+    }),
     plain(0x6062, |_, _| Some(var(0x6062, "Position demand value", T::Integer32, Ro, I32(0), true))),
     plain(0x6063, |_, _| Some(var(0x6063, "Position actual internal value", T::Integer32, Ro, I32(0), true))),
     plain(0x6064, |_, _| Some(var(0x6064, "Position actual value", T::Integer32, Ro, I32(0), true))),
@@ -259,7 +263,11 @@ pub(crate) static PARAMS: &[Param] = &[
     ),
     plain(0x6077, |_, _| Some(var(0x6077, "Torque actual value", T::Integer16, Ro, I16(0), true))),
     plain(0x6078, |_, _| Some(var(0x6078, "Current actual value", T::Integer16, Ro, I16(0), true))),
-    plain(0x6079, |_, _| Some(var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(0), true))),
+    // mV; the bus starts at its nominal voltage.
+    plain(0x6079, |c, _| {
+        let mv = (c.params.bus.nominal_voltage * 1000.0).clamp(0.0, 4e9) as u32;
+        Some(var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(mv), true))
+    }),
     taken(
         0x607A,
         |_, _| Some(var(0x607A, "Target position", T::Integer32, Rww, I32(0), true)),
@@ -749,6 +757,12 @@ pub(crate) static PARAMS: &[Param] = &[
         index: 0x6060,
         def: |c, _| Some(var(0x6060, "Modes of operation", T::Integer8, Rww, I8(c.initial_mode), true)),
         check: Some(|d, _, _, _, v| {
+            // CiA 402-2 6060h: 0 is "no mode change / no mode assigned"
+            // (the power-on value of a drive without a default mode):
+            // stored, the mode in force stays (select_mode ignores it).
+            if v.i8() == 0 {
+                return Ok(WriteOutcome::Store);
+            }
             // CiA 402-2 §6.3.2: a mode the drive does not run is refused
             // (a manufacturer mode runs on its stand-in).
             if d.stand_in(v.i8()).is_none() {
