@@ -163,6 +163,14 @@ pub trait SlaveApp {
         let _ = now;
     }
 
+    /// The AL status error indication changed (ETG.1000.6 §6.4.1.4):
+    /// `Some(code)` when a requested transition was refused or the slave
+    /// fell back on an error, `None` when the master acknowledged it (AL
+    /// control bit 4, or a request for INIT).
+    fn al_error(&mut self, code: Option<AlStatusCode>, now: Instant) {
+        let _ = (code, now);
+    }
+
     /// Application timers and unsolicited mailbox messages (CoE
     /// emergencies: [`MailboxOut::unsolicited`]). Return the next deadline.
     fn poll(&mut self, now: Instant, out: &mut MailboxOut<'_>) -> Option<Instant> {

@@ -227,7 +227,9 @@ impl<A: SlaveApp> Slave<A> {
     fn handle(&mut self, ev: EscEvent, now: Instant) {
         match ev {
             EscEvent::EscReset => {
-                self.error = None;
+                if self.error.take().is_some() {
+                    self.app.al_error(None, now);
+                }
                 self.op_pending = None;
                 self.enter(AlState::Init, now);
             }
@@ -329,10 +331,11 @@ impl<A: SlaveApp> Slave<A> {
                 return;
             }
             self.error = None;
+            self.app.al_error(None, now);
         }
         self.op_pending = None;
         let Some(to) = requested else {
-            return self.set_error(AlStatusCode::UNKNOWN_STATE);
+            return self.set_error(AlStatusCode::UNKNOWN_STATE, now);
         };
         if to == self.state {
             return self.write_status();
@@ -343,7 +346,7 @@ impl<A: SlaveApp> Slave<A> {
             } else {
                 AlStatusCode::INVALID_STATE_CHANGE
             };
-            return self.set_error(code);
+            return self.set_error(code, now);
         }
         if self.state.is_down_to(to) {
             return self.enter(to, now);
@@ -355,7 +358,7 @@ impl<A: SlaveApp> Slave<A> {
                 self.check_pending_op(now);
             }
             Ok(()) => self.enter(to, now),
-            Err(code) => self.set_error(code),
+            Err(code) => self.set_error(code, now),
         }
     }
 
@@ -480,10 +483,10 @@ impl<A: SlaveApp> Slave<A> {
             self.enter(AlState::Op, now);
         } else if need_outputs && self.cfg.op_needs_outputs.is_some_and(|d| now >= since + d) {
             self.op_pending = None;
-            self.set_error(AlStatusCode::SM_WATCHDOG);
+            self.set_error(AlStatusCode::SM_WATCHDOG, now);
         } else if need_sync && now >= since + self.cfg.sync_timeout {
             self.op_pending = None;
-            self.set_error(AlStatusCode::NO_SYNC_ERROR);
+            self.set_error(AlStatusCode::NO_SYNC_ERROR, now);
         }
     }
 
@@ -508,7 +511,7 @@ impl<A: SlaveApp> Slave<A> {
         if self.state.is_down_to(to) {
             self.enter(to, now);
         }
-        self.set_error(code);
+        self.set_error(code, now);
     }
 
     fn enter(&mut self, to: AlState, now: Instant) {
@@ -529,7 +532,8 @@ impl<A: SlaveApp> Slave<A> {
         }
     }
 
-    fn set_error(&mut self, code: AlStatusCode) {
+    fn set_error(&mut self, code: AlStatusCode, now: Instant) {
+        self.app.al_error(Some(code), now);
         self.error = Some(code);
         self.write_status();
     }
