@@ -11,7 +11,7 @@
 //! would ([`Node::foreign_sync`]).
 
 use crate::owners::Dispatch;
-use crate::{Application, Node};
+use crate::{AppContext, Application, Node};
 use drivebus_can::{Instant, TxSink};
 use drivebus_od::{ObjectDictionary, ObjectHooks};
 
@@ -56,5 +56,24 @@ impl Node {
         if self.run_requests(now, app, out) {
             self.poll_services(now, app, out);
         }
+    }
+
+    /// An event of another protocol for the application (an EtherCAT state
+    /// change or AL error): `f` gets the application and its context, and
+    /// the requests it queues (an EMCY) are carried out as after any
+    /// callback.
+    pub fn with_app<A: Application + ?Sized, R>(
+        &mut self,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+        f: impl FnOnce(&mut A, &mut AppContext<'_>) -> R,
+    ) -> R {
+        self.s.link.now = now;
+        let r = f(&mut *app, &mut self.s.cx(&mut self.od));
+        if self.run_requests(now, app, out) {
+            self.poll_services(now, app, out);
+        }
+        r
     }
 }

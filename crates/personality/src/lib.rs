@@ -24,6 +24,7 @@
 
 pub mod behaviour;
 pub mod build;
+pub mod ecat;
 mod emcy_tables;
 mod profiles;
 
