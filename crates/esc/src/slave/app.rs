@@ -141,6 +141,14 @@ pub trait SlaveApp {
         let _ = (data, now);
     }
 
+    /// The master wrote a complete outputs buffer (SAFE-OP and OP, every
+    /// mode): in DC mode the outputs wait for the next SYNC0, so this is
+    /// where an application counts frames per cycle (ETG.1020 "SM event
+    /// missed", "cycle time too small").
+    fn outputs_received(&mut self, now: Instant) {
+        let _ = now;
+    }
+
     /// Fill in the inputs (SAFE-OP and OP).
     fn inputs(&mut self, data: &mut [u8], now: Instant) {
         let _ = (data, now);

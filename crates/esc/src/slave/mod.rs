@@ -295,6 +295,7 @@ impl<A: SlaveApp> Slave<A> {
             return;
         }
         self.outputs_valid = true;
+        self.app.outputs_received(now);
         if self.state == AlState::Op && !self.is_dc() {
             self.app.outputs(&self.out_buf, now);
         }
@@ -546,7 +547,7 @@ impl<A: SlaveApp> Slave<A> {
     }
 }
 
-impl<A: SlaveApp> Device for Slave<A> {
+impl<A: SlaveApp + 'static> Device for Slave<A> {
     fn esc(&self) -> &Esc {
         &self.esc
     }
@@ -555,6 +556,9 @@ impl<A: SlaveApp> Device for Slave<A> {
     }
     fn poll(&mut self, now: Instant) -> Option<Instant> {
         Slave::poll(self, now)
+    }
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
     }
 }
 

@@ -29,6 +29,7 @@ pub mod rules;
 mod sync;
 
 pub use behaviour::EcatBehaviour;
+pub use sync::sub as sync_sub;
 pub use sync::{SYNC_MODES_SUPPORTED, sync_objects};
 
 use crate::build::{BuildError, BuildOptions, Context, PersonalityDevice, build_full};
