@@ -8,6 +8,7 @@ mod args;
 mod demo;
 mod dump;
 mod eds_cmd;
+mod ethercat;
 mod fault;
 mod link;
 mod misc;
@@ -62,5 +63,6 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => misc::lss(g, c).await.map(|()| 0),
         Command::SlcanPty(a) => misc::slcan_pty(g, a).await.map(|()| 0),
+        Command::Ethercat(c) => ethercat::run(c).await,
     }
 }

@@ -90,7 +90,8 @@ pub struct AxisReport {
     pub enabled_at: Option<u32>,
     /// Cycles it spent in Operation enabled.
     pub enabled_cycles: u32,
-    /// Cycles with the fault bit (statusword bit 3).
+    /// Cycles with the fault bit (statusword bit 3) once it had been
+    /// enabled.
     pub fault_cycles: u32,
     /// Largest |demand of the previous cycle − position actual value|.
     pub max_following: f64,
@@ -263,7 +264,11 @@ impl Axis {
         let sw = get(inputs, self.sw, 2) as u16;
         let pos = get(inputs, self.pos, 4) as f64;
         let (cw, target): (u16, f64) = if sw & 0x08 != 0 {
-            self.report.fault_cycles += 1;
+            // A fault from before (a previous master left OP: 6007h) is
+            // reset; one after the drive was enabled here is a failure.
+            if self.report.enabled_at.is_some() {
+                self.report.fault_cycles += 1;
+            }
             (if cycle.is_multiple_of(2) { 0x00 } else { 0x80 }, pos)
         } else if sw & 0x6F == 0x27 {
             self.report.enabled_at.get_or_insert(cycle);
