@@ -53,7 +53,9 @@ fn serves_a_line_of_drives_on_an_interface_and_stops_on_sigterm() {
     let pcap = dir.join("line.pcapng");
     std::fs::create_dir_all(&dir).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_drivebus"))
-        .args(["ethercat", "serve", "--iface", &a, "--drive", "ipos", "--drive", "generic", "--drive", "ipos"])
+        .args([
+            "ethercat", "serve", "--iface", &a, "--drive", "ipos", "--drive", "generic", "--drive", "ipos",
+        ])
         .arg("--state-dir")
         .arg(dir.join("state"))
         .arg("--pcap")

@@ -46,5 +46,8 @@ fn drives_run_without_a_master() {
     let period = with_drive(&host, 0, |d| d.app().device().app.drive.control_period()).unwrap();
     // One second of control periods, give or take the last partial one.
     let expected = (1.0 / period).round() as u64;
-    assert!(after - before >= expected - 1 && after - before <= expected + 1, "{before} → {after}, {expected}");
+    assert!(
+        after - before >= expected - 1 && after - before <= expected + 1,
+        "{before} → {after}, {expected}"
+    );
 }

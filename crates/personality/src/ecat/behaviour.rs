@@ -119,7 +119,9 @@ impl EcatBehaviour {
         if on {
             let e: EmcyFrame = self.inner.emcy(EMCY_COMMUNICATION);
             cx.request(e.raise());
-        } else {
+        } else if cx.drive.state_machine().fault_code() != EMCY_COMMUNICATION {
+            // A drive still faulted on it (6007h = 1) keeps the error
+            // until its fault reset, which clears the EMCY itself.
             cx.request(Request::ClearEmcy(EMCY_COMMUNICATION));
         }
     }
