@@ -6,7 +6,7 @@
 //! the EtherCAT dictionary leaves out and the sync manager objects it
 //! adds (docs/personalities.md).
 
-use drivebus_esc::sii::{sm_type, SiiPdo};
+use drivebus_esc::sii::{SiiPdo, sm_type};
 use drivebus_esi::{CheckOptions, SmKind};
 use drivebus_ethercat::drive::{DriveSlaveExt, DriveSpec, Image, facts, slave};
 use drivebus_personality::Profile;
@@ -16,7 +16,10 @@ use std::collections::BTreeSet;
 const PROFILES: [Profile; 2] = [Profile::Ipos, Profile::Generic];
 
 fn entries(p: &SiiPdo) -> Vec<u32> {
-    p.entries.iter().map(|e| (u32::from(e.index) << 16) | (u32::from(e.sub_index) << 8) | u32::from(e.bit_len)).collect()
+    p.entries
+        .iter()
+        .map(|e| (u32::from(e.index) << 16) | (u32::from(e.sub_index) << 8) | u32::from(e.bit_len))
+        .collect()
 }
 
 #[test]
@@ -42,7 +45,10 @@ fn sii_esi_and_dictionary_agree() {
         let (_, mi) = d.sm(SmKind::MBoxIn).unwrap();
         assert_eq!((c.mailbox.rx_offset, c.mailbox.rx_size), (mo.start, mo.default_size.unwrap()), "{p}");
         assert_eq!((c.mailbox.tx_offset, c.mailbox.tx_size), (mi.start, mi.default_size.unwrap()), "{p}");
-        assert!(usize::from(c.mailbox.tx_size) >= d.ethercrab_min_mailbox_in(), "{p}: SM1 big enough for ethercrab");
+        assert!(
+            usize::from(c.mailbox.tx_size) >= d.ethercrab_min_mailbox_in(),
+            "{p}: SM1 big enough for ethercrab"
+        );
         let sm_len = |t: u8| c.sync_managers.iter().find(|s| s.sm_type == t).unwrap().length;
         assert_eq!(u32::from(sm_len(sm_type::OUTPUTS)) * 8, Image::bits_of(&od, 0x1C12), "{p}: SM2 = 1C12h");
         assert_eq!(u32::from(sm_len(sm_type::INPUTS)) * 8, Image::bits_of(&od, 0x1C13), "{p}: SM3 = 1C13h");
@@ -55,8 +61,12 @@ fn sii_esi_and_dictionary_agree() {
             let flagged: Vec<u16> = pdos.iter().filter(|x| x.flags & 0x0002 != 0).map(|x| x.index).collect();
             assert_eq!(flagged, rules::assigned(&od, assign), "{p}: {assign:04X}h");
             let all: BTreeSet<u16> = pdos.iter().map(|x| x.index).collect();
-            let maps: BTreeSet<u16> =
-                od.objects().iter().map(|o| o.index).filter(|i| rules::is_mapping(*i) && rules::kind_of(*i) == rules::kind_of(pdos[0].index)).collect();
+            let maps: BTreeSet<u16> = od
+                .objects()
+                .iter()
+                .map(|o| o.index)
+                .filter(|i| rules::is_mapping(*i) && rules::kind_of(*i) == rules::kind_of(pdos[0].index))
+                .collect();
             assert_eq!(all, maps, "{p}: every mapping object described");
         }
         // The ESI: written, valid, read back equal; it describes the
@@ -83,14 +93,21 @@ fn eds_differs_exactly_by_the_can_objects() {
         let eds = p.parse_eds().eds;
         let di = &eds.device_info;
         let id = [1u8, 2, 3].map(|sub| od.get_u32(0x1018, sub));
-        assert_eq!(id, [di.vendor_number, di.product_number, di.revision_number], "{p}: EDS [DeviceInfo] = 1018h");
+        assert_eq!(
+            id,
+            [di.vendor_number, di.product_number, di.revision_number],
+            "{p}: EDS [DeviceInfo] = 1018h"
+        );
         let in_eds: BTreeSet<u16> = eds.objects.keys().copied().collect();
         let in_od: BTreeSet<u16> = od.objects().iter().map(|o| o.index).collect();
         let facts = ecat::facts(p).unwrap();
         let removed: BTreeSet<u16> = in_eds.difference(&in_od).copied().collect();
         let added: BTreeSet<u16> = in_od.difference(&in_eds).copied().collect();
         assert!(removed.iter().all(|i| (facts.can_only)(*i)), "{p}: only CAN objects go: {removed:04X?}");
-        assert!(added.iter().all(|i| matches!(i, 0x1C00 | 0x1C12 | 0x1C13 | 0x1C32 | 0x1C33)), "{p}: {added:04X?}");
+        assert!(
+            added.iter().all(|i| matches!(i, 0x1C00 | 0x1C12 | 0x1C13 | 0x1C32 | 0x1C33)),
+            "{p}: {added:04X?}"
+        );
         assert!(added.contains(&0x1C32) && added.contains(&0x1C33), "{p}");
         // Every object both have agrees: the ESI of the EtherCAT
         // dictionary checked against the EDS finds nothing else.
@@ -107,8 +124,10 @@ fn eds_differs_exactly_by_the_can_objects() {
             // parameters it stores.
             .filter(|f| !(matches!(f.index, Some(0x608F | 0x6090)) && f.field == "backup/settings"))
             .collect();
-        let brief: Vec<String> =
-            f.iter().map(|x| format!("{:04X?}:{:?} {} esi={} eds={}", x.index, x.sub, x.field, x.esi, x.other)).collect();
+        let brief: Vec<String> = f
+            .iter()
+            .map(|x| format!("{:04X?}:{:?} {} esi={} eds={}", x.index, x.sub, x.field, x.esi, x.other))
+            .collect();
         assert!(f.is_empty(), "{p}: EDS vs ESI: {brief:#?}");
     }
 }

@@ -321,3 +321,68 @@ pub fn check(m: &[u8]) -> Result<&[u8], Fail> {
     }
     Ok(b)
 }
+
+/// How an FoE write ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FoeResult {
+    /// Every packet acknowledged; BUSY answers on the way.
+    Done { busy: usize },
+    /// The drive answered ERR with this code.
+    Error(u32),
+    /// A mailbox error.
+    Mailbox(u16),
+    /// No answer.
+    NoResponse,
+}
+
+impl Rig {
+    /// SOEM's `ecx_FOEwrite`: WRQ, DATA packets of SM0 − 12 bytes (an
+    /// empty last one after a full one), the same packet again after a
+    /// BUSY (10 ms later).
+    pub fn foe_write(&mut self, name: &str, password: u32, data: &[u8]) -> FoeResult {
+        let maxdata = MBX_LEN - 12;
+        let c = self.counter();
+        let mut b = vec![2u8, 0];
+        b.extend_from_slice(&password.to_le_bytes());
+        b.extend_from_slice(name.as_bytes());
+        self.send(&mbx(0x04, c, &b));
+        let (mut sent, mut pos, mut seg, mut busy) = (0u32, 0usize, 0usize, 0usize);
+        let mut final_zero = true;
+        loop {
+            let Some(m) = self.read() else { return FoeResult::NoResponse };
+            if m[5] & 0x0F == 0 {
+                return FoeResult::Mailbox(u16::from_le_bytes([m[8], m[9]]));
+            }
+            let b = &m[6..];
+            let word = u32::from_le_bytes([b[2], b[3], b[4], b[5]]);
+            match b[0] {
+                4 if word == sent => {
+                    let k = (data.len() - pos).min(maxdata);
+                    if k == 0 && !final_zero {
+                        return FoeResult::Done { busy };
+                    }
+                    final_zero = pos + k == data.len() && k == maxdata;
+                    seg = k;
+                }
+                6 if sent > 0 => {
+                    busy += 1;
+                    self.tick(Duration::from_millis(10));
+                    pos -= seg;
+                    sent -= 1;
+                    let k = (data.len() - pos).min(maxdata);
+                    final_zero = pos + k == data.len() && k == maxdata;
+                    seg = k;
+                }
+                5 => return FoeResult::Error(word),
+                _ => return FoeResult::Error(0),
+            }
+            sent += 1;
+            let c = self.counter();
+            let mut d = vec![3u8, 0];
+            d.extend_from_slice(&sent.to_le_bytes());
+            d.extend_from_slice(&data[pos..pos + seg]);
+            pos += seg;
+            self.send(&mbx(0x04, c, &d));
+        }
+    }
+}
