@@ -37,6 +37,8 @@
 
 mod access;
 mod app;
+#[doc(hidden)]
+pub mod fuzzing;
 mod identity;
 mod image;
 mod sync;
