@@ -248,18 +248,8 @@ impl ProfileInfo {
     /// The 6502h bit of a standard mode (CiA 402: pp 0, vl 1, pv 2, tq 3,
     /// hm 5, ip 6, csp 7, csv 8, cst 9); `None` for manufacturer modes.
     pub fn mode_bit(mode: i8) -> Option<u32> {
-        match mode {
-            1 => Some(0),
-            2 => Some(1),
-            3 => Some(2),
-            4 => Some(3),
-            6 => Some(5),
-            7 => Some(6),
-            8 => Some(7),
-            9 => Some(8),
-            10 => Some(9),
-            _ => None,
-        }
+        let bit = drivebus_cia402::codes::mode::supported_bit(mode);
+        (bit != 0).then(|| bit.trailing_zeros())
     }
 }
 
