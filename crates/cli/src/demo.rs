@@ -26,7 +26,8 @@ const CYCLE: Duration = Duration::from_millis(1);
 pub struct Sample {
     /// Seconds since the nodes were started.
     pub t: f64,
-    /// 6062h position demand value \[m°\].
+    /// Position demand \[m°\]: 6064h + 60F4h (the AKD has no 6062h, its
+    /// manual's object list §7.1.5 has the following error 60F4h).
     pub demand: f64,
     /// 6064h position actual value \[m°\].
     pub position: f64,
@@ -122,8 +123,9 @@ impl Demo {
                 self.cur.t = t.saturating_duration_since(self.t0).as_nanos() as f64 / 1e9;
                 self.samples.push(self.cur);
             } else if id == self.cob[2] {
+                // After TPDO2 of the same SYNC (higher COB-ID, later).
                 self.cur.following = i32_at(0);
-                self.cur.demand = i32_at(4);
+                self.cur.demand = self.cur.position + self.cur.following;
             } else if id == self.cob[4] {
                 self.cur.position2 = i32_at(0);
             }
@@ -236,7 +238,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
 
     // 3. PDOs. RPDO1 controlword (event), RPDO2 controlword + target (SYNC);
     // TPDO1 statusword (event), TPDO2 position + velocity, TPDO3 following
-    // error + demand (every SYNC).
+    // error (every SYNC; the demand is position + following error).
     d.pb.set_message("configure PDOs");
     for node in [1u8, 2] {
         d.m.map_pdo(node, false, 0, &[0x6040_0010], 255).context("RPDO1")?;
@@ -244,7 +246,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         let t1 = d.m.map_pdo(node, true, 0, &[0x6041_0010, 0x6061_0008], 255).context("TPDO1")?;
         let t2 = d.m.map_pdo(node, true, 1, &[0x6064_0020, 0x606C_0020], 1).context("TPDO2")?;
         if node == 1 {
-            let t3 = d.m.map_pdo(node, true, 2, &[0x60F4_0020, 0x6062_0020], 1).context("TPDO3")?;
+            let t3 = d.m.map_pdo(node, true, 2, &[0x60F4_0020], 1).context("TPDO3")?;
             d.cob[..3].copy_from_slice(&[t1, t2, t3]);
         } else {
             d.cob[3..].copy_from_slice(&[t1, t2]);
@@ -484,7 +486,7 @@ pub fn plot(path: &std::path::Path, s: &[Sample]) -> anyhow::Result<()> {
             "degrees",
             vec![
                 ("node 1 actual 6064h", BLUE, Box::new(|x: &Sample| x.position / 1000.0)),
-                ("node 1 demand 6062h", RED, Box::new(|x: &Sample| x.demand / 1000.0)),
+                ("node 1 demand (6064h + 60F4h)", RED, Box::new(|x: &Sample| x.demand / 1000.0)),
                 (
                     "node 2 actual 6064h (1000 of its units)",
                     GREEN,

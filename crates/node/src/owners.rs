@@ -119,6 +119,10 @@ pub(crate) struct Services {
     pub sdo_params_dirty: bool,
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
+    /// What the EDS served at 1021h says besides the dictionary: LSS
+    /// slave or not, and the device's own `[DeviceInfo]`.
+    #[cfg(feature = "std")]
+    pub eds_info: (bool, Option<drivebus_eds::DeviceInfo>),
 }
 
 /// The node's side of an application callback, borrowed apart from the
@@ -264,7 +268,14 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
             tag::EMCY => self.s.emcy.check_read(at.index, at.sub),
             #[cfg(feature = "std")]
             tag::EDS => {
-                let text = crate::eds_object::generate(od, self.s.nmt.node_id(), self.s.pdo.config());
+                let (lss, info) = &self.s.eds_info;
+                let text = crate::eds_object::generate(
+                    od,
+                    self.s.nmt.node_id(),
+                    self.s.pdo.config(),
+                    *lss,
+                    info.as_ref(),
+                );
                 od.set_raw(at.r, text.as_bytes());
                 Ok(())
             }

@@ -98,28 +98,13 @@ impl Node {
         self.app_errors.push((code, bits));
         let reg = self.defined_register();
         self.send_raw_emcy(code, reg, bytes, now);
-        let od = &mut self.od;
-        if let Ok(r) = od.find(0x1001, 0) {
-            od.set_raw(r, &[reg]);
+        if let Ok(r) = self.od.find(0x1001, 0) {
+            self.od.set_raw(r, &[reg]);
         }
-        // 1003h: newest first, sub 0 = number of entries.
-        let depth = od.object(0x1003).map(|o| o.subs().len().saturating_sub(1)).unwrap_or(0);
-        if depth > 0 {
-            let n = od.get_u32(0x1003, 0).unwrap_or(0) as usize;
-            for i in (1..depth.min(n + 1)).rev() {
-                let v = od.get_u32(0x1003, i as u8).unwrap_or(0);
-                if let Ok(r) = od.find(0x1003, i as u8 + 1) {
-                    od.set_raw(r, &v.to_le_bytes());
-                }
-            }
-            let entry = u32::from(code) | (u32::from(bytes[0]) << 16);
-            if let Ok(r) = od.find(0x1003, 1) {
-                od.set_raw(r, &entry.to_le_bytes());
-            }
-            if let Ok(r) = od.find(0x1003, 0) {
-                od.set_raw(r, &[(n + 1).min(depth) as u8]);
-            }
-        }
+        // 1003h through the EMCY producer, so its reads agree (CiA 301
+        // §7.5.2.5; KC1 §7.2.1.4: the code, with the manufacturer's first
+        // byte as additional information).
+        self.record_emcy_history(u32::from(code) | (u32::from(bytes[0]) << 16));
     }
 
     /// Clears an error raised by [`Self::raise_defined`]; the error-reset

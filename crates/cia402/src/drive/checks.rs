@@ -4,7 +4,7 @@
 use super::Drive;
 use super::config::DriveConfig;
 use super::mode::op;
-use super::objects::{How, Raw, pair_of, range, record, sub};
+use super::objects::{How, Raw, range, record, sub};
 use crate::state_machine::Options;
 use drivebus_od::{Access, DataType as T, Object, ObjectDictionary, SdoAbort, Value, WriteOutcome};
 
@@ -114,13 +114,23 @@ pub(super) fn min_max_check(
 }
 
 pub(super) fn min_max_apply(d: &mut Drive, od: &mut ObjectDictionary, i: u16, s: u8, v: Raw, how: How) {
-    let get = |od: &ObjectDictionary, s: u8| od.get_i64(i, s).unwrap_or(0);
-    // A reload takes both stored values; a write the one written.
-    let (lo, hi) = match how {
-        How::Reload => (get(od, 1), get(od, 2)),
-        How::Write if s == 1 => (if i == 0x6046 { v.u as i64 } else { v.s }, get(od, 2)),
-        How::Write => (get(od, 1), if i == 0x6046 { v.u as i64 } else { v.s }),
+    let x = if i == 0x6046 { v.u as i64 } else { v.s };
+    // A write keeps the other bound as the dictionary holds it; a reload
+    // takes the stored bounds one sub-index after the other.
+    let (mut lo, mut hi) = match i {
+        0x607B => (i64::from(d.params.position_range.0), i64::from(d.params.position_range.1)),
+        0x607D => (i64::from(d.params.software_limits.0), i64::from(d.params.software_limits.1)),
+        _ => (i64::from(d.extra.vl_min), i64::from(d.extra.vl_max)),
     };
+    if how == How::Write {
+        let get = |s: u8| od.get_i64(i, s).unwrap_or(0);
+        (lo, hi) = (get(1), get(2));
+    }
+    if s == 1 {
+        lo = x;
+    } else {
+        hi = x;
+    }
     match i {
         0x607B => d.params.position_range = (lo as i32, hi as i32),
         0x607D => d.params.software_limits = (lo as i32, hi as i32),
@@ -168,18 +178,16 @@ pub(super) fn factor_apply(d: &mut Drive, od: &mut ObjectDictionary, i: u16, s: 
         // Stored set-up parameters: the units in force stay.
         return;
     }
-    match how {
-        // The units are derived once, after every factor is reloaded.
-        How::Reload => *factor_slot(&mut d.factor, i) = pair_of(od, i),
-        How::Write => {
-            let slot = factor_slot(&mut d.factor, i);
-            if s == 1 {
-                slot.0 = v.u32();
-            } else {
-                slot.1 = v.u32();
-            }
-            d.retune_units();
-        }
+    let _ = od;
+    let slot = factor_slot(&mut d.factor, i);
+    if s == 1 {
+        slot.0 = v.u32();
+    } else {
+        slot.1 = v.u32();
+    }
+    // On a reload the units are derived once, after every factor.
+    if how == How::Write {
+        d.retune_units();
     }
 }
 

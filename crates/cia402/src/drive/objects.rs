@@ -200,10 +200,14 @@ impl Drive {
             Some(check) => check(self, od, index, sub, v)?,
             None => WriteOutcome::Store,
         };
-        if outcome == WriteOutcome::Store
-            && let Some(apply) = p.apply
-        {
-            apply(self, od, index, sub, v, How::Write);
+        if outcome == WriteOutcome::Store {
+            if let Some(apply) = p.apply {
+                apply(self, od, index, sub, v, How::Write);
+            }
+            // A withdrawn object's value lives with the drive.
+            if let Ok(e) = self.withdrawn.find(index, sub) {
+                self.withdrawn.set_le(e, data);
+            }
         }
         Ok(outcome)
     }
@@ -215,11 +219,13 @@ impl Drive {
 
     /// Takes every stored parameter (after install, and after the node
     /// restored or loaded values behind the write path), entry by entry in
-    /// table order, then derives the units and re-resolves the handles.
+    /// table order, then derives the units and re-resolves the handles. A
+    /// withdrawn object's values are the drive's own (`withdraw_object`).
     pub(crate) fn reload(&mut self, od: &mut ObjectDictionary) {
         for p in PARAMS {
             let Some(apply) = p.apply else { continue };
-            let Some(o) = od.object(p.index) else { continue };
+            let src = if self.withdrawn.object(p.index).is_some() { &self.withdrawn } else { &*od };
+            let Some(o) = src.object(p.index) else { continue };
             let vals: Vec<(u8, Raw)> = o
                 .subs()
                 .iter()
@@ -256,6 +262,10 @@ impl Drive {
     pub(crate) fn refresh_handler_objects(&mut self, od: &mut ObjectDictionary) {
         for sub in 1..=6 {
             self.read_handler_object(od, 0x60C4, sub);
+            // The handler's state now is the power-on value (1011h restores it).
+            if let Some(s) = od.get_mut(0x60C4, sub) {
+                s.default = s.bytes().to_vec();
+            }
         }
         // Replaced in place only: inserting a new object would move the
         // handles the node's PDO service holds (a handler added after
@@ -275,6 +285,9 @@ impl Drive {
         let Some(u) = Units::new(&self.factor) else { return };
         // The demand is in user units: keep it at the same increments.
         let inc = self.units.pos_to_inc_f(self.dem.pos);
+        // The reference shift's fraction, over the new denominator.
+        let frac = self.units.frac_to_inc_f(self.inc_frac) * u.position_ratio().den as f64;
+        self.inc_frac = (libm::floor(frac) as i128).clamp(0, u.position_ratio().den as i128 - 1);
         self.units = u;
         self.dem.pos = self.units.inc_to_pos_f(inc);
         self.dem.vel = 0.0;
@@ -282,25 +295,26 @@ impl Drive {
     }
 }
 
-/// Handles of the values the drive pushes every period.
+/// Handles of the values the drive pushes every period; `None` where the
+/// device does not have the object (`Drive::withdraw_object`).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Refs {
-    pub statusword: EntryRef,
-    pub error_code: EntryRef,
-    pub mode_display: EntryRef,
-    pub pos_demand: EntryRef,
-    pub pos_internal: EntryRef,
-    pub pos_actual: EntryRef,
-    pub vel_demand: EntryRef,
-    pub vel_actual: EntryRef,
-    pub torque_demand: EntryRef,
-    pub torque_actual: EntryRef,
-    pub current_actual: EntryRef,
-    pub dc_link: EntryRef,
-    pub following_error: EntryRef,
-    pub inputs: EntryRef,
-    pub probe_status: EntryRef,
-    pub probe_pos: [EntryRef; 4],
+    pub statusword: Option<EntryRef>,
+    pub error_code: Option<EntryRef>,
+    pub mode_display: Option<EntryRef>,
+    pub pos_demand: Option<EntryRef>,
+    pub pos_internal: Option<EntryRef>,
+    pub pos_actual: Option<EntryRef>,
+    pub vel_demand: Option<EntryRef>,
+    pub vel_actual: Option<EntryRef>,
+    pub torque_demand: Option<EntryRef>,
+    pub torque_actual: Option<EntryRef>,
+    pub current_actual: Option<EntryRef>,
+    pub dc_link: Option<EntryRef>,
+    pub following_error: Option<EntryRef>,
+    pub inputs: Option<EntryRef>,
+    pub probe_status: Option<EntryRef>,
+    pub probe_pos: [Option<EntryRef>; 4],
     pub vl_demand: Option<EntryRef>,
     pub vl_actual: Option<EntryRef>,
     /// Number of objects when resolved: inserting an object moves handles.
@@ -308,26 +322,27 @@ pub(crate) struct Refs {
 }
 
 impl Refs {
-    /// Resolves every handle; `None` if the drive's objects are missing.
+    /// Resolves every handle; `None` without a statusword (not a drive's
+    /// dictionary).
     pub fn resolve(od: &ObjectDictionary) -> Option<Refs> {
         let f = |i: u16| od.find(i, 0).ok();
         Some(Refs {
-            statusword: f(0x6041)?,
-            error_code: f(0x603F)?,
-            mode_display: f(0x6061)?,
-            pos_demand: f(0x6062)?,
-            pos_internal: f(0x6063)?,
-            pos_actual: f(0x6064)?,
-            vel_demand: f(0x606B)?,
-            vel_actual: f(0x606C)?,
-            torque_demand: f(0x6074)?,
-            torque_actual: f(0x6077)?,
-            current_actual: f(0x6078)?,
-            dc_link: f(0x6079)?,
-            following_error: f(0x60F4)?,
-            inputs: f(0x60FD)?,
-            probe_status: f(0x60B9)?,
-            probe_pos: [f(0x60BA)?, f(0x60BB)?, f(0x60BC)?, f(0x60BD)?],
+            statusword: Some(f(0x6041)?),
+            error_code: f(0x603F),
+            mode_display: f(0x6061),
+            pos_demand: f(0x6062),
+            pos_internal: f(0x6063),
+            pos_actual: f(0x6064),
+            vel_demand: f(0x606B),
+            vel_actual: f(0x606C),
+            torque_demand: f(0x6074),
+            torque_actual: f(0x6077),
+            current_actual: f(0x6078),
+            dc_link: f(0x6079),
+            following_error: f(0x60F4),
+            inputs: f(0x60FD),
+            probe_status: f(0x60B9),
+            probe_pos: [f(0x60BA), f(0x60BB), f(0x60BC), f(0x60BD)],
             vl_demand: f(0x6043),
             vl_actual: f(0x6044),
             objects: od.objects().len(),

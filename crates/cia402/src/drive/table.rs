@@ -132,7 +132,11 @@ pub(crate) static PARAMS: &[Param] = &[
         option_check,
         option_apply,
     ),
-    plain(0x6061, |_, _| Some(var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(0), true))),
+    // The display starts with the power-on mode the drive enters.
+    plain(0x6061, |c, modes| {
+        let m = if op::supported_bit(c.initial_mode) & modes != 0 { c.initial_mode } else { 0 };
+        Some(var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(m), true))
+    }),
     plain(0x6062, |_, _| Some(var(0x6062, "Position demand value", T::Integer32, Ro, I32(0), true))),
     plain(0x6063, |_, _| Some(var(0x6063, "Position actual internal value", T::Integer32, Ro, I32(0), true))),
     plain(0x6064, |_, _| Some(var(0x6064, "Position actual value", T::Integer32, Ro, I32(0), true))),
@@ -259,7 +263,11 @@ pub(crate) static PARAMS: &[Param] = &[
     ),
     plain(0x6077, |_, _| Some(var(0x6077, "Torque actual value", T::Integer16, Ro, I16(0), true))),
     plain(0x6078, |_, _| Some(var(0x6078, "Current actual value", T::Integer16, Ro, I16(0), true))),
-    plain(0x6079, |_, _| Some(var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(0), true))),
+    // mV; the bus starts at its nominal voltage.
+    plain(0x6079, |c, _| {
+        let mv = (c.params.bus.nominal_voltage * 1000.0).clamp(0.0, 4e9) as u32;
+        Some(var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(mv), true))
+    }),
     taken(
         0x607A,
         |_, _| Some(var(0x607A, "Target position", T::Integer32, Rww, I32(0), true)),
@@ -496,19 +504,17 @@ pub(crate) static PARAMS: &[Param] = &[
         // A jerk of 0 would never build up any acceleration.
         positive,
         |d, od, _, s, v, how| {
-            let (a, b) = pair_of(od, 0x60A4);
-            match how {
-                How::Write => {
-                    let (acceleration, deceleration) = if s == 1 { (v.u32(), b) } else { (a, v.u32()) };
-                    d.jerk = ProfileJerk::Rate { acceleration, deceleration };
+            let (a, b) = match (how, d.jerk) {
+                (How::Write, _) => pair_of(od, 0x60A4),
+                (How::Reload, ProfileJerk::Rate { acceleration, deceleration }) => {
+                    (acceleration, deceleration)
                 }
                 // Stored rates replace rates; a jerk time (configured or set
                 // by the personality) stays until 60A4h itself is written.
-                How::Reload if matches!(d.jerk, ProfileJerk::Rate { .. }) => {
-                    d.jerk = ProfileJerk::Rate { acceleration: a, deceleration: b };
-                }
-                How::Reload => {}
-            }
+                (How::Reload, ProfileJerk::Time(_)) => return,
+            };
+            let (acceleration, deceleration) = if s == 1 { (v.u32(), b) } else { (a, v.u32()) };
+            d.jerk = ProfileJerk::Rate { acceleration, deceleration };
         },
     ),
     plain(0x60A8, |c, _| Some(var(0x60A8, "SI unit position", T::Unsigned32, Rw, U32(c.si_units[0]), false))),
@@ -686,9 +692,11 @@ pub(crate) static PARAMS: &[Param] = &[
         |d, od, _, s, v, how| {
             let x = &mut d.extra;
             match (how, s) {
+                // Sub 1 (the command) comes before sub 2 (the mask).
+                (How::Reload, 1) => x.outputs = v.u32(),
                 (How::Reload, _) => {
-                    x.output_mask = od.get_u32(0x60FE, 2).unwrap_or(0);
-                    x.outputs = od.get_u32(0x60FE, 1).unwrap_or(0) & x.output_mask;
+                    x.output_mask = v.u32();
+                    x.outputs &= x.output_mask;
                 }
                 (How::Write, 1) => x.outputs = v.u32() & x.output_mask,
                 (How::Write, _) => {
@@ -750,8 +758,10 @@ pub(crate) static PARAMS: &[Param] = &[
         def: |c, _| Some(var(0x6060, "Modes of operation", T::Integer8, Rww, I8(c.initial_mode), true)),
         check: Some(|d, _, _, _, v| {
             // CiA 402-2 §6.3.2: a mode the drive does not run is refused
-            // (a manufacturer mode runs on its stand-in).
-            if d.stand_in(v.i8()).is_none() {
+            // (a manufacturer mode runs on its stand-in); 0 is "no mode
+            // change" (the power-on value of a drive without a default
+            // mode): stored, the mode in force stays.
+            if v.i8() != 0 && d.stand_in(v.i8()).is_none() {
                 return Err(SdoAbort::INVALID_VALUE);
             }
             Ok(WriteOutcome::Store)
