@@ -14,7 +14,7 @@
 //! * where the EDS has a single value and the drive a structure (or the
 //!   reverse: SSD 630 6080h is an ARRAY of two, §12), the EDS's object
 //!   replaces the drive's, whose parameter is withdrawn; the behaviour
-//!   translates (`behaviour/ssd630.rs`);
+//!   translates (`src/ssd630/`);
 //! * every other sub-object takes the EDS's name, data type, access, PDO
 //!   mapping and limits; object code and name likewise.
 //!

@@ -1,7 +1,7 @@
 //! Kollmorgen KC1, *KC1 CAN-BUS Communication*, edition J 05/2013, firmware 1.9.
 
-use super::{can, maps::*};
-use crate::{ProfileInfo, Quirk, Transport, emcy_tables};
+use crate::shared::{can, maps::*};
+use crate::{ProfileInfo, Quirk, Transport};
 
 /// KC1 facts.
 pub static INFO: ProfileInfo = ProfileInfo {
@@ -23,7 +23,7 @@ pub static INFO: ProfileInfo = ProfileInfo {
     granularity: 8,                  // §7.3.1.2: byte-wise mapping only
     max_mapped_entries: 8,           // §7.3.1.2
     dummy_mapping: false,            // §8.2.2.1: 2100h is used instead of 0001h–0007h
-    emcy: emcy_tables::KC1,          // §7.1
+    emcy: super::emcy::EMCY,         // §7.1
     sdo_block: false,                // §6.4.5: expedited and segmented only
     time: false,                     // §6.4.3
     nmt_enter_preoperational: false, // §6.4.1: cs 128 not listed

@@ -1,7 +1,7 @@
 //! Kollmorgen KC1 (seed000, *KC1 CAN-BUS Communication*, edition J 05/2013)
 //! and the parts the AKD shares with it ([`Kollmorgen`]).
 //!
-//! What is emulated (sections of the KC1 manual; AKD sections in `akd.rs`):
+//! What is emulated (sections of the KC1 manual; AKD sections in `akd/`):
 //!
 //! - no SDO block transfer (§6.4.5), no TIME (§6.4.3), NMT 80h not in the
 //!   command list (§6.4.1): configuration ([`crate::build::node_config`]);
@@ -16,6 +16,14 @@
 //!   §7.2.1.2 notwithstanding), byte 3 "category" 01h (§6.4.4.2);
 //! - 6099h homing speeds above 65535 velocity units → `0609 0031`
 //!   (example 9 frames 43–44; our reading, see docs/personalities.md).
+
+mod emcy;
+mod facts;
+
+pub use facts::INFO;
+
+/// The EDS file (`crates/personality/eds/kc1.eds`).
+pub const EDS: &str = include_str!("../../eds/kc1.eds");
 
 use crate::Profile;
 
@@ -168,10 +176,10 @@ impl Behaviour for Kollmorgen {
         {
             self.sync_seen = true;
         }
-        if let Some(f) = super::resize_expedited(od, node_id, frame) {
+        if let Some(f) = crate::shared::resize_expedited(od, node_id, frame) {
             return FilterOutcome::Replace(f);
         }
-        if let Some(f) = super::pad_short_rpdo(od, frame) {
+        if let Some(f) = crate::shared::pad_short_rpdo(od, frame) {
             return FilterOutcome::Replace(f);
         }
         FilterOutcome::Pass
@@ -340,7 +348,7 @@ impl Behaviour for Kollmorgen {
 
     fn emcy(&self, code: u16) -> EmcyFrame {
         let code = kollmorgen_code(code);
-        EmcyFrame { code, register: Some(super::class_bit(code)), bytes: [EMCY_CATEGORY, 0, 0, 0, 0] }
+        EmcyFrame { code, register: Some(crate::shared::class_bit(code)), bytes: [EMCY_CATEGORY, 0, 0, 0, 0] }
     }
 
     fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {

@@ -31,6 +31,14 @@
 //! The §4.4 traces replay against this behaviour in
 //! `tests/replay_dds6.rs` / `tests/replay_dds6_ip.rs`.
 
+mod emcy;
+mod facts;
+
+pub use facts::INFO;
+
+/// The EDS file (`crates/personality/eds/dds6.eds`).
+pub const EDS: &str = include_str!("../../eds/dds6.eds");
+
 use drivebus_cia402::homing::{HomingRegistry, StandardMethod};
 
 /// The SDO abort for a store/restore the device state forbids.

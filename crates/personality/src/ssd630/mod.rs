@@ -26,6 +26,14 @@
 //!   §7.3.2.1 defines as the application's power-on reset, does the same;
 //!   Reset Communication does not (it is no power-on).
 
+mod emcy;
+mod facts;
+
+pub use facts::INFO;
+
+/// The EDS file (`crates/personality/eds/ssd630.eds`).
+pub const EDS: &str = include_str!("../../eds/ssd630.eds");
+
 use drivebus_cia402::homing::{
     HomingConfig, HomingContext, HomingMethod, HomingRegistry, MethodStep, StandardMethod,
 };

@@ -17,7 +17,7 @@ pub(crate) const BEHAVIOUR: Owner = Owner::app(0xBF);
 
 /// A personality: the CiA 402 drive and the behaviour that makes it act
 /// like the product. `drivebus_node::NodeDevice<Personality>` is the device
-/// [`crate::build`] returns.
+/// [`crate::build()`] returns.
 pub struct Personality {
     /// The CiA 402 drive.
     pub drive: Drive,
@@ -61,7 +61,7 @@ impl Personality {
     }
 
     /// The behaviour as its concrete type `T` (e.g.
-    /// [`crate::behaviour::ssd630::Ssd630`] to switch its enable input at
+    /// [`crate::ssd630::Ssd630`] to switch its enable input at
     /// run time); `None` if it is another type or does not expose itself
     /// ([`Behaviour::as_any_mut`]). A change takes effect at the next poll.
     pub fn behaviour_mut<T: core::any::Any>(&mut self) -> Option<&mut T> {

@@ -1,36 +1,13 @@
-//! The behaviour of each personality: what makes the CiA 402 drive act like
-//! the product (see [`crate::build::Behaviour`]). One file per drive; helpers
-//! shared by several drives live here.
-//!
-//! [`Plain`](crate::build::Plain) is the drive as CiA 301/402 describe it,
-//! without quirks (for variants and tests).
+//! What several personalities share: PDO default builders, the CiA 402
+//! default mappings, the error-register class of an EMCY code, and the
+//! frame fixes two Kollmorgen quirks need. Each personality lives in its
+//! own module (`kc1/`, `akd/`, …); the framework in `build.rs`.
 
-pub mod akd;
-pub mod dds6;
-pub mod generic;
-pub mod ipos;
-pub mod kc1;
-pub mod ssd630;
-
-use crate::Profile;
-use crate::build::Behaviour;
-use alloc::boxed::Box;
+use crate::PdoDefault;
 use drivebus_can::Frame;
 use drivebus_od::ObjectDictionary;
 
 extern crate alloc;
-
-/// The behaviour of `profile`.
-pub fn for_profile(profile: Profile) -> Box<dyn Behaviour> {
-    match profile {
-        Profile::Kc1 => Box::new(kc1::kc1()),
-        Profile::Akd => Box::new(akd::Akd::new()),
-        Profile::Generic => Box::new(generic::Generic::new()),
-        Profile::Ssd630 => Box::new(ssd630::Ssd630::new()),
-        Profile::Dds6 => Box::new(dds6::Dds6::new()),
-        Profile::Ipos => Box::new(ipos::Ipos::new()),
-    }
-}
 
 /// The CiA 301 error-register class bit of an EMCY code (§7.5.2.2 Table 48
 /// classes), *without* the generic bit 0.
@@ -99,4 +76,33 @@ pub fn pad_short_rpdo(od: &ObjectDictionary, f: &Frame) -> Option<Frame> {
         return Some(Frame::new(id as u16, &b[..len]));
     }
     None
+}
+
+/// A CAN PDO default: valid unless `cob_id` has bit 31, transmission type 255.
+pub(crate) const fn can(cob_id: u32, event_timer_ms: u16, mapping: &'static [u32]) -> PdoDefault {
+    PdoDefault {
+        cob_id: Some(cob_id),
+        enabled: cob_id & 0x8000_0000 == 0,
+        transmission_type: Some(0xFF),
+        event_timer_ms,
+        mapping,
+    }
+}
+
+/// An EtherCAT (CoE) PDO default: no COB-ID, `enabled` = assigned in 1C12h/1C13h.
+pub(crate) const fn coe(enabled: bool, mapping: &'static [u32]) -> PdoDefault {
+    PdoDefault { cob_id: None, enabled, transmission_type: None, event_timer_ms: 0, mapping }
+}
+
+/// The CiA 402 default mappings the Kollmorgen drives and the SSD 630 use
+/// (controlword/statusword first, then the mode's set-point or actual value).
+pub(crate) mod maps {
+    pub const CW: &[u32] = &[0x6040_0010];
+    pub const CW_MODE: &[u32] = &[0x6040_0010, 0x6060_0008];
+    pub const CW_POS: &[u32] = &[0x6040_0010, 0x607A_0020];
+    pub const CW_VEL: &[u32] = &[0x6040_0010, 0x60FF_0020];
+    pub const SW: &[u32] = &[0x6041_0010];
+    pub const SW_MODE: &[u32] = &[0x6041_0010, 0x6061_0008];
+    pub const SW_POS: &[u32] = &[0x6041_0010, 0x6064_0020];
+    pub const SW_VEL: &[u32] = &[0x6041_0010, 0x606C_0020];
 }

@@ -1,7 +1,7 @@
 //! The generic CiA 402 servo: every mode, every service the stack offers.
 //! Values come from CiA 301 and CiA 402-2, not from a vendor manual.
 
-use super::{can, maps::*};
+use crate::shared::{can, maps::*};
 use crate::{EmcyEntry, ProfileInfo, Transport};
 
 /// Generic servo facts.

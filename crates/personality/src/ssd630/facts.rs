@@ -1,7 +1,7 @@
 //! SSD Drives 630 series, *CANopen-630* product manual, modification V0904.
 
-use super::{can, maps::*};
-use crate::{ProfileInfo, Quirk, Transport, emcy_tables};
+use crate::shared::{can, maps::*};
+use crate::{ProfileInfo, Quirk, Transport};
 
 /// SSD 630 facts.
 pub static INFO: ProfileInfo = ProfileInfo {
@@ -36,7 +36,7 @@ pub static INFO: ProfileInfo = ProfileInfo {
     granularity: 8,                 // §7: 60FDh may be mapped as a 16-bit half
     max_mapped_entries: 8,          // §7
     dummy_mapping: false,           // not mentioned
-    emcy: emcy_tables::SSD630,      // §9 Table 1
+    emcy: super::emcy::EMCY,        // §9 Table 1
     sdo_block: false,               // §3, §5: expedited and segmented
     time: false,                    // not mentioned
     nmt_enter_preoperational: true, // §6: cs 128

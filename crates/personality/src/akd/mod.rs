@@ -16,9 +16,17 @@
 //!   (CiA 402 methods 5/3 behave so), −5 set reference here (as 37), −4/−3
 //!   reference switch without index, positive/negative (as 19/21).
 
-use super::kc1::Kollmorgen;
+mod emcy;
+mod facts;
+
+pub use facts::INFO;
+
+/// The EDS file (`crates/personality/eds/akd.eds`).
+pub const EDS: &str = include_str!("../../eds/akd.eds");
+
 use crate::Profile;
 use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict};
+use crate::kc1::Kollmorgen;
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::Frame;
@@ -106,7 +114,7 @@ impl Behaviour for Akd {
         self.0.finish(node);
         let od = node.od_mut();
         // §6.10.2.3: 6099h:2 "50 % of 6099h:1" (the KC1's is 1/8).
-        crate::build::set_default(od, 0x6099, 2, &drivebus_od::Value::U32(super::kc1::UNITS_PER_REV / 2));
+        crate::build::set_default(od, 0x6099, 2, &drivebus_od::Value::U32(crate::kc1::UNITS_PER_REV / 2));
         // §6.9.2.3: 60C2h:1 default 2 (with 60C2h:2 = -3: 2 ms).
         crate::build::set_default(od, 0x60C2, 1, &drivebus_od::Value::U8(2));
     }

@@ -1,7 +1,7 @@
 //! Technosoft iPOS, *iPOS CoE Programming*, P091.064.UM.0524 (CiA 402 over EtherCAT).
 
-use super::coe;
-use crate::{ProfileInfo, Quirk, Transport, emcy_tables};
+use crate::shared::coe;
+use crate::{ProfileInfo, Quirk, Transport};
 
 /// iPOS facts.
 pub static INFO: ProfileInfo = ProfileInfo {
@@ -39,7 +39,7 @@ pub static INFO: ProfileInfo = ProfileInfo {
     granularity: 8,                  // §2.4: at most 8 one-byte objects
     max_mapped_entries: 8,           // §2.4, 64 bits per PDO (§1.6.3.1)
     dummy_mapping: true,             // §2.2.5: data types 0001h–0007h as RxPDO dummies (and 207Dh)
-    emcy: emcy_tables::IPOS,         // §3.1.3 Table 3.1.3
+    emcy: super::emcy::EMCY,         // §3.1.3 Table 3.1.3
     sdo_block: false,                // CoE mailbox SDO; block transfer does not exist on EtherCAT
     time: false,                     // not described
     nmt_enter_preoperational: false, // EtherCAT state machine instead of NMT (§3.1)

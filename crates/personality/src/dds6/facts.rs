@@ -1,8 +1,8 @@
 //! LAM Technologies DDS6, *Vector Controlled Stepper Motors Drives, CANopen
 //! DS301, DS402* user manual, HW 1.00 / FW 0.22.
 
-use super::can;
-use crate::{ProfileInfo, Quirk, Transport, emcy_tables};
+use crate::shared::can;
+use crate::{ProfileInfo, Quirk, Transport};
 
 /// DDS6 facts.
 pub static INFO: ProfileInfo = ProfileInfo {
@@ -38,7 +38,7 @@ pub static INFO: ProfileInfo = ProfileInfo {
     granularity: 8,                 // not stated; byte mapping in every example
     max_mapped_entries: 8,          // §6.3.21/22: sub 1..8
     dummy_mapping: false,           // not mentioned
-    emcy: emcy_tables::DDS6,        // §5
+    emcy: super::emcy::EMCY,        // §5
     sdo_block: false,               // not mentioned (expedited only in the examples)
     time: false,                    // not mentioned
     nmt_enter_preoperational: true, // §6.1: IDE NMT panel lists every service

@@ -12,6 +12,13 @@
 //! - 1F56h:1 program software identification: the CRC-32 (IEEE) of the
 //!   program data, 0 when empty, updated after every download.
 
+mod facts;
+
+pub use facts::INFO;
+
+/// The EDS file (`crates/personality/eds/generic.eds`).
+pub const EDS: &str = include_str!("../../eds/generic.eds");
+
 use crate::Profile;
 use crate::build::{Behaviour, Context, Verdict};
 use drivebus_node::NodeConfig;

@@ -28,6 +28,14 @@
 //! * the error register uses only bits 0 and 4 (§3.1.3 / 1001h);
 //! * no 1010h/1011h: 2076h saves, 2080h resets (§4.9.6).
 
+mod emcy;
+mod facts;
+
+pub use facts::INFO;
+
+/// The EDS file (`crates/personality/eds/ipos.eds`).
+pub const EDS: &str = include_str!("../../eds/ipos.eds");
+
 use crate::Profile;
 use crate::build::{Behaviour, Context, EmcyFrame, Verdict};
 use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, profile_type};

@@ -1,7 +1,7 @@
 //! Kollmorgen AKD, *AKD CAN-BUS Kommunikation*, edition R 09/2016, firmware 1.15.
 
-use super::{can, maps::*};
-use crate::{ProfileInfo, Quirk, Transport, emcy_tables};
+use crate::shared::{can, maps::*};
+use crate::{ProfileInfo, Quirk, Transport};
 
 /// AKD facts.
 pub static INFO: ProfileInfo = ProfileInfo {
@@ -24,7 +24,7 @@ pub static INFO: ProfileInfo = ProfileInfo {
     granularity: 8,                  // §6.3: byte-wise mapping only
     max_mapped_entries: 8,           // §6.3.1.2
     dummy_mapping: false,            // §7.2.2.1: 2100h placeholder instead
-    emcy: emcy_tables::AKD,          // §6.1
+    emcy: super::emcy::EMCY,         // §6.1
     sdo_block: false,                // §5.4.5
     time: false,                     // §5.4.3: TIME not supported, although 1012h exists (§6.2.1.14)
     nmt_enter_preoperational: false, // §5.4.1
