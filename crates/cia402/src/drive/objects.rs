@@ -21,6 +21,16 @@ pub(crate) enum How {
     Reload,
 }
 
+/// What an entry's check or apply is handed: which sub-object, its value,
+/// and why the apply runs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Arg {
+    pub index: u16,
+    pub sub: u8,
+    pub v: Raw,
+    pub how: How,
+}
+
 /// A written or stored value, little-endian, up to 8 bytes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Raw {
@@ -131,7 +141,7 @@ fn param_at(index: u16) -> Option<&'static super::table::Param> {
 pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> Vec<Object> {
     let mut v = Vec::with_capacity(PARAMS.len());
     for (k, p) in PARAMS.iter().enumerate() {
-        let Some(mut o) = (p.def)(cfg, modes) else { continue };
+        let Some(mut o) = p.object(cfg, modes) else { continue };
         if p.owned() {
             let tag = Owner::app(k as u8);
             for s in o.subs_mut() {
@@ -160,7 +170,9 @@ impl Drive {
     ) -> Result<WriteOutcome, SdoAbort> {
         match param_of(at.owner) {
             Some((_, p)) if p.index == at.index => match p.check {
-                Some(check) => check(self, od, at.index, at.sub, Raw::of(data)),
+                Some(check) => {
+                    check(self, od, Arg { index: at.index, sub: at.sub, v: Raw::of(data), how: How::Write })
+                }
                 None => Ok(WriteOutcome::Store),
             },
             _ => Ok(WriteOutcome::Store),
@@ -174,7 +186,7 @@ impl Drive {
             && let Some(apply) = p.apply
         {
             let v = Raw::of(od.bytes(at.r));
-            apply(self, od, at.index, at.sub, v, How::Write);
+            apply(self, od, Arg { index: at.index, sub: at.sub, v, how: How::Write });
         }
     }
 
@@ -195,14 +207,14 @@ impl Drive {
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
         let Some(p) = param_at(index) else { return Ok(WriteOutcome::Store) };
-        let v = Raw::of(data);
+        let a = Arg { index, sub, v: Raw::of(data), how: How::Write };
         let outcome = match p.check {
-            Some(check) => check(self, od, index, sub, v)?,
+            Some(check) => check(self, od, a)?,
             None => WriteOutcome::Store,
         };
         if outcome == WriteOutcome::Store {
             if let Some(apply) = p.apply {
-                apply(self, od, index, sub, v, How::Write);
+                apply(self, od, a);
             }
             // A withdrawn object's value lives with the drive.
             if let Ok(e) = self.withdrawn.find(index, sub) {
@@ -233,7 +245,7 @@ impl Drive {
                 .map(|s| (s.sub, Raw::of(s.bytes())))
                 .collect();
             for (s, v) in vals {
-                apply(self, od, p.index, s, v, How::Reload);
+                apply(self, od, Arg { index: p.index, sub: s, v, how: How::Reload });
             }
         }
         // Configuration, not an object.
