@@ -6,8 +6,8 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use drivebus_bus::{Bus, BusConfig, BusNode, Outbox};
-use drivebus_can::{Duration, Frame, Instant};
+use drivebus_bus::{Bus, BusConfig};
+use drivebus_can::{Device, Duration, Frame, Instant, TxSink};
 use std::hint::black_box;
 
 const NODES: u16 = 30;
@@ -20,16 +20,23 @@ struct PdoNode {
     seen: u64,
 }
 
-impl BusNode for PdoNode {
-    fn handle_frame(&mut self, frame: &Frame, _now: Instant, _out: &mut Outbox<'_>) {
+impl Device for PdoNode {
+    fn handle_frame(&mut self, frame: &Frame, _now: Instant, _out: &mut dyn TxSink) {
         self.seen += u64::from(frame.raw_data()[0]);
     }
-    fn poll(&mut self, now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+    fn poll(&mut self, now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
         if now >= self.next {
-            out.push(Frame::new8(0x180 + self.id, [self.seen as u8, 1, 2, 3, 4, 5, 6, 7]));
+            out.send(Frame::new8(0x180 + self.id, [self.seen as u8, 1, 2, 3, 4, 5, 6, 7]));
             self.next = now + self.period;
         }
         Some(self.next)
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 

@@ -4,15 +4,14 @@ use alloc::boxed::Box;
 use alloc::collections::{BinaryHeap, VecDeque};
 use alloc::string::String;
 use alloc::vec::Vec;
-use core::any::Any;
 use core::cmp::{Ordering, Reverse};
 use core::fmt;
 use core::time::Duration;
-use drivebus_can::{Frame, Instant};
+use drivebus_can::{Device, Frame, Instant, LinkState};
 
 use crate::candump::{self, CandumpRecord, LogEntry};
 use crate::fault::{FaultRule, RuleId, XorShift64};
-use crate::node::{BusNode, LinkState, NodeId, ProbeId};
+use crate::node::{NodeId, ProbeId};
 use crate::stats::{BusStats, LoadWindow};
 use crate::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
 
@@ -73,24 +72,13 @@ impl BusConfig {
     }
 }
 
-/// `BusNode` plus downcasting, so tests can inspect the nodes they attached.
-pub(crate) trait AnyNode: BusNode {
-    fn as_any(&self) -> &dyn Any;
-    fn as_any_mut(&mut self) -> &mut dyn Any;
-}
-
-impl<T: BusNode + 'static> AnyNode for T {
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-    fn as_any_mut(&mut self) -> &mut dyn Any {
-        self
-    }
-}
-
 pub(crate) enum Endpoint {
-    Node(Box<dyn AnyNode>),
-    Probe { received: Vec<(Instant, Frame)>, capture: bool },
+    /// A device and whether it was started.
+    Node(Box<dyn Device>, bool),
+    Probe {
+        received: Vec<(Instant, Frame)>,
+        capture: bool,
+    },
 }
 
 pub(crate) struct Station {
@@ -234,9 +222,11 @@ impl Bus {
         id
     }
 
-    /// Attaches a node; it is first polled at the current time.
-    pub fn attach<N: BusNode + 'static>(&mut self, node: N) -> NodeId {
-        self.add_station(Endpoint::Node(Box::new(node)), Some(self.now))
+    /// Attaches a device. It is started ([`Device::start`]) and polled at
+    /// the next step, so it can still be configured through
+    /// [`Bus::node_mut`] until then; it hears no frame before it started.
+    pub fn attach<D: Device + 'static>(&mut self, device: D) -> NodeId {
+        self.add_station(Endpoint::Node(Box::new(device), false), Some(self.now))
     }
 
     /// Attaches a probe that records every frame it receives.
@@ -247,8 +237,7 @@ impl Bus {
     /// The node attached as `id`, if it is a `T`.
     pub fn node<T: 'static>(&self, id: NodeId) -> Option<&T> {
         match &self.station(id)?.endpoint {
-            // `**n`: the boxed node itself, not the Box (which is a BusNode too).
-            Endpoint::Node(n) => (**n).as_any().downcast_ref(),
+            Endpoint::Node(n, _) => n.as_any().downcast_ref(),
             Endpoint::Probe { .. } => None,
         }
     }
@@ -257,7 +246,7 @@ impl Bus {
     /// what it will do, call [`Bus::wake`] so it is polled again.
     pub fn node_mut<T: 'static>(&mut self, id: NodeId) -> Option<&mut T> {
         match &mut self.station_mut(id)?.endpoint {
-            Endpoint::Node(n) => (**n).as_any_mut().downcast_mut(),
+            Endpoint::Node(n, _) => n.as_any_mut().downcast_mut(),
             Endpoint::Probe { .. } => None,
         }
     }
@@ -266,7 +255,7 @@ impl Bus {
     pub fn wake(&mut self, id: NodeId) {
         let now = self.now;
         if let Some(st) = self.station_mut(id)
-            && matches!(st.endpoint, Endpoint::Node(_))
+            && matches!(st.endpoint, Endpoint::Node(..))
         {
             st.deadline = Some(now);
         }
@@ -285,7 +274,7 @@ impl Bus {
     pub fn send_from(&mut self, from: impl Into<NodeId>, frame: Frame) -> bool {
         let from = from.into();
         let Some(st) = self.station_mut(from) else { return false };
-        if st.link != LinkState::Active {
+        if !st.link.is_on_bus() {
             self.stats.discarded += 1;
             return false;
         }

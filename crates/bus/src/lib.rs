@@ -1,6 +1,7 @@
 //! Deterministic virtual CAN bus on simulated time.
 //!
-//! Stations — [`BusNode`] implementations and test probes — share one bus.
+//! Stations — [`Device`]s (the `drivebus_can` contract) and test probes —
+//! share one bus.
 //! [`Bus::step`] / [`Bus::run_until`] advance simulated time event by event:
 //!
 //! - each node is polled at the deadline it returned (and after each frame
@@ -19,24 +20,27 @@
 //!   ([`candump`]), and counted in [`BusStats`].
 //!
 //! ```
-//! use drivebus_bus::{Bus, BusConfig, BusNode, Outbox};
-//! use drivebus_can::{Frame, Instant};
+//! use drivebus_bus::{Bus, BusConfig};
+//! use drivebus_can::{Device, Frame, Instant, TxSink};
 //!
 //! /// Answers every SYNC with a TPDO.
-//! struct Device;
-//! impl BusNode for Device {
-//!     fn handle_frame(&mut self, f: &Frame, _now: Instant, out: &mut Outbox<'_>) {
+//! struct Echo;
+//! impl Device for Echo {
+//!     fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+//!     fn handle_frame(&mut self, f: &Frame, _now: Instant, out: &mut dyn TxSink) {
 //!         if f.std_id() == Some(0x080) {
-//!             out.push(Frame::new(0x181, &[0x2A]));
+//!             out.send(Frame::new(0x181, &[0x2A]));
 //!         }
 //!     }
-//!     fn poll(&mut self, _now: Instant, _out: &mut Outbox<'_>) -> Option<Instant> {
+//!     fn poll(&mut self, _now: Instant, _out: &mut dyn TxSink) -> Option<Instant> {
 //!         None
 //!     }
+//!     fn as_any(&self) -> &dyn core::any::Any { self }
+//!     fn as_any_mut(&mut self) -> &mut dyn core::any::Any { self }
 //! }
 //!
 //! let mut bus = Bus::new(BusConfig { log_epoch_us: 1_700_000_000_000_000, ..BusConfig::with_bitrate(1_000_000) });
-//! bus.attach(Device);
+//! bus.attach(Echo);
 //! let master = bus.attach_probe();
 //! bus.send_from(master, Frame::new(0x080, &[]));
 //! bus.run_until(Instant::from_millis(1));
@@ -51,7 +55,7 @@
 //! log. The core is `no_std` + `alloc`; the `std` feature adds writing the
 //! log to files.
 //!
-//! The bus holds `Box<dyn BusNode>` stations and is therefore not `Send`;
+//! The bus holds `Box<dyn Device>` stations and is therefore not `Send`;
 //! a driver on another thread should build the bus (and its nodes) there.
 #![cfg_attr(not(feature = "std"), no_std)]
 
@@ -67,6 +71,7 @@ pub mod timing;
 
 pub use bus::{Bus, BusConfig, LogSink};
 pub use candump::{CandumpRecord, LogEntry, ParseError, ParseErrorKind};
+pub use drivebus_can::{Device, LinkState};
 pub use fault::{FaultAction, FaultRule, RuleId, XorShift64};
-pub use node::{BusNode, LinkState, NodeId, Outbox, ProbeId};
+pub use node::{NodeId, ProbeId};
 pub use stats::BusStats;

@@ -2,14 +2,18 @@
 
 use core::cmp::Reverse;
 use core::time::Duration;
-use drivebus_can::{Frame, Instant, earliest};
+use drivebus_can::{Frame, Instant, LinkState, earliest};
 
 use crate::bus::{Bus, Endpoint, InFlight, Outcome, Station, TimedKind};
 use crate::candump::{self, LogEntry};
 use crate::fault::{FaultAction, corrupt_data};
-use crate::node::{LinkState, NodeId, Outbox};
+use crate::node::{NodeId, Outbox};
 use crate::stats::BusStats;
 use crate::timing::{INTERMISSION_BITS, bits_duration, frame_bits};
+
+/// A transmit error counter above this makes a station error passive
+/// (ISO 11898-1 §12.1.4.2).
+const ERROR_PASSIVE_LIMIT: u16 = 127;
 
 /// Full arbitration key: identifier bits as they go on the wire, plus RTR
 /// (a data frame beats a remote frame with the same identifier). A standard
@@ -26,10 +30,15 @@ pub(crate) fn arbitration_key(f: &Frame) -> u64 {
 }
 
 impl Station {
-    /// Polls a node and records its next deadline.
+    /// Polls a node (starting it at its first poll) and records its next
+    /// deadline.
     fn poll(&mut self, now: Instant, stats: &mut BusStats) {
-        if let Endpoint::Node(n) = &mut self.endpoint {
+        if let Endpoint::Node(n, started) = &mut self.endpoint {
             let mut out = Outbox { queue: &mut self.queue };
+            if !*started {
+                *started = true;
+                n.start(now, &mut out);
+            }
             let d = n.poll(now, &mut out);
             // A deadline not after `now` would stall time: push it 1 ns on.
             self.deadline = d.map(|d| d.max(now + Duration::from_nanos(1)));
@@ -38,7 +47,7 @@ impl Station {
     }
 
     pub(crate) fn discard_if_offline(&mut self, stats: &mut BusStats) {
-        if self.link != LinkState::Active && !self.queue.is_empty() {
+        if !self.link.is_on_bus() && !self.queue.is_empty() {
             stats.discarded += self.queue.len() as u64;
             self.queue.clear();
         }
@@ -54,8 +63,7 @@ impl Bus {
         match &self.inflight {
             Some(f) => t = earliest(t, Some(f.done_at)),
             None => {
-                let waiting =
-                    self.stations.iter().any(|s| s.link == LinkState::Active && !s.queue.is_empty());
+                let waiting = self.stations.iter().any(|s| s.link.is_on_bus() && !s.queue.is_empty());
                 if waiting {
                     t = earliest(t, Some(self.idle_at));
                 }
@@ -120,7 +128,7 @@ impl Bus {
             match e.kind {
                 TimedKind::Send { station, frame } => {
                     if let Some(st) = self.stations.get_mut(station) {
-                        if st.link == LinkState::Active {
+                        if st.link.is_on_bus() {
                             st.queue.push_back(frame);
                         } else {
                             self.stats.discarded += 1;
@@ -158,7 +166,7 @@ impl Bus {
     fn arbitrate(&self) -> Option<usize> {
         let mut best: Option<(u64, usize)> = None;
         for (i, st) in self.stations.iter().enumerate() {
-            if st.link != LinkState::Active {
+            if !st.link.is_on_bus() {
                 continue;
             }
             if let Some(f) = st.queue.front() {
@@ -230,9 +238,13 @@ impl Bus {
                 // The destroyed frame is lost with the rest of the queue.
                 self.stats.discarded += 1;
                 self.go_bus_off(from);
-            } else if st.link == LinkState::Active {
+            } else if st.link.is_on_bus() {
                 // Automatic retransmission: back to the head of its queue.
                 st.queue.push_front(frame);
+                if st.tec > ERROR_PASSIVE_LIMIT && st.link == LinkState::Active {
+                    st.link = LinkState::ErrorPassive;
+                    self.notify_link(from);
+                }
             }
             return;
         }
@@ -240,6 +252,10 @@ impl Bus {
         *self.stats.per_id.entry(frame.id()).or_insert(0) += 1;
         if let Some(st) = self.stations.get_mut(from) {
             st.tec = st.tec.saturating_sub(1);
+            if st.tec <= ERROR_PASSIVE_LIMIT && st.link == LinkState::ErrorPassive {
+                st.link = LinkState::Active;
+                self.notify_link(from);
+            }
         }
         match outcome {
             Outcome::Deliver { frame: seen, altered } => {
@@ -258,7 +274,7 @@ impl Bus {
                 self.stats.duplicated += 1;
                 self.deliver(from, frame);
                 if let Some(st) = self.stations.get_mut(from)
-                    && st.link == LinkState::Active
+                    && st.link.is_on_bus()
                 {
                     st.queue.push_front(frame);
                     st.head_is_retry = true;
@@ -272,10 +288,10 @@ impl Bus {
     fn signal_error_frame(&mut self, from: usize) {
         let now = self.now;
         for (i, st) in self.stations.iter_mut().enumerate() {
-            if i == from || st.link != LinkState::Active {
+            if i == from || !st.link.is_on_bus() {
                 continue;
             }
-            if let Endpoint::Node(n) = &mut st.endpoint {
+            if let Endpoint::Node(n, true) = &mut st.endpoint {
                 let mut out = Outbox { queue: &mut st.queue };
                 n.handle_error_frame(now, &mut out);
                 st.poll(now, &mut self.stats);
@@ -287,7 +303,7 @@ impl Bus {
     pub(crate) fn notify_link(&mut self, i: usize) {
         let now = self.now;
         let Some(st) = self.stations.get_mut(i) else { return };
-        if let Endpoint::Node(n) = &mut st.endpoint {
+        if let Endpoint::Node(n, true) = &mut st.endpoint {
             let mut out = Outbox { queue: &mut st.queue };
             n.link_changed(st.link, now, &mut out);
             st.poll(now, &mut self.stats);
@@ -311,13 +327,15 @@ impl Bus {
         }
         let echo = self.cfg.echo;
         for (i, st) in self.stations.iter_mut().enumerate() {
-            if (i == from && !echo) || st.link != LinkState::Active {
+            if (i == from && !echo) || !st.link.is_on_bus() {
                 continue;
             }
             match &mut st.endpoint {
-                Endpoint::Node(n) => {
-                    let mut out = Outbox { queue: &mut st.queue };
-                    n.handle_frame(&frame, now, &mut out);
+                Endpoint::Node(n, started) => {
+                    if *started {
+                        let mut out = Outbox { queue: &mut st.queue };
+                        n.handle_frame(&frame, now, &mut out);
+                    }
                     st.poll(now, &mut self.stats);
                 }
                 Endpoint::Probe { received, capture } => {

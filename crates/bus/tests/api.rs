@@ -1,7 +1,7 @@
 //! External injection, node hooks, bad ids and other API edges.
 
-use drivebus_bus::{Bus, BusConfig, BusNode, FaultRule, LinkState, NodeId, Outbox};
-use drivebus_can::{Duration, Frame, Instant};
+use drivebus_bus::{Bus, BusConfig, FaultRule, LinkState, NodeId};
+use drivebus_can::{Device, Duration, Frame, Instant, TxSink};
 
 #[test]
 fn inject_sends_from_a_silent_external_station() {
@@ -50,20 +50,27 @@ struct Watcher {
     send: bool,
 }
 
-impl BusNode for Watcher {
-    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut Outbox<'_>) {}
-    fn poll(&mut self, _now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+impl Device for Watcher {
+    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut dyn TxSink) {}
+    fn poll(&mut self, _now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
         self.polls += 1;
         if std::mem::take(&mut self.send) {
-            out.push(Frame::new(0x300, &[]));
+            out.send(Frame::new(0x300, &[]));
         }
         None
     }
-    fn handle_error_frame(&mut self, _now: Instant, _out: &mut Outbox<'_>) {
+    fn handle_error_frame(&mut self, _now: Instant, _out: &mut dyn TxSink) {
         self.errors += 1;
     }
-    fn link_changed(&mut self, state: LinkState, now: Instant, _out: &mut Outbox<'_>) {
+    fn link_changed(&mut self, state: LinkState, now: Instant, _out: &mut dyn TxSink) {
         self.links.push((state, now));
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 
@@ -104,11 +111,18 @@ fn nodes_hear_error_frames_and_their_own_link_changes() {
 /// Always asks to be polled again "now".
 struct Eager(u32);
 
-impl BusNode for Eager {
-    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut Outbox<'_>) {}
-    fn poll(&mut self, now: Instant, _: &mut Outbox<'_>) -> Option<Instant> {
+impl Device for Eager {
+    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut dyn TxSink) {}
+    fn poll(&mut self, now: Instant, _: &mut dyn TxSink) -> Option<Instant> {
         self.0 += 1;
         Some(now)
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 
@@ -119,4 +133,26 @@ fn a_deadline_in_the_past_cannot_stall_time() {
     bus.run_until(Instant::from_nanos(9));
     // Polled at 0, 1, ..., 9 ns.
     assert_eq!(bus.node::<Eager>(n).map(|e| e.0), Some(10));
+}
+
+#[test]
+fn a_station_hears_it_went_error_passive_and_back() {
+    // 16 destroyed transmissions: TEC 128 > 127, error passive (ISO
+    // 11898-1 §12.1.4.2); the retransmission then succeeds, one success
+    // brings it to 127: error active again.
+    let mut bus = Bus::new(BusConfig::zero_time());
+    let w = bus.attach(Watcher::default());
+    let probe = bus.attach_probe();
+    bus.add_fault(FaultRule::corrupt().from(w).times(16));
+    if let Some(n) = bus.node_mut::<Watcher>(w) {
+        n.send = true;
+    }
+    bus.wake(w);
+    bus.run_until(Instant::from_millis(1));
+    let links: Vec<LinkState> =
+        bus.node::<Watcher>(w).map(|n| n.links.iter().map(|l| l.0).collect()).unwrap();
+    assert_eq!(links, [LinkState::ErrorPassive, LinkState::Active]);
+    assert_eq!(bus.tec(w), Some(127));
+    // Error passive still transmits: the frame arrived.
+    assert_eq!(bus.take_received(probe), [Frame::new(0x300, &[])]);
 }

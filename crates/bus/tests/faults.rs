@@ -1,7 +1,7 @@
 //! Every fault rule, bus-off and disconnection.
 
-use drivebus_bus::{Bus, BusConfig, BusNode, FaultRule, LinkState, Outbox};
-use drivebus_can::{CanId, Duration, Frame, Instant};
+use drivebus_bus::{Bus, BusConfig, FaultRule, LinkState};
+use drivebus_can::{CanId, Device, Duration, Frame, Instant, TxSink};
 
 fn ms(v: u64) -> Instant {
     Instant::from_millis(v)
@@ -206,15 +206,22 @@ struct Ticker {
     next: Instant,
 }
 
-impl BusNode for Ticker {
-    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut Outbox<'_>) {}
-    fn poll(&mut self, now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+impl Device for Ticker {
+    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut dyn TxSink) {}
+    fn poll(&mut self, now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
         if now >= self.next {
             self.ticks += 1;
-            out.push(Frame::new(0x700, &[self.ticks]));
+            out.send(Frame::new(0x700, &[self.ticks]));
             self.next += Duration::from_millis(1);
         }
         Some(self.next)
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 

@@ -1,7 +1,7 @@
 //! Two tiny nodes exchange 1000 frames; the run is deterministic.
 
-use drivebus_bus::{Bus, BusConfig, BusNode, Outbox};
-use drivebus_can::{Duration, Frame, Instant};
+use drivebus_bus::{Bus, BusConfig};
+use drivebus_can::{Device, Duration, Frame, Instant, TxSink};
 
 /// Sends 0x200 with a counter; each answer 0x201 triggers the next ping.
 struct Pinger {
@@ -10,20 +10,27 @@ struct Pinger {
     started: bool,
 }
 
-impl BusNode for Pinger {
-    fn handle_frame(&mut self, frame: &Frame, _now: Instant, out: &mut Outbox<'_>) {
+impl Device for Pinger {
+    fn handle_frame(&mut self, frame: &Frame, _now: Instant, out: &mut dyn TxSink) {
         if frame.std_id() == Some(0x201) && self.next < self.limit {
-            out.push(Frame::new(0x200, &self.next.to_le_bytes()));
+            out.send(Frame::new(0x200, &self.next.to_le_bytes()));
             self.next += 1;
         }
     }
-    fn poll(&mut self, _now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+    fn poll(&mut self, _now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
         if !self.started {
             self.started = true;
-            out.push(Frame::new(0x200, &self.next.to_le_bytes()));
+            out.send(Frame::new(0x200, &self.next.to_le_bytes()));
             self.next += 1;
         }
         None
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 
@@ -33,23 +40,30 @@ struct Ponger {
     answered: u32,
 }
 
-impl BusNode for Ponger {
-    fn handle_frame(&mut self, frame: &Frame, now: Instant, _out: &mut Outbox<'_>) {
+impl Device for Ponger {
+    fn handle_frame(&mut self, frame: &Frame, now: Instant, _out: &mut dyn TxSink) {
         if frame.std_id() == Some(0x200) && frame.len() == 2 {
             let d = frame.data();
             self.due = Some((now + Duration::from_micros(100), [d[0], d[1]]));
         }
     }
-    fn poll(&mut self, now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+    fn poll(&mut self, now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
         match self.due {
             Some((t, d)) if t <= now => {
-                out.push(Frame::new(0x201, &d));
+                out.send(Frame::new(0x201, &d));
                 self.answered += 1;
                 self.due = None;
                 None
             }
             other => other.map(|(t, _)| t),
         }
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 

@@ -2,13 +2,18 @@
 //!
 //! This crate is the vocabulary every sans-IO layer of drivebus speaks: a
 //! protocol machine takes a [`Frame`] and an [`Instant`] and emits frames into
-//! a [`TxSink`]. Nothing here reads a clock or touches I/O.
+//! a [`TxSink`]. Nothing here reads a clock or touches I/O. [`Device`] is
+//! the contract every host (virtual bus, real-time loop, test) drives.
 #![cfg_attr(not(feature = "std"), no_std)]
 
+extern crate alloc;
+
 pub mod cob;
+mod device;
 mod frame;
 mod time;
 
+pub use device::{Device, LinkState};
 pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
 pub use time::Instant;
 
@@ -16,14 +21,15 @@ pub use core::time::Duration;
 
 /// Where a protocol machine puts the frames it wants sent.
 ///
-/// Generic rather than `dyn` so the hot paths monomorphise and inline.
+/// Protocol machines take it generically (`&mut impl TxSink`) so the hot
+/// paths monomorphise and inline; the [`Device`] contract passes
+/// `&mut dyn TxSink` (hand it on as `&mut out`).
 pub trait TxSink {
     /// Queue one frame for transmission.
     fn send(&mut self, frame: Frame);
 }
 
-#[cfg(feature = "std")]
-impl TxSink for std::vec::Vec<Frame> {
+impl TxSink for alloc::vec::Vec<Frame> {
     #[inline]
     fn send(&mut self, frame: Frame) {
         self.push(frame);

@@ -11,25 +11,27 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use drivebus_can::{Duration, Frame, Instant};
-use drivebus_cia402::drive::{DriveConfig, DriveNode, generic_drive, generic_drive_with};
+use drivebus_cia402::drive::{Drive, DriveConfig, generic_drive, generic_drive_with};
 use drivebus_cia402::interp::CspMode;
+use drivebus_node::NodeDevice;
 use std::hint::black_box;
 
 const ID: u8 = 1;
 
 /// A booted, operational, enabled drive in `mode` at `t`.
-fn station(mut dn: DriveNode, mode: u8, out: &mut Vec<Frame>) -> Instant {
+fn station(mut dn: NodeDevice<Drive>, mode: u8, out: &mut Vec<Frame>) -> Instant {
     let mut t = Instant::ZERO;
+    dn.node.boot(t, &mut dn.app, out);
     dn_poll(&mut dn, t, out);
-    let sdo = |dn: &mut DriveNode, t, out: &mut Vec<Frame>, idx: u16, data: &[u8]| {
+    let sdo = |dn: &mut NodeDevice<Drive>, t, out: &mut Vec<Frame>, idx: u16, data: &[u8]| {
         let mut b = [0x2F - 4 * (data.len() as u8 - 1), idx as u8, (idx >> 8) as u8, 0, 0, 0, 0, 0];
         b[4..4 + data.len()].copy_from_slice(data);
-        dn.handle_frame_into(&Frame::new(0x600 + u16::from(ID), &b), t, out);
+        frame(dn, &Frame::new(0x600 + u16::from(ID), &b), t, out);
     };
-    dn.handle_frame_into(&Frame::new(0x000, &[0x01, ID]), t, out);
+    frame(&mut dn, &Frame::new(0x000, &[0x01, ID]), t, out);
     sdo(&mut dn, t, out, 0x6060, &[mode]);
     for cw in [0x06u16, 0x0F] {
-        dn.handle_frame_into(&Frame::new(0x200 + u16::from(ID), &cw.to_le_bytes()), t, out);
+        frame(&mut dn, &Frame::new(0x200 + u16::from(ID), &cw.to_le_bytes()), t, out);
     }
     t += Duration::from_millis(1);
     dn_poll(&mut dn, t, out);
@@ -39,14 +41,19 @@ fn station(mut dn: DriveNode, mode: u8, out: &mut Vec<Frame>) -> Instant {
 }
 
 thread_local! {
-    static STATION: std::cell::RefCell<Option<DriveNode>> = const { std::cell::RefCell::new(None) };
+    static STATION: std::cell::RefCell<Option<NodeDevice<Drive>>> = const { std::cell::RefCell::new(None) };
 }
 
-fn dn_poll(dn: &mut DriveNode, t: Instant, out: &mut Vec<Frame>) {
-    dn.poll_into(t, out);
+/// A received frame, through the node's generic (monomorphised) path.
+fn frame(dn: &mut NodeDevice<Drive>, f: &Frame, t: Instant, out: &mut Vec<Frame>) {
+    dn.node.handle_frame(f, t, &mut dn.app, out);
 }
 
-fn bench_mode(c: &mut Criterion, name: &str, dn: DriveNode, mode: u8, pp: bool) {
+fn dn_poll(dn: &mut NodeDevice<Drive>, t: Instant, out: &mut Vec<Frame>) {
+    dn.node.poll(t, &mut dn.app, out);
+}
+
+fn bench_mode(c: &mut Criterion, name: &str, dn: NodeDevice<Drive>, mode: u8, pp: bool) {
     let mut out = Vec::with_capacity(64);
     let mut t = station(dn, mode, &mut out);
     let mut dn = STATION.with(|s| s.borrow_mut().take()).expect("station");
@@ -64,17 +71,17 @@ fn bench_mode(c: &mut Criterion, name: &str, dn: DriveNode, mode: u8, pp: bool) 
             let mut d = [0u8; 6];
             d[..2].copy_from_slice(&cw.to_le_bytes());
             d[2..].copy_from_slice(&target.to_le_bytes());
-            dn.handle_frame_into(&Frame::new(rpdo2, &d), t, &mut out);
-            dn.handle_frame_into(&sync, t, &mut out);
+            frame(&mut dn, &Frame::new(rpdo2, &d), t, &mut out);
+            frame(&mut dn, &sync, t, &mut out);
             t += Duration::from_millis(1);
-            dn.poll_into(t, &mut out);
+            dn_poll(&mut dn, t, &mut out);
             black_box(out.len());
             out.clear();
         })
     });
     // Eight control periods per 1 ms cycle actually ran.
-    assert!(dn.drive.steps() >= 8 * k, "{name}: {} steps for {k} cycles", dn.drive.steps());
-    let sw = dn.drive.statusword();
+    assert!(dn.app.steps() >= 8 * k, "{name}: {} steps for {k} cycles", dn.app.steps());
+    let sw = dn.app.statusword();
     assert_eq!(sw & 0x6F, 0x27, "{name}: still operation enabled ({sw:04X})");
 }
 

@@ -7,16 +7,21 @@
 //! of it is pure, deterministic logic (no clocks, no I/O, no allocation per
 //! step).
 //!
+//! [`codes`] holds the CiA 402 tables a drive and a master share (states
+//! and their statusword coding, controlword commands, modes and their
+//! names). Without the default `drive` feature the crate is only those
+//! tables and the state machine: what a master depends on.
+//!
 //! # A generic drive on the bus
 //!
-//! [`drive::generic_drive`] is a complete CiA 402 servo (CiA 301 node,
+//! (With the `drive` feature.) [`drive::generic_drive`] is a complete CiA 402 servo (CiA 301 node,
 //! pre-defined PDO set, pp/vl/pv/tq); [`drive::generic_drive_with`] adds a
 //! configuration and mode handlers:
 //!
 //! ```
 //! use drivebus_bus::{Bus, BusConfig};
 //! use drivebus_can::Duration;
-//! use drivebus_cia402::drive::{DriveConfig, DriveNode, ModeHandler, generic_drive_with};
+//! use drivebus_cia402::drive::{Drive, DriveConfig, ModeHandler, generic_drive_with};
 //! use drivebus_cia402::homing::HomingMode;
 //! use drivebus_cia402::interp::{CspMode, CstMode, CsvMode, IpMode};
 //!
@@ -30,22 +35,23 @@
 //! let mut bus = Bus::new(BusConfig::zero_time());
 //! let id = bus.attach(generic_drive_with(3, DriveConfig::default(), handlers));
 //! bus.run_for(Duration::from_millis(1)); // boot-up, pre-operational
-//! let dn = bus.node::<DriveNode>(id).unwrap();
-//! assert_eq!(dn.drive.supported_modes(), 0x3EF); // 6502h: pp vl pv tq hm ip csp csv cst
-//! assert_eq!(dn.drive.statusword() & 0x4F, 0x40); // switch on disabled
+//! let dn = bus.node::<drivebus_node::NodeDevice<Drive>>(id).unwrap();
+//! assert_eq!(dn.app.supported_modes(), 0x3EF); // 6502h: pp vl pv tq hm ip csp csv cst
+//! assert_eq!(dn.app.statusword() & 0x4F, 0x40); // switch on disabled
 //! ```
 //!
 //! A master then drives it over the bus as any CiA 402 device: NMT start,
 //! controlword 6040h 06h/07h/0Fh, 6060h the mode, targets by SDO or RPDO,
-//! SYNC for the cyclic modes. Outside the virtual bus, wrap a
-//! `drivebus_node::Node` and a [`drive::Drive`] yourself
-//! ([`drive::Drive::install_with`]) and forward [`drive::Drive::take_emcy`]
-//! to the node after every call, as [`drive::DriveNode`] does.
+//! SYNC for the cyclic modes. On any other host (a real bus, an embedded
+//! main loop) the same `drivebus_node::NodeDevice<Drive>` is the device: it
+//! implements `drivebus_can::Device`; or install a [`drive::Drive`] on your
+//! own `drivebus_node::Node` ([`drive::Drive::install_with`]) and pass it as
+//! the node's application.
 //!
-//! Personalities set manufacturer statusword bits 8/14/15, the *remote*
-//! bit 9, and refuse writes by drive state (e.g. no 1010h store while
-//! enabled) with a [`drive::DriveExtension`] in
-//! [`drive::DriveConfig::extension`].
+//! Personalities wrap the drive in their own `drivebus_node::Application`
+//! (manufacturer statusword bits, write vetoes by drive state, e.g. no
+//! 1010h store while enabled) and call the drive's parts
+//! ([`drive::Drive::check_object`], [`drive::Drive::sync`], …).
 //!
 //! # The mode handler contract
 //!
@@ -120,10 +126,16 @@
 //! ```
 #![cfg_attr(not(feature = "std"), no_std)]
 
+#[cfg(feature = "drive")]
 extern crate alloc;
 
+pub mod codes;
+#[cfg(feature = "drive")]
 pub mod drive;
+#[cfg(feature = "drive")]
 pub mod homing;
+#[cfg(feature = "drive")]
 pub mod interp;
+#[cfg(feature = "drive")]
 pub mod model;
 pub mod state_machine;

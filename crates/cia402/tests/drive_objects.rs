@@ -82,8 +82,7 @@ fn object_descriptions() {
 /// application — through a reload from the dictionary too.
 #[test]
 fn withdrawn_objects_keep_their_parameters() {
-    use drivebus_node::{Application, NmtState, NodeEvent};
-    use drivebus_od::ObjectHooks;
+    use drivebus_node::{NmtState, NodeEvent};
     let mut node = Node::new(NodeConfig::new(1));
     let mut drive = Drive::install(&mut node, DriveConfig::default()).unwrap();
     let max = drive.mode_params().max_profile_velocity;
@@ -95,11 +94,7 @@ fn withdrawn_objects_keep_their_parameters() {
     assert!(!drive.withdraw_object(node.od_mut(), 0x607F), "already out");
     let od = node.od_mut();
     let reload = |d: &mut Drive, od: &mut drivebus_od::ObjectDictionary| {
-        d.on_event(
-            od,
-            NodeEvent::NmtState { from: NmtState::Stopped, to: NmtState::PreOperational },
-            drivebus_can::Instant::ZERO,
-        )
+        d.event(od, NodeEvent::NmtState { from: NmtState::Stopped, to: NmtState::PreOperational })
     };
     reload(&mut drive, od);
     assert_eq!(drive.mode_params().max_profile_velocity, max, "power-on value kept");
@@ -107,11 +102,11 @@ fn withdrawn_objects_keep_their_parameters() {
     drive.on_write(od, 0x607F, 0, &1000u32.to_le_bytes()).unwrap();
     reload(&mut drive, od);
     assert_eq!(drive.mode_params().max_profile_velocity, 1000, "the written value survives a reload");
-    drive.on_event(od, NodeEvent::ResetApplication, drivebus_can::Instant::ZERO);
+    drive.event(od, NodeEvent::ResetApplication);
     reload(&mut drive, od);
     assert_eq!(drive.mode_params().max_profile_velocity, max, "reset application: power-on value");
     // Live values of withdrawn objects are not published; the others are.
-    drive.poll(od, drivebus_can::Instant::from_millis(1));
+    drive.step_to(od, drivebus_can::Instant::from_millis(1));
     assert!(od.get(0x6062, 0).is_none());
     assert!(od.get_u32(0x6041, 0).is_some_and(|sw| sw != 0));
 }

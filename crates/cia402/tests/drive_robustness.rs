@@ -30,9 +30,12 @@ proptest! {
             let (index, sub, size) = targets[pick % targets.len()];
             let mut bytes = data.clone();
             bytes.resize(size, 0);
-            let _ = node.od_mut().write(&mut d, index, sub, &bytes);
+            // The node's write path, as every protocol writes.
+            let now = drivebus_can::Instant::ZERO;
+            let mut out = Vec::new();
+            let _ = node.write_object(index, sub, &bytes, now, &mut d, &mut out);
             let cw = [0x06u16, 0x07, 0x0F, 0x1F, 0x3F, 0x5F, 0x80, 0x10F][usize::from(cw_pick)];
-            let _ = node.od_mut().write(&mut d, 0x6040, 0, &cw.to_le_bytes());
+            let _ = node.write_object(0x6040, 0, &cw.to_le_bytes(), now, &mut d, &mut out);
             d.step_n(node.od_mut(), steps);
         }
         // Still a coherent statusword.

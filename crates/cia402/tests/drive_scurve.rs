@@ -194,7 +194,7 @@ fn jerk_time_setter_and_personality_defaults() {
     let mut r = Rig::with_config(cfg);
     {
         let dn = r.dn_mut();
-        dn.drive.set_profile_jerk(dn.node.od_mut(), ProfileJerk::Time(0.05));
+        dn.app.set_profile_jerk(dn.node.od_mut(), ProfileJerk::Time(0.05));
     }
     r.write(0x6081, 0, &V.to_le_bytes());
     r.write(0x6083, 0, &A.to_le_bytes());
@@ -251,13 +251,13 @@ mod robustness {
             if let Some(t) = jerk_time {
                 d.set_profile_jerk(node.od_mut(), ProfileJerk::Time(t));
             }
-            let _ = node.od_mut().write(&mut d, 0x6086, 0, &3i16.to_le_bytes());
+            let _ = node.write_object(0x6086, 0, &3i16.to_le_bytes(), drivebus_can::Instant::ZERO, &mut d, &mut Vec::new());
             for (pick, value, cw_pick, steps) in ops {
                 let (index, sub, size) = OBJECTS[pick];
                 let bytes = value.to_le_bytes();
-                let _ = node.od_mut().write(&mut d, index, sub, &bytes[..size]);
+                let _ = node.write_object(index, sub, &bytes[..size], drivebus_can::Instant::ZERO, &mut d, &mut Vec::new());
                 let cw = [0x06u16, 0x07, 0x0F, 0x1F, 0x3F, 0x5F, 0x8F, 0x21F][cw_pick];
-                let _ = node.od_mut().write(&mut d, 0x6040, 0, &cw.to_le_bytes());
+                let _ = node.write_object(0x6040, 0, &cw.to_le_bytes(), drivebus_can::Instant::ZERO, &mut d, &mut Vec::new());
                 d.step_n(node.od_mut(), steps);
                 prop_assert!(d.demand_position().is_finite() && d.demand_velocity().is_finite());
             }

@@ -60,7 +60,7 @@ pub struct Global {
 /// The subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Serve virtual drives on a socketcand TCP server (python-can, canopen).
+    /// Serve virtual drives on a socketcand TCP server (python-can, canopen), or on any bus (--bus).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(ServeArgs),
     /// Run the demo: two virtual drives, PDOs, homing, a move and a CSP sine; writes an SVG plot.
@@ -117,16 +117,25 @@ Examples:
   drivebus serve --drive generic:5 --bitrate 1000000
   drivebus serve --drive generic:5 --fault drop:0x185,every=10   (lose every 10th TPDO1)
   drivebus serve --drive akd:1 --eds-object   (then: drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 eds export)
+  drivebus serve --bus socketcan://can0 --drive akd:1            (virtual drive on a real bus)
+  drivebus serve --bus 'slcan:///dev/ttyACM0?bitrate=500000' --drive kc1:3
+  drivebus serve --bus socketcand://192.0.2.10:29536/can0 --drive dds6:2 --listen 127.0.0.1:29536
 
-Prints one line containing `listening on` when ready; stops on SIGINT/SIGTERM (exit 0).
+Without --bus (or with --bus virtual) the drives sit on an in-process bus served over socketcand at
+--listen (default 127.0.0.1:29536). With --bus URL they sit on that bus, keeping their own timing
+(heartbeats, SYNC-driven PDOs, EMCY inhibit times); the socketcand listener is then off unless
+--listen is given (it shares the drives and the bus traffic).
+Prints one line when ready: `listening on HOST:PORT (channel NAME)` when listening, `serving on URL`
+otherwise; stops on SIGINT/SIGTERM (exit 0).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
 
 /// `drivebus serve`.
 #[derive(Args, Debug)]
 pub struct ServeArgs {
-    /// TCP address to listen on.
-    #[arg(long, default_value = DEFAULT_LISTEN, value_name = "HOST:PORT")]
-    pub listen: String,
+    /// TCP address of the socketcand listener [default: 127.0.0.1:29536 on the virtual bus; off
+    /// with --bus URL unless given].
+    #[arg(long, value_name = "HOST:PORT")]
+    pub listen: Option<String>,
     /// The bus name clients open (`< open NAME >`).
     #[arg(long, default_value = "can0")]
     pub channel: String,
@@ -136,7 +145,8 @@ pub struct ServeArgs {
     /// Directory where each drive keeps its stored parameters (1010h).
     #[arg(long)]
     pub state_dir: Option<PathBuf>,
-    /// Pace frames like a CAN bus at this bit rate.
+    /// Pace frames like a CAN bus at this bit rate (the in-process bus the drives and the
+    /// listener share; a real bus paces itself).
     #[arg(long, value_name = "BPS")]
     pub bitrate: Option<u32>,
     /// Fault injection on the hosting bus (repeatable): `drop:IDS[,every=N][,skip=N][,times=N]`

@@ -51,7 +51,7 @@ fn main() {
 async fn run(cli: Cli) -> anyhow::Result<i32> {
     let g = &cli.global;
     match &cli.cmd {
-        Command::Serve(a) => serve::run(a).await.map(|()| 0),
+        Command::Serve(a) => serve::run(g, a).await.map(|()| 0),
         Command::Demo(a) => demo::run(g, a).await.map(|()| 0),
         Command::Scan(a) => misc::scan(g, a).await.map(|()| 0),
         Command::Sdo(c) => sdo_cmd::run(g, c).await.map(|()| 0),

@@ -7,7 +7,7 @@ use drivebus_can::{Duration, Frame, Instant};
 use drivebus_sdo::client::{Protocol, SdoClient, SdoClientConfig};
 
 use crate::link::SdoFailure;
-use crate::vdrive::{DriveSpec, VDrive};
+use crate::vdrive::{DriveSpec, build};
 
 /// The master's station and the drives on a simulated bus.
 pub struct SimMaster {
@@ -27,7 +27,7 @@ impl SimMaster {
         let mut bus = Bus::new(BusConfig { log: false, ..BusConfig::with_bitrate(bitrate) });
         let probe = bus.attach_probe();
         for s in specs {
-            bus.attach(VDrive::build(*s, None, Default::default())?.pn);
+            bus.attach(build(*s, None, Default::default())?);
         }
         Ok(SimMaster { bus, probe, backlog: Vec::new(), sdo_count: 0 })
     }

@@ -1,16 +1,14 @@
 //! Virtual drives: a personality built by `drivebus_personality` (its EDS
 //! as the dictionary of a CiA 301 node, the CiA 402 drive on it, the
-//! manufacturer's behaviour), and a real-time host that runs one on an
-//! async bus.
+//! manufacturer's behaviour), hosted in real time by
+//! `drivebus_transport::host` like any other device.
 
 use std::path::Path;
 
 use anyhow::{Context, anyhow, bail};
-use drivebus_can::{Frame, Instant, TxSink};
 use drivebus_node::{MemoryStorage, Storage};
 use drivebus_personality::build::BuildOptions;
-use drivebus_personality::{PersonalityNode, Profile};
-use drivebus_transport::CanBus;
+use drivebus_personality::{PersonalityDevice, Profile};
 use tokio::task::JoinHandle;
 
 /// A drive to host, as given on the command line (`akd:1`).
@@ -64,88 +62,27 @@ impl std::fmt::Display for DriveSpec {
     }
 }
 
-/// A virtual drive: the personality's node (EDS dictionary, CiA 402
-/// drive, manufacturer behaviour) from `drivebus_personality::build`.
-pub struct VDrive {
-    /// The drive station (node, drive, behaviour).
-    pub pn: PersonalityNode,
-    /// Which personality.
-    pub spec: DriveSpec,
-}
-
-impl VDrive {
-    /// Builds the drive `spec` with `options` (e.g. the EDS at 1021h);
-    /// parameters stored with 1010h go to `state_dir/<profile>-<node>/`
-    /// when given, else to memory.
-    pub fn build(spec: DriveSpec, state_dir: Option<&Path>, options: BuildOptions) -> anyhow::Result<VDrive> {
-        let storage: Box<dyn Storage + Send> = match state_dir {
-            Some(dir) => {
-                let d = dir.join(spec.dir_name());
-                Box::new(
-                    drivebus_node::FileStorage::new(&d)
-                        .with_context(|| format!("state directory {}", d.display()))?,
-                )
-            }
-            None => Box::new(MemoryStorage::new()),
-        };
-        let pn = spec
-            .profile
-            .build_with_options(spec.node, storage, options)
-            .map_err(|e| anyhow!("cannot build {spec}: {e}"))?;
-        Ok(VDrive { pn, spec })
-    }
-
-    /// Boot: boot-up message, pre-operational (the first poll boots).
-    pub fn boot(&mut self, now: Instant, out: &mut impl TxSink) {
-        self.pn.poll_into(now, out);
-    }
-
-    /// A frame from the bus.
-    pub fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut impl TxSink) {
-        self.pn.handle_frame_into(frame, now, out);
-    }
-
-    /// Due work; the next deadline.
-    pub fn poll(&mut self, now: Instant, out: &mut impl TxSink) -> Option<Instant> {
-        self.pn.poll_into(now, out)
-    }
-}
-
-/// Runs `vd` in real time on `bus` until the bus closes or the task is
-/// aborted: boots it, then handles frames and deadlines as they come.
-pub fn spawn_realtime(mut vd: VDrive, mut bus: CanBus) -> JoinHandle<()> {
-    tokio::spawn(async move {
-        let start = tokio::time::Instant::now();
-        let now = || Instant::from_nanos(u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX));
-        let at = |t: Instant| {
-            start
-                + std::time::Duration::from_nanos(t.as_nanos())
-                    .min(std::time::Duration::from_secs(86_400 * 365))
-        };
-        let mut out: Vec<Frame> = Vec::new();
-        vd.boot(now(), &mut out);
-        loop {
-            let next = vd.poll(now(), &mut out);
-            for f in out.drain(..) {
-                if let Err(e) = bus.send(f).await {
-                    tracing::warn!(drive = %vd.spec, error = %e, "bus send failed, drive stops");
-                    return;
-                }
-            }
-            let deadline =
-                next.map_or_else(|| tokio::time::Instant::now() + std::time::Duration::from_secs(3600), at);
-            tokio::select! {
-                r = bus.recv() => match r {
-                    Ok(f) => vd.handle_frame(&f, now(), &mut out),
-                    Err(e) => {
-                        tracing::info!(drive = %vd.spec, error = %e, "bus closed, drive stops");
-                        return;
-                    }
-                },
-                () = tokio::time::sleep_until(deadline) => {}
-            }
+/// Builds the drive `spec` with `options` (e.g. the EDS at 1021h);
+/// parameters stored with 1010h go to `state_dir/<profile>-<node>/` when
+/// given, else to memory.
+pub fn build(
+    spec: DriveSpec,
+    state_dir: Option<&Path>,
+    options: BuildOptions,
+) -> anyhow::Result<PersonalityDevice> {
+    let storage: Box<dyn Storage + Send> = match state_dir {
+        Some(dir) => {
+            let d = dir.join(spec.dir_name());
+            Box::new(
+                drivebus_node::FileStorage::new(&d)
+                    .with_context(|| format!("state directory {}", d.display()))?,
+            )
         }
-    })
+        None => Box::new(MemoryStorage::new()),
+    };
+    spec.profile
+        .build_with_options(spec.node, storage, options)
+        .map_err(|e| anyhow!("cannot build {spec}: {e}"))
 }
 
 /// Builds and starts `specs` on `hub`, each as its own participant.
@@ -157,9 +94,12 @@ pub fn spawn_on_hub(
 ) -> anyhow::Result<Vec<JoinHandle<()>>> {
     let mut drives = Vec::new();
     for s in specs {
-        drives.push(VDrive::build(*s, state_dir, options)?);
+        drives.push(build(*s, state_dir, options)?);
     }
-    Ok(drives.into_iter().map(|d| spawn_realtime(d, hub.attach())).collect())
+    Ok(drivebus_transport::host::spawn_on_hub(drives, hub)
+        .into_iter()
+        .map(|h| h.into_join_handle())
+        .collect())
 }
 
 #[cfg(test)]

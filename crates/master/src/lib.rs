@@ -1,5 +1,5 @@
-//! Async CANopen master for drivebus (tokio), and a real-time host for
-//! sans-IO devices.
+//! Async CANopen master for drivebus (tokio). (Devices are hosted in real
+//! time by `drivebus_transport::host`.)
 //!
 //! A [`Master`] sits on one [`CanBus`](drivebus_transport::CanBus). One
 //! receive task demultiplexes every frame: SDO responses go to the transfer
@@ -18,13 +18,12 @@
 //! # let _ = device_type; Ok(()) }
 //! ```
 //!
-//! Modules: [`host`] runs sans-IO devices in real time; `master` (the core,
+//! Modules: `master` (the core,
 //! events, NMT, heartbeat/guarding, EMCY, SYNC/TIME); [`sdo`]; [`scan`];
 //! [`lss`]; [`pdo`]; [`drive`] (CiA 402).
 
 mod clock;
 pub mod drive;
-pub mod host;
 pub mod lss;
 mod master;
 pub mod pdo;
@@ -32,7 +31,6 @@ pub mod scan;
 pub mod sdo;
 
 pub use drive::{Drive, DriveError, DriveState, Profile};
-pub use host::{Device, NodeDevice, NodeHost, spawn_device, spawn_node, spawn_on_hub};
 pub use lss::{LssError, LssMaster};
 pub use master::{Master, MasterConfig, MasterEvent, NodeStatus, SyncTick, WaitError};
 pub use pdo::{ConfigError, PdoDir, PdoMapEntry, PdoRecord};

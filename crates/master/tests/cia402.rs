@@ -7,34 +7,18 @@ mod common;
 use std::time::Duration;
 
 use common::bounded;
-use drivebus_can::{Frame, Instant};
-use drivebus_cia402::drive::{DriveNode, generic_drive};
+use drivebus_cia402::drive::generic_drive;
 use drivebus_master::drive::mode;
-use drivebus_master::{Device, DriveState, NmtCommand, RemoteState, spawn_device};
+use drivebus_master::{DriveState, NmtCommand, RemoteState};
 use drivebus_transport::Hub;
-
-/// `DriveNode` as a hostable device (its `*_into` methods take any sink).
-struct Real(DriveNode);
-
-impl Device for Real {
-    fn boot(&mut self, now: Instant, out: &mut Vec<Frame>) {
-        // DriveNode boots at its first poll.
-        self.0.poll_into(now, out);
-    }
-    fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut Vec<Frame>) {
-        self.0.handle_frame_into(frame, now, out);
-    }
-    fn poll(&mut self, now: Instant, out: &mut Vec<Frame>) -> Option<Instant> {
-        self.0.poll_into(now, out)
-    }
-}
+use drivebus_transport::host::spawn;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn enable_and_move_the_virtual_drive() {
     bounded(async {
         let hub = Hub::default();
         let m = common::master(&hub);
-        let _host = spawn_device(Real(generic_drive(9)), hub.attach());
+        let _host = spawn(generic_drive(9), hub.attach());
         assert_eq!(m.sdo(9).read::<u32>(0x1000, 0).await.unwrap(), 0x0002_0192);
         m.sdo(9).write::<u16>(0x1017, 0, 20).await.unwrap();
         m.nmt(9, NmtCommand::Start).await.unwrap();

@@ -1,6 +1,6 @@
 //! The CiA 402 `Drive` handle against a minimal stand-in drive: a state
-//! machine on 6040h/6041h with instant motion, hosted as a custom `Device`
-//! that sends TPDO 1 whenever the statusword changes.
+//! machine on 6040h/6041h with instant motion, an application that asks
+//! for TPDO 1 whenever the statusword changes, hosted in real time.
 
 mod common;
 
@@ -8,18 +8,16 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use common::bounded;
-use drivebus_can::{Frame, Instant};
 use drivebus_master::drive::mode;
 use drivebus_master::{
-    Device, Drive, DriveError, DriveState, Master, NmtCommand, NodeHost, PdoDir, PdoMapEntry, PdoRecord,
-    Profile, RemoteState, spawn_device,
+    Drive, DriveError, DriveState, Master, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, Profile, RemoteState,
 };
-use drivebus_node::{Application, Node, NodeConfig};
+use drivebus_node::{AppContext, Application, Node, NodeConfig, NodeDevice};
 use drivebus_od::{
-    Access, DataType, Object, ObjectCode, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Value,
-    WriteOutcome,
+    Access, DataType, Object, ObjectCode, ObjectDictionary, SdoAbort, SubObject, Target, Value, WriteOutcome,
 };
 use drivebus_transport::Hub;
+use drivebus_transport::host::{DeviceHost, spawn};
 
 const SOD: u16 = 0x0040;
 const RTSO: u16 = 0x0021;
@@ -38,6 +36,8 @@ struct StandIn {
     reached: bool,
     homing_error: bool,
     csp_targets: Arc<Mutex<Vec<i32>>>,
+    /// The statusword TPDO 1 last carried.
+    last_sw: u16,
 }
 
 impl StandIn {
@@ -100,23 +100,18 @@ impl StandIn {
     }
 }
 
-// The work is done in `on_write` (storing the value itself) rather than
-// `after_write`: the node's RPDO path does not forward `after_write` to the
-// application (drivebus-node `AppOnly`), and a drive must react to RPDOs.
-impl ObjectHooks for StandIn {
-    fn on_write(
+// The stand-in owns 6040h, 6060h and 607Ah: it stores them itself and
+// asks for TPDO 1 when the statusword changed.
+impl Application for StandIn {
+    fn check_write(
         &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
+        cx: &mut AppContext<'_>,
+        at: &Target,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
-        if !matches!(index, 0x6040 | 0x6060 | 0x607A) {
-            return Ok(WriteOutcome::Store);
-        }
-        let r = od.find(index, sub)?;
-        od.set_raw(r, data);
-        match index {
+        let od = &mut *cx.od;
+        od.set_raw(at.r, data);
+        match at.index {
             0x6040 => {
                 let cw = od.get_u64(0x6040, 0).unwrap_or(0) as u16;
                 self.controlword(od, cw);
@@ -129,16 +124,19 @@ impl ObjectHooks for StandIn {
                 self.publish(od);
             }
             0x607A if od.get_i64(0x6061, 0) == Some(i64::from(mode::CSP)) => {
-                let t = od.get_i64(0x607A, sub).unwrap_or(0) as i32;
+                let t = od.get_i64(0x607A, at.sub).unwrap_or(0) as i32;
                 self.csp_targets.lock().unwrap().push(t);
             }
             _ => {}
         }
+        let sw = self.statusword();
+        if sw != self.last_sw {
+            self.last_sw = sw;
+            cx.request_tpdo(0);
+        }
         Ok(WriteOutcome::Handled)
     }
 }
-
-impl Application for StandIn {}
 
 fn var(index: u16, dt: DataType, access: Access, v: Value, hooked: bool) -> Object {
     let mut s = SubObject::new(0, "x", dt, access, v).mappable();
@@ -148,72 +146,39 @@ fn var(index: u16, dt: DataType, access: Access, v: Value, hooked: bool) -> Obje
     Object::with_code(index, ObjectCode::Var, "x").with_sub(s)
 }
 
-/// The stand-in as a host device: a TPDO 1 request whenever the
-/// statusword changes, like `drivebus_cia402::DriveNode`.
-struct StandInDevice {
-    node: Node,
-    app: StandIn,
-    last_sw: u16,
-}
-
-impl StandInDevice {
-    fn new(id: u8) -> (StandInDevice, Arc<Mutex<Vec<i32>>>) {
-        let mut cfg = NodeConfig::new(id);
-        cfg.device_type = 0x0002_0192;
-        let mut node = Node::new(cfg);
-        node.insert_object(var(0x6040, DataType::Unsigned16, Access::Rw, Value::U16(0), true));
-        node.insert_object(var(0x6041, DataType::Unsigned16, Access::Ro, Value::U16(SOD), false));
-        node.insert_object(var(0x6060, DataType::Integer8, Access::Rw, Value::I8(0), true));
-        node.insert_object(var(0x6061, DataType::Integer8, Access::Ro, Value::I8(0), false));
-        node.insert_object(var(0x6064, DataType::Integer32, Access::Ro, Value::I32(0), false));
-        node.insert_object(var(0x607A, DataType::Integer32, Access::Rw, Value::I32(0), true));
-        node.insert_object(var(0x60FF, DataType::Integer32, Access::Rw, Value::I32(0), false));
-        node.insert_object(var(0x6071, DataType::Integer16, Access::Rw, Value::I16(0), false));
-        node.insert_object(var(0x6081, DataType::Unsigned32, Access::Rw, Value::U32(0), false));
-        node.insert_object(var(0x6083, DataType::Unsigned32, Access::Rw, Value::U32(0), false));
-        node.insert_object(var(0x6084, DataType::Unsigned32, Access::Rw, Value::U32(0), false));
-        node.insert_object(var(0x6098, DataType::Integer8, Access::Rw, Value::I8(0), false));
-        let app = StandIn { state: SOD, ..Default::default() };
-        let targets = app.csp_targets.clone();
-        (StandInDevice { node, app, last_sw: SOD }, targets)
-    }
-    fn after(&mut self, now: Instant, out: &mut Vec<Frame>) {
-        let sw = self.app.statusword();
-        if sw != self.last_sw {
-            self.last_sw = sw;
-            self.node.request_tpdo(0);
-            self.node.poll(now, &mut self.app, out);
-        }
-    }
-}
-
-impl Device for StandInDevice {
-    fn boot(&mut self, now: Instant, out: &mut Vec<Frame>) {
-        self.node.boot(now, &mut self.app, out);
-    }
-    fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut Vec<Frame>) {
-        self.node.handle_frame(frame, now, &mut self.app, out);
-        self.after(now, out);
-    }
-    fn poll(&mut self, now: Instant, out: &mut Vec<Frame>) -> Option<Instant> {
-        let next = self.node.poll(now, &mut self.app, out);
-        self.after(now, out);
-        next
-    }
+fn stand_in(id: u8) -> (NodeDevice<StandIn>, Arc<Mutex<Vec<i32>>>) {
+    let mut cfg = NodeConfig::new(id);
+    cfg.device_type = 0x0002_0192;
+    let mut node = Node::new(cfg);
+    node.insert_object(var(0x6040, DataType::Unsigned16, Access::Rw, Value::U16(0), true));
+    node.insert_object(var(0x6041, DataType::Unsigned16, Access::Ro, Value::U16(SOD), false));
+    node.insert_object(var(0x6060, DataType::Integer8, Access::Rw, Value::I8(0), true));
+    node.insert_object(var(0x6061, DataType::Integer8, Access::Ro, Value::I8(0), false));
+    node.insert_object(var(0x6064, DataType::Integer32, Access::Ro, Value::I32(0), false));
+    node.insert_object(var(0x607A, DataType::Integer32, Access::Rw, Value::I32(0), true));
+    node.insert_object(var(0x60FF, DataType::Integer32, Access::Rw, Value::I32(0), false));
+    node.insert_object(var(0x6071, DataType::Integer16, Access::Rw, Value::I16(0), false));
+    node.insert_object(var(0x6081, DataType::Unsigned32, Access::Rw, Value::U32(0), false));
+    node.insert_object(var(0x6083, DataType::Unsigned32, Access::Rw, Value::U32(0), false));
+    node.insert_object(var(0x6084, DataType::Unsigned32, Access::Rw, Value::U32(0), false));
+    node.insert_object(var(0x6098, DataType::Integer8, Access::Rw, Value::I8(0), false));
+    let app = StandIn { state: SOD, last_sw: SOD, ..Default::default() };
+    let targets = app.csp_targets.clone();
+    (NodeDevice::new(node, app), targets)
 }
 
 struct Rig {
     hub: Hub,
     m: Master,
-    host: NodeHost<StandInDevice>,
+    host: DeviceHost<NodeDevice<StandIn>>,
     targets: Arc<Mutex<Vec<i32>>>,
 }
 
 fn rig(id: u8) -> Rig {
     let hub = Hub::default();
     let m = common::master(&hub);
-    let (dev, targets) = StandInDevice::new(id);
-    let host = spawn_device(dev, hub.attach());
+    let (dev, targets) = stand_in(id);
+    let host = spawn(dev, hub.attach());
     Rig { hub, m, host, targets }
 }
 

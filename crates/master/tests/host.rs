@@ -7,16 +7,17 @@ mod common;
 use std::time::Duration;
 
 use common::{bounded, node};
-use drivebus_master::{Master, MasterEvent, NodeDevice, Protocol, SdoError, spawn_node, spawn_on_hub};
-use drivebus_node::NmtState;
+use drivebus_master::{Master, MasterEvent, Protocol, SdoError};
+use drivebus_node::{NmtState, NodeDevice};
 use drivebus_od::NoHooks;
+use drivebus_transport::host::{spawn, spawn_on_hub};
 use drivebus_transport::socketcand::SocketcandServer;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn serve_three_nodes_over_socketcand() {
     bounded(async {
         let (server, addr) = SocketcandServer::bind("127.0.0.1:0", "can0").await.unwrap();
-        let devices = [21u8, 22, 23].map(|id| NodeDevice { node: node(id), app: NoHooks });
+        let devices = [21u8, 22, 23].map(|id| NodeDevice::new(node(id), NoHooks));
         let hosts = spawn_on_hub(devices, server.hub());
         let bus = drivebus_transport::open(&format!("socketcand://{addr}/can0")).await.unwrap();
         let m = Master::new(bus);
@@ -65,7 +66,8 @@ async fn virtual_url_and_boot_order() {
     bounded(async {
         let m = Master::new(drivebus_transport::open("virtual://host-test").await.unwrap());
         let boot = m.expect_bootup(30, Duration::from_secs(2));
-        let h = spawn_node(node(30), NoHooks, drivebus_transport::open("virtual://host-test").await.unwrap());
+        let bus = drivebus_transport::open("virtual://host-test").await.unwrap();
+        let h = spawn(NodeDevice::new(node(30), NoHooks), bus);
         boot.await.unwrap();
         assert_eq!(m.sdo(30).read::<String>(0x1008, 0).await.unwrap(), "test node 30");
         h.into_join_handle().abort();

@@ -130,7 +130,8 @@ pub fn install_error_behaviour(od: &mut ObjectDictionary, n_classes: u8) {
 fn hooked(mut o: Object) -> Object {
     for s in o.subs_mut() {
         if s.access.writable() {
-            s.hooked = true;
+            s.owner = drivebus_od::Owner::HOOKED;
+            s.live = true;
         }
     }
     o
@@ -146,9 +147,9 @@ mod tests {
         install(&mut od, &NmtConfig::new(5), 3);
         install_error_behaviour(&mut od, 2);
         assert_eq!(od.get_u32(0x1016, 0), Some(3));
-        assert!(od.get(0x1016, 3).unwrap().hooked);
-        assert!(!od.get(0x1016, 0).unwrap().hooked);
-        assert!(od.get(0x1017, 0).unwrap().hooked);
+        assert!(od.get(0x1016, 3).unwrap().is_hooked());
+        assert!(!od.get(0x1016, 0).unwrap().is_hooked());
+        assert!(od.get(0x1017, 0).unwrap().is_hooked());
         assert!(od.get(0x100C, 0).is_some() && od.get(0x100D, 0).is_some());
         assert_eq!(od.get_u32(0x1029, 0), Some(2));
         assert_eq!(od.get(0x1029, 1).unwrap().name, "Communication error");

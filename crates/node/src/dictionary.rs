@@ -144,7 +144,7 @@ pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
 
 /// Bring a dictionary from elsewhere (an EDS) up to what the services
 /// need: objects it lacks are added from `generated`; sub-objects it has
-/// keep their description and value but take the service's hook flag.
+/// keep their description and value but take the service as their owner.
 pub fn merge_services(od: &mut ObjectDictionary, generated: &ObjectDictionary) {
     for g in generated.objects() {
         if od.object(g.index).is_none() {
@@ -153,7 +153,10 @@ pub fn merge_services(od: &mut ObjectDictionary, generated: &ObjectDictionary) {
         }
         for gs in g.subs() {
             if let Some(s) = od.get_mut(g.index, gs.sub) {
-                s.hooked |= gs.hooked;
+                if gs.owner != drivebus_od::Owner::NONE {
+                    s.owner = gs.owner;
+                }
+                s.live |= gs.live;
             } else if let Some(o) = od.object_mut(g.index) {
                 let merged = o.clone().with_sub(gs.clone());
                 *o = merged;

@@ -22,23 +22,26 @@ extern crate alloc;
 
 mod app;
 mod config;
+mod device;
 mod dictionary;
 #[cfg(feature = "std")]
 mod eds_object;
-mod hooks;
 mod node;
-mod sim;
+pub mod owners;
+mod poll;
+mod requests;
 pub mod storage;
 
-pub use app::{Application, NodeEvent};
+pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
 pub use config::{Identity, NodeConfig};
+pub use device::NodeDevice;
 pub use dictionary::build_dictionary;
-pub use hooks::{LOAD_SIGNATURE, SAVE_SIGNATURE};
 pub use node::Node;
-pub use sim::SimNode;
+pub use owners::{LOAD_SIGNATURE, SAVE_SIGNATURE};
 #[cfg(feature = "std")]
 pub use storage::FileStorage;
 pub use storage::{MemoryStorage, Slot, Storage, StorageError};
 
 /// Re-exports so users of the node need one dependency.
 pub use drivebus_nmt::{NmtCommand, NmtState};
+pub use drivebus_od::{Owner, Target, WriteOutcome};

@@ -1,27 +1,23 @@
 //! [`Node`]: one CiA 301 device.
 
-use crate::app::{Application, NodeEvent};
+use crate::app::{Application, FrameFilter, NodeEvent};
 use crate::config::NodeConfig;
-use crate::dictionary::{build_dictionary, mark_node_relative, rebase_node_id};
-use crate::hooks::{CommHooks, Services};
-use crate::storage::{MemoryStorage, Slot, Storage, apply_image};
+use crate::dictionary::{build_dictionary, mark_node_relative};
+use crate::owners::{Dispatch, Link, Services, dirty, resolve};
+use crate::storage::{MemoryStorage, Storage};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::{CanId, Frame, Instant, TxSink, earliest};
-use drivebus_emcy::{Emcy, EmcyConsumer, register_bit_for};
-use drivebus_lss::{LssAddress, LssEvent, LssSlave, StoreStatus};
-use drivebus_nmt::{ErrorClass, InitSubState, Nmt, NmtCommand, NmtEvent, NmtState, Service};
-use drivebus_od::{ObjectDictionary, PersistGroup};
+use drivebus_emcy::{Emcy, register_bit_for};
+use drivebus_lss::{LssAddress, LssSlave};
+use drivebus_nmt::{InitSubState, Nmt, NmtCommand, NmtState, Service};
+use drivebus_od::{ObjectDictionary, SdoAbort};
 use drivebus_pdo::{Pdo, PdoRx};
-use drivebus_sdo::server::{FIRST_PARAM_INDEX, SdoServer};
-use drivebus_sync::{SyncService, TimeService};
+use drivebus_sdo::server::SdoServer;
+use drivebus_sync::SyncService;
 
-/// EMCY for a heartbeat or life-guarding loss (CiA 301 Table 21).
-const EMCY_GUARD: u16 = 0x8130;
 /// EMCY for a SYNC with the wrong length (CiA 301 Table 21).
-const EMCY_SYNC_LEN: u16 = 0x8240;
-/// 1029h class of communication errors (sub 1).
-const COMM_ERROR: ErrorClass = ErrorClass(1);
+pub(crate) const EMCY_SYNC_LEN: u16 = 0x8240;
 
 /// A complete CiA 301 device: the services of the communication profile
 /// over one object dictionary, sans-IO.
@@ -29,36 +25,46 @@ const COMM_ERROR: ErrorClass = ErrorClass(1);
 /// Drive it with [`Node::boot`] once, then [`Node::handle_frame`] for every
 /// received frame and [`Node::poll`] at (or after) the deadline it returns.
 /// Application behaviour plugs in through an [`Application`] passed to each
-/// call, so the node never owns or knows the application.
+/// call, so the node never owns or knows the application;
+/// [`crate::NodeDevice`] pairs the two as one [`drivebus_can::Device`].
 pub struct Node {
-    cfg: NodeConfig,
-    od: ObjectDictionary,
-    s: Services,
-    sdo: Vec<SdoServer>,
-    lss: Option<LssSlave>,
-    node_id: u8,
+    pub(crate) cfg: NodeConfig,
+    pub(crate) od: ObjectDictionary,
+    pub(crate) s: Services,
+    pub(crate) sdo: Vec<SdoServer>,
+    pub(crate) lss: Option<LssSlave>,
+    pub(crate) node_id: u8,
     /// Service behind each 11-bit identifier (see `route`), rebuilt when a
     /// COB-ID changes: frame dispatch is one table load.
-    routes: Vec<u8>,
-    /// The deadline the last full poll computed, and what it depended on:
-    /// an idle poll before it returns at once.
-    next_deadline: Option<Instant>,
-    polled_generation: u64,
-    dirty: bool,
+    pub(crate) routes: Vec<u8>,
+    /// The NMT state `routes` was built for.
+    pub(crate) routes_state: NmtState,
+    /// Each service's next deadline (`svc` order) and their earliest.
+    pub(crate) deadlines: [Option<Instant>; crate::poll::SERVICES],
+    pub(crate) next_deadline: Option<Instant>,
+    /// `od.generation()` when the PDO service last looked: the dictionary
+    /// counts changes of the entries event-driven TPDOs map (all entries,
+    /// when one maps a live entry) and nothing else.
+    pub(crate) seen_generation: u64,
+    /// The requests being carried out (swapped with `s.requests`).
+    pub(crate) running: Vec<crate::app::Request>,
+    /// Errors raised with a device-defined register (code, bits).
+    pub(crate) app_errors: Vec<(u16, u8)>,
 }
 
 /// Route codes in [`Node::routes`].
-mod route {
+pub(crate) mod route {
     pub const NONE: u8 = 0;
     pub const NMT: u8 = 1;
     pub const ERROR_CONTROL: u8 = 2;
     pub const LSS: u8 = 3;
     pub const SYNC: u8 = 4;
-    pub const TIME: u8 = 5;
-    pub const EMCY_CONSUMER: u8 = 6;
     pub const PDO: u8 = 7;
+    /// Through `dispatch_configurable` (shared identifiers, TIME, EMCY
+    /// consumer, services the NMT state does not allow a fast path).
+    pub const OTHER: u8 = 8;
     /// SDO server `i` is `SDO + i`.
-    pub const SDO: u8 = 8;
+    pub const SDO: u8 = 9;
 }
 
 impl Node {
@@ -76,7 +82,7 @@ impl Node {
 
     /// A device around an existing dictionary (e.g. built from an EDS):
     /// communication objects it lacks are added, those it has keep their
-    /// descriptions but are routed to the services.
+    /// descriptions but are owned by the services.
     pub fn with_dictionary(
         mut cfg: NodeConfig,
         mut od: ObjectDictionary,
@@ -89,6 +95,7 @@ impl Node {
         let generated = build_dictionary(&cfg, node_id);
         crate::dictionary::merge_services(&mut od, &generated);
         mark_node_relative(&cfg, &generated, node_id, &mut od);
+        resolve(&mut od);
         // CiA 305 §3.2: the LSS address is 1018h:01h–04h. A dictionary
         // from elsewhere (an EDS) keeps its own 1018h, so the identity is
         // read back from it: one source for SDO and LSS.
@@ -111,10 +118,14 @@ impl Node {
             sync: SyncService::install(&mut ObjectDictionary::new(), node_id),
             time: None,
             storage,
+            link: Link {
+                dirty: dirty::ALL | dirty::ROUTES | dirty::PDO_MAP,
+                requests: Vec::with_capacity(8),
+                node_id,
+                now: Instant::ZERO,
+            },
             sdo_params_dirty: false,
-            comm_changed: false,
             pending_nmt: None,
-            now: Instant::ZERO,
             #[cfg(feature = "std")]
             eds_info: (cfg.lss, cfg.eds_device_info.clone()),
         };
@@ -139,9 +150,12 @@ impl Node {
             lss,
             node_id,
             routes: alloc::vec![route::NONE; 0x800],
+            routes_state: NmtState::Initialisation(InitSubState::Initialising),
+            deadlines: [None; crate::poll::SERVICES],
             next_deadline: None,
-            polled_generation: 0,
-            dirty: true,
+            seen_generation: 0,
+            running: Vec::with_capacity(8),
+            app_errors: Vec::new(),
         };
         node.load_lss_config();
         node
@@ -151,21 +165,25 @@ impl Node {
     pub fn od(&self) -> &ObjectDictionary {
         &self.od
     }
-    /// The object dictionary, for the application to push live values
-    /// (`set_le`, `set_raw`, `write_local`). Add objects with
+    /// The object dictionary, for pushing live values (`set_le`,
+    /// `set_raw`) from outside an application callback. Every service is
+    /// polled at the next [`Node::poll`]. Add objects with
     /// [`Node::insert_object`], not through this reference: services hold
-    /// resolved handles into the dictionary.
+    /// resolved handles into the dictionary. Writes that must reach their
+    /// owner go through [`Node::write_object`].
     pub fn od_mut(&mut self) -> &mut ObjectDictionary {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::ALL;
         &mut self.od
     }
 
-    /// Add (or replace) an object and re-resolve every service's handles.
+    /// Add (or replace) an object: its `hooked()` entries get their owner,
+    /// and every service re-resolves its handles.
     pub fn insert_object(&mut self, obj: drivebus_od::Object) {
         self.od.insert(obj);
+        resolve(&mut self.od);
         self.s.pdo.reload(&self.od);
+        self.s.link.dirty |= dirty::ALL | dirty::ROUTES | dirty::PDO_MAP;
         self.rebuild_routes();
-        self.dirty = true;
     }
     /// The configuration the node was built from.
     pub fn config(&self) -> &NodeConfig {
@@ -201,22 +219,72 @@ impl Node {
     }
 
     /// Power on: load stored parameters, start the services, send the
-    /// boot-up message and enter pre-operational. An unconfigured node
-    /// (node-ID FFh) stays silent, answering only LSS.
+    /// boot-up message, enter pre-operational and tell the application
+    /// ([`Application::on_start`]). An unconfigured node (node-ID FFh)
+    /// stays silent, answering only LSS. What the application requests at
+    /// start is carried out by the next [`Node::poll`].
     pub fn boot<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A, out: &mut impl TxSink) {
-        self.s.now = now;
-        self.load_groups(&[Slot::Manufacturer, Slot::Application, Slot::Communication]);
+        self.s.link.now = now;
+        self.load_groups(&[
+            crate::storage::Slot::Manufacturer,
+            crate::storage::Slot::Application,
+            crate::storage::Slot::Communication,
+        ]);
         self.start_communication(now, app, out);
+        app.on_start(&mut self.s.cx(&mut self.od));
+    }
+
+    /// Reads an object the way every protocol does (SDO upload, CoE, a
+    /// local tool): access check, the owner's refresh of a live entry, the
+    /// bytes. The SDO server runs this same path.
+    pub fn read_object<A: Application + ?Sized>(
+        &mut self,
+        index: u16,
+        sub: u8,
+        now: Instant,
+        app: &mut A,
+    ) -> Result<&[u8], SdoAbort> {
+        self.s.link.now = now;
+        let mut d = Dispatch { s: &mut self.s, app };
+        self.od.read(&mut d, index, sub)
+    }
+
+    /// Writes an object the way every protocol does (SDO download, CoE, a
+    /// local tool): the whole write path of `DEVELOPERS.md` — find, access,
+    /// type/length/limits, the watcher's veto and the owner's check, store,
+    /// the owner's apply — then the node's follow-ups (reconfigured
+    /// identifiers, NMT events, the application's requests). The SDO
+    /// server runs this same path. Frames the follow-ups produce (a reset
+    /// communication's boot-up) go to `out`.
+    pub fn write_object<A: Application + ?Sized>(
+        &mut self,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) -> Result<(), SdoAbort> {
+        self.s.link.now = now;
+        let r = {
+            let mut d = Dispatch { s: &mut self.s, app: &mut *app };
+            self.od.write(&mut d, index, sub, data)
+        };
+        self.after_write(now, app, out);
+        if self.run_requests(now, app, out) {
+            self.poll_services(now, app, out);
+        }
+        r
     }
 
     /// Signal an error: 1001h, 1003h and an EMCY frame (CiA 301 §7.2.7).
     /// Returns false if the code was already active.
     pub fn raise_emcy(&mut self, code: u16, manufacturer: [u8; 5], now: Instant) -> bool {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::EMCY;
         self.s.emcy.raise(&mut self.od, code, register_bit_for(code), manufacturer, now)
     }
 
-    /// Signal an error with explicit 1001h bits.
+    /// Signal an error with explicit 1001h bits (CiA 301 bookkeeping).
     pub fn raise_emcy_with_register(
         &mut self,
         code: u16,
@@ -224,19 +292,19 @@ impl Node {
         manufacturer: [u8; 5],
         now: Instant,
     ) -> bool {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::EMCY;
         self.s.emcy.raise(&mut self.od, code, register, manufacturer, now)
     }
 
     /// An error went away (the error-reset EMCY goes when the last clears).
     pub fn clear_emcy(&mut self, code: u16, now: Instant) -> bool {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::EMCY;
         self.s.emcy.clear(&mut self.od, code, now)
     }
 
     /// Every active error went away.
     pub fn clear_all_emcy(&mut self, now: Instant) {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::EMCY;
         self.s.emcy.clear_all(&mut self.od, now)
     }
 
@@ -244,20 +312,20 @@ impl Node {
     /// personality that sends its own frame with [`Node::send_raw_emcy`]):
     /// low 16 bits the error code, high 16 bits additional information.
     pub fn record_emcy_history(&mut self, entry: u32) {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::EMCY;
         self.s.emcy.record(&mut self.od, entry)
     }
 
     /// Send an EMCY outside the error bookkeeping (personality quirks).
     pub fn send_raw_emcy(&mut self, code: u16, register: u8, bytes: [u8; 5], now: Instant) {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::EMCY;
         self.s.emcy.send_raw(code, register, bytes, now)
     }
 
     /// Restrict change-of-state detection of TPDO `n` (0-based) to the bits
     /// of `mask` (see `drivebus_pdo::Pdo::set_change_mask`).
     pub fn set_tpdo_change_mask(&mut self, n: u16, mask: Option<[u8; drivebus_can::MAX_DATA_LEN]>) -> bool {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::PDO;
         self.s.pdo.set_change_mask(n, mask)
     }
 
@@ -272,7 +340,7 @@ impl Node {
 
     /// Ask for an event-driven / acyclic TPDO (0-based number).
     pub fn request_tpdo(&mut self, n: u16) -> bool {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::PDO;
         self.s.pdo.request_tpdo(n)
     }
 
@@ -284,7 +352,7 @@ impl Node {
         app: &mut A,
         out: &mut impl TxSink,
     ) {
-        self.dirty = true;
+        self.s.link.dirty |= dirty::ALL;
         if let Some(ev) = self.s.nmt.set_state(to) {
             self.on_nmt_event(ev, now, app, out);
         }
@@ -309,11 +377,12 @@ impl Node {
             NmtCommand::ResetNode => NmtState::Initialisation(InitSubState::ResetApplication),
             NmtCommand::ResetCommunication => NmtState::Initialisation(InitSubState::ResetCommunication),
         };
-        self.s.now = now;
+        self.s.link.now = now;
         self.set_nmt_state(to, now, app, out);
     }
 
-    /// Handle one received frame.
+    /// Handle one received frame. The application's
+    /// [`filter_frame`](Application::filter_frame) sees it first.
     pub fn handle_frame<A: Application + ?Sized>(
         &mut self,
         frame: &Frame,
@@ -321,73 +390,168 @@ impl Node {
         app: &mut A,
         out: &mut impl TxSink,
     ) {
-        self.s.now = now;
-        let Some(id) = frame.std_id() else {
-            // 29-bit identifiers can carry PDOs, SYNC and SDOs when configured.
-            self.dirty = true;
-            if !self.s.nmt.state().is_initialisation() {
-                self.dispatch_configurable(frame, now, app, out);
+        let replaced;
+        let frame = match app.filter_frame(&self.od, self.node_id, frame) {
+            FrameFilter::Pass => frame,
+            FrameFilter::Replace(f) => {
+                replaced = f;
+                &replaced
             }
-            return;
+            FrameFilter::Drop => return,
         };
-        let r = self.routes[usize::from(id & 0x7FF)];
-        if r == route::LSS {
-            self.dirty = true;
-            self.on_lss_frame(frame, now, app, out);
-            return;
+        self.s.link.now = now;
+        self.dispatch_frame(frame, now, app, out);
+        if !self.s.link.requests.is_empty() {
+            self.frame_requests(now, app, out);
         }
-        let state = self.s.nmt.state();
-        if state.is_initialisation() {
-            return;
+    }
+
+    /// What the application asked for while a frame was handled goes out
+    /// with this frame's answers.
+    #[cold]
+    #[inline(never)]
+    fn frame_requests<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A, out: &mut impl TxSink) {
+        if self.run_requests(now, app, out) {
+            self.poll_services(now, app, out);
         }
-        match r {
+    }
+
+    #[inline]
+    fn dispatch_frame<A: Application + ?Sized>(
+        &mut self,
+        frame: &Frame,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        let Some(id) = frame.std_id() else {
+            return self.other_frame(route::OTHER, frame, now, app, out);
+        };
+        // The table already holds what the NMT state allows (CiA 301
+        // §7.3.2.2): no state check on the hot paths.
+        match self.routes[usize::from(id & 0x7FF)] {
             route::NONE => {}
+            route::PDO => self.pdo_frame(frame, now, app, out),
+            route::SYNC if frame.id() == self.s.sync.can_id() => self.sync_frame(frame, now, app, out),
+            r if r >= route::SDO => self.sdo_frame(usize::from(r - route::SDO), frame, now, app, out),
+            r => self.other_frame(r, frame, now, app, out),
+        }
+    }
+
+    /// An RPDO (or a remote request for a TPDO).
+    #[inline]
+    fn pdo_frame<A: Application + ?Sized>(
+        &mut self,
+        frame: &Frame,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        // RPDO timers moved, mapped values changed.
+        self.s.link.dirty |= dirty::PDO;
+        let (pdo, mut hooks) = self.s.pdo_and_app(&mut *app);
+        match pdo.handle_frame(frame, now, &mut self.od, &mut hooks, out) {
+            PdoRx::Handled => {}
+            PdoRx::Event(ev) => {
+                self.on_pdo_event(ev, now, app);
+                self.drain_pdo_events(now, app);
+            }
+            // Not a PDO after all (e.g. an RTR on an RPDO id): the other
+            // services sharing identifiers get a look.
+            PdoRx::NotPdo => self.dispatch_configurable(frame, now, app, out),
+        }
+    }
+
+    /// The rarer frames: NMT, error control, LSS, and whatever shares an
+    /// identifier or is not allowed a fast path in this state.
+    #[cold]
+    #[inline(never)]
+    fn other_frame<A: Application + ?Sized>(
+        &mut self,
+        r: u8,
+        frame: &Frame,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        match r {
+            route::LSS => {
+                self.s.link.dirty |= dirty::ALL;
+                self.on_lss_frame(frame, now, app, out);
+            }
             route::NMT | route::ERROR_CONTROL => {
-                self.dirty = true;
+                self.s.link.dirty |= dirty::NMT;
                 if let Some(ev) = self.s.nmt.handle_frame(frame, now, out) {
                     self.on_nmt_event(ev, now, app, out);
                 }
             }
-            r if r >= route::SDO => {
-                let i = usize::from(r - route::SDO);
-                if state.allows(Service::Sdo) && i < self.sdo.len() {
-                    let mut hooks = CommHooks { s: &mut self.s, app };
-                    self.sdo[i].handle_frame(frame, now, &mut self.od, &mut hooks, out);
-                    // A transfer only moves this server's own timeout: fold
-                    // it into the cached deadline rather than forcing a full
-                    // poll (an early wake-up is harmless, a late one is not).
-                    let d = self.sdo[i].poll(now, out);
-                    self.next_deadline = earliest(self.next_deadline, d);
-                    self.after_sdo_write(now, app, out);
-                }
-            }
-            route::PDO if state.allows(Service::Pdo) => {
-                self.dirty = true;
-                let rx = self.s.pdo.handle_frame(frame, now, &mut self.od, &mut AppOnly(&mut *app), out);
-                match rx {
-                    PdoRx::Event(ev) => {
-                        self.on_pdo_event(ev, now, app);
-                        self.drain_pdo_events(now, app);
-                    }
-                    // Events beyond the first are only queued when a first was returned.
-                    PdoRx::Handled => {}
-                    // Not a PDO after all (e.g. an RTR on an RPDO id): the
-                    // other services sharing identifiers get a look.
-                    PdoRx::NotPdo => self.dispatch_configurable(frame, now, app, out),
-                }
-            }
             _ => {
-                self.dirty = true;
-                self.dispatch_configurable(frame, now, app, out);
+                self.s.link.dirty |= dirty::ALL;
+                if !self.s.nmt.state().is_initialisation() {
+                    self.dispatch_configurable(frame, now, app, out);
+                }
             }
         }
     }
 
+    /// One SDO request to server `i`, through the write path.
+    #[inline]
+    fn sdo_frame<A: Application + ?Sized>(
+        &mut self,
+        i: usize,
+        frame: &Frame,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        let mut d = Dispatch { s: &mut self.s, app: &mut *app };
+        self.sdo[i].handle_frame(frame, now, &mut self.od, &mut d, out);
+        // A transfer only moves this server's own timeout: fold it into the
+        // cached deadlines rather than polling every service (an early
+        // wake-up is harmless, a late one is not).
+        let dl = self.sdo[i].poll(now, out);
+        let k = crate::poll::svc::SDO;
+        self.deadlines[k] = earliest(self.deadlines[k], dl);
+        self.next_deadline = earliest(self.next_deadline, dl);
+        self.after_write(now, app, out);
+    }
+
+    /// A SYNC: the synchronous PDOs, then the application.
+    #[inline]
+    fn sync_frame<A: Application + ?Sized>(
+        &mut self,
+        frame: &Frame,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        if let Some(ev) = self.s.sync.handle_frame(frame, now) {
+            // The consumer's timeout moved.
+            self.s.link.dirty |= dirty::SYNC;
+            if ev.length_error.is_some() {
+                self.raise_emcy(EMCY_SYNC_LEN, [0; 5], now);
+            }
+            self.on_sync(ev.counter, now, app, out);
+        }
+    }
+
     /// Rebuild the identifier → service table from the services' current
-    /// COB-IDs (after boot and after any communication object changed).
-    fn rebuild_routes(&mut self) {
+    /// COB-IDs and the NMT state (after boot, a state change and any
+    /// communication object change): a service the state does not allow
+    /// routes through the checks of `dispatch_configurable`.
+    pub(crate) fn rebuild_routes(&mut self) {
+        self.s.link.dirty &= !dirty::ROUTES;
+        let state = self.s.nmt.state();
+        self.routes_state = state;
         let t = &mut self.routes;
         t.iter_mut().for_each(|x| *x = route::NONE);
+        let lss = if self.lss.is_some() { route::LSS } else { route::NONE };
+        if state.is_initialisation() {
+            // Nothing but LSS before boot (an unconfigured node waits for it).
+            t[usize::from(drivebus_lss::MASTER_TO_SLAVE)] = lss;
+            return;
+        }
+        let gate = |svc: Service, r: u8| if state.allows(svc) { r } else { route::OTHER };
         let mut set = |id: Option<CanId>, r: u8| {
             if let Some(CanId::Standard(i)) = id {
                 t[usize::from(i & 0x7FF)] = r;
@@ -397,16 +561,16 @@ impl Node {
         // in the order dispatch_configurable checks them.
         let cfg = *self.s.pdo.config();
         for n in 0..cfg.rpdo_count {
-            set(self.s.pdo.can_id(drivebus_pdo::PdoKind::Rpdo, n), route::PDO);
+            set(self.s.pdo.can_id(drivebus_pdo::PdoKind::Rpdo, n), gate(Service::Pdo, route::PDO));
         }
         for n in 0..cfg.tpdo_count {
-            set(self.s.pdo.can_id(drivebus_pdo::PdoKind::Tpdo, n), route::PDO);
+            set(self.s.pdo.can_id(drivebus_pdo::PdoKind::Tpdo, n), gate(Service::Pdo, route::PDO));
         }
         if let Some(o) = self.od.object(0x1028) {
             for sub in o.subs().iter().skip(1) {
                 let cob = drivebus_od::le_u64(sub.bytes()) as u32;
                 if cob & 0xA000_0000 == 0 {
-                    set(CanId::standard((cob & 0x7FF) as u16), route::EMCY_CONSUMER);
+                    set(CanId::standard((cob & 0x7FF) as u16), route::OTHER);
                 }
             }
         }
@@ -414,18 +578,17 @@ impl Node {
             && let Some(cob) = self.od.get_u32(0x1012, 0)
             && cob & 0xA000_0000 == 0x8000_0000
         {
-            set(CanId::standard((cob & 0x7FF) as u16), route::TIME);
+            set(CanId::standard((cob & 0x7FF) as u16), route::OTHER);
         }
         for (i, s) in self.sdo.iter().enumerate().take(usize::from(u8::MAX - route::SDO)) {
-            set(s.rx_cob_id(), route::SDO + i as u8);
+            set(s.rx_cob_id(), gate(Service::Sdo, route::SDO + i as u8));
         }
-        set(Some(self.s.sync.can_id()), route::SYNC);
+        set(Some(self.s.sync.can_id()), gate(Service::Sync, route::SYNC));
         t[0x000] = route::NMT;
         for x in &mut t[0x701..=0x77F] {
             *x = route::ERROR_CONTROL;
         }
-        t[usize::from(drivebus_lss::MASTER_TO_SLAVE)] =
-            if self.lss.is_some() { route::LSS } else { route::NONE };
+        t[usize::from(drivebus_lss::MASTER_TO_SLAVE)] = lss;
     }
 
     /// Frames whose identifiers come from the dictionary: SYNC, TIME, EMCY
@@ -440,22 +603,15 @@ impl Node {
         let state = self.s.nmt.state();
         let fid = frame.id();
         if fid == self.s.sync.can_id() {
-            if state.allows(Service::Sync)
-                && let Some(ev) = self.s.sync.handle_frame(frame, now)
-            {
-                if ev.length_error.is_some() {
-                    self.raise_emcy(EMCY_SYNC_LEN, [0; 5], now);
-                }
-                self.on_sync(ev.counter, now, app, out);
+            if state.allows(Service::Sync) {
+                self.sync_frame(frame, now, app, out);
             }
             return;
         }
         if state.allows(Service::Sdo) {
             for i in 0..self.sdo.len() {
                 if self.sdo[i].rx_cob_id() == Some(fid) {
-                    let mut hooks = CommHooks { s: &mut self.s, app };
-                    self.sdo[i].handle_frame(frame, now, &mut self.od, &mut hooks, out);
-                    self.after_sdo_write(now, app, out);
+                    self.sdo_frame(i, frame, now, app, out);
                     return;
                 }
             }
@@ -464,378 +620,24 @@ impl Node {
             && state.allows(Service::Time)
             && let Some(tod) = t.handle_frame(frame)
         {
-            app.on_event(&mut self.od, NodeEvent::Time(tod), now);
+            app.on_event(&mut self.s.cx(&mut self.od), NodeEvent::Time(tod));
             return;
         }
         if let Some(c) = &self.s.emcy_consumer
             && state.allows(Service::Emcy)
             && let Some(rx) = c.handle_frame(frame)
         {
-            app.on_event(&mut self.od, NodeEvent::Emcy(rx), now);
+            app.on_event(&mut self.s.cx(&mut self.od), NodeEvent::Emcy(rx));
             return;
         }
         if state.allows(Service::Pdo) {
-            let rx = self.s.pdo.handle_frame(frame, now, &mut self.od, &mut AppOnly(&mut *app), out);
+            self.s.link.dirty |= dirty::PDO;
+            let (pdo, mut hooks) = self.s.pdo_and_app(&mut *app);
+            let rx = pdo.handle_frame(frame, now, &mut self.od, &mut hooks, out);
             if let PdoRx::Event(ev) = rx {
                 self.on_pdo_event(ev, now, app);
             }
             self.drain_pdo_events(now, app);
         }
-    }
-
-    /// Do the timed work due at `now`; returns when to call again.
-    pub fn poll<A: Application + ?Sized>(
-        &mut self,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) -> Option<Instant> {
-        // Nothing received, nothing written and no deadline reached since
-        // the last full poll: nothing can be due.
-        if !self.dirty
-            && self.od.generation() == self.polled_generation
-            && self.next_deadline.is_none_or(|d| now < d)
-        {
-            return self.next_deadline;
-        }
-        let next = self.poll_services(now, app, out);
-        self.dirty = false;
-        self.polled_generation = self.od.generation();
-        self.next_deadline = next;
-        next
-    }
-
-    fn poll_services<A: Application + ?Sized>(
-        &mut self,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) -> Option<Instant> {
-        self.s.now = now;
-        let state = self.s.nmt.state();
-        if state.is_initialisation() {
-            return None;
-        }
-        let mut next = self.s.nmt.poll(now, out);
-        while let Some(ev) = self.s.nmt.pop_event() {
-            self.on_nmt_event(ev, now, app, out);
-        }
-        if state.allows(Service::Sync) {
-            let sp = self.s.sync.poll(now, out);
-            if let Some(ev) = sp.produced {
-                self.on_sync(ev.counter, now, app, out);
-            }
-            if sp.timeout.is_some() {
-                app.on_event(&mut self.od, NodeEvent::SyncTimeout, now);
-            }
-            next = earliest(next, sp.next);
-        }
-        if self.s.nmt.state().allows(Service::Pdo) {
-            next = earliest(next, self.s.pdo.poll(now, &mut self.od, &mut AppOnly(&mut *app), out));
-            self.drain_pdo_events(now, app);
-        }
-        for s in &mut self.sdo {
-            next = earliest(next, s.poll(now, out));
-        }
-        if self.s.nmt.state().allows(Service::Emcy) {
-            next = earliest(next, self.s.emcy.poll(now, out));
-        } else {
-            // Stopped: EMCYs are not sent (CiA 301 §7.3.2.2) and not kept.
-            self.s.emcy.discard_queue();
-        }
-        next
-    }
-
-    fn on_sync<A: Application + ?Sized>(
-        &mut self,
-        counter: Option<u8>,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) {
-        if self.s.nmt.state().allows(Service::Pdo) {
-            self.s.pdo.on_sync(counter, now, &mut self.od, &mut AppOnly(&mut *app), out);
-            self.drain_pdo_events(now, app);
-        }
-        app.on_sync(&mut self.od, counter, now);
-    }
-
-    fn drain_pdo_events<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A) {
-        while let Some(ev) = self.s.pdo.pop_event() {
-            self.on_pdo_event(ev, now, app);
-        }
-    }
-
-    fn on_pdo_event<A: Application + ?Sized>(
-        &mut self,
-        ev: drivebus_pdo::PdoEvent,
-        now: Instant,
-        app: &mut A,
-    ) {
-        match ev {
-            drivebus_pdo::PdoEvent::RpdoResumed { .. } => {
-                self.s.emcy.clear(&mut self.od, 0x8250, now);
-            }
-            drivebus_pdo::PdoEvent::RpdoTimeout { rpdo } => {
-                app.on_event(&mut self.od, NodeEvent::RpdoTimeout { rpdo }, now);
-            }
-            _ => {}
-        }
-        if let Some(code) = ev.emcy_code() {
-            self.raise_emcy(code, [0; 5], now);
-        }
-    }
-
-    /// Follow-ups of an SDO write that could not run inside the hook: an
-    /// NMT event from reconfiguring error control, rebuilt SDO servers.
-    fn after_sdo_write<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A, out: &mut impl TxSink) {
-        if let Some(ev) = self.s.pending_nmt.take() {
-            self.on_nmt_event(ev, now, app, out);
-        }
-        if core::mem::take(&mut self.s.comm_changed) {
-            self.dirty = true;
-            self.rebuild_routes();
-        }
-        if core::mem::take(&mut self.s.sdo_params_dirty) {
-            for s in &mut self.sdo {
-                if let Some(i) = s.param_index() {
-                    s.reconfigure(&self.od, i);
-                }
-            }
-            self.rebuild_routes();
-        }
-    }
-
-    fn on_nmt_event<A: Application + ?Sized>(
-        &mut self,
-        ev: NmtEvent,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) {
-        let od = &mut self.od;
-        match ev {
-            NmtEvent::StateChanged { from, to } => {
-                if from == NmtState::Operational {
-                    // Leaving operational drops latched synchronous data and timers.
-                    self.s.pdo.reset();
-                }
-                if to == NmtState::Stopped {
-                    // SDO is not available in stopped: transfers end silently.
-                    self.sdo.iter_mut().for_each(SdoServer::reset);
-                    self.s.emcy.discard_queue();
-                }
-                app.on_event(od, NodeEvent::NmtState { from, to }, now);
-            }
-            NmtEvent::ResetApplication => {
-                app.on_event(od, NodeEvent::ResetApplication, now);
-                self.reset_groups(&[PersistGroup::Manufacturer, PersistGroup::Application]);
-                self.reset_communication(now, app, out);
-            }
-            NmtEvent::ResetCommunication => self.reset_communication(now, app, out),
-            NmtEvent::HeartbeatTimeout { node } => {
-                self.comm_error(now, app, out);
-                app.on_event(&mut self.od, NodeEvent::HeartbeatTimeout { node }, now);
-            }
-            NmtEvent::HeartbeatRecovered { node, .. } => {
-                self.comm_recovered(now);
-                app.on_event(&mut self.od, NodeEvent::HeartbeatRecovered { node }, now);
-            }
-            NmtEvent::RemoteBootup { node } => app.on_event(od, NodeEvent::RemoteBootup { node }, now),
-            NmtEvent::RemoteStateChange { node, state } => {
-                app.on_event(od, NodeEvent::RemoteState { node, state }, now)
-            }
-            NmtEvent::LifeGuardingLost => {
-                self.comm_error(now, app, out);
-                app.on_event(&mut self.od, NodeEvent::LifeGuardingLost, now);
-            }
-            NmtEvent::LifeGuardingResolved => {
-                self.comm_recovered(now);
-                app.on_event(&mut self.od, NodeEvent::LifeGuardingResolved, now);
-            }
-        }
-    }
-
-    /// A communication error: EMCY 8130h and the 1029h reaction.
-    fn comm_error<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A, out: &mut impl TxSink) {
-        self.raise_emcy(EMCY_GUARD, [0; 5], now);
-        if let Some(ev) = self.s.nmt.on_error(COMM_ERROR) {
-            self.on_nmt_event(ev, now, app, out);
-        }
-    }
-
-    fn comm_recovered(&mut self, now: Instant) {
-        let any_lost = self.s.nmt.is_life_guarding_lost()
-            || self.s.nmt.consumer_entries().any(|e| self.s.nmt.is_heartbeat_timed_out(e.node));
-        if !any_lost {
-            self.clear_emcy(EMCY_GUARD, now);
-        }
-    }
-
-    /// Reset communication (CiA 301 §7.3.2.1): communication parameters to
-    /// their power-on values, a pending LSS node-ID becomes active, then
-    /// boot-up.
-    fn reset_communication<A: Application + ?Sized>(
-        &mut self,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) {
-        if let Some(lss) = &mut self.lss {
-            let id = lss.reset_communication();
-            if id != self.node_id {
-                rebase_node_id(&mut self.od, self.node_id, id);
-                self.node_id = id;
-                self.cfg.node_id = id;
-                self.cfg.nmt.node_id = id;
-                self.s.nmt.set_node_id(id);
-            }
-        }
-        self.reset_groups(&[PersistGroup::Communication]);
-        app.on_event(&mut self.od, NodeEvent::ResetCommunication, now);
-        self.start_communication(now, app, out);
-    }
-
-    /// Defaults, then stored values, for `groups`.
-    fn reset_groups(&mut self, groups: &[PersistGroup]) {
-        self.od.restore_defaults(|_, s| groups.contains(&s.persist));
-        let slots: Vec<Slot> = groups.iter().filter_map(|g| Slot::of(*g)).collect();
-        self.load_groups(&slots);
-    }
-
-    fn load_groups(&mut self, slots: &[Slot]) {
-        for &slot in slots {
-            let group = match slot {
-                Slot::Communication => PersistGroup::Communication,
-                Slot::Application => PersistGroup::Application,
-                Slot::Manufacturer => PersistGroup::Manufacturer,
-                Slot::Lss => continue,
-            };
-            // A missing, unreadable or corrupt image leaves the defaults:
-            // better a node with defaults than no node.
-            if let Ok(Some(img)) = self.s.storage.load(slot) {
-                let _ = apply_image(&mut self.od, group, &img);
-            }
-        }
-    }
-
-    /// The node-ID stored by LSS "store configuration" wins over the configured one.
-    fn load_lss_config(&mut self) {
-        let Some(lss) = &self.lss else { return };
-        let Ok(Some(img)) = self.s.storage.load(Slot::Lss) else { return };
-        if img.len() == 2 && (drivebus_lss::is_configurable_node_id(img[0])) && img[0] != self.node_id {
-            let id = img[0];
-            let mut l = LssSlave::new(*lss.identity(), id, img[1]);
-            core::mem::swap(self.lss.as_mut().expect("checked above"), &mut l);
-            rebase_node_id(&mut self.od, self.node_id, id);
-            self.node_id = id;
-            self.cfg.node_id = id;
-            self.cfg.nmt.node_id = id;
-            self.s.nmt.set_node_id(id);
-        }
-    }
-
-    /// Re-read every service's configuration and boot (or wait for LSS).
-    fn start_communication<A: Application + ?Sized>(
-        &mut self,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) {
-        let id = self.node_id;
-        self.s.emcy.reconfigure_all(&mut self.od);
-        self.s.emcy.clear_history(&mut self.od);
-        self.s.emcy_consumer = if self.cfg.emcy_consumers > 0 {
-            let mut c = EmcyConsumer::install(&mut ObjectDictionary::new(), self.cfg.emcy_consumers);
-            c.reconfigure_all(&self.od);
-            Some(c)
-        } else {
-            None
-        };
-        self.s.sync.reconfigure_all(&self.od);
-        self.s.sync.reset_counter();
-        self.s.time = if self.cfg.time {
-            let mut t = TimeService::install(&mut ObjectDictionary::new());
-            t.reconfigure(&self.od, drivebus_sync::OD_COB_ID_TIME, 0);
-            Some(t)
-        } else {
-            None
-        };
-        self.s.pdo.reload(&self.od);
-        self.s.pdo.reset();
-        self.sdo = SdoServer::servers_from_od(&self.od, self.cfg.sdo);
-        if self.od.object(FIRST_PARAM_INDEX).is_none() {
-            // No 1200h: the default server on its pre-defined identifiers
-            // (CiA 301 §7.3.5), 600h/580h + node-ID.
-            let sid = u16::from(if (1..=127).contains(&id) { id } else { 1 });
-            let (rx, tx) = (CanId::Standard(0x600 + sid), CanId::Standard(0x580 + sid));
-            self.sdo.insert(0, SdoServer::new(rx, tx, self.cfg.sdo));
-        }
-        self.rebuild_routes();
-        self.dirty = true;
-        if !(1..=127).contains(&id) {
-            return;
-        }
-        if let Some(ev) = self.s.nmt.boot(&self.od, now, out) {
-            self.on_nmt_event(ev, now, app, out);
-        }
-    }
-
-    fn on_lss_frame<A: Application + ?Sized>(
-        &mut self,
-        frame: &Frame,
-        now: Instant,
-        app: &mut A,
-        out: &mut impl TxSink,
-    ) {
-        let Some(lss) = &mut self.lss else { return };
-        let Some(ev) = lss.handle_frame(frame, now, out) else { return };
-        match ev {
-            LssEvent::NodeIdConfigured(id) => app.on_event(&mut self.od, NodeEvent::LssNodeId(id), now),
-            LssEvent::StoreRequested { node_id, bit_timing } => {
-                let status = match self.s.storage.save(Slot::Lss, &[node_id, bit_timing]) {
-                    Ok(()) => StoreStatus::Stored,
-                    Err(_) => StoreStatus::AccessError,
-                };
-                lss.complete_store(status, out);
-            }
-            LssEvent::ActivateBitTiming { delay_ms } => {
-                let index = lss.active_bit_timing();
-                app.on_event(&mut self.od, NodeEvent::LssActivateBitTiming { index, delay_ms }, now);
-            }
-            LssEvent::ResetCommunication { .. } => {
-                // An unconfigured node got its node-ID: start up on our own (CiA 305).
-                self.s.nmt.set_node_id(lss.pending_node_id());
-                self.reset_communication(now, app, out);
-            }
-            _ => {}
-        }
-    }
-}
-
-/// Hooks for the PDO service: mapped application objects go to the
-/// application; communication objects are never PDO-mapped by services.
-struct AppOnly<'a, A: ?Sized>(&'a mut A);
-
-impl<A: Application + ?Sized> drivebus_od::ObjectHooks for AppOnly<'_, A> {
-    fn on_read(
-        &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-    ) -> Result<(), drivebus_od::SdoAbort> {
-        self.0.on_read(od, index, sub)
-    }
-    fn on_write(
-        &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-        data: &[u8],
-    ) -> Result<drivebus_od::WriteOutcome, drivebus_od::SdoAbort> {
-        self.0.on_write(od, index, sub, data)
-    }
-    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
-        self.0.after_write(od, index, sub)
     }
 }

@@ -5,9 +5,9 @@
 //! `cargo test -p drivebus-node --test bus_efficiency -- --nocapture`
 //! prints the figures recorded in BENCHMARKS.md.
 
-use drivebus_bus::{Bus, BusConfig, BusNode, Outbox};
-use drivebus_can::{Duration, Frame, Instant};
-use drivebus_node::{Node, NodeConfig, SimNode};
+use drivebus_bus::{Bus, BusConfig};
+use drivebus_can::{Device, Duration, Frame, Instant, TxSink};
+use drivebus_node::{Node, NodeConfig, NodeDevice};
 use drivebus_od::{Access, DataType, NoHooks, Object, Value};
 use drivebus_sdo::client::{Completed, Protocol, SdoClient, SdoClientConfig};
 use std::cell::RefCell;
@@ -28,22 +28,29 @@ struct Master {
     result: Rc<RefCell<Option<(Instant, Completed)>>>,
 }
 
-impl BusNode for Master {
-    fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut Outbox<'_>) {
-        self.client.handle_frame(frame, now, out);
+impl Device for Master {
+    fn handle_frame(&mut self, frame: &Frame, now: Instant, mut out: &mut dyn TxSink) {
+        self.client.handle_frame(frame, now, &mut out);
         if let Some(r) = self.client.take_result() {
             *self.result.borrow_mut() = Some((now, r.expect("transfer succeeds")));
         }
     }
-    fn poll(&mut self, now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+    fn poll(&mut self, now: Instant, mut out: &mut dyn TxSink) -> Option<Instant> {
         match self.job.take() {
             Some(Job::Download(d)) => {
-                self.client.start_download(0x2000, 0, &d, Protocol::Block, now, out).unwrap()
+                self.client.start_download(0x2000, 0, &d, Protocol::Block, now, &mut out).unwrap()
             }
-            Some(Job::Upload) => self.client.start_upload(0x2000, 0, Protocol::Block, now, out).unwrap(),
+            Some(Job::Upload) => self.client.start_upload(0x2000, 0, Protocol::Block, now, &mut out).unwrap(),
             None => {}
         }
-        self.client.poll(now, out)
+        self.client.poll(now, &mut out)
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 
@@ -55,7 +62,7 @@ fn run(job: Job) -> (f64, f64, usize) {
     let blob: Vec<u8> = (0..LEN).map(|i| (i * 31 + 7) as u8).collect();
     node.insert_object(Object::var(0x2000, "Blob", DataType::Domain, Access::Rw, Value::Bytes(blob.clone())));
     let mut bus = Bus::new(BusConfig::with_bitrate(1_000_000));
-    bus.attach(SimNode::new(node, NoHooks));
+    bus.attach(NodeDevice::new(node, NoHooks));
     bus.run_for(Duration::from_millis(1));
     let log_start = bus.log().len();
     let result = Rc::new(RefCell::new(None));

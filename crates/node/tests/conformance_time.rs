@@ -35,14 +35,8 @@ fn time_02_consumer_accepts_only_six_byte_stamps() {
 
 #[derive(Default)]
 struct Recorder(Vec<drivebus_node::NodeEvent>);
-impl drivebus_od::ObjectHooks for Recorder {}
 impl drivebus_node::Application for Recorder {
-    fn on_event(
-        &mut self,
-        _: &mut drivebus_od::ObjectDictionary,
-        e: drivebus_node::NodeEvent,
-        _: drivebus_can::Instant,
-    ) {
+    fn on_event(&mut self, _: &mut drivebus_node::AppContext<'_>, e: drivebus_node::NodeEvent) {
         self.0.push(e);
     }
 }

@@ -3,9 +3,9 @@
 
 mod common;
 use common::*;
-use drivebus_bus::{Bus, BusConfig, BusNode, Outbox};
-use drivebus_can::{Duration, Frame, Instant};
-use drivebus_node::{Node, SimNode};
+use drivebus_bus::{Bus, BusConfig};
+use drivebus_can::{Device, Duration, Frame, Instant, TxSink};
+use drivebus_node::{Node, NodeDevice};
 use drivebus_od::{NoHooks, ObjectDictionary};
 use drivebus_sdo::client::{Completed, Protocol, SdoClient, SdoClientConfig};
 use std::cell::RefCell;
@@ -17,19 +17,26 @@ struct Reader {
     result: Rc<RefCell<Option<Vec<u8>>>>,
 }
 
-impl BusNode for Reader {
-    fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut Outbox<'_>) {
-        self.client.handle_frame(frame, now, out);
+impl Device for Reader {
+    fn handle_frame(&mut self, frame: &Frame, now: Instant, mut out: &mut dyn TxSink) {
+        self.client.handle_frame(frame, now, &mut out);
         if let Some(r) = self.client.take_result() {
             let Completed::Upload(d) = r.expect("upload of 1021h") else { panic!("not an upload") };
             *self.result.borrow_mut() = Some(d);
         }
     }
-    fn poll(&mut self, now: Instant, out: &mut Outbox<'_>) -> Option<Instant> {
+    fn poll(&mut self, now: Instant, mut out: &mut dyn TxSink) -> Option<Instant> {
         if !std::mem::replace(&mut self.started, true) {
-            self.client.start_upload(0x1021, 0, Protocol::Block, now, out).unwrap();
+            self.client.start_upload(0x1021, 0, Protocol::Block, now, &mut out).unwrap();
         }
-        self.client.poll(now, out)
+        self.client.poll(now, &mut out)
+    }
+    fn start(&mut self, _now: Instant, _out: &mut dyn TxSink) {}
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 
@@ -65,7 +72,7 @@ fn eds_read_from_1021h_gives_the_same_dictionary() {
     let node = Node::new(cfg);
     let original = described(node.od());
     let mut bus = Bus::new(BusConfig::with_bitrate(1_000_000));
-    let dut = bus.attach(SimNode::new(node, NoHooks));
+    let dut = bus.attach(NodeDevice::new(node, NoHooks));
     bus.run_for(Duration::from_millis(1));
     let result = Rc::new(RefCell::new(None));
     bus.attach(Reader {
@@ -80,7 +87,7 @@ fn eds_read_from_1021h_gives_the_same_dictionary() {
     let back = drivebus_eds::to_od(&parsed.eds, 5).unwrap();
     assert_eq!(described(&back), original);
     // 1022h: ASCII.
-    let node = &bus.node::<SimNode>(dut).unwrap().node;
+    let node = &bus.node::<NodeDevice>(dut).unwrap().node;
     assert_eq!(node.od().get_u64(0x1022, 0), Some(0));
     // Node-relative COB-IDs are written as $NODEID expressions.
     assert!(text.contains("$NODEID+0x80"), "EMCY COB-ID not node-relative");

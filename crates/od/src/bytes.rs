@@ -49,6 +49,28 @@ impl ValueBytes {
         None
     }
 
+    /// The content as a zero-extended word. Inline bytes past `len` are
+    /// always zero (every write keeps them so), so no length dispatch.
+    #[inline(always)]
+    pub(crate) fn word(&self) -> u64 {
+        match self {
+            ValueBytes::Inline { buf, .. } => u64::from_le_bytes(*buf),
+            ValueBytes::Heap(v) => crate::types::le_u64(v),
+        }
+    }
+
+    /// Store a word into an inline value (the caller keeps bits past the
+    /// value's size zero); `Some(changed)`, `None` for a heap value.
+    #[inline(always)]
+    pub(crate) fn set_word(&mut self, w: u64) -> Option<bool> {
+        if let ValueBytes::Inline { buf, .. } = self {
+            let old = u64::from_le_bytes(*buf);
+            *buf = w.to_le_bytes();
+            return Some(old != w);
+        }
+        None
+    }
+
     /// Mutable view of the current content (length unchanged).
     #[inline]
     pub(crate) fn as_mut_slice(&mut self) -> &mut [u8] {

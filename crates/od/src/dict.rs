@@ -1,6 +1,7 @@
 //! The object dictionary: objects, sub-objects, lookup and checked access.
 
 use crate::bytes::ValueBytes;
+use crate::owner::{ObjectHooks, Owner, Target, WriteOutcome};
 use crate::types::{check_len, compare_le};
 use crate::{Access, DataType, ObjectCode, PersistGroup, SdoAbort, Value};
 use alloc::borrow::Cow;
@@ -39,8 +40,19 @@ pub struct SubObject {
     pub persist: PersistGroup,
     /// Largest byte length a variable-size value may take (`None`: unbounded).
     pub max_len: Option<usize>,
-    /// Reads and writes are routed through [`ObjectHooks`].
-    pub hooked: bool,
+    /// Who checks and applies writes (see [`crate::owner`]); `NONE`: the
+    /// dictionary stores them itself.
+    pub owner: Owner,
+    /// The owner refreshes the value before every read ([`ObjectHooks::on_read`]).
+    pub live: bool,
+    /// The application sees writes first and may veto them, though another
+    /// owner holds the entry (a drive refusing a 1010h store while enabled).
+    pub watched: bool,
+    /// Changes of the value count in [`ObjectDictionary::generation`]
+    /// (default: yes). A device unmarks what no poller watches, so writes
+    /// to those entries do not wake it (only entries mapped into
+    /// event-driven TPDOs stay marked in a node).
+    pub marked: bool,
     /// The DefaultValue text contained `$NODEID` (CiA 306): kept for EDS export.
     pub node_id_relative: bool,
     value: ValueBytes,
@@ -83,7 +95,10 @@ impl SubObject {
             default,
             persist: PersistGroup::Volatile,
             max_len: None,
-            hooked: false,
+            owner: Owner::NONE,
+            live: false,
+            watched: false,
+            marked: true,
             node_id_relative: false,
         }
     }
@@ -99,10 +114,29 @@ impl SubObject {
         self.high_limit = high.encode(self.data_type).ok();
         self
     }
-    /// Route reads and writes through the hooks.
+    /// Owned by whoever installs it, reads and writes going through the
+    /// hooks ([`Owner::HOOKED`], live): the way a service marks the
+    /// communication objects it must check, apply or refresh.
     pub fn hooked(mut self) -> Self {
-        self.hooked = true;
+        self.owner = Owner::HOOKED;
+        self.live = true;
         self
+    }
+    /// Owned by `owner` (writes checked and applied by it).
+    pub fn owned(mut self, owner: Owner) -> Self {
+        self.owner = owner;
+        self
+    }
+    /// Refreshed by its owner before every read.
+    pub fn live(mut self) -> Self {
+        self.live = true;
+        self
+    }
+    /// Reads or writes leave the fast path (an owner, a watcher or a live
+    /// value): a raw copy is not equivalent to a checked access.
+    #[inline]
+    pub fn is_hooked(&self) -> bool {
+        self.owner != Owner::NONE || self.watched || self.live
     }
     /// Override the persistence group.
     pub fn persist(mut self, group: PersistGroup) -> Self {
@@ -144,6 +178,7 @@ impl SubObject {
     }
 
     /// Check `data` against type, length and limits (no access check).
+    #[inline]
     pub fn validate(&self, data: &[u8]) -> Result<(), SdoAbort> {
         check_len(self.data_type, data.len())?;
         if let Some(max) = self.max_len
@@ -285,74 +320,6 @@ impl Object {
     }
 }
 
-/// What a write hook decided.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum WriteOutcome {
-    /// Store the written bytes as the new value.
-    Store,
-    /// The hook has applied the write itself (possibly storing other values).
-    Handled,
-}
-
-/// Application behaviour attached to hooked sub-objects.
-///
-/// Hooks live outside the dictionary and get it passed in, so a hook may
-/// read or update other entries (e.g. 1003h sub 0 clearing the history).
-pub trait ObjectHooks {
-    /// Before a hooked value is read (SDO upload, PDO sampling, export): may
-    /// refresh the stored value with [`ObjectDictionary::set_raw`], or refuse.
-    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
-        let _ = (od, index, sub);
-        Ok(())
-    }
-    /// Before a write to a hooked value is stored, after type, length and
-    /// limit checks passed. Return the abort to refuse it.
-    fn on_write(
-        &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-        data: &[u8],
-    ) -> Result<WriteOutcome, SdoAbort> {
-        let _ = (od, index, sub, data);
-        Ok(WriteOutcome::Store)
-    }
-    /// After a write that [`ObjectHooks::on_write`] answered with `Store`
-    /// was stored: react to the new value (reconfigure a service).
-    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
-        let _ = (od, index, sub);
-    }
-}
-
-/// Hooks that do nothing: a dictionary of plain values.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NoHooks;
-impl ObjectHooks for NoHooks {}
-
-impl<A: ObjectHooks, B: ObjectHooks> ObjectHooks for (A, B) {
-    /// The first hook set that does not answer `Store` decides; a refusal from either refuses.
-    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
-        self.0.on_read(od, index, sub)?;
-        self.1.on_read(od, index, sub)
-    }
-    fn on_write(
-        &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-        data: &[u8],
-    ) -> Result<WriteOutcome, SdoAbort> {
-        match self.0.on_write(od, index, sub, data)? {
-            WriteOutcome::Handled => Ok(WriteOutcome::Handled),
-            WriteOutcome::Store => self.1.on_write(od, index, sub, data),
-        }
-    }
-    fn after_write(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
-        self.0.after_write(od, index, sub);
-        self.1.after_write(od, index, sub);
-    }
-}
-
 /// A runtime-built object dictionary, objects sorted by index.
 #[derive(Clone, Debug, Default)]
 pub struct ObjectDictionary {
@@ -435,13 +402,13 @@ impl ObjectDictionary {
                 self.objects.insert(i, obj);
             }
         }
-        self.generation = self.generation.wrapping_add(1);
+        self.bump_all();
     }
 
     /// Remove an object. Invalidates every [`EntryRef`].
     pub fn remove(&mut self, index: u16) -> Option<Object> {
         let i = search(&self.keys, index).ok()?;
-        self.generation = self.generation.wrapping_add(1);
+        self.bump_all();
         self.keys.remove(i);
         Some(self.objects.remove(i))
     }
@@ -460,11 +427,33 @@ impl ObjectDictionary {
         search(&self.keys, index).ok().map(move |i| &mut self.objects[i])
     }
 
-    /// Counter bumped by every change of a value or of the structure. Lets a
-    /// poller (change-of-state TPDOs) skip work when nothing was written.
+    /// Counter bumped by every change of a [`SubObject::marked`] value
+    /// (every value, unless a device unmarked some) and of the structure.
+    /// Lets a poller (change-of-state TPDOs) skip work when nothing it
+    /// watches was written.
     #[inline]
     pub fn generation(&self) -> u64 {
         self.generation
+    }
+
+    /// Marks or unmarks one entry (see [`SubObject::marked`]).
+    pub fn set_marked(&mut self, r: EntryRef, on: bool) {
+        self.objects[r.obj as usize].subs[r.sub as usize].marked = on;
+    }
+
+    /// Marks or unmarks every entry.
+    pub fn mark_all(&mut self, on: bool) {
+        for o in &mut self.objects {
+            for s in &mut o.subs {
+                s.marked = on;
+            }
+        }
+    }
+
+    /// A change of the structure (or of an unknown set of values).
+    #[inline]
+    fn bump_all(&mut self) {
+        self.generation = self.generation.wrapping_add(1);
     }
 
     /// Resolve `(index, sub)`: `0602 0000` or `0609 0011` if absent.
@@ -499,7 +488,7 @@ impl ObjectDictionary {
     /// `set_*`/`write*` paths to change its value.
     pub fn get_mut(&mut self, index: u16, sub: u8) -> Option<&mut SubObject> {
         let r = self.find(index, sub).ok()?;
-        self.generation = self.generation.wrapping_add(1);
+        self.bump_all();
         Some(&mut self.objects[r.obj as usize].subs[r.sub as usize])
     }
 
@@ -512,16 +501,54 @@ impl ObjectDictionary {
     /// Overwrite the stored bytes without checks (the application pushing a
     /// live value, a service updating its own object). The caller owns the
     /// invariant that `data` is a valid encoding for the type.
-    #[inline]
+    #[inline(always)]
     pub fn set_raw(&mut self, r: EntryRef, data: &[u8]) {
-        let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
-        if !same_bytes(v, data) {
-            if v.len() == data.len() {
-                copy_small(v.as_mut_slice(), data);
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        // The usual numeric sizes: one word compare and store.
+        if let Some(changed) = s.value.set_inline(data) {
+            self.generation = self.generation.wrapping_add(u64::from(changed & s.marked));
+            return;
+        }
+        self.set_raw_slow(r, data);
+    }
+
+    /// [`set_raw`](Self::set_raw) for heap values and length changes.
+    #[inline(never)]
+    fn set_raw_slow(&mut self, r: EntryRef, data: &[u8]) {
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        if !same_bytes(&s.value, data) {
+            if s.value.len() == data.len() {
+                copy_small(s.value.as_mut_slice(), data);
             } else {
-                v.set(data);
+                s.value.set(data);
             }
-            self.generation = self.generation.wrapping_add(1);
+            self.generation = self.generation.wrapping_add(u64::from(s.marked));
+        }
+    }
+
+    /// The value of a fixed-size entry (≤ 8 bytes) as a zero-extended
+    /// little-endian word, without a length dispatch (PDO packing).
+    #[inline(always)]
+    pub fn word(&self, r: EntryRef) -> u64 {
+        self.entry(r).value.word()
+    }
+
+    /// Overwrite a fixed-size value (≤ 8 bytes) from a word whose bits above
+    /// the value's size are zero (PDO unpacking). Like [`set_le`] without a
+    /// length dispatch; the caller owns the size invariant.
+    ///
+    /// [`set_le`]: ObjectDictionary::set_le
+    #[inline(always)]
+    pub fn set_word(&mut self, r: EntryRef, w: u64) {
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        match s.value.set_word(w) {
+            Some(changed) => {
+                self.generation = self.generation.wrapping_add(u64::from(changed & s.marked));
+            }
+            None => {
+                let n = s.value.len().min(8);
+                self.set_le_slow(r, &w.to_le_bytes()[..n]);
+            }
         }
     }
 
@@ -529,9 +556,12 @@ impl ObjectDictionary {
     /// change of length. Panics in debug builds if the size differs.
     #[inline(always)]
     pub fn set_le(&mut self, r: EntryRef, data: &[u8]) {
-        let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
-        match v.set_inline(data) {
-            Some(changed) => self.generation = self.generation.wrapping_add(u64::from(changed)),
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        match s.value.set_inline(data) {
+            Some(changed) => {
+                // Branch-free: counts only a change of a marked entry.
+                self.generation = self.generation.wrapping_add(u64::from(changed & s.marked));
+            }
             None => self.set_le_slow(r, data),
         }
     }
@@ -540,10 +570,10 @@ impl ObjectDictionary {
     #[cold]
     #[inline(never)]
     fn set_le_slow(&mut self, r: EntryRef, data: &[u8]) {
-        let v = &mut self.objects[r.obj as usize].subs[r.sub as usize].value;
-        if !same_bytes(v, data) {
-            copy_small(v.as_mut_slice(), data);
-            self.generation = self.generation.wrapping_add(1);
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        if !same_bytes(&s.value, data) {
+            copy_small(s.value.as_mut_slice(), data);
+            self.generation = self.generation.wrapping_add(u64::from(s.marked));
         }
     }
 
@@ -574,7 +604,8 @@ impl ObjectDictionary {
         Ok(())
     }
 
-    /// SDO-style checked read: access, then the read hook, then the bytes.
+    /// SDO-style checked read: access, then the owner's refresh of a live
+    /// entry, then the bytes.
     pub fn read<H: ObjectHooks + ?Sized>(
         &mut self,
         hooks: &mut H,
@@ -586,22 +617,32 @@ impl ObjectDictionary {
         Ok(self.bytes(r))
     }
 
-    /// Checked read through a resolved handle: access and read hook. The
-    /// bytes are then at [`ObjectDictionary::bytes`].
+    /// Checked read through a resolved handle: access, and the owner's
+    /// refresh of a live entry. The bytes are then at
+    /// [`ObjectDictionary::bytes`].
     #[inline]
     pub fn read_ref<H: ObjectHooks + ?Sized>(&mut self, hooks: &mut H, r: EntryRef) -> Result<(), SdoAbort> {
         let e = self.entry(r);
         if !e.access.readable() {
             return Err(SdoAbort::READ_WRITE_ONLY);
         }
-        if e.hooked {
-            let (index, sub) = self.index_of(r);
-            hooks.on_read(self, index, sub)?;
+        if e.live {
+            let at = self.target(r);
+            hooks.on_read(self, &at)?;
         }
         Ok(())
     }
 
-    /// SDO-style checked write: access, type/length/limits, write hook, store.
+    /// What a hook is told about an entry.
+    #[inline]
+    pub fn target(&self, r: EntryRef) -> Target {
+        let o = &self.objects[r.obj as usize];
+        let s = &o.subs[r.sub as usize];
+        Target { r, index: o.index, sub: s.sub, owner: s.owner, watched: s.watched }
+    }
+
+    /// SDO-style checked write: the whole write path of [`crate::owner`]
+    /// (find, access, type/length/limits, owner check, store, owner apply).
     pub fn write<H: ObjectHooks + ?Sized>(
         &mut self,
         hooks: &mut H,
@@ -613,7 +654,7 @@ impl ObjectDictionary {
         self.write_ref(hooks, r, data)
     }
 
-    /// Checked write through a resolved handle.
+    /// Checked write through a resolved handle (steps 2–7).
     #[inline]
     pub fn write_ref<H: ObjectHooks + ?Sized>(
         &mut self,
@@ -627,8 +668,10 @@ impl ObjectDictionary {
         self.write_local(hooks, r, data)
     }
 
-    /// Write by the local device or a PDO (no SDO access check, but type,
-    /// limits and hooks apply). RPDO writes use this after checking mapping.
+    /// Write by the local device or a PDO: no access check, but type,
+    /// length, limits and the owner apply (steps 3–7). RPDO writes use this
+    /// after checking the mapping.
+    #[inline]
     pub fn write_local<H: ObjectHooks + ?Sized>(
         &mut self,
         hooks: &mut H,
@@ -637,17 +680,18 @@ impl ObjectDictionary {
     ) -> Result<(), SdoAbort> {
         let e = self.entry(r);
         e.validate(data)?;
-        if e.hooked {
-            let (index, sub) = self.index_of(r);
-            if hooks.on_write(self, index, sub, data)? == WriteOutcome::Handled {
-                self.generation = self.generation.wrapping_add(1);
-                return Ok(());
-            }
+        if e.owner == Owner::NONE && !e.watched {
             self.set_raw(r, data);
-            hooks.after_write(self, index, sub);
             return Ok(());
         }
-        self.set_raw(r, data);
+        let at = self.target(r);
+        match hooks.check_write(self, &at, data)? {
+            WriteOutcome::Handled => self.bump_all(),
+            WriteOutcome::Store => {
+                self.set_raw(r, data);
+                hooks.apply_write(self, &at);
+            }
+        }
         Ok(())
     }
 
@@ -661,7 +705,7 @@ impl ObjectDictionary {
                 }
             }
         }
-        self.generation = self.generation.wrapping_add(1);
+        self.bump_all();
     }
 
     /// Every `(index, sub, bytes)` whose persistence group is `group` and whose
@@ -674,108 +718,5 @@ impl ObjectDictionary {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn od() -> ObjectDictionary {
-        let mut od = ObjectDictionary::new();
-        od.insert(Object::var(
-            0x1000,
-            "Device type",
-            DataType::Unsigned32,
-            Access::Ro,
-            Value::U32(0x0002_0192),
-        ));
-        od.insert(
-            Object::var(0x2000, "Setpoint", DataType::Integer16, Access::Rw, Value::I16(0)).with_sub(
-                SubObject::new(0, "Setpoint", DataType::Integer16, Access::Rw, Value::I16(0))
-                    .limits(Value::I16(-100), Value::I16(100))
-                    .mappable(),
-            ),
-        );
-        od.insert(Object::var(0x2001, "Secret", DataType::Unsigned8, Access::Wo, Value::U8(0)));
-        od.insert(
-            Object::record(0x1018, "Identity")
-                .with_sub(SubObject::new(1, "Vendor-ID", DataType::Unsigned32, Access::Ro, Value::U32(0x9A)))
-                .with_sub(SubObject::new(4, "Serial", DataType::Unsigned32, Access::Ro, Value::U32(7))),
-        );
-        od
-    }
-
-    #[test]
-    fn branch_free_search_matches_binary_search() {
-        for n in 0..40u16 {
-            let keys: Vec<u16> = (0..n).map(|i| i * 3 + 1).collect();
-            for k in 0..(n * 3 + 4) {
-                assert_eq!(search(&keys, k), keys.binary_search(&k), "n={n} k={k}");
-            }
-        }
-        assert!(same_bytes(&[1, 2, 3], &[1, 2, 3]) && !same_bytes(&[1, 2, 3], &[1, 2, 4]));
-        assert!(!same_bytes(&[1], &[1, 0]) && same_bytes(&[7; 12], &[7; 12]));
-    }
-
-    #[test]
-    fn lookup_aborts() {
-        let od = od();
-        assert_eq!(od.find(0x1001, 0), Err(SdoAbort::NO_OBJECT));
-        assert_eq!(od.find(0x1018, 2), Err(SdoAbort::NO_SUB_INDEX));
-        let r = od.find(0x1018, 4).unwrap();
-        assert_eq!(od.index_of(r), (0x1018, 4));
-        assert_eq!(od.get_u32(0x1018, 0), Some(4), "sub 0 tracks the highest sub-index");
-    }
-
-    #[test]
-    fn write_checks_in_order() {
-        let mut od = od();
-        let h = &mut NoHooks;
-        assert_eq!(od.write(h, 0x1000, 0, &[0; 4]), Err(SdoAbort::WRITE_READ_ONLY));
-        assert_eq!(od.read(h, 0x2001, 0).map(<[u8]>::to_vec), Err(SdoAbort::READ_WRITE_ONLY));
-        assert_eq!(od.write(h, 0x2000, 0, &[0; 4]), Err(SdoAbort::DATA_TOO_LONG));
-        assert_eq!(od.write(h, 0x2000, 0, &[0]), Err(SdoAbort::DATA_TOO_SHORT));
-        assert_eq!(od.write(h, 0x2000, 0, &101i16.to_le_bytes()), Err(SdoAbort::VALUE_TOO_HIGH));
-        assert_eq!(od.write(h, 0x2000, 0, &(-101i16).to_le_bytes()), Err(SdoAbort::VALUE_TOO_LOW));
-        let g = od.generation();
-        od.write(h, 0x2000, 0, &(-100i16).to_le_bytes()).unwrap();
-        assert!(od.generation() != g);
-        assert_eq!(od.get_i64(0x2000, 0), Some(-100));
-    }
-
-    struct Veto;
-    impl ObjectHooks for Veto {
-        fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
-            let r = od.find(index, sub)?;
-            od.set_raw(r, &42i16.to_le_bytes());
-            Ok(())
-        }
-        fn on_write(
-            &mut self,
-            _: &mut ObjectDictionary,
-            _: u16,
-            _: u8,
-            data: &[u8],
-        ) -> Result<WriteOutcome, SdoAbort> {
-            if data == 13i16.to_le_bytes() { Err(SdoAbort::DEVICE_STATE) } else { Ok(WriteOutcome::Store) }
-        }
-    }
-
-    #[test]
-    fn hooks_supply_and_veto() {
-        let mut od = od();
-        od.get_mut(0x2000, 0).unwrap().hooked = true;
-        assert_eq!(od.read(&mut Veto, 0x2000, 0).unwrap(), 42i16.to_le_bytes());
-        assert_eq!(od.write(&mut Veto, 0x2000, 0, &13i16.to_le_bytes()), Err(SdoAbort::DEVICE_STATE));
-        od.write(&mut Veto, 0x2000, 0, &12i16.to_le_bytes()).unwrap();
-        assert_eq!(od.get_i64(0x2000, 0), Some(12));
-    }
-
-    #[test]
-    fn restore_defaults_by_group() {
-        let mut od = od();
-        od.write(&mut NoHooks, 0x2000, 0, &5i16.to_le_bytes()).unwrap();
-        assert_eq!(od.get(0x2000, 0).unwrap().persist, PersistGroup::Manufacturer);
-        od.restore_defaults(|_, s| s.persist == PersistGroup::Communication);
-        assert_eq!(od.get_i64(0x2000, 0), Some(5));
-        od.restore_defaults(|_, s| s.persist == PersistGroup::Manufacturer);
-        assert_eq!(od.get_i64(0x2000, 0), Some(0));
-    }
-}
+#[path = "dict_tests.rs"]
+mod tests;

@@ -1,12 +1,12 @@
 //! Typed hooks: application code that works with [`Value`]s rather than
 //! little-endian bytes.
 
-use crate::{ObjectDictionary, ObjectHooks, SdoAbort, Value, WriteOutcome};
+use crate::{ObjectDictionary, ObjectHooks, SdoAbort, Target, Value, WriteOutcome};
 
 /// Hooks written against decoded values. Wrap in [`Typed`] to use them
 /// wherever [`ObjectHooks`] are expected.
 pub trait TypedHooks {
-    /// The live value of a hooked object, or `None` to keep the stored one.
+    /// The live value of a live entry, or `None` to keep the stored one.
     fn read(&mut self, index: u16, sub: u8) -> Result<Option<Value>, SdoAbort> {
         let _ = (index, sub);
         Ok(None)
@@ -25,23 +25,22 @@ pub trait TypedHooks {
 pub struct Typed<T>(pub T);
 
 impl<T: TypedHooks> ObjectHooks for Typed<T> {
-    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
-        if let Some(v) = self.0.read(index, sub)? {
-            od.set_value(index, sub, &v)?;
+    fn on_read(&mut self, od: &mut ObjectDictionary, at: &Target) -> Result<(), SdoAbort> {
+        if let Some(v) = self.0.read(at.index, at.sub)? {
+            let bytes = v.encode(od.entry(at.r).data_type)?;
+            od.set_raw(at.r, &bytes);
         }
         Ok(())
     }
 
-    fn on_write(
+    fn check_write(
         &mut self,
         od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
+        at: &Target,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
-        let dt = od.get(index, sub).ok_or(SdoAbort::NO_OBJECT)?.data_type;
-        let value = Value::decode(dt, data)?;
-        self.0.write(index, sub, &value)?;
+        let value = Value::decode(od.entry(at.r).data_type, data)?;
+        self.0.write(at.index, at.sub, &value)?;
         Ok(WriteOutcome::Store)
     }
 }

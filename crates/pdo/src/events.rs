@@ -107,6 +107,10 @@ impl EventQueue {
         self.buf[(self.head + self.len) % EVENT_QUEUE_LEN] = Some(e);
         self.len += 1;
     }
+    #[inline]
+    pub(crate) fn is_empty(&self) -> bool {
+        self.len == 0
+    }
     pub(crate) fn pop(&mut self) -> Option<PdoEvent> {
         if self.len == 0 {
             return None;

@@ -38,7 +38,7 @@ pub(crate) struct Seg {
     pub bit_len: u8,
     /// Size of the object's value in bytes.
     pub size: u8,
-    /// Not hooked, no limits, not BOOLEAN: a raw copy is equivalent to a
+    /// No owner, watcher or live value, no limits, not BOOLEAN: a raw copy is equivalent to a
     /// checked write/read, so the fast path may skip the checks.
     pub plain: bool,
 }
@@ -49,6 +49,8 @@ pub(crate) struct Copy {
     pub r: EntryRef,
     pub off: u8,
     pub len: u8,
+    /// The value's bits in the frame as a word: `(frame >> 8·off) & mask`.
+    pub mask: u64,
 }
 
 /// A resolved mapping: what the frame path walks (no search, no allocation).
@@ -63,7 +65,7 @@ pub(crate) struct Plan {
     pub aligned: bool,
     /// Every object entry is plain (see [`Seg::plain`]).
     pub all_plain: bool,
-    /// Some entry needs the read hook before sampling.
+    /// Some entry is live: its owner refreshes it before sampling.
     pub hooked: bool,
 }
 
@@ -170,11 +172,11 @@ pub(crate) fn resolve(
             let r = od.find(index, sub)?;
             let s = od.entry(r);
             let size = s.data_type.fixed_size().unwrap_or(0);
-            let plain = !s.hooked
+            let plain = !s.is_hooked()
                 && s.low_limit.is_none()
                 && s.high_limit.is_none()
                 && s.data_type != DataType::Boolean;
-            plan.hooked |= s.hooked;
+            plan.hooked |= s.live;
             Seg { r: Some(r), bit_off: off, bit_len: bits, size: size as u8, plain }
         };
         if seg.bit_off % 8 != 0 || u16::from(seg.bit_len) != 8 * u16::from(seg.size) {
@@ -182,36 +184,14 @@ pub(crate) fn resolve(
         }
         plan.all_plain &= seg.plain;
         if let Some(r) = seg.r {
-            plan.copies.push(Copy { r, off: (seg.bit_off / 8) as u8, len: seg.size });
+            let mask = if seg.size >= 8 { u64::MAX } else { (1u64 << (8 * u32::from(seg.size))) - 1 };
+            plan.copies.push(Copy { r, off: (seg.bit_off / 8) as u8, len: seg.size, mask });
         }
         off += u16::from(bits);
         plan.segs.push(seg);
     }
     plan.len = off.div_ceil(8) as u8;
     Ok(plan)
-}
-
-/// `dst.copy_from_slice(src)` with the usual object sizes as fixed-size
-/// moves (no `memcpy` call on the frame path); unequal lengths do nothing.
-#[inline(always)]
-fn copy_small(dst: &mut [u8], src: &[u8]) {
-    if dst.len() != src.len() {
-        return;
-    }
-    match dst.len() {
-        1 => dst[0] = src[0],
-        2 => {
-            if let (Ok(d), Ok(s)) = (<&mut [u8; 2]>::try_from(dst), <&[u8; 2]>::try_from(src)) {
-                *d = *s;
-            }
-        }
-        4 => {
-            if let (Ok(d), Ok(s)) = (<&mut [u8; 4]>::try_from(dst), <&[u8; 4]>::try_from(src)) {
-                *d = *s;
-            }
-        }
-        _ => dst.copy_from_slice(src),
-    }
 }
 
 /// Fill `buf` (zeroed by the caller) with the mapped values (TPDO sampling). Hooked objects are
@@ -238,13 +218,13 @@ pub(crate) fn sample<H: ObjectHooks + ?Sized>(
         }
     }
     if plan.aligned {
-        // Dummies stay zero: callers pass a zeroed buffer.
+        // Whole-byte entries: OR the values' words into the frame word
+        // (dummies stay zero: callers pass a zeroed buffer).
+        let mut w = u64::from_le_bytes(*buf);
         for c in &plan.copies {
-            let off = usize::from(c.off);
-            if let Some(dst) = buf.get_mut(off..off + usize::from(c.len)) {
-                copy_small(dst, od.bytes(c.r));
-            }
+            w |= (od.word(c.r) & c.mask) << (8 * u32::from(c.off));
         }
+        *buf = w.to_le_bytes();
     } else {
         for s in &plan.segs {
             if let Some(r) = s.r {
@@ -265,15 +245,14 @@ pub(crate) fn apply<H: ObjectHooks + ?Sized>(
     hooks: &mut H,
     rpdo: u16,
     events: &mut EventQueue,
-    data: &[u8],
+    data: &[u8; MAX_DATA_LEN],
 ) {
     if plan.aligned && plan.all_plain {
-        // Fast path: in-place copies, equivalent to checked writes for plain objects.
+        // Fast path: each value is a masked shift of the frame word, stored
+        // in place; equivalent to checked writes for plain objects.
+        let w = u64::from_le_bytes(*data);
         for c in &plan.copies {
-            let off = usize::from(c.off);
-            if let Some(src) = data.get(off..off + usize::from(c.len)) {
-                od.set_le(c.r, src);
-            }
+            od.set_word(c.r, (w >> (8 * u32::from(c.off))) & c.mask);
         }
         return;
     }

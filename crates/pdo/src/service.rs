@@ -379,10 +379,32 @@ impl Pdo {
         }
     }
 
+    /// Whether events are queued (a cheap check before draining them).
+    #[inline]
+    pub fn has_events(&self) -> bool {
+        !self.events.is_empty()
+    }
+
     /// Next queued event (events from [`Pdo::on_sync`], [`Pdo::poll`] and
     /// any beyond the first of [`Pdo::handle_frame`]). Drain after each call.
     pub fn pop_event(&mut self) -> Option<PdoEvent> {
         self.events.pop()
+    }
+
+    /// The entries the active event-driven TPDOs (254/255) map: a change of
+    /// one of them is a change of state the next [`Pdo::poll`] must see (a
+    /// node marks them so it polls the PDO service only then).
+    pub fn event_mapped(&self) -> impl Iterator<Item = drivebus_od::EntryRef> + '_ {
+        self.event_tpdos
+            .iter()
+            .filter_map(|&n| self.tpdos.get(usize::from(n)))
+            .flat_map(|t| t.s.plan.segs.iter().filter_map(|s| s.r))
+    }
+
+    /// Some active event-driven TPDO maps a live entry (refreshed by its
+    /// owner on every sample): such a TPDO can change without a write.
+    pub fn event_live(&self) -> bool {
+        self.event_tpdos.iter().filter_map(|&n| self.tpdos.get(usize::from(n))).any(|t| t.s.plan.hooked)
     }
 
     /// Events dropped because the queue was full.

@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use drivebus_can::{CanId, Frame};
-use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort, Value, WriteOutcome};
+use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort, Target, Value, WriteOutcome};
 use drivebus_pdo::*;
 use proptest::strategy::Strategy;
 
@@ -321,19 +321,17 @@ struct AppHooks {
     live: u16,
 }
 impl ObjectHooks for AppHooks {
-    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
+    fn on_read(&mut self, od: &mut ObjectDictionary, at: &Target) -> Result<(), SdoAbort> {
         if self.live == 0xDEAD {
             return Err(SdoAbort::HARDWARE_ERROR);
         }
-        let r = od.find(index, sub)?;
-        od.set_raw(r, &self.live.to_le_bytes());
+        od.set_raw(at.r, &self.live.to_le_bytes());
         Ok(())
     }
-    fn on_write(
+    fn check_write(
         &mut self,
         _: &mut ObjectDictionary,
-        _: u16,
-        _: u8,
+        _: &Target,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
         if data == [0xFF, 0xFF] { Err(SdoAbort::DEVICE_STATE) } else { Ok(WriteOutcome::Store) }

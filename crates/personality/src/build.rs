@@ -1,22 +1,24 @@
 //! Building a running drive from a personality: the framework.
 //!
-//! [`build`] turns a [`Profile`] into a [`PersonalityNode`] — a CiA 301
-//! [`Node`] whose dictionary comes from the profile's EDS, a CiA 402
-//! [`Drive`] installed on it, the profile's default PDOs as factory
-//! defaults, and the personality's [`Behaviour`] composed in front of the
-//! drive. A `PersonalityNode` is a [`drivebus_bus::BusNode`], so it goes straight onto the
-//! virtual bus:
+//! [`build`] turns a [`Profile`] into a `NodeDevice<Personality>` — a CiA
+//! 301 [`Node`] whose dictionary comes from the profile's EDS, and as its
+//! application a [`Personality`]: a CiA 402 [`Drive`] installed on the node
+//! with the profile's default PDOs as factory defaults, and the
+//! personality's [`Behaviour`] in front of the drive. It is a
+//! `drivebus_can::Device`, so any host runs it (the virtual bus, the
+//! real-time host on a real bus):
 //!
 //! ```
 //! use drivebus_bus::{Bus, BusConfig};
 //! use drivebus_can::Duration;
-//! use drivebus_personality::{PersonalityNode, Profile};
+//! use drivebus_node::NodeDevice;
+//! use drivebus_personality::{Personality, Profile};
 //!
 //! let mut bus = Bus::new(BusConfig::zero_time());
 //! let id = bus.attach(Profile::Generic.build(3).unwrap());
 //! bus.run_for(Duration::from_millis(1));
-//! let d = bus.node::<PersonalityNode>(id).unwrap();
-//! assert_eq!(d.drive.statusword() & 0x4F, 0x40); // switch on disabled
+//! let d = bus.node::<NodeDevice<Personality>>(id).unwrap();
+//! assert_eq!(d.app.drive.statusword() & 0x4F, 0x40); // switch on disabled
 //! assert_eq!(d.node.od().get_u32(0x1000, 0), Some(0x0002_0192));
 //! ```
 //!
@@ -35,41 +37,54 @@
 //! 5. 6502h and 60E3h set to what the profile reports;
 //! 6. the profile's PDO defaults written as value *and* default (1011h
 //!    restore brings them back);
-//! 7. the objects named by [`Behaviour::hooked_objects`] are hooked so the
-//!    behaviour sees their reads and writes.
+//! 7. the objects named by [`Behaviour::hooked_objects`] reach the
+//!    behaviour: it owns the plain ones and watches (may veto) those a
+//!    CiA 301 service or the drive owns; their reads reach it too.
 //!
 //! # How a behaviour is composed with the drive
 //!
-//! For every hooked read/write the node asks its application; the
-//! application of a `PersonalityNode` is the behaviour *first*, then the
-//! drive ([`Verdict`]). Received frames pass [`Behaviour::filter_rx`] before
-//! the node sees them. After every drive step the behaviour may patch live
-//! values ([`Behaviour::after_step`]: statusword bits 8/9/14/15, the
-//! manufacturer-mode display). Fault codes the drive raises are turned into
-//! EMCY frames by [`Behaviour::emcy`] (code, error register, manufacturer
-//! bytes). Boot-time frames (and a local NMT command, [`Action::Nmt`]) come
-//! from [`Behaviour::on_boot`]. [`PersonalityNode::behaviour_mut`] reaches
-//! the behaviour's concrete type at run time ([`Behaviour::as_any_mut`]).
+//! The node hands the [`Personality`] the writes of the objects it owns
+//! (the drive's, the behaviour's) and watches, once each on the write path
+//! (`DEVELOPERS.md`): the behaviour decides *first* ([`Verdict`]), then the
+//! drive's entry checks; after the store the drive applies, then
+//! [`Behaviour::after_write`]. The 6060h check (manufacturer modes
+//! included, [`Behaviour::manufacturer_mode`] →
+//! `DriveConfig::manufacturer_modes`) is the drive's. Received frames pass
+//! [`Behaviour::filter_rx`] before the node sees them. After every drive
+//! step the behaviour may patch live values ([`Behaviour::after_step`]:
+//! statusword bits 8/9/14/15). Fault codes the drive raises are turned into
+//! EMCY frames by [`Behaviour::emcy`]. What a behaviour wants from the node
+//! (EMCY, a TPDO, a local NMT command, …) it queues as a
+//! [`drivebus_node::Request`] ([`Context::request`]), the one way requests
+//! reach the node. [`Personality::behaviour_mut`] reaches the behaviour's
+//! concrete type at run time ([`Behaviour::as_any_mut`]).
 
 use crate::{PdoDefault, Profile, ProfileInfo};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::{Frame, Instant};
-use drivebus_cia402::drive::{Drive, DriveConfig, Injection, ModeHandler, op};
+use drivebus_cia402::drive::{Drive, DriveConfig, ModeHandler, op};
 use drivebus_cia402::homing::{HomingMethod, HomingMode, HomingRegistry, StandardMethod};
 use drivebus_cia402::interp::{CspMode, CstMode, CsvMode, IpMode};
 use drivebus_nmt::{CommandSet, NmtCommand};
-use drivebus_node::{Identity, MemoryStorage, Node, NodeConfig, NodeEvent, Storage};
-use drivebus_od::{ObjectDictionary, SdoAbort, Value};
+use drivebus_node::{Identity, MemoryStorage, Node, NodeConfig, NodeDevice, NodeEvent, Request, Storage};
+use drivebus_od::{ObjectDictionary, Owner, SdoAbort, Value};
 use drivebus_pdo::{DEFAULT_DUMMY_TYPES, Granularity, PdoDefaults, PdoKind, set_defaults};
 
 extern crate alloc;
 
 mod conform;
-mod node;
+mod personality;
 
-use node::ModeState;
-pub use node::PersonalityNode;
+pub(crate) use personality::BEHAVIOUR;
+pub use personality::Personality;
+
+/// A running personality: the node and its [`Personality`].
+pub type PersonalityDevice = NodeDevice<Personality>;
+
+/// What [`Behaviour::filter_rx`] does with a received frame (the node's
+/// [`drivebus_node::FrameFilter`]).
+pub type FilterOutcome = drivebus_node::FrameFilter;
 
 /// Why a personality could not be built.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,60 +142,35 @@ pub struct EmcyFrame {
     pub bytes: [u8; 5],
 }
 
-/// Something a behaviour asks the node to do; carried out by the
-/// [`PersonalityNode`] right after the call that produced it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Action {
-    /// Send an EMCY outside the error bookkeeping (boot messages, quirks).
-    RawEmcy(EmcyFrame),
-    /// Raise an error (1001h, 1003h, EMCY).
-    Raise(EmcyFrame),
-    /// An error went away.
-    Clear(u16),
-    /// Ask for an event-driven TPDO (0-based number).
-    RequestTpdo(u16),
-    /// Put this raw value back into a sub-object after the current frame
-    /// was handled, and re-read the PDO configuration (used to lift a
-    /// restriction for one write, e.g. remapping a valid PDO).
-    Restore {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// The raw little-endian value.
-        value: u32,
-        /// Only if the sub-object still holds this value (the lifted one);
-        /// `None`: always.
-        only_if: Option<u32>,
-    },
-    /// Inject a fault into the drive (a manufacturer switch that faults).
-    Inject(Injection),
-    /// Restrict change-of-state detection of a TPDO (0-based) to the set
-    /// bits of `mask` (byte `i` masks PDO byte `i`); `None`: every bit.
-    TpdoChangeMask {
-        /// TPDO number, 0-based.
-        tpdo: u16,
-        /// The mask.
-        mask: Option<[u8; 8]>,
-    },
-    /// A local NMT command: the device changes its own NMT state (e.g.
-    /// operational after power-on) as if the master had sent `cmd`, whether
-    /// or not the drive takes that command from the bus
-    /// ([`Node::nmt_command`]).
-    Nmt(NmtCommand),
+impl EmcyFrame {
+    /// Raise this error (1001h, 1003h, EMCY).
+    pub fn raise(self) -> Request {
+        Request::RaiseEmcy { code: self.code, register: self.register, manufacturer: self.bytes }
+    }
+    /// Send this frame outside the error bookkeeping.
+    pub fn raw(self) -> Request {
+        Request::RawEmcy { code: self.code, register: self.register.unwrap_or(0), bytes: self.bytes }
+    }
 }
 
 /// The context a [`Behaviour`] gets: the drive (to forward a translated
-/// write, read its state) and the action queue.
+/// write, read its state, inject a fault) and the node's request queue.
 pub struct Context<'a> {
     /// The CiA 402 drive this behaviour sits in front of.
     pub drive: &'a mut Drive,
-    /// Actions for the node, carried out after the current call.
-    pub actions: &'a mut Vec<Action>,
+    /// Requests for the node, carried out after the current call.
+    pub requests: &'a mut Vec<Request>,
     /// The node-ID.
     pub node_id: u8,
     /// Simulated time of the call.
     pub now: Instant,
+}
+
+impl Context<'_> {
+    /// Queue a request for the node (EMCY, TPDO, local NMT, …).
+    pub fn request(&mut self, r: Request) {
+        self.requests.push(r);
+    }
 }
 
 /// What makes a drive a KC1 rather than a generic servo: the quirks of a
@@ -239,7 +229,8 @@ pub trait Behaviour: Send {
 
     /// A received frame before the node handles it: pass it, replace it
     /// (e.g. an SDO download whose size field is corrected to the object's
-    /// size) or drop it (see [`FilterOutcome`]).
+    /// size) or drop it (see [`FilterOutcome`]). The personality's
+    /// [`drivebus_node::Application::filter_frame`].
     fn filter_rx(&mut self, od: &ObjectDictionary, node_id: u8, frame: &Frame) -> FilterOutcome {
         let _ = (od, node_id, frame);
         FilterOutcome::Pass
@@ -258,8 +249,8 @@ pub trait Behaviour: Send {
         Ok(Verdict::Pass)
     }
 
-    /// A write to a hooked object was stored (called before the drive's and
-    /// the CiA 301 service's own `after_write`).
+    /// A write to an object the personality owns or watches was stored
+    /// and applied by its owner (the drive, a CiA 301 service).
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
         let _ = (cx, od, index, sub);
     }
@@ -277,7 +268,8 @@ pub trait Behaviour: Send {
         Ok(())
     }
 
-    /// After the boot-up message: extra frames the drive sends at power-on.
+    /// After the boot-up message: extra frames the drive sends at power-on
+    /// (queued as requests; sent by the poll that follows).
     fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         let _ = (cx, od);
     }
@@ -299,22 +291,11 @@ pub trait Behaviour: Send {
     }
 
     /// The behaviour as [`Any`](core::any::Any), so its owner can reach the
-    /// concrete type at run time ([`PersonalityNode::behaviour_mut`]: the
+    /// concrete type at run time ([`Personality::behaviour_mut`]: the
     /// SSD 630's enable input, a test's switches). `None`: not reachable.
     fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
         None
     }
-}
-
-/// What [`Behaviour::filter_rx`] does with a received frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FilterOutcome {
-    /// Hand the frame to the node unchanged.
-    Pass,
-    /// Hand this frame instead.
-    Replace(Frame),
-    /// The drive ignores the frame.
-    Drop,
 }
 
 /// A behaviour with no quirks: the drive as CiA 301/402 describe it (a
@@ -467,13 +448,13 @@ fn apply_pdo(
 
 /// Builds the personality `profile` as node `node_id` with parameters in
 /// `storage`, with the profile's own [`Behaviour`]
-/// ([`crate::behaviour::for_profile`]).
+/// ([`Profile::behaviour`]).
 pub fn build(
     profile: Profile,
     node_id: u8,
     storage: Box<dyn Storage + Send>,
-) -> Result<PersonalityNode, BuildError> {
-    build_with(profile, node_id, storage, crate::behaviour::for_profile(profile))
+) -> Result<PersonalityDevice, BuildError> {
+    build_with(profile, node_id, storage, profile.behaviour())
 }
 
 /// [`build`] with an explicit behaviour (tests, a personality variant).
@@ -482,7 +463,7 @@ pub fn build_with(
     node_id: u8,
     storage: Box<dyn Storage + Send>,
     behaviour: Box<dyn Behaviour>,
-) -> Result<PersonalityNode, BuildError> {
+) -> Result<PersonalityDevice, BuildError> {
     build_custom(profile, node_id, storage, behaviour, |_| {})
 }
 
@@ -494,8 +475,8 @@ pub fn build_on_machine(
     node_id: u8,
     storage: Box<dyn Storage + Send>,
     machine: impl FnOnce(&mut DriveConfig),
-) -> Result<PersonalityNode, BuildError> {
-    build_custom(profile, node_id, storage, crate::behaviour::for_profile(profile), machine)
+) -> Result<PersonalityDevice, BuildError> {
+    build_custom(profile, node_id, storage, profile.behaviour(), machine)
 }
 
 /// Options of a build beyond what the personality's manual describes.
@@ -515,8 +496,8 @@ pub fn build_with_options(
     node_id: u8,
     storage: Box<dyn Storage + Send>,
     options: BuildOptions,
-) -> Result<PersonalityNode, BuildError> {
-    build_full(profile, node_id, storage, crate::behaviour::for_profile(profile), |_| {}, options)
+) -> Result<PersonalityDevice, BuildError> {
+    build_full(profile, node_id, storage, profile.behaviour(), |_| {}, options)
 }
 
 /// The general form of [`build`]: explicit behaviour and machine.
@@ -526,7 +507,7 @@ pub fn build_custom(
     storage: Box<dyn Storage + Send>,
     behaviour: Box<dyn Behaviour>,
     machine: impl FnOnce(&mut DriveConfig),
-) -> Result<PersonalityNode, BuildError> {
+) -> Result<PersonalityDevice, BuildError> {
     build_full(profile, node_id, storage, behaviour, machine, BuildOptions::default())
 }
 
@@ -538,7 +519,7 @@ pub fn build_full(
     mut behaviour: Box<dyn Behaviour>,
     machine: impl FnOnce(&mut DriveConfig),
     options: BuildOptions,
-) -> Result<PersonalityNode, BuildError> {
+) -> Result<PersonalityDevice, BuildError> {
     let info = profile.info();
     // Quirk `node-id-0-is-1` (KC1 §6.2): rotary switches at 0 mean node 1.
     let node_id =
@@ -563,6 +544,13 @@ pub fn build_full(
     let mut dc = drive_config(info);
     behaviour.adjust_drive_config(&mut dc);
     machine(&mut dc);
+    // The manufacturer modes of 6060h the profile lists, on their stand-ins.
+    dc.manufacturer_modes = info
+        .modes
+        .iter()
+        .filter(|m| **m < 0)
+        .filter_map(|&m| behaviour.manufacturer_mode(m).map(|s| (m, s)))
+        .collect();
     let hs = handlers(info, &*behaviour);
     let mut drive = Drive::install_with(&mut node, dc, hs).map_err(BuildError::Drive)?;
 
@@ -602,7 +590,14 @@ pub fn build_full(
                 let subs: Vec<u8> = o.subs().iter().map(|s| s.sub).collect();
                 for s in subs {
                     if let Some(e) = od.get_mut(index, s) {
-                        e.hooked = true;
+                        // A plain object becomes the behaviour's; one a
+                        // service or the drive owns is watched (veto first).
+                        if e.owner == Owner::NONE {
+                            e.owner = BEHAVIOUR;
+                        } else if !e.owner.is_app() {
+                            e.watched = true;
+                        }
+                        e.live = true;
                     }
                 }
             }
@@ -615,15 +610,25 @@ pub fn build_full(
     if let Some(o) = node.od().object(0x1000).cloned() {
         node.insert_object(o);
     }
-    let state =
-        ModeState { manufacturer: None, homing: info.homing_methods.to_vec(), modes: info.modes.to_vec() };
-    Ok(PersonalityNode::assemble(node, drive, behaviour, profile, state))
+    Ok(NodeDevice::new(node, Personality::new(drive, behaviour, profile)))
 }
 
 impl Profile {
+    /// The personality's own [`Behaviour`], fresh (what [`build`] installs).
+    pub fn behaviour(&self) -> Box<dyn Behaviour> {
+        match self {
+            Profile::Kc1 => Box::new(crate::kc1::kc1()),
+            Profile::Akd => Box::new(crate::akd::Akd::new()),
+            Profile::Generic => Box::new(crate::generic::Generic::new()),
+            Profile::Ssd630 => Box::new(crate::ssd630::Ssd630::new()),
+            Profile::Dds6 => Box::new(crate::dds6::Dds6::new()),
+            Profile::Ipos => Box::new(crate::ipos::Ipos::new()),
+        }
+    }
+
     /// This personality as node `node_id`, parameters in memory: the
     /// one-liner for tests and the CLI (`serve --drive akd:5`).
-    pub fn build(&self, node_id: u8) -> Result<PersonalityNode, BuildError> {
+    pub fn build(&self, node_id: u8) -> Result<PersonalityDevice, BuildError> {
         build(*self, node_id, Box::new(MemoryStorage::new()))
     }
 
@@ -633,7 +638,7 @@ impl Profile {
         &self,
         node_id: u8,
         storage: Box<dyn Storage + Send>,
-    ) -> Result<PersonalityNode, BuildError> {
+    ) -> Result<PersonalityDevice, BuildError> {
         build(*self, node_id, storage)
     }
 
@@ -644,7 +649,7 @@ impl Profile {
         node_id: u8,
         storage: Box<dyn Storage + Send>,
         options: BuildOptions,
-    ) -> Result<PersonalityNode, BuildError> {
+    ) -> Result<PersonalityDevice, BuildError> {
         build_with_options(*self, node_id, storage, options)
     }
 }

@@ -31,7 +31,7 @@ fn every_entry_up_to_sub_0_reads_the_emcy_code() {
         let mut sent = Vec::new();
         for code in [0x5530u16, 0x4310] {
             r.take();
-            r.pn_mut().inject(Injection::Fault(code));
+            r.pn_mut().app.inject(Injection::Fault(code));
             r.run_ms(5);
             let emcy: Vec<u16> = r
                 .take()

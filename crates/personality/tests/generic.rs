@@ -232,7 +232,7 @@ fn every_profile_builds_from_its_name() {
         let (profile, id) = drivebus_personality::parse_drive_spec(&spec).expect("spec");
         assert_eq!((profile, id), (*p, 7));
         let (r, _boot) = Rig::with(profile.build(id).unwrap_or_else(|e| panic!("{spec}: {e}")));
-        assert_eq!(r.pn().profile(), *p);
+        assert_eq!(r.pn().app.profile(), *p);
         assert_eq!(r.node().od().get_u32(0x1000, 0), Some(p.info().device_type), "{spec}");
     }
     assert!(drivebus_personality::parse_drive_spec("akd:0x10").is_some());

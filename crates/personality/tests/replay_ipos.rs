@@ -14,8 +14,8 @@
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
-use drivebus_personality::behaviour::ipos::Ipos;
-use drivebus_personality::{PersonalityNode, Profile, build_with};
+use drivebus_personality::ipos::Ipos;
+use drivebus_personality::{PersonalityDevice, Profile, build_with};
 
 struct Rig {
     bus: Bus,
@@ -37,8 +37,8 @@ impl Rig {
         Rig { bus, probe, dut, transfers: 0 }
     }
 
-    fn dn(&self) -> &PersonalityNode {
-        self.bus.node::<PersonalityNode>(self.dut).unwrap()
+    fn dn(&self) -> &PersonalityDevice {
+        self.bus.node::<PersonalityDevice>(self.dut).unwrap()
     }
 
     fn exchange(&mut self, req: [u8; 8]) -> Vec<Frame> {

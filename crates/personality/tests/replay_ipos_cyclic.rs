@@ -267,7 +267,7 @@ fn e40_cst_basic() {
     assert!((tq - 100).abs() <= 5, "6077h {tq} ‰ follows");
     assert!(r.motor_rpm() > 0.0, "the motor turns positive");
     // "The drive applies the new current reference": 100 ‰ of 1000 mA.
-    let amps = r.dn().drive.model().current();
+    let amps = r.dn().app.drive.model().current();
     assert!((amps - 0.1).abs() <= 0.01, "motor current {amps} A, 100 mA expected");
 }
 
@@ -684,7 +684,7 @@ fn pvt_empty_buffer_with_speed_quick_stops() {
     r.run_ms(100);
     let sw = r.sw.unwrap();
     assert!(matches!(sw & 0x6F, 0x07 | 0x40 | 0x60), "statusword {sw:04X}h after the quick stop");
-    assert!(r.dn().drive.model().velocity().abs() < 1e-3, "at rest");
+    assert!(r.dn().app.drive.model().velocity().abs() < 1e-3, "at rest");
 }
 
 /// E31 (§11.3): electronic gearing through the second encoder input. The
@@ -708,8 +708,8 @@ fn e31_gearing_second_encoder() {
     r.sdo(0x2013, 2, &1u16.to_le_bytes());
     let enc = |r: &mut Rig, m: i64| {
         let id = r.dut;
-        let pn = r.bus.node_mut::<PersonalityNode>(id).unwrap();
-        pn.behaviour_mut::<Ipos>().unwrap().set_second_encoder(m.rem_euclid(2000));
+        let pn = r.bus.node_mut::<PersonalityDevice>(id).unwrap();
+        pn.app.behaviour_mut::<Ipos>().unwrap().set_second_encoder(m.rem_euclid(2000));
     };
     // Step 8 (201Eh) is not used with 201Dh = 3: an online master position
     // is ignored.

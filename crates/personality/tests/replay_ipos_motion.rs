@@ -404,7 +404,7 @@ fn e23_torque_profile() {
     // has no 6078h, Appendix A).
     let rated_ma = 1000.0;
     let ma = 500.0 / 1000.0 * rated_ma;
-    let amps = r.dn().drive.model().current();
+    let amps = r.dn().app.drive.model().current();
     assert!((amps * 1000.0 - ma).abs() <= 10.0, "motor current {amps} A, 500 mA expected");
     // Step 9: 6071h := FB50h = −1200 = −120.0 %: 1700 ‰ at 1000 ‰/s.
     assert_eq!(0xFB50u16 as i16, -1200);
@@ -420,7 +420,7 @@ fn e23_torque_profile() {
     let tq = r.upload(0x6077, 0, 2);
     assert!((tq + 1200).abs() <= 20, "6077h {tq} ‰ held against the stop");
     // "reach a current of -120.0% of the motor rated current (-1200mA)".
-    let amps = r.dn().drive.model().current();
+    let amps = r.dn().app.drive.model().current();
     assert!((amps * 1000.0 + 1200.0).abs() <= 20.0, "motor current {amps} A, −1200 mA expected");
 }
 
@@ -609,7 +609,7 @@ fn lsn_emcy_and_60b8_bit6() {
     r.target_position_rpdo2(-8000);
     r.controlword(0x1F);
     r.wait_sw("at −8000, through the LSN", SW_TARGET_REACHED, SW_TARGET_REACHED, 2 * bound);
-    assert!(r.dn().drive.view().digital_inputs & 1 != 0, "on the LSN");
+    assert!(r.dn().app.drive.view().digital_inputs & 1 != 0, "on the LSN");
     assert_eq!(r.sw.unwrap() & (1 << 11), 0, "no internal limit");
     assert!((r.upload(0x6064, 0, 4) + 8000).abs() <= FEW_COUNTS, "at −8000");
     assert!(codes(&r).is_empty(), "no EMCY with 60B8h bit 6 = 1: {:?}", codes(&r));

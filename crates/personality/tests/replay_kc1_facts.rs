@@ -55,7 +55,7 @@ fn kc1_fault_codes_from_the_table() {
     for (fault, expected) in [(0x2310u16, 0xFF07u16), (0x8611, 0x8611)] {
         assert!(info.emcy_text(expected).is_some(), "{expected:04X}h in §7.1");
         let mut r = node();
-        r.pn_mut().inject(drivebus_cia402::drive::Injection::Fault(fault));
+        r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(fault));
         r.run_ms(1);
         let f = r.take();
         let [lo, hi] = expected.to_le_bytes();

@@ -13,8 +13,8 @@ mod shared_trace;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
-use drivebus_personality::behaviour::ssd630::{COUNTS_PER_REV, Ssd630};
-use drivebus_personality::{PersonalityNode, Profile, build_with};
+use drivebus_personality::ssd630::{COUNTS_PER_REV, Ssd630};
+use drivebus_personality::{PersonalityDevice, Profile, build_with};
 use shared_trace::fr;
 
 struct Rig {
@@ -43,8 +43,8 @@ impl Rig {
         Rig::with(Ssd630::new())
     }
 
-    fn dn(&self) -> &PersonalityNode {
-        self.bus.node::<PersonalityNode>(self.dut).unwrap()
+    fn dn(&self) -> &PersonalityDevice {
+        self.bus.node::<PersonalityDevice>(self.dut).unwrap()
     }
 
     fn take(&mut self) -> Vec<Frame> {
@@ -85,9 +85,9 @@ impl Rig {
 
     /// Position rate over the next second \[increments/s\].
     fn rate(&mut self) -> f64 {
-        let p0 = self.dn().drive.position_increments();
+        let p0 = self.dn().app.drive.position_increments();
         self.run_ms(1000);
-        (self.dn().drive.position_increments() - p0) as f64
+        (self.dn().app.drive.position_increments() - p0) as f64
     }
 
     /// Runs until the statusword has `bits` set (at most `ms`).
@@ -419,8 +419,9 @@ fn emcy_register_from_table_1() {
     r.enable();
     r.take();
     r.bus
-        .node_mut::<PersonalityNode>(r.dut)
+        .node_mut::<PersonalityDevice>(r.dut)
         .unwrap()
+        .app
         .inject(drivebus_cia402::drive::Injection::Fault(0x8611));
     r.run_ms(5);
     let emcy: Vec<Frame> = r.take().into_iter().filter(|f| f.std_id() == Some(0x81)).collect();

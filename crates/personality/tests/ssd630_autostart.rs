@@ -10,7 +10,7 @@
 mod replay_rig;
 
 use drivebus_node::{MemoryStorage, NmtState, Slot, Storage};
-use drivebus_personality::{PersonalityNode, Profile};
+use drivebus_personality::{PersonalityDevice, Profile};
 use replay_rig::*;
 
 /// Boot-up and the §9 "no error" EMCY with the firmware tag "V819d".
@@ -36,7 +36,7 @@ fn configured(value: u8, store: bool) -> MemoryStorage {
 
 /// Power on with `storage`: the frames of the boot and the rig.
 fn power_on(storage: MemoryStorage) -> (Rig, Vec<drivebus_can::Frame>) {
-    let pn: PersonalityNode = Profile::Ssd630.build_with_storage(1, Box::new(storage)).unwrap();
+    let pn: PersonalityDevice = Profile::Ssd630.build_with_storage(1, Box::new(storage)).unwrap();
     Rig::with(pn)
 }
 

@@ -1,5 +1,5 @@
 //! The SSD 630's "Controller Active" / "Drive Active" input X10.7 switched
-//! at run time (`PersonalityNode::behaviour_mut::<Ssd630>()`), seed003
+//! at run time (`PersonalityDevice::behaviour_mut::<Ssd630>()`), seed003
 //! *CANopen-630* manual:
 //!
 //! * §10.2 Switch on Disabled: the controller checks "a. Controller Active
@@ -18,7 +18,7 @@
 mod replay_rig;
 
 use drivebus_personality::Profile;
-use drivebus_personality::behaviour::ssd630::Ssd630;
+use drivebus_personality::ssd630::Ssd630;
 use replay_rig::*;
 
 fn statusword(r: &mut Rig) -> u16 {
@@ -32,7 +32,7 @@ fn controlword(r: &mut Rig, cw: u16) {
 }
 
 fn set_input(r: &mut Rig, on: bool) {
-    r.pn_mut().behaviour_mut::<Ssd630>().expect("the 630's behaviour").set_enable_input(on);
+    r.pn_mut().app.behaviour_mut::<Ssd630>().expect("the 630's behaviour").set_enable_input(on);
     r.run_ms(5);
 }
 
@@ -66,7 +66,7 @@ fn dropping_the_input_goes_to_switch_on_disabled() {
     assert_eq!(statusword(&mut r), 0x0240);
     controlword(&mut r, 0x00);
     enable(&mut r);
-    assert!(r.pn_mut().behaviour_mut::<Ssd630>().unwrap().enable_input());
+    assert!(r.pn_mut().app.behaviour_mut::<Ssd630>().unwrap().enable_input());
 }
 
 #[test]
@@ -93,5 +93,5 @@ fn with_2019h_1_dropping_the_input_faults() {
 #[test]
 fn other_behaviours_are_not_the_630() {
     let (mut r, _) = Rig::new(Profile::Kc1, 1);
-    assert!(r.pn_mut().behaviour_mut::<Ssd630>().is_none());
+    assert!(r.pn_mut().app.behaviour_mut::<Ssd630>().is_none());
 }

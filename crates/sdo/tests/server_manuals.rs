@@ -3,7 +3,7 @@
 
 use drivebus_can::{Frame, Instant};
 use drivebus_od::{
-    Access, DataType, NoHooks, Object, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Value,
+    Access, DataType, NoHooks, Object, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Target, Value,
 };
 use drivebus_sdo::server::{SdoServer, ServerConfig};
 
@@ -116,8 +116,8 @@ struct AsciiChannel {
     at: usize,
 }
 impl ObjectHooks for AsciiChannel {
-    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
-        let r = od.find(index, sub)?;
+    fn on_read(&mut self, od: &mut ObjectDictionary, at: &Target) -> Result<(), SdoAbort> {
+        let r = at.r;
         let end = (self.at + 4).min(self.reply.len());
         let chunk = self.reply[self.at..end].to_vec();
         self.at = end;

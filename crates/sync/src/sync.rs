@@ -273,10 +273,19 @@ impl SyncService {
 
     /// Re-read an object of this service after a write was stored.
     pub fn reconfigure(&mut self, od: &ObjectDictionary, index: u16, sub: u8) {
+        if let Some(v) = od.get_u32(index, sub) {
+            self.apply_value(index, sub, v);
+        }
+    }
+
+    /// Take the stored value `v` of `(index, sub)` (what [`reconfigure`]
+    /// reads, handed over by a caller that holds it: no dictionary search).
+    ///
+    /// [`reconfigure`]: SyncService::reconfigure
+    pub fn apply_value(&mut self, index: u16, sub: u8, v: u32) {
         if sub != 0 {
             return;
         }
-        let Some(v) = od.get_u32(index, 0) else { return };
         match index {
             OD_COB_ID_SYNC => {
                 let was = self.is_producing();

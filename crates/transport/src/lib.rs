@@ -18,9 +18,13 @@
 //! [`SlcanPty`](slcan::SlcanPty) (an slcan adapter emulated on a
 //! pseudo-terminal). Both relay through a [`Hub`]; in-process participants
 //! (virtual drives) join the same hub with [`Hub::attach`].
+//!
+//! [`host`] runs any sans-IO `drivebus_can::Device` in real time on a
+//! [`CanBus`] (and [`host::bridge`] puts a hub's devices on a real bus).
 
 mod error;
 mod handle;
+pub mod host;
 pub mod hub;
 pub mod slcan;
 #[cfg(all(feature = "socketcan", target_os = "linux"))]

@@ -265,10 +265,10 @@ pub struct DriveConfig {
     pub zero_means_off: ZeroMeansOff,
     /// What 6083h / 6084h / 609Ah = 0 means.
     pub zero_ramp: ZeroRamp,
-    /// The personality hook: statusword bits 8/9/14/15 and write vetoes by
-    /// drive state (see [`DriveExtension`](super::DriveExtension)). None by
-    /// default.
-    pub extension: super::Extension,
+    /// Manufacturer modes (negative 6060h) the drive takes, each with the
+    /// standard mode it runs on meanwhile (6061h shows the manufacturer
+    /// code). Empty by default: CiA 402 modes only.
+    pub manufacturer_modes: alloc::vec::Vec<(i8, i8)>,
     /// 6086h values accepted, as [`profile_type`] bits (others: 0609 0030).
     /// [`DriveConfig::servo`]: linear, sin², jerk-limited.
     pub motion_profile_types: u32,
@@ -344,7 +344,7 @@ impl DriveConfig {
             initial_mode: op::PP,
             zero_means_off: ZeroMeansOff::default(),
             zero_ramp: ZeroRamp::Refused,
-            extension: super::Extension::none(),
+            manufacturer_modes: alloc::vec::Vec::new(),
             motion_profile_types: profile_type::IMPLEMENTED,
             profile_jerk_object: true,
             // The profile acceleration built up in 10 ms.
@@ -359,6 +359,26 @@ impl DriveConfig {
 }
 
 impl DriveConfig {
+    /// 6072h/6073h power-on value: the motor's peak over rated current in
+    /// per mille.
+    pub(crate) fn max_torque_per_mille(&self) -> u16 {
+        let m = &self.params.motor;
+        (m.max_current / m.rated_current * 1000.0).clamp(0.0, 65535.0) as u16
+    }
+    /// 6075h power-on value \[mA\].
+    pub(crate) fn rated_current_ma(&self) -> u32 {
+        (self.params.motor.rated_current * 1000.0).clamp(1.0, 4e9) as u32
+    }
+    /// 6076h power-on value \[mN·m\].
+    pub(crate) fn rated_torque_mnm(&self) -> u32 {
+        let m = &self.params.motor;
+        (m.kt * m.rated_current * 1000.0).clamp(1.0, 4e9) as u32
+    }
+    /// vl speeds \[rpm of the motor shaft\]: the motor's top speed.
+    pub(crate) fn vl_rpm(&self) -> u32 {
+        (self.params.motor.max_speed * 60.0 / (2.0 * core::f64::consts::PI)).clamp(1.0, 32767.0) as u32
+    }
+
     /// The 60A4h:1/2 power-on values of [`DriveConfig::profile_jerk`] (a
     /// jerk time is converted with the power-on ramps).
     pub(crate) fn profile_jerk_rates(&self) -> (u32, u32) {

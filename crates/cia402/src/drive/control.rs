@@ -729,17 +729,10 @@ impl Drive {
         }
     }
 
-    /// Statusword 6041h (CiA 402-2 §6.2.2), with the personality's bits
-    /// 8/9/14/15.
+    /// Statusword 6041h (CiA 402-2 §6.2.2); a personality patches the
+    /// manufacturer bits 8/14/15 after each step.
     pub(crate) fn statusword_value(&self) -> u16 {
-        let sw = self.base_statusword();
-        match self.cfg.extension.get() {
-            None => sw,
-            Some(ext) => {
-                let mask = super::extension::STATUS_MASK;
-                (sw & !mask) | (ext.status_bits(&self.view()) & mask)
-            }
-        }
+        self.base_statusword()
     }
 
     /// 60FDh digital inputs as published.
@@ -747,7 +740,7 @@ impl Drive {
         self.model.switches().digital_inputs() | u32::from(self.interlock) << 3
     }
 
-    /// The statusword without the personality's bits.
+    /// The statusword as the drive computes it.
     pub(crate) fn base_statusword(&self) -> u16 {
         let mut sw = self.sm.statusword();
         sw |= u16::from(self.warning || self.mode_warning || self.command_error.is_some()) << 7;
@@ -778,6 +771,8 @@ impl Drive {
             if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
         };
         let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
+        // 6061h shows a manufacturer mode while its stand-in runs.
+        let shown = self.mode_shown();
         // Objects the device lacks are not published (`withdraw_object`).
         let put = |od: &mut ObjectDictionary, r: Option<drivebus_od::EntryRef>, b: &[u8]| {
             if let Some(r) = r {
@@ -786,7 +781,7 @@ impl Drive {
         };
         put(od, r.statusword, &sw.to_le_bytes());
         put(od, r.error_code, &self.sm.fault_code().to_le_bytes());
-        put(od, r.mode_display, &self.mode.to_le_bytes());
+        put(od, r.mode_display, &shown.to_le_bytes());
         put(od, r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
         put(od, r.pos_internal, &(inc as i32).to_le_bytes());
         put(od, r.pos_actual, &(pos_shown as i32).to_le_bytes());

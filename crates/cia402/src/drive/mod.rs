@@ -1,36 +1,39 @@
 //! The CiA 402 drive: object dictionary binding, device control, profile
 //! modes, units, I/O and faults.
 //!
-//! [`Drive::install`] inserts the CiA 402 objects into a [`Node`]'s
-//! dictionary; the drive is then the node's [`Application`]: it validates
-//! writes through [`ObjectHooks`], steps the [`DriveModel`] at its control
-//! rate in [`Application::poll`] and pushes the live values (statusword,
-//! actual values) with `set_le` through handles resolved once.
-//! [`DriveNode`] puts node and drive on the virtual bus and forwards the
-//! drive's EMCY requests to the node.
+//! [`Drive::install`] inserts the CiA 402 objects (one entry each in
+//! `table.rs`: definition, write check, apply) into a [`Node`]'s
+//! dictionary, each writable sub-object owned by its entry; the drive is
+//! then the node's [`Application`]: the node hands it the writes of the
+//! objects it owns, it steps the [`DriveModel`] at its control rate in
+//! [`Application::poll`] and pushes the live values (statusword, actual
+//! values) with `set_le` through handles resolved once. Its EMCY requests
+//! go to the node as [`drivebus_node::Request`]s.
+//! `drivebus_node::NodeDevice<Drive>` is node and drive as one device.
 //!
 //! ```
-//! use drivebus_cia402::drive::generic_drive;
+//! use drivebus_cia402::drive::{Drive, generic_drive};
 //! use drivebus_bus::{Bus, BusConfig};
 //! use drivebus_can::Duration;
+//! use drivebus_node::NodeDevice;
 //!
 //! let mut bus = Bus::new(BusConfig::zero_time());
 //! let id = bus.attach(generic_drive(3));
 //! bus.run_for(Duration::from_millis(1));
-//! let dn = bus.node::<drivebus_cia402::drive::DriveNode>(id).unwrap();
-//! assert_eq!(dn.drive.statusword() & 0x4F, 0x40); // switch on disabled
+//! let dn = bus.node::<NodeDevice<Drive>>(id).unwrap();
+//! assert_eq!(dn.app.statusword() & 0x4F, 0x40); // switch on disabled
 //! ```
 
+mod checks;
 mod config;
 mod control;
-pub mod extension;
-mod hooks;
+mod generic;
 pub mod mode;
-mod node;
 mod objects;
 mod pp;
 pub mod profile;
 mod supervise;
+mod table;
 pub mod units;
 
 #[cfg(test)]
@@ -40,18 +43,17 @@ pub use config::{
     DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk, TargetReached,
     ZeroMeansOff, ZeroRamp, profile_type,
 };
-pub use extension::{DriveExtension, DriveView, Extension};
+pub use generic::{default_pdo_mapping, generic_drive, generic_drive_with};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
-pub use node::{DriveNode, default_pdo_mapping, generic_drive, generic_drive_with};
 pub use units::{Carry, FactorGroup, Ratio, Units};
 
 use crate::model::{DriveModel, ParamError, StepEvents};
 use crate::state_machine::StateMachine;
 use alloc::boxed::Box;
 use alloc::vec::Vec;
-use drivebus_can::{Duration, Instant};
-use drivebus_node::{Application, Node, NodeEvent};
-use drivebus_od::ObjectDictionary;
+use drivebus_can::{Duration, Instant, LinkState};
+use drivebus_node::{AppContext, Application, Node, NodeEvent, Request};
+use drivebus_od::{ObjectDictionary, SdoAbort, Target, WriteOutcome};
 use objects::Refs;
 use profile::{Ramp, Shape};
 
@@ -70,9 +72,8 @@ pub enum Injection {
     ConnectionLost,
 }
 
-/// An EMCY request for the node (the drive's callbacks only get the
-/// dictionary; [`DriveNode`] drains these into `Node::raise_emcy` /
-/// `Node::clear_emcy` after every call).
+/// An EMCY the drive asks for (603Fh codes); [`Drive::flush_emcy`] turns
+/// them into the node's [`Request`]s at the end of every callback.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EmcyRequest {
     /// Raise an error code (1001h, 1003h, EMCY frame).
@@ -155,6 +156,8 @@ pub struct Drive {
     status_bits: u16,
     warning: bool,
     limit_active: bool,
+    /// The manufacturer mode selected (negative 6060h) and its stand-in.
+    manufacturer: Option<(i8, i8)>,
     // supervision
     sup: supervise::Supervision,
     emcy: Vec<EmcyRequest>,
@@ -230,6 +233,7 @@ impl Drive {
             cw: 0,
             mode: 0,
             mode_active: false,
+            manufacturer: None,
             dem: Demand::default(),
             inc_offset: 0,
             inc_frac: 0,
@@ -271,8 +275,7 @@ impl Drive {
     /// device has no such object (a personality whose manual does not list
     /// it): SDO and PDO no longer reach it, and the drive keeps working
     /// with the parameter's value — the power-on value, or what
-    /// [`ObjectHooks::on_write`](drivebus_od::ObjectHooks::on_write) sets
-    /// from the application side. Live values it published are no longer
+    /// [`Drive::on_write`] sets from the application side. Live values it published are no longer
     /// published. Returns whether the object was there. The caller
     /// re-resolves the node's services (`Node::insert_object`).
     pub fn withdraw_object(&mut self, od: &mut ObjectDictionary, index: u16) -> bool {
@@ -422,8 +425,8 @@ impl Drive {
         self.probe.set_dedicated(probe, active);
     }
 
-    /// What a [`DriveExtension`] sees (state, mode, statusword without the
-    /// extension's bits, controlword, inputs, NMT operational).
+    /// A snapshot of the drive for a personality's decisions (state, mode,
+    /// statusword, controlword, inputs, NMT operational).
     pub fn view(&self) -> DriveView {
         DriveView {
             state: self.sm.state(),
@@ -435,20 +438,56 @@ impl Drive {
         }
     }
 
-    /// The personality hook in force (from [`DriveConfig::extension`]).
-    pub fn extension(&self) -> &Extension {
-        &self.cfg.extension
+    /// The manufacturer mode (negative 6060h) in force, if any.
+    pub fn manufacturer_mode(&self) -> Option<i8> {
+        self.manufacturer.map(|(m, _)| m)
     }
 
-    /// Replaces the personality hook (e.g. after [`generic_drive_with`]);
-    /// the statusword is republished at the next poll.
-    pub fn set_extension(&mut self, ext: Extension) {
-        self.cfg.extension = ext;
+    /// The mode the drive runs for a 6060h value: itself for a mode it
+    /// runs, the stand-in of a manufacturer mode
+    /// ([`DriveConfig::manufacturer_modes`]); `None`: refused (CiA 402-2
+    /// §6.3.2). The one place 6060h is checked.
+    pub fn stand_in(&self, m: i8) -> Option<i8> {
+        if m < 0 {
+            return self.cfg.manufacturer_modes.iter().find(|(c, _)| *c == m).map(|&(_, s)| s);
+        }
+        (op::supported_bit(m) & self.modes != 0).then_some(m)
     }
 
-    /// Takes the queued EMCY requests (for wrappers other than [`DriveNode`]).
-    pub fn take_emcy(&mut self) -> impl Iterator<Item = EmcyRequest> + '_ {
-        self.emcy.drain(..)
+    /// 6060h taken: the mode (or a manufacturer mode's stand-in) runs.
+    pub(crate) fn select_mode(&mut self, od: &mut ObjectDictionary, m: i8) {
+        let Some(run) = self.stand_in(m) else { return };
+        self.manufacturer = (m < 0).then_some((m, run));
+        self.request_mode(od, run);
+        self.publish(od);
+    }
+
+    /// 6061h: the manufacturer code while its stand-in runs.
+    pub(crate) fn mode_shown(&mut self) -> i8 {
+        match self.manufacturer {
+            Some((m, run)) if run == self.mode => m,
+            Some(_) => {
+                // The stand-in was left (another 6060h, a reset).
+                self.manufacturer = None;
+                self.mode
+            }
+            None => self.mode,
+        }
+    }
+
+    /// Hands the queued EMCY requests to the node, each as `map` turns the
+    /// drive's code into an EMCY (a personality's own codes and register
+    /// bits); the drive's own callbacks use the CiA 301 bookkeeping.
+    pub fn flush_emcy(&mut self, cx: &mut AppContext<'_>, map: impl Fn(u16) -> Request) {
+        for r in self.emcy.drain(..) {
+            match r {
+                EmcyRequest::Raise(c) => cx.request(map(c)),
+                EmcyRequest::Clear(c) => match map(c) {
+                    Request::RaiseEmcy { code, .. } => cx.clear_emcy(code),
+                    _ => cx.clear_emcy(c),
+                },
+            }
+        }
     }
 
     /// Registers a mode handler after installation (adds its modes to 6502h,
@@ -501,44 +540,25 @@ impl Drive {
     }
 }
 
-impl drivebus_od::ObjectHooks for Drive {
-    fn on_read(
-        &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-    ) -> Result<(), drivebus_od::SdoAbort> {
-        self.read_handler_object(od, index, sub);
-        Ok(())
-    }
-
-    fn on_write(
-        &mut self,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-        data: &[u8],
-    ) -> Result<drivebus_od::WriteOutcome, drivebus_od::SdoAbort> {
-        let r = self.write_hook(od, index, sub, data)?;
-        // A withdrawn object's value lives here (see `withdraw_object`).
-        if r == drivebus_od::WriteOutcome::Store && self.is_withdrawn(index) {
-            let _ = self.withdrawn.find(index, sub).map(|e| self.withdrawn.set_le(e, data));
-        }
-        Ok(r)
-    }
-}
-
-impl Application for Drive {
-    fn on_sync(&mut self, od: &mut ObjectDictionary, counter: Option<u8>, now: Instant) {
-        let _ = (counter, now);
+/// What the drive does for each node callback, without handing over its
+/// EMCY requests: the parts a wrapping application (a personality) calls
+/// before its own behaviour, then [`Drive::flush_emcy`].
+impl Drive {
+    /// A SYNC: cyclic set-points latch, SYNC supervision resets.
+    pub fn sync(&mut self, od: &mut ObjectDictionary) {
         self.sup.sync_lost = false;
         self.handler_sync(od);
     }
 
-    fn on_event(&mut self, od: &mut ObjectDictionary, event: NodeEvent, now: Instant) {
-        let _ = now;
+    /// A node event (NMT state, guarding, resets, link).
+    pub fn event(&mut self, od: &mut ObjectDictionary, event: NodeEvent) {
         match event {
             NodeEvent::HeartbeatTimeout { .. } | NodeEvent::LifeGuardingLost => {
+                self.connection_lost(0x8130);
+            }
+            // CiA 402-2 6007h: bus-off (or a pulled cable) aborts the
+            // connection; error passive still communicates.
+            NodeEvent::Link(LinkState::BusOff { .. } | LinkState::Disconnected) => {
                 self.connection_lost(0x8130);
             }
             NodeEvent::NmtState { from, to } => {
@@ -550,7 +570,7 @@ impl Application for Drive {
                     self.connection_lost(0x8130);
                 }
                 if to == NmtState::PreOperational && from != NmtState::Operational {
-                    // Stored parameters may have been loaded behind the hooks.
+                    // Stored parameters may have been loaded behind the write path.
                     self.reload(od);
                 }
             }
@@ -565,6 +585,7 @@ impl Application for Drive {
                 self.fault_reset();
                 self.emcy.clear();
                 self.command_error = None;
+                self.manufacturer = None;
                 self.sm = StateMachine::new(*self.sm.options());
                 self.sm.self_test_passed();
                 self.cw = 0;
@@ -584,9 +605,72 @@ impl Application for Drive {
         self.publish(od);
     }
 
-    fn poll(&mut self, od: &mut ObjectDictionary, now: Instant) -> Option<Instant> {
-        Some(self.advance(od, now))
+    /// Steps the drive to `now`; the next control period's instant.
+    pub fn step_to(&mut self, od: &mut ObjectDictionary, now: Instant) -> Instant {
+        self.advance(od, now)
     }
+}
+
+/// The drive's EMCY as CiA 301 bookkeeping (the drive on its own).
+fn standard(code: u16) -> Request {
+    Request::RaiseEmcy { code, register: None, manufacturer: [0; 5] }
+}
+
+impl Application for Drive {
+    fn check_write(
+        &mut self,
+        cx: &mut AppContext<'_>,
+        at: &Target,
+        data: &[u8],
+    ) -> Result<WriteOutcome, SdoAbort> {
+        let r = self.check_object(cx.od, at, data);
+        self.flush_emcy(cx, standard);
+        r
+    }
+
+    fn apply_write(&mut self, cx: &mut AppContext<'_>, at: &Target) {
+        self.apply_object(cx.od, at);
+        self.flush_emcy(cx, standard);
+    }
+
+    fn on_read(&mut self, cx: &mut AppContext<'_>, at: &Target) -> Result<(), SdoAbort> {
+        self.refresh_object(cx.od, at);
+        Ok(())
+    }
+
+    fn on_sync(&mut self, cx: &mut AppContext<'_>, counter: Option<u8>) {
+        let _ = counter;
+        self.sync(cx.od);
+        self.flush_emcy(cx, standard);
+    }
+
+    fn on_event(&mut self, cx: &mut AppContext<'_>, event: NodeEvent) {
+        self.event(cx.od, event);
+        self.flush_emcy(cx, standard);
+    }
+
+    fn poll(&mut self, cx: &mut AppContext<'_>) -> Option<Instant> {
+        let next = self.advance(cx.od, cx.now);
+        self.flush_emcy(cx, standard);
+        Some(next)
+    }
+}
+
+/// A snapshot of the drive (see [`Drive::view`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DriveView {
+    /// The device control state (CiA 402-2 §6.2.1).
+    pub state: crate::state_machine::State,
+    /// The active mode of operation (6061h).
+    pub mode: i8,
+    /// The statusword the drive computed.
+    pub statusword: u16,
+    /// The last controlword received (6040h).
+    pub controlword: u16,
+    /// Digital inputs 60FDh as the drive publishes them.
+    pub digital_inputs: u32,
+    /// The node is NMT *Operational* (tracked from the node's events).
+    pub operational: bool,
 }
 
 impl Drive {

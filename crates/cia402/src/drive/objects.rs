@@ -1,36 +1,105 @@
-//! The CiA 402 objects the drive installs (CiA 402-2 §6 object
-//! descriptions: types, access, PDO mapping) and the handles of the live
-//! values it pushes every control period.
+//! Installing the drive's objects ([`super::table`]), dispatching a write
+//! to its entry by owner tag, reloading, and the handles of the live
+//! values the drive pushes every control period.
 
 use super::config::DriveConfig;
-use super::mode::op;
+use super::table::PARAMS;
+use super::{Drive, Units};
 use alloc::format;
-use drivebus_od::{Access, DataType as T, EntryRef, Object, ObjectCode, ObjectDictionary, SubObject, Value};
+use alloc::vec::Vec;
+use drivebus_od::{
+    Access, DataType as T, EntryRef, Object, ObjectCode, ObjectDictionary, Owner, SdoAbort, SubObject,
+    Target, Value, WriteOutcome, le_i64, le_u64,
+};
 
-/// Sub-object flags: PDO-mappable, routed through the drive's hooks.
-#[derive(Clone, Copy)]
-struct F {
-    map: bool,
-    hook: bool,
+/// Why an entry's apply runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum How {
+    /// A write was checked (and stored, unless forwarded by a wrapper).
+    Write,
+    /// The node restored or loaded stored values behind the write path.
+    Reload,
 }
-const PLAIN: F = F { map: false, hook: false };
-const HOOK: F = F { map: false, hook: true };
-const MAP: F = F { map: true, hook: false };
-const MAP_HOOK: F = F { map: true, hook: true };
 
-fn sub(s: u8, name: &'static str, t: T, a: Access, v: Value, f: F) -> SubObject {
+/// What an entry's check or apply is handed: which sub-object, its value,
+/// and why the apply runs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Arg {
+    pub index: u16,
+    pub sub: u8,
+    pub v: Raw,
+    pub how: How,
+}
+
+/// A written or stored value, little-endian, up to 8 bytes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Raw {
+    /// Zero-extended.
+    pub u: u64,
+    /// Sign-extended.
+    pub s: i64,
+    len: u8,
+}
+
+impl Raw {
+    pub(crate) fn of(b: &[u8]) -> Raw {
+        Raw { u: le_u64(b), s: le_i64(b), len: b.len().min(8) as u8 }
+    }
+    pub(crate) fn u32(self) -> u32 {
+        self.u as u32
+    }
+    pub(crate) fn u16(self) -> u16 {
+        self.u as u16
+    }
+    pub(crate) fn u8(self) -> u8 {
+        self.u as u8
+    }
+    pub(crate) fn i32(self) -> i32 {
+        self.s as i32
+    }
+    pub(crate) fn i16(self) -> i16 {
+        self.s as i16
+    }
+    pub(crate) fn i8(self) -> i8 {
+        self.s as i8
+    }
+    /// The bytes as written.
+    pub(crate) fn bytes(self) -> [u8; 8] {
+        self.u.to_le_bytes()
+    }
+    pub(crate) fn len(self) -> usize {
+        usize::from(self.len)
+    }
+}
+
+/// Inclusive range check with the CiA 301 abort for each side.
+pub(crate) fn range(v: i64, lo: i64, hi: i64) -> Result<(), SdoAbort> {
+    if v < lo {
+        Err(SdoAbort::VALUE_TOO_LOW)
+    } else if v > hi {
+        Err(SdoAbort::VALUE_TOO_HIGH)
+    } else {
+        Ok(())
+    }
+}
+
+/// Sub 1 and sub 2 of a 2-entry array or record as u32s (1 when absent).
+pub(crate) fn pair_of(od: &ObjectDictionary, index: u16) -> (u32, u32) {
+    (od.get_u32(index, 1).unwrap_or(1), od.get_u32(index, 2).unwrap_or(1))
+}
+
+pub(crate) fn sub(s: u8, name: &'static str, t: T, a: Access, v: Value, map: bool) -> SubObject {
     let mut x = SubObject::new(s, name, t, a, v);
-    x.pdo_mappable = f.map;
-    x.hooked = f.hook;
+    x.pdo_mappable = map;
     x
 }
 
-fn var(index: u16, name: &'static str, t: T, a: Access, v: Value, f: F) -> Object {
-    Object::with_code(index, ObjectCode::Var, name).with_sub(sub(0, name, t, a, v, f))
+pub(crate) fn var(index: u16, name: &'static str, t: T, a: Access, v: Value, map: bool) -> Object {
+    Object::with_code(index, ObjectCode::Var, name).with_sub(sub(0, name, t, a, v, map))
 }
 
 /// An ARRAY whose entries have their own defaults.
-fn array(index: u16, name: &'static str, t: T, a: Access, values: &[Value], f: F) -> Object {
+pub(crate) fn array(index: u16, name: &'static str, t: T, a: Access, values: &[Value], map: bool) -> Object {
     let mut o = Object::with_code(index, ObjectCode::Array, name).with_sub(SubObject::new(
         0,
         "Highest sub-index supported",
@@ -40,199 +109,202 @@ fn array(index: u16, name: &'static str, t: T, a: Access, values: &[Value], f: F
     ));
     for (i, v) in values.iter().enumerate() {
         let mut s = SubObject::new(i as u8 + 1, format!("{name} {}", i + 1), t, a, v.clone());
-        s.pdo_mappable = f.map;
-        s.hooked = f.hook;
+        s.pdo_mappable = map;
         o = o.with_sub(s);
     }
     o
 }
 
-fn record(index: u16, name: &'static str, subs: impl IntoIterator<Item = SubObject>) -> Object {
+pub(crate) fn record(index: u16, name: &'static str, subs: impl IntoIterator<Item = SubObject>) -> Object {
     subs.into_iter().fold(Object::record(index, name), Object::with_sub)
 }
 
 /// 60E3h supported homing methods, sub 1..n (CiA 402-2 homing mode).
 pub(crate) fn supported_homing_methods(methods: &[i8]) -> Object {
-    let values: alloc::vec::Vec<Value> = methods.iter().map(|&m| Value::I8(m)).collect();
-    array(0x60E3, "Supported homing methods", T::Integer8, Access::Ro, &values, PLAIN)
+    let values: Vec<Value> = methods.iter().map(|&m| Value::I8(m)).collect();
+    array(0x60E3, "Supported homing methods", T::Integer8, Access::Ro, &values, false)
 }
 
-/// Every object of the drive, with power-on values from `cfg`; `modes` is
-/// 6502h.
-pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> {
-    use Access::{Ro, Rw, Rww};
-    use Value::*;
-    let p = &cfg.profile;
-    let f = &cfg.factor;
-    let o = &cfg.options;
-    let m = &cfg.params.motor;
-    let rated_torque_mnm = (m.kt * m.rated_current * 1000.0).clamp(1.0, 4e9) as u32;
-    let rated_current_ma = (m.rated_current * 1000.0).clamp(1.0, 4e9) as u32;
-    let max_torque = (m.max_current / m.rated_current * 1000.0).clamp(0.0, 65535.0) as u16;
-    let max_motor_speed = p.max_profile_velocity;
-    let pair = |v: (u32, u32)| [U32(v.0), U32(v.1)];
-    let power_on_mode = if op::supported_bit(cfg.initial_mode) & modes != 0 { cfg.initial_mode } else { 0 };
-    let dc_link_mv = (cfg.params.bus.nominal_voltage * 1000.0).clamp(0.0, 4e9) as u32;
-    let mut v = alloc::vec![
-        var(0x6007, "Abort connection option code", T::Integer16, Rw, I16(o.abort_connection()), HOOK),
-        var(0x603F, "Error code", T::Unsigned16, Ro, U16(0), MAP),
-        var(0x6040, "Controlword", T::Unsigned16, Rww, U16(0), MAP_HOOK),
-        var(0x6041, "Statusword", T::Unsigned16, Ro, U16(0), MAP),
-        var(0x605A, "Quick stop option code", T::Integer16, Rw, I16(o.quick_stop()), HOOK),
-        var(0x605B, "Shutdown option code", T::Integer16, Rw, I16(o.shutdown()), HOOK),
-        var(0x605C, "Disable operation option code", T::Integer16, Rw, I16(o.disable_operation()), HOOK),
-        var(0x605D, "Halt option code", T::Integer16, Rw, I16(o.halt()), HOOK),
-        var(0x605E, "Fault reaction option code", T::Integer16, Rw, I16(o.fault_reaction()), HOOK),
-        var(0x6060, "Modes of operation", T::Integer8, Rww, I8(cfg.initial_mode), MAP_HOOK),
-        // The display starts with the power-on mode the drive enters.
-        var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(power_on_mode), MAP),
-        var(0x6062, "Position demand value", T::Integer32, Ro, I32(0), MAP),
-        var(0x6063, "Position actual internal value", T::Integer32, Ro, I32(0), MAP),
-        var(0x6064, "Position actual value", T::Integer32, Ro, I32(0), MAP),
-        var(0x6065, "Following error window", T::Unsigned32, Rw, U32(p.following_error_window), MAP_HOOK),
-        var(0x6066, "Following error time out", T::Unsigned16, Rw, U16(p.following_error_timeout), MAP_HOOK),
-        var(0x6067, "Position window", T::Unsigned32, Rw, U32(p.position_window), MAP_HOOK),
-        var(0x6068, "Position window time", T::Unsigned16, Rw, U16(p.position_window_time), MAP_HOOK),
-        var(0x606B, "Velocity demand value", T::Integer32, Ro, I32(0), MAP),
-        var(0x606C, "Velocity actual value", T::Integer32, Ro, I32(0), MAP),
-        var(0x606D, "Velocity window", T::Unsigned16, Rw, U16(p.velocity_window), MAP_HOOK),
-        var(0x606E, "Velocity window time", T::Unsigned16, Rw, U16(p.velocity_window_time), MAP_HOOK),
-        var(0x606F, "Velocity threshold", T::Unsigned16, Rw, U16(p.velocity_threshold), MAP_HOOK),
-        var(0x6070, "Velocity threshold time", T::Unsigned16, Rw, U16(p.velocity_threshold_time), MAP_HOOK),
-        var(0x6071, "Target torque", T::Integer16, Rww, I16(0), MAP_HOOK),
-        var(0x6072, "Max torque", T::Unsigned16, Rw, U16(max_torque), MAP_HOOK),
-        var(0x6073, "Max current", T::Unsigned16, Rw, U16(max_torque), HOOK),
-        var(0x6074, "Torque demand", T::Integer16, Ro, I16(0), MAP),
-        var(0x6075, "Motor rated current", T::Unsigned32, Rw, U32(rated_current_ma), HOOK),
-        var(0x6076, "Motor rated torque", T::Unsigned32, Rw, U32(rated_torque_mnm), HOOK),
-        var(0x6077, "Torque actual value", T::Integer16, Ro, I16(0), MAP),
-        var(0x6078, "Current actual value", T::Integer16, Ro, I16(0), MAP),
-        // mV; the bus starts at its nominal voltage.
-        var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(dc_link_mv), MAP),
-        var(0x607A, "Target position", T::Integer32, Rww, I32(0), MAP_HOOK),
-        array(0x607B, "Position range limit", T::Integer32, Rw, &[I32(0), I32(0)], HOOK),
-        var(0x607C, "Home offset", T::Integer32, Rw, I32(0), MAP_HOOK),
-        array(0x607D, "Software position limit", T::Integer32, Rw, &[I32(0), I32(0)], HOOK),
-        var(0x607E, "Polarity", T::Unsigned8, Rw, U8(f.polarity), HOOK),
-        var(0x607F, "Max profile velocity", T::Unsigned32, Rw, U32(p.max_profile_velocity), MAP_HOOK),
-        var(0x6080, "Max motor speed", T::Unsigned32, Rw, U32(max_motor_speed), MAP_HOOK),
-        var(0x6081, "Profile velocity", T::Unsigned32, Rw, U32(p.profile_velocity), MAP_HOOK),
-        var(0x6082, "End velocity", T::Unsigned32, Rw, U32(0), MAP_HOOK),
-        var(0x6083, "Profile acceleration", T::Unsigned32, Rw, U32(p.profile_acceleration), MAP_HOOK),
-        var(0x6084, "Profile deceleration", T::Unsigned32, Rw, U32(p.profile_deceleration), MAP_HOOK),
-        var(0x6085, "Quick stop deceleration", T::Unsigned32, Rw, U32(p.quick_stop_deceleration), MAP_HOOK),
-        var(0x6086, "Motion profile type", T::Integer16, Rw, I16(0), MAP_HOOK),
-        var(0x6087, "Torque slope", T::Unsigned32, Rw, U32(p.torque_slope), MAP_HOOK),
-        var(0x6088, "Torque profile type", T::Integer16, Rw, I16(0), MAP_HOOK),
-        array(0x608F, "Position encoder resolution", T::Unsigned32, Ro, &pair(f.encoder), PLAIN),
-        array(0x6090, "Velocity encoder resolution", T::Unsigned32, Ro, &pair(f.velocity_encoder), PLAIN),
-        array(0x6091, "Gear ratio", T::Unsigned32, Rw, &pair(f.gear), HOOK),
-        array(0x6092, "Feed constant", T::Unsigned32, Rw, &pair(f.feed), HOOK),
-        array(0x6096, "Velocity factor", T::Unsigned32, Rw, &pair(f.velocity_factor), HOOK),
-        array(0x6097, "Acceleration factor", T::Unsigned32, Rw, &pair(f.acceleration_factor), HOOK),
-        // Homing (behaviour: crate::homing through a ModeHandler).
-        var(0x6098, "Homing method", T::Integer8, Rw, I8(0), MAP_HOOK),
-        array(
-            0x6099,
-            "Homing speeds",
-            T::Unsigned32,
-            Rw,
-            &[U32(p.profile_velocity / 4), U32(p.profile_velocity / 40)],
-            MAP_HOOK
-        ),
-        var(0x609A, "Homing acceleration", T::Unsigned32, Rw, U32(p.profile_acceleration), MAP_HOOK),
-        var(0x60A8, "SI unit position", T::Unsigned32, Rw, U32(cfg.si_units[0]), PLAIN),
-        var(0x60A9, "SI unit velocity", T::Unsigned32, Rw, U32(cfg.si_units[1]), PLAIN),
-        var(0x60AA, "SI unit acceleration", T::Unsigned32, Rw, U32(cfg.si_units[2]), PLAIN),
-        var(0x60AB, "SI unit jerk", T::Unsigned32, Rw, U32(cfg.si_units[3]), PLAIN),
-        // Offsets and interpolation (behaviour: crate::interp).
-        var(0x60B0, "Position offset", T::Integer32, Rww, I32(0), MAP_HOOK),
-        var(0x60B1, "Velocity offset", T::Integer32, Rww, I32(0), MAP_HOOK),
-        var(0x60B2, "Torque offset", T::Integer16, Rww, I16(0), MAP_HOOK),
-        var(0x60B8, "Touch probe function", T::Unsigned16, Rww, U16(0), MAP_HOOK),
-        var(0x60B9, "Touch probe status", T::Unsigned16, Ro, U16(0), MAP),
-        var(0x60BA, "Touch probe 1 positive edge", T::Integer32, Ro, I32(0), MAP),
-        var(0x60BB, "Touch probe 1 negative edge", T::Integer32, Ro, I32(0), MAP),
-        var(0x60BC, "Touch probe 2 positive edge", T::Integer32, Ro, I32(0), MAP),
-        var(0x60BD, "Touch probe 2 negative edge", T::Integer32, Ro, I32(0), MAP),
-        var(0x60C0, "Interpolation sub mode select", T::Integer16, Rw, I16(0), MAP_HOOK),
-        // Sub 1 position; subs 2 (velocity, PVT) and 3 (segment time in ms,
-        // PT/PVT) for the manufacturer sub-modes of `IpMode`.
-        array(0x60C1, "Interpolation data record", T::Integer32, Rww, &[I32(0), I32(0), I32(0)], MAP_HOOK),
-        record(
-            0x60C2,
-            "Interpolation time period",
-            [
-                sub(1, "Interpolation time period value", T::Unsigned8, Rw, U8(1), MAP_HOOK),
-                sub(2, "Interpolation time index", T::Integer8, Rw, I8(-3), MAP_HOOK),
-            ]
-        ),
-        array(0x60C3, "Interpolation sync definition", T::Unsigned8, Rw, &[U8(0), U8(1)], PLAIN),
-        record(
-            0x60C4,
-            "Interpolation data configuration",
-            [
-                sub(1, "Maximum buffer size", T::Unsigned32, Ro, U32(1), HOOK),
-                sub(2, "Actual buffer size", T::Unsigned32, Rw, U32(1), HOOK),
-                sub(3, "Buffer organization", T::Unsigned8, Rw, U8(0), HOOK),
-                sub(4, "Buffer position", T::Unsigned16, Rw, U16(1), HOOK),
-                sub(5, "Size of data record", T::Unsigned8, Rw, U8(4), HOOK),
-                sub(6, "Buffer clear", T::Unsigned8, Rw, U8(0), HOOK),
-            ]
-        ),
-        var(0x60C5, "Max acceleration", T::Unsigned32, Rw, U32(p.max_acceleration), MAP_HOOK),
-        var(0x60C6, "Max deceleration", T::Unsigned32, Rw, U32(p.max_acceleration), MAP_HOOK),
-        var(0x60F4, "Following error actual value", T::Integer32, Ro, I32(0), MAP),
-        var(0x60FD, "Digital inputs", T::Unsigned32, Ro, U32(0), MAP),
-        array(0x60FE, "Digital outputs", T::Unsigned32, Rww, &[U32(0), U32(cfg.io.output_mask)], MAP_HOOK),
-        var(0x60FF, "Target velocity", T::Integer32, Rww, I32(0), MAP_HOOK),
-        var(0x6502, "Supported drive modes", T::Unsigned32, Ro, U32(modes), PLAIN),
-    ];
-    if cfg.profile_jerk_object {
-        // CiA 402-2 60A4h profile jerk (ARRAY, up to 6 entries): this drive
-        // uses two, sub 1 while the speed rises, sub 2 while it falls.
-        let (ja, jd) = cfg.profile_jerk_rates();
-        v.push(array(0x60A4, "Profile jerk", T::Unsigned32, Rw, &[U32(ja), U32(jd)], MAP_HOOK));
-    }
-    if cfg.io.probe_source_object {
-        // 60D0h touch probe source (ARRAY of INTEGER16), used with 60B8h
-        // trigger selection 10b.
-        v.push(array(0x60D0, "Touch probe source", T::Integer16, Rw, &[I16(1), I16(2)], HOOK));
-    }
-    if modes & op::supported_bit(op::HM) != 0 {
-        // 60E3h: the standard methods (CiA 402-2 §6.7.x: 1–14, 17–30, 33–35, 37).
-        // A handler with a registry replaces it (`refresh_handler_objects`).
-        let methods: alloc::vec::Vec<i8> =
-            (1..=37i8).filter(|m| !matches!(m, 15 | 16 | 31 | 32 | 36)).collect();
-        v.push(supported_homing_methods(&methods));
-    }
-    if modes & op::supported_bit(op::VL) != 0 {
-        // vl (CiA 402-2 §6.5): speeds in rpm of the motor shaft.
-        let rpm = (m.max_speed * 60.0 / (2.0 * core::f64::consts::PI)).clamp(1.0, 32767.0) as u32;
-        v.extend([
-            var(0x6042, "vl target velocity", T::Integer16, Rww, I16(0), MAP_HOOK),
-            var(0x6043, "vl velocity demand", T::Integer16, Ro, I16(0), MAP),
-            var(0x6044, "vl velocity actual value", T::Integer16, Ro, I16(0), MAP),
-            array(0x6046, "vl velocity min max amount", T::Unsigned32, Rw, &[U32(0), U32(rpm)], HOOK),
-            record(
-                0x6048,
-                "vl velocity acceleration",
-                [
-                    sub(1, "Delta speed", T::Unsigned32, Rw, U32(rpm), HOOK),
-                    sub(2, "Delta time", T::Unsigned16, Rw, U16(1), HOOK),
-                ],
-            ),
-            record(
-                0x6049,
-                "vl velocity deceleration",
-                [
-                    sub(1, "Delta speed", T::Unsigned32, Rw, U32(rpm), HOOK),
-                    sub(2, "Delta time", T::Unsigned16, Rw, U16(1), HOOK),
-                ],
-            ),
-        ]);
+/// The table entry a drive tag names.
+fn param_of(owner: Owner) -> Option<(usize, &'static super::table::Param)> {
+    let k = usize::from(owner.app_tag()?);
+    PARAMS.get(k).map(|p| (k, p))
+}
+
+/// The table entry of an index.
+fn param_at(index: u16) -> Option<&'static super::table::Param> {
+    PARAMS.iter().find(|p| p.index == index)
+}
+
+/// Every object of the drive with power-on values from `cfg` (`modes` is
+/// 6502h), its writable sub-objects owned by their table entry.
+pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> Vec<Object> {
+    let mut v = Vec::with_capacity(PARAMS.len());
+    for (k, p) in PARAMS.iter().enumerate() {
+        let Some(mut o) = p.object(cfg, modes) else { continue };
+        if p.owned() {
+            let tag = Owner::app(k as u8);
+            for s in o.subs_mut() {
+                if s.access.writable() {
+                    s.owner = tag;
+                }
+                if p.live && s.sub != 0 {
+                    s.owner = tag;
+                    s.live = true;
+                }
+            }
+        }
+        v.push(o);
     }
     v
+}
+
+impl Drive {
+    /// Step 5 of the write path for one of the drive's objects: its
+    /// entry's check. Another application's tag is not the drive's: stored.
+    pub fn check_object(
+        &mut self,
+        od: &mut ObjectDictionary,
+        at: &Target,
+        data: &[u8],
+    ) -> Result<WriteOutcome, SdoAbort> {
+        match param_of(at.owner) {
+            Some((_, p)) if p.index == at.index => match p.check {
+                Some(check) => {
+                    check(self, od, Arg { index: at.index, sub: at.sub, v: Raw::of(data), how: How::Write })
+                }
+                None => Ok(WriteOutcome::Store),
+            },
+            _ => Ok(WriteOutcome::Store),
+        }
+    }
+
+    /// Step 7: the stored value taken by the object's entry.
+    pub fn apply_object(&mut self, od: &mut ObjectDictionary, at: &Target) {
+        if let Some((_, p)) = param_of(at.owner)
+            && p.index == at.index
+            && let Some(apply) = p.apply
+        {
+            let v = Raw::of(od.bytes(at.r));
+            apply(self, od, Arg { index: at.index, sub: at.sub, v, how: How::Write });
+        }
+    }
+
+    /// Before a read of a live object: the handlers' present values (60C4h).
+    pub fn refresh_object(&mut self, od: &mut ObjectDictionary, at: &Target) {
+        self.read_handler_object(od, at.index, at.sub);
+    }
+
+    /// A write forwarded by a wrapping application (a personality that
+    /// translated it): the object's check, then its apply, by index. Nothing
+    /// is stored; the caller stores what it wants. `Ok(Handled)`: the check
+    /// applied it.
+    pub fn on_write(
+        &mut self,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<WriteOutcome, SdoAbort> {
+        let Some(p) = param_at(index) else { return Ok(WriteOutcome::Store) };
+        let a = Arg { index, sub, v: Raw::of(data), how: How::Write };
+        let outcome = match p.check {
+            Some(check) => check(self, od, a)?,
+            None => WriteOutcome::Store,
+        };
+        if outcome == WriteOutcome::Store {
+            if let Some(apply) = p.apply {
+                apply(self, od, a);
+            }
+            // A withdrawn object's value lives with the drive.
+            if let Ok(e) = self.withdrawn.find(index, sub) {
+                self.withdrawn.set_le(e, data);
+            }
+        }
+        Ok(outcome)
+    }
+
+    /// Before a read by index (a wrapping application's own read path).
+    pub fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        self.read_handler_object(od, index, sub);
+    }
+
+    /// Takes every stored parameter (after install, and after the node
+    /// restored or loaded values behind the write path), entry by entry in
+    /// table order, then derives the units and re-resolves the handles. A
+    /// withdrawn object's values are the drive's own (`withdraw_object`).
+    pub(crate) fn reload(&mut self, od: &mut ObjectDictionary) {
+        for p in PARAMS {
+            let Some(apply) = p.apply else { continue };
+            let src = if self.withdrawn.object(p.index).is_some() { &self.withdrawn } else { &*od };
+            let Some(o) = src.object(p.index) else { continue };
+            let vals: Vec<(u8, Raw)> = o
+                .subs()
+                .iter()
+                .filter(|s| s.access.writable())
+                .map(|s| (s.sub, Raw::of(s.bytes())))
+                .collect();
+            for (s, v) in vals {
+                apply(self, od, Arg { index: p.index, sub: s, v, how: How::Reload });
+            }
+        }
+        // Configuration, not an object.
+        self.params.homing_return_to_home = self.cfg.homing_return_to_home;
+        if let Some(units) = Units::new(&self.factor) {
+            self.units = units;
+        }
+        self.refs = Refs::resolve(od);
+    }
+
+    /// Shows the handlers' present values of the objects they own (60C4h)
+    /// in the dictionary (before an SDO upload, after install).
+    pub(crate) fn read_handler_object(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        if index != 0x60C4 {
+            return;
+        }
+        let Some(v) = self.handlers.iter().find_map(|h| h.read_object(index, sub)) else { return };
+        if let Ok(r) = od.find(index, sub) {
+            let n = od.bytes(r).len().min(8);
+            od.set_le(r, &v.to_le_bytes()[..n]);
+        }
+    }
+
+    /// After install or a new handler: 60C4h from the ip handler, 60E3h
+    /// from the hm handler's method registry.
+    pub(crate) fn refresh_handler_objects(&mut self, od: &mut ObjectDictionary) {
+        for sub in 1..=6 {
+            self.read_handler_object(od, 0x60C4, sub);
+            // The handler's state now is the power-on value (1011h restores it).
+            if let Some(s) = od.get_mut(0x60C4, sub) {
+                s.default = s.bytes().to_vec();
+            }
+        }
+        // Replaced in place only: inserting a new object would move the
+        // handles the node's PDO service holds (a handler added after
+        // install without hm at install keeps no 60E3h).
+        let present = od.object(0x60E3).is_some();
+        if let Some(methods) = self.handlers.iter().find_map(|h| h.homing_methods())
+            && present
+        {
+            od.insert(supported_homing_methods(&methods));
+            self.refs = Refs::resolve(od);
+        }
+    }
+
+    /// Re-derives the unit conversions after a factor group write (checked
+    /// exact by the entry), keeping the position where it is.
+    pub(crate) fn retune_units(&mut self) {
+        let Some(u) = Units::new(&self.factor) else { return };
+        // The demand is in user units: keep it at the same increments.
+        let inc = self.units.pos_to_inc_f(self.dem.pos);
+        // The reference shift's fraction, over the new denominator.
+        let frac = self.units.frac_to_inc_f(self.inc_frac) * u.position_ratio().den as f64;
+        self.inc_frac = (libm::floor(frac) as i128).clamp(0, u.position_ratio().den as i128 - 1);
+        self.units = u;
+        self.dem.pos = self.units.inc_to_pos_f(inc);
+        self.dem.vel = 0.0;
+        self.pp.reset(self.dem.pos);
+    }
 }
 
 /// Handles of the values the drive pushes every period; `None` where the

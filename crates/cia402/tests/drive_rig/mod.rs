@@ -1,22 +1,24 @@
-//! Test rig for the drive tests: one `DriveNode` and a probe on a
-//! zero-time virtual bus.
+//! Test rig for the drive tests: one `NodeDevice` (node + drive, or node +
+//! an application wrapping the drive) and a probe on a zero-time virtual bus.
 #![allow(dead_code)]
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame, Instant};
-use drivebus_cia402::drive::{Drive, DriveConfig, DriveNode, generic_drive, generic_drive_with};
+use drivebus_cia402::drive::{Drive, DriveConfig, generic_drive, generic_drive_with};
+use drivebus_node::{Application, NodeDevice};
 
 pub const ID: u8 = 5;
 
-pub struct Rig {
+pub struct Rig<A: Application + 'static = Drive> {
     pub bus: Bus,
     pub probe: ProbeId,
     pub dut: NodeId,
     /// Frames other than SDO responses seen during SDO exchanges.
     stash: Vec<Frame>,
+    app: core::marker::PhantomData<A>,
 }
 
-impl Rig {
+impl Rig<Drive> {
     /// The generic drive, booted, boot-up frame consumed.
     pub fn generic() -> Rig {
         Rig::with(generic_drive(ID))
@@ -26,27 +28,30 @@ impl Rig {
         Rig::with(generic_drive_with(ID, cfg, Vec::new()))
     }
 
-    pub fn with(dn: DriveNode) -> Rig {
+    pub fn drive(&self) -> &Drive {
+        &self.dn().app
+    }
+    pub fn drive_mut(&mut self) -> &mut Drive {
+        &mut self.dn_mut().app
+    }
+}
+
+impl<A: Application + 'static> Rig<A> {
+    pub fn with(dn: NodeDevice<A>) -> Rig<A> {
         let mut bus = Bus::new(BusConfig::zero_time());
         let probe = bus.attach_probe();
         let dut = bus.attach(dn);
         bus.run_for(Duration::from_micros(1));
-        let mut rig = Rig { bus, probe, dut, stash: Vec::new() };
+        let mut rig = Rig { bus, probe, dut, stash: Vec::new(), app: core::marker::PhantomData };
         assert_eq!(rig.take(), vec![Frame::new(0x700 + ID as u16, &[0])], "boot-up");
         rig
     }
 
-    pub fn dn(&self) -> &DriveNode {
-        self.bus.node::<DriveNode>(self.dut).expect("dut")
+    pub fn dn(&self) -> &NodeDevice<A> {
+        self.bus.node::<NodeDevice<A>>(self.dut).expect("dut")
     }
-    pub fn dn_mut(&mut self) -> &mut DriveNode {
-        self.bus.node_mut::<DriveNode>(self.dut).expect("dut")
-    }
-    pub fn drive(&self) -> &Drive {
-        &self.dn().drive
-    }
-    pub fn drive_mut(&mut self) -> &mut Drive {
-        &mut self.dn_mut().drive
+    pub fn dn_mut(&mut self) -> &mut NodeDevice<A> {
+        self.bus.node_mut::<NodeDevice<A>>(self.dut).expect("dut")
     }
     pub fn now(&self) -> Instant {
         self.bus.now()
@@ -144,7 +149,7 @@ impl Rig {
         &mut self,
         step_us: u64,
         max_ms: f64,
-        mut pred: impl FnMut(&Rig) -> bool,
+        mut pred: impl FnMut(&Rig<A>) -> bool,
     ) -> Option<f64> {
         let t0 = self.now();
         loop {

@@ -4,10 +4,11 @@
 use std::future::Future;
 use std::time::Duration;
 
-use drivebus_master::{Master, NodeDevice, NodeHost, spawn_node};
-use drivebus_node::{Identity, Node, NodeConfig};
+use drivebus_master::Master;
+use drivebus_node::{Identity, Node, NodeConfig, NodeDevice};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectCode, SubObject, Value};
 use drivebus_transport::Hub;
+use drivebus_transport::host::{DeviceHost, spawn};
 
 /// Bounds every test: nothing here may hang CI.
 pub async fn bounded<T>(f: impl Future<Output = T>) -> T {
@@ -49,8 +50,8 @@ pub fn node(id: u8) -> Node {
     n
 }
 
-pub fn host(hub: &Hub, n: Node) -> NodeHost<NodeDevice<NoHooks>> {
-    spawn_node(n, NoHooks, hub.attach())
+pub fn host(hub: &Hub, n: Node) -> DeviceHost<NodeDevice<NoHooks>> {
+    spawn(NodeDevice::new(n, NoHooks), hub.attach())
 }
 
 /// A master on `hub` with short SDO timeouts.

@@ -4,7 +4,7 @@
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame, Instant};
-use drivebus_node::{Node, NodeConfig, SimNode};
+use drivebus_node::{Node, NodeConfig, NodeDevice};
 use drivebus_od::NoHooks;
 
 /// The candump-style frame parser shared with the manual traces.
@@ -34,7 +34,7 @@ impl Rig {
         let id = node.node_id();
         let mut bus = Bus::new(BusConfig::zero_time());
         let probe = bus.attach_probe();
-        let dut = bus.attach(SimNode::new(node, NoHooks));
+        let dut = bus.attach(NodeDevice::new(node, NoHooks));
         bus.run_for(Duration::from_micros(1));
         let mut rig = Rig { bus, probe, dut };
         if (1..=127).contains(&id) {
@@ -44,11 +44,11 @@ impl Rig {
     }
 
     pub fn node(&self) -> &Node {
-        &self.bus.node::<SimNode>(self.dut).expect("dut").node
+        &self.bus.node::<NodeDevice>(self.dut).expect("dut").node
     }
 
     pub fn node_mut(&mut self) -> &mut Node {
-        &mut self.bus.node_mut::<SimNode>(self.dut).expect("dut").node
+        &mut self.bus.node_mut::<NodeDevice>(self.dut).expect("dut").node
     }
 
     /// Raise an EMCY in the device (as its application would) and let it go out.

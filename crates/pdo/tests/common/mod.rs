@@ -4,7 +4,7 @@
 
 use drivebus_can::{Frame, Instant};
 use drivebus_od::{
-    Access, DataType, NoHooks, Object, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Value,
+    Access, DataType, NoHooks, Object, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Target, Value,
     WriteOutcome,
 };
 use drivebus_pdo::{Pdo, PdoConfig, classify, install};
@@ -69,21 +69,21 @@ pub struct NodeHooks<'a> {
 }
 
 impl ObjectHooks for NodeHooks<'_> {
-    fn on_write(
+    fn check_write(
         &mut self,
         od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
+        at: &Target,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
-        if classify(self.pdo.config(), index).is_none() {
-            return Ok(WriteOutcome::Store);
+        if classify(self.pdo.config(), at.index).is_some() {
+            self.pdo.check_write(od, at.index, at.sub, data)?;
         }
-        self.pdo.check_write(od, index, sub, data)?;
-        let r = od.find(index, sub)?;
-        od.set_raw(r, data);
-        self.pdo.reconfigure(od, index, sub);
-        Ok(WriteOutcome::Handled)
+        Ok(WriteOutcome::Store)
+    }
+    fn apply_write(&mut self, od: &mut ObjectDictionary, at: &Target) {
+        if classify(self.pdo.config(), at.index).is_some() {
+            self.pdo.reconfigure(od, at.index, at.sub);
+        }
     }
 }
 

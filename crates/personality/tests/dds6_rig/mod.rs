@@ -22,8 +22,8 @@ mod shared_trace;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
-use drivebus_personality::behaviour::dds6::Dds6;
-use drivebus_personality::{PersonalityNode, Profile, build_with};
+use drivebus_personality::dds6::Dds6;
+use drivebus_personality::{PersonalityDevice, Profile, build_with};
 
 /// The frame lines of a trace file, comments dropped; checks the count.
 pub fn trace(text: &'static str, frames: usize) -> Vec<&'static str> {
@@ -122,8 +122,8 @@ impl Rig {
     }
 
     /// The personality node.
-    pub fn dn(&self) -> &PersonalityNode {
-        self.bus.node::<PersonalityNode>(self.dut).unwrap()
+    pub fn dn(&self) -> &PersonalityDevice {
+        self.bus.node::<PersonalityDevice>(self.dut).unwrap()
     }
 
     /// A dictionary value.

@@ -7,8 +7,8 @@ pub use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 pub use drivebus_can::{Duration, Frame};
 pub use drivebus_cia402::drive::DriveConfig;
 use drivebus_node::MemoryStorage;
-pub use drivebus_personality::behaviour::ipos::Ipos;
-pub use drivebus_personality::{PersonalityNode, Profile, build_custom};
+pub use drivebus_personality::ipos::Ipos;
+pub use drivebus_personality::{PersonalityDevice, Profile, build_custom};
 
 /// Encoder counts per motor revolution: a 500-line quadrature encoder
 /// (§6.4 step 5, §7.3.1 step 6: "500 lines … 20 rotations … 9C40h").
@@ -94,8 +94,8 @@ impl Rig {
         Rig::on(|_| {})
     }
 
-    pub fn dn(&self) -> &PersonalityNode {
-        self.bus.node::<PersonalityNode>(self.dut).unwrap()
+    pub fn dn(&self) -> &PersonalityDevice {
+        self.bus.node::<PersonalityDevice>(self.dut).unwrap()
     }
 
     /// Runs the bus for `us` µs, sorting what the drive sent.
@@ -204,12 +204,12 @@ impl Rig {
 
     /// Motor shaft position \[revolutions\] of the model.
     pub fn motor_revs(&self) -> f64 {
-        self.dn().drive.model().position() / (2.0 * core::f64::consts::PI)
+        self.dn().app.drive.model().position() / (2.0 * core::f64::consts::PI)
     }
 
     /// Motor speed \[rpm\] of the model.
     pub fn motor_rpm(&self) -> f64 {
-        self.dn().drive.model().velocity() * 60.0 / (2.0 * core::f64::consts::PI)
+        self.dn().app.drive.model().velocity() * 60.0 / (2.0 * core::f64::consts::PI)
     }
 
     /// A live value straight from the dictionary (what the master's
@@ -218,7 +218,7 @@ impl Rig {
     pub fn od_i64(&self, index: u16, sub: u8) -> i64 {
         match self.dn().node.od().get_i64(index, sub) {
             Some(v) => v,
-            None if (index, sub) == (0x6074, 0) => self.dn().drive.demand_torque().round() as i64,
+            None if (index, sub) == (0x6074, 0) => self.dn().app.drive.demand_torque().round() as i64,
             None => panic!("{index:04X}h:{sub} is not in the dictionary"),
         }
     }

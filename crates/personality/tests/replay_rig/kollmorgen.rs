@@ -8,7 +8,7 @@ use super::trace::{Line, Trace, every_2nd_and_3rd};
 use super::{Rig, assert_form, frs, replay};
 use drivebus_can::Frame;
 use drivebus_od::Value;
-use drivebus_personality::{PersonalityNode, Profile};
+use drivebus_personality::{PersonalityDevice, Profile};
 
 /// `profile` as node `id`, booted: the only power-on frame is the boot-up
 /// message (KC1 §8.2.1.7 frame 1, AKD §7.2.1.7: `703 00` for node 3).
@@ -20,7 +20,7 @@ pub fn booted(profile: Profile, id: u8) -> Rig {
 
 /// A node built for a test (machine or behaviour of its own) as node `id`,
 /// booted: boot-up message only.
-pub fn booted_with(pn: PersonalityNode, id: u8) -> Rig {
+pub fn booted_with(pn: PersonalityDevice, id: u8) -> Rig {
     let (r, boot) = Rig::with(pn);
     assert_eq!(boot, frs(&[&format!("{:03X}#00", 0x700 + u16::from(id))]));
     r
@@ -184,7 +184,7 @@ pub fn sync_every_nth(r: &mut Rig, t: &Trace, setup: (u32, u32), sync: u32) {
 /// A drive fault 4310h on node 1: the Kollmorgen EMCY `emcy` (register 08h
 /// without the generic bit, category 01h) within 1 ms.
 pub fn emcy_fault(r: &mut Rig, emcy: &str) {
-    r.pn_mut().inject(drivebus_cia402::drive::Injection::Fault(0x4310));
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x4310));
     r.run_ms(1);
     assert_eq!(r.take(), frs(&[emcy]));
 }

@@ -1,4 +1,4 @@
-//! A test rig for the personality replays: one [`PersonalityNode`] built by
+//! A test rig for the personality replays: one [`PersonalityDevice`] built by
 //! `drivebus_personality::build` and a probe on a zero-time virtual bus,
 //! frames written candump-style (`603#2F 60 60 00 03 00 00 00`).
 #![allow(dead_code)]
@@ -9,7 +9,7 @@ pub mod trace;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame, Instant};
 use drivebus_node::Node;
-use drivebus_personality::{PersonalityNode, Profile};
+use drivebus_personality::{PersonalityDevice, Profile};
 
 pub use trace::fr;
 
@@ -37,7 +37,7 @@ impl Rig {
     }
 
     /// A built node on a fresh bus.
-    pub fn with(node: PersonalityNode) -> (Rig, Vec<Frame>) {
+    pub fn with(node: PersonalityDevice) -> (Rig, Vec<Frame>) {
         let mut bus = Bus::new(BusConfig::zero_time());
         let probe = bus.attach_probe();
         let dut = bus.attach(node);
@@ -47,12 +47,12 @@ impl Rig {
         (rig, boot)
     }
 
-    pub fn pn(&self) -> &PersonalityNode {
-        self.bus.node::<PersonalityNode>(self.dut).expect("dut")
+    pub fn pn(&self) -> &PersonalityDevice {
+        self.bus.node::<PersonalityDevice>(self.dut).expect("dut")
     }
 
-    pub fn pn_mut(&mut self) -> &mut PersonalityNode {
-        self.bus.node_mut::<PersonalityNode>(self.dut).expect("dut")
+    pub fn pn_mut(&mut self) -> &mut PersonalityDevice {
+        self.bus.node_mut::<PersonalityDevice>(self.dut).expect("dut")
     }
 
     pub fn node(&self) -> &Node {

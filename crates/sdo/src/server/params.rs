@@ -9,7 +9,7 @@ use super::{SdoServer, ServerConfig};
 use alloc::vec::Vec;
 use drivebus_can::CanId;
 use drivebus_od::{
-    Access, DataType, Object, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Value, WriteOutcome,
+    Access, DataType, Object, ObjectDictionary, ObjectHooks, SdoAbort, SubObject, Target, Value, WriteOutcome,
 };
 
 /// First server SDO parameter record.
@@ -140,20 +140,18 @@ pub fn check_write(od: &ObjectDictionary, index: u16, sub: u8, data: &[u8]) -> R
 }
 
 /// Hooks applying [`check_write`] to 1200h..127Fh and storing what passes;
-/// for integrators (and tests) without a node to route hooks. Pair it with
-/// other hooks through the `(A, B)` implementation.
+/// for integrators (and tests) without a node to route writes to owners.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ParamHooks;
 
 impl ObjectHooks for ParamHooks {
-    fn on_write(
+    fn check_write(
         &mut self,
         od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
+        at: &Target,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
-        check_write(od, index, sub, data)?;
+        check_write(od, at.index, at.sub, data)?;
         Ok(WriteOutcome::Store)
     }
 }

@@ -3,7 +3,7 @@
 use super::*;
 use crate::crc::crc16;
 use alloc::vec;
-use drivebus_od::{Access, Object, SubObject, Value, WriteOutcome};
+use drivebus_od::{Access, Object, SubObject, Target, Value, WriteOutcome};
 
 const NODE: u16 = 5;
 const RX: u16 = 0x600 + NODE;
@@ -13,14 +13,13 @@ const TX: u16 = 0x580 + NODE;
 /// refuse reads of 2007h, so every dictionary/hook abort can reach the wire.
 struct Hooks;
 impl ObjectHooks for Hooks {
-    fn on_read(&mut self, _: &mut ObjectDictionary, index: u16, _: u8) -> Result<(), SdoAbort> {
-        if index == 0x2007 { Err(SdoAbort::DEVICE_STATE) } else { Ok(()) }
+    fn on_read(&mut self, _: &mut ObjectDictionary, at: &Target) -> Result<(), SdoAbort> {
+        if at.index == 0x2007 { Err(SdoAbort::DEVICE_STATE) } else { Ok(()) }
     }
-    fn on_write(
+    fn check_write(
         &mut self,
         _: &mut ObjectDictionary,
-        _: u16,
-        _: u8,
+        _: &Target,
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
         let v = u32::from_le_bytes([data[0], data[1], data[2], data[3]]);
@@ -626,7 +625,7 @@ fn additional_channel_serves_requests() {
         &Frame::new8(0x6C1, [0x40, 0x00, 0x10, 0, 0, 0, 0, 0]),
         Instant::ZERO,
         &mut od,
-        &mut (Hooks, ParamHooks),
+        &mut ParamHooks,
         &mut |f: Frame| out.push(f),
     );
     assert_eq!(out, [Frame::new8(0x6C2, [0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x02, 0x00])]);
@@ -672,11 +671,10 @@ struct Growing {
     reads: usize,
 }
 impl ObjectHooks for Growing {
-    fn on_read(&mut self, od: &mut ObjectDictionary, index: u16, sub: u8) -> Result<(), SdoAbort> {
+    fn on_read(&mut self, od: &mut ObjectDictionary, at: &Target) -> Result<(), SdoAbort> {
         self.reads += 1;
-        let r = od.find(index, sub)?;
         let len = 20 + 7 * self.reads;
-        od.set_raw(r, &vec![self.reads as u8; len]);
+        od.set_raw(at.r, &vec![self.reads as u8; len]);
         Ok(())
     }
 }
@@ -684,7 +682,7 @@ impl ObjectHooks for Growing {
 #[test]
 fn read_hook_runs_once_per_upload() {
     let mut od = od();
-    od.get_mut(0x2000, 0).unwrap().hooked = true;
+    od.get_mut(0x2000, 0).unwrap().live = true;
     let mut s = SdoServer::default_channel(NODE as u8, ServerConfig::default());
     let mut h = Growing { reads: 0 };
     let mut got = Vec::new();
