@@ -17,7 +17,6 @@ use std::time::Duration;
 
 use drivebus_nmt::RemoteState;
 use tokio::sync::{Notify, broadcast};
-use tokio::time::Instant as TokioInstant;
 
 use crate::master::Master;
 use crate::pdo::{PdoDir, PdoMapEntry};
@@ -239,7 +238,7 @@ impl Master {
             let (latest, updated) = (latest.clone(), updated.clone());
             // Decoded in the receive task, in frame order: once an SDO
             // answer is in, every TPDO sent before it is in `latest`.
-            let sink = move |f: &drivebus_can::Frame| {
+            let sink = move |f: &drivebus_can::Frame, _: drivebus_can::Instant| {
                 let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
                 for m in mapping.iter().filter(|m| m.index >= 0x1000) {
                     if let Some((off, len)) = offset_of(&mapping, m.index, m.sub)
@@ -392,7 +391,7 @@ impl Drive {
         timeout: Duration,
         pred: impl Fn(u16) -> bool,
     ) -> Result<u16, DriveError> {
-        let deadline = TokioInstant::now() + timeout;
+        let deadline = self.master.now() + timeout;
         loop {
             // Register for the next TPDO before reading, so none is missed.
             let notified = self.updated.notified();
@@ -403,14 +402,14 @@ impl Drive {
             if !allow_fault && DriveState::from_statusword(sw) == DriveState::Fault {
                 return Err(DriveError::Fault { statusword: sw });
             }
-            let now = TokioInstant::now();
+            let now = self.master.now();
             if now >= deadline {
                 return Err(DriveError::Timeout { waiting_for: what, statusword: sw });
             }
-            let wake = deadline.min(now + self.poll);
+            let wake = deadline.saturating_duration_since(now).min(self.poll);
             tokio::select! {
                 () = notified => {}
-                () = tokio::time::sleep_until(wake) => {}
+                () = self.master.sleep(wake) => {}
             }
         }
     }
@@ -489,20 +488,20 @@ impl Drive {
     /// Writes 6060h and waits for 6061h to show `mode`.
     pub async fn set_mode(&self, mode: i8) -> Result<(), DriveError> {
         self.write_raw(MODES_OF_OPERATION, 0, &mode.to_le_bytes()).await?;
-        let deadline = TokioInstant::now() + self.timeout;
+        let deadline = self.master.now() + self.timeout;
         loop {
             let v = self.read_raw(MODES_DISPLAY, 0).await?;
             if v.first().map(|b| *b as i8) == Some(mode) {
                 return Ok(());
             }
-            if TokioInstant::now() >= deadline {
+            if self.master.now() >= deadline {
                 let sw = self.statusword().await.unwrap_or(0);
                 return Err(DriveError::Timeout {
                     waiting_for: "modes of operation display",
                     statusword: sw,
                 });
             }
-            tokio::time::sleep(self.poll).await;
+            self.master.sleep(self.poll).await;
         }
     }
 
@@ -578,7 +577,7 @@ impl Drive {
         let mut n = 0;
         for v in values {
             loop {
-                match tokio::time::timeout(Duration::from_secs(1), ticks.recv()).await {
+                match self.master.timeout(Duration::from_secs(1), ticks.recv()).await {
                     Ok(Ok(_)) => {
                         // Behind by whole cycles: align to the latest SYNC
                         // rather than sending a burst for the old ones.

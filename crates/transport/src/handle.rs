@@ -111,6 +111,15 @@ impl CanTx {
         }
     }
 
+    /// False for transports that cannot carry remote (RTR) frames
+    /// (socketcand): sending one fails.
+    pub fn carries_rtr(&self) -> bool {
+        match &self.0 {
+            TxInner::Hub { .. } => true,
+            TxInner::Chan { rtr, .. } => *rtr,
+        }
+    }
+
     /// Waits until every frame this transport was given before the call
     /// has been written to the socket or device, so that a program may
     /// report success and exit without losing it. On the in-process hub
