@@ -179,20 +179,26 @@ impl SdoHandle {
         self.download(index, sub, &value.to_sdo()).await
     }
 
-    /// The data type of `index`/`sub` in the dictionary registered with
-    /// [`Master::set_eds`].
+    /// The data type of `index`/`sub`: from the dictionary registered
+    /// with [`Master::set_eds`], else from the CiA 301/402 standard
+    /// objects (`drivebus_objects`).
     pub fn data_type(&self, index: u16, sub: u8) -> Option<DataType> {
-        self.master.eds(self.node).and_then(|od| od.get(index, sub).map(|s| s.data_type))
+        self.master
+            .eds(self.node)
+            .and_then(|od| od.get(index, sub).map(|s| s.data_type))
+            .or_else(|| drivebus_objects::entry(index, sub).map(|e| e.data_type))
     }
 
     fn resolve_type(&self, index: u16, sub: u8, dt: Option<DataType>) -> Result<DataType, SdoError> {
         dt.or_else(|| self.data_type(index, sub)).ok_or_else(|| {
-            SdoError::InvalidRequest(format!("data type of {index:04X}h:{sub} unknown (no EDS entry)"))
+            SdoError::InvalidRequest(format!(
+                "data type of {index:04X}h:{sub} unknown (no EDS entry, not a CiA 301/402 standard object)"
+            ))
         })
     }
 
     /// Reads and decodes `index`/`sub` as `dt`, or as the type the node's
-    /// EDS dictionary gives when `dt` is `None`.
+    /// EDS dictionary or the standard objects give when `dt` is `None`.
     pub async fn read_value(&self, index: u16, sub: u8, dt: Option<DataType>) -> Result<Value, SdoError> {
         let dt = self.resolve_type(index, sub, dt)?;
         let data = self.upload(index, sub).await?;
