@@ -30,6 +30,7 @@
 
 mod clock;
 mod core;
+pub mod dcf;
 pub mod drive;
 pub mod driver;
 pub mod host;
@@ -40,12 +41,15 @@ pub mod scan;
 pub mod sdo;
 
 pub use crate::core::Stats;
-pub use drive::{Drive, DriveError, DriveState, Profile};
+pub use dcf::DumpReport;
+pub use drive::{
+    Drive, DriveError, DriveState, MotionLimits, MotionProgress, Profile, StopAction, StopReport, mode_name,
+};
 pub use driver::sim::{SimBus, Stalled};
 pub use host::{Device, NodeDevice, NodeHost, spawn_device, spawn_node, spawn_on_hub};
-pub use lss::{LssError, LssMaster};
+pub use lss::{LssError, LssMaster, OnlySlave};
 pub use master::{Master, MasterConfig, MasterEvent, NodeStatus, PdoCallback, SyncTick, WaitError};
-pub use pdo::{ConfigError, PdoDir, PdoMapEntry, PdoRecord};
+pub use pdo::{ConfigError, PdoDir, PdoMapEntry, PdoRecord, PdoWriteError};
 pub use scan::{ScanOptions, ScannedNode};
 pub use sdo::{SdoError, SdoHandle, SdoValue};
 

@@ -49,6 +49,18 @@ impl fmt::Display for LssError {
 
 impl std::error::Error for LssError {}
 
+/// What [`LssMaster::configure_only_slave`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnlySlave {
+    /// The one non-configured slave, now with the node-ID (and stored if asked).
+    Configured(LssAddress),
+    /// No non-configured slave answered.
+    NoneFound,
+    /// More than one non-configured slave is on the bus: nothing was
+    /// configured (the first one found is given, for a selective switch).
+    Several(LssAddress),
+}
+
 /// The LSS master; from [`Master::lss`].
 #[derive(Clone, Debug)]
 pub struct LssMaster {
@@ -241,6 +253,76 @@ impl LssMaster {
             FastScanOutcome::NoneFound => Ok(None),
             FastScanOutcome::Lost(_) => Err(LssError::Timeout),
         }
+    }
+
+    /// Configures `node_id` on the non-configured slave, refusing when
+    /// there is more than one (a global switch would give every slave the
+    /// same node-ID): fastscan isolates one slave, which gets the node-ID;
+    /// if another non-configured slave still answers "identify
+    /// non-configured remote slave", the first is unconfigured again
+    /// (node-ID FFh) and nothing changes. Otherwise the node-ID is stored
+    /// when `store`, and the slave returns to waiting (it starts under the
+    /// new node-ID, CiA 305).
+    pub async fn configure_only_slave(&self, node_id: u8, store: bool) -> Result<OnlySlave, LssError> {
+        self.configure_only_slave_with(FastScan::new(self.timeout), node_id, store).await
+    }
+
+    /// [`configure_only_slave`](Self::configure_only_slave) with a prepared scanner.
+    pub async fn configure_only_slave_with(
+        &self,
+        scan: FastScan,
+        node_id: u8,
+        store: bool,
+    ) -> Result<OnlySlave, LssError> {
+        if !drivebus_lss::is_configurable_node_id(node_id) || node_id == 0xFF {
+            return Err(LssError::InvalidArgument(format!("node-ID {node_id} is not 1..=127")));
+        }
+        let Some(addr) = self.fastscan_with(scan).await? else { return Ok(OnlySlave::NoneFound) };
+        self.configure_node_id(node_id).await?;
+        if self.identify_non_configured().await? {
+            self.configure_node_id(0xFF).await?;
+            self.switch_global(LssMode::Waiting).await?;
+            return Ok(OnlySlave::Several(addr));
+        }
+        if store {
+            self.store().await?;
+        }
+        self.switch_global(LssMode::Waiting).await?;
+        Ok(OnlySlave::Configured(addr))
+    }
+
+    /// Finds the non-configured slave with the lowest LSS address (fastscan)
+    /// and whether others are on the bus, leaving every slave as it was
+    /// (the found one is given node-ID 1 for the check, then FFh again).
+    pub async fn probe_unconfigured(&self) -> Result<Option<(LssAddress, bool)>, LssError> {
+        let Some(addr) = self.fastscan().await? else { return Ok(None) };
+        self.configure_node_id(1).await?;
+        let more = self.identify_non_configured().await;
+        self.configure_node_id(0xFF).await?;
+        self.switch_global(LssMode::Waiting).await?;
+        Ok(Some((addr, more?)))
+    }
+
+    /// Switch state selective on `addr`, configure `node_id`, store when
+    /// asked, back to waiting. The node-ID of a slave that had one takes
+    /// effect at its next NMT reset communication.
+    pub async fn configure_selected(
+        &self,
+        addr: &LssAddress,
+        node_id: u8,
+        store: bool,
+    ) -> Result<(), LssError> {
+        self.switch_selective(addr).await?;
+        let r = async {
+            self.configure_node_id(node_id).await?;
+            if store {
+                self.store().await?;
+            }
+            Ok(())
+        }
+        .await;
+        self.switch_global(LssMode::Waiting).await?;
+        r
     }
 
     /// Fastscan, then configure `node_id` on the found slave, optionally

@@ -7,7 +7,7 @@ mod common;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use common::dual::{Station, Which, on_both};
+use common::dual::{Station, on_both};
 use common::{identity, node};
 use drivebus_master::{
     FastScan, LssAddress, LssField, LssMode, MasterEvent, NmtCommand, PdoDir, PdoMapEntry, PdoRecord,
@@ -180,6 +180,138 @@ fn lss_fastscan_and_node_id_assignment() {
             lss.switch_selective(&b).await.unwrap();
             assert_eq!(lss.inquire_node_id().await.unwrap(), 41);
             lss.switch_global(LssMode::Waiting).await.unwrap();
+        },
+    );
+}
+
+fn drive(id: u8) -> Station {
+    use drivebus_cia402::drive::{DriveConfig, ModeHandler, generic_drive_with};
+    let handlers: Vec<Box<dyn ModeHandler + Send>> =
+        vec![Box::new(drivebus_cia402::homing::HomingMode::default())];
+    Station::Drive(Box::new(generic_drive_with(id, DriveConfig::default(), handlers)))
+}
+
+#[test]
+fn a_refused_pdo_mapping_leaves_the_previous_one_in_force() {
+    on_both(
+        || plain(&[5]),
+        |m, which| async move {
+            let before = m.read_pdo(5, PdoDir::Tx, 1).await.unwrap();
+            assert!(before.valid());
+            // 1000h is not mappable: the device refuses the entry.
+            let bad = PdoRecord::new(0x185, 255, vec![PdoMapEntry::new(0x1000, 0, 32)]);
+            let e = m.try_write_pdo(5, PdoDir::Tx, 1, &bad).await.unwrap_err();
+            assert!(
+                matches!(e.cause, drivebus_master::ConfigError::Sdo { index: 0x1A00, sub: 1, .. }),
+                "{e}"
+            );
+            assert_eq!(e.restored, Ok(()), "{which:?}");
+            assert!(e.to_string().contains("previous configuration was restored"), "{e}");
+            let after = m.read_pdo(5, PdoDir::Tx, 1).await.unwrap();
+            assert_eq!(after, before, "{which:?}: the PDO is as it was");
+        },
+    );
+}
+
+#[test]
+fn drive_enable_move_and_fault_reset_only_when_faulted() {
+    on_both(
+        || vec![drive(9)],
+        |m, which| async move {
+            let d = m.drive(9).await.unwrap().with_timeout(Duration::from_secs(2));
+            assert_eq!(d.state().await.unwrap(), drivebus_master::DriveState::SwitchOnDisabled);
+            d.enable().await.unwrap();
+            // Not faulted: reset leaves the running drive alone.
+            assert!(!d.fault_reset().await.unwrap(), "{which:?}");
+            assert_eq!(d.state().await.unwrap(), drivebus_master::DriveState::OperationEnabled);
+            d.set_mode(drivebus_master::drive::mode::PP).await.unwrap();
+            let seen = Arc::new(Mutex::new(0usize));
+            let s2 = seen.clone();
+            let d = d.on_progress(Duration::from_millis(50), move |_| *s2.lock().unwrap() += 1);
+            let start = d.position().await.unwrap();
+            d.move_to(20_000, true, None, Duration::from_secs(20)).await.unwrap();
+            let end = d.position().await.unwrap();
+            assert!((end - start - 20_000).abs() < 100, "{which:?}: {start} -> {end}");
+            assert!(*seen.lock().unwrap() > 0, "progress reported");
+        },
+    );
+}
+
+#[test]
+fn homing_waits_for_a_fresh_attained_and_a_runaway_is_halted() {
+    on_both(
+        || vec![drive(9)],
+        |m, which| async move {
+            let d = m.drive(9).await.unwrap().with_timeout(Duration::from_secs(2));
+            d.enable().await.unwrap();
+            d.home(35, Duration::from_secs(5)).await.unwrap();
+            assert_ne!(d.statusword().await.unwrap() & 0x1000, 0, "attained, bit 12 stays set");
+            // Method 17 (negative limit switch): the generic axis has none,
+            // so it never finishes; the stale bit 12 of the first homing
+            // must not count.
+            let e = d.home(17, Duration::from_millis(500)).await.unwrap_err();
+            assert!(matches!(e, drivebus_master::DriveError::Timeout { .. }), "{which:?}: {e}");
+            let stop = d.stop_motion(Duration::from_secs(5)).await.unwrap();
+            assert_eq!(stop.action, drivebus_master::StopAction::Halted, "{which:?}");
+            let v = d.actual_velocity().await.unwrap();
+            assert!(v.abs() <= 100, "{which:?}: at rest, velocity {v}");
+            let limits = d.motion_limits().await;
+            assert!(limits.homing_speeds.is_some());
+            assert!(!limits.describe(stop.position, None, true).is_empty());
+        },
+    );
+}
+
+#[test]
+fn lss_set_node_id_refuses_two_unconfigured_slaves() {
+    on_both(
+        || vec![unconfigured(0x20), unconfigured(0x10)],
+        |m, which| async move {
+            let lss = m.lss().timeout(Duration::from_millis(30));
+            let r = lss.configure_only_slave(9, false).await.unwrap();
+            assert_eq!(
+                r,
+                drivebus_master::OnlySlave::Several(LssAddress::new(0xABC, 0x77, 3, 0x10)),
+                "{which:?}"
+            );
+            // Nothing changed: both still unconfigured, no node 9.
+            m.sleep(Duration::from_millis(20)).await;
+            assert!(m.sdo(9).timeout(Duration::from_millis(50)).upload(0x1000, 0).await.is_err());
+            let (first, more) = lss.probe_unconfigured().await.unwrap().unwrap();
+            assert_eq!((first.serial, more), (0x10, true));
+            // The selective path configures exactly one.
+            lss.configure_selected(&LssAddress::new(0xABC, 0x77, 3, 0x20), 9, false).await.unwrap();
+            m.sleep(Duration::from_millis(20)).await;
+            assert_eq!(m.sdo(9).read::<u32>(0x1018, 4).await.unwrap(), 0x20);
+            // One unconfigured slave left: now the global path works.
+            let r = lss.configure_only_slave(10, false).await.unwrap();
+            assert_eq!(r, drivebus_master::OnlySlave::Configured(LssAddress::new(0xABC, 0x77, 3, 0x10)));
+            m.sleep(Duration::from_millis(20)).await;
+            assert_eq!(m.sdo(10).read::<u32>(0x1018, 4).await.unwrap(), 0x10);
+            assert_eq!(
+                lss.configure_only_slave(11, false).await.unwrap(),
+                drivebus_master::OnlySlave::NoneFound
+            );
+        },
+    );
+}
+
+#[test]
+fn dictionary_dump_of_standard_objects() {
+    on_both(
+        || plain(&[5]),
+        |m, which| async move {
+            let (eds, report) = m.dump_standard_dcf(5).await.unwrap();
+            assert!(report.read > 20, "{which:?}: {report:?}");
+            assert_eq!(eds.commissioning.as_ref().unwrap().node_id, 5);
+            let id = &eds.objects[&0x1018].subs[&1];
+            assert_eq!(id.parameter_value.as_deref(), Some("0x00000ABC"));
+            assert!(eds.objects.contains_key(&0x1800) && !eds.objects.contains_key(&0x6041));
+            let text = drivebus_eds::write(&eds);
+            assert!(
+                text.contains("[DeviceComissioning]") && text.contains("ParameterValue=0x00000ABC"),
+                "{text}"
+            );
         },
     );
 }

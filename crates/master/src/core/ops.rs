@@ -131,9 +131,7 @@ impl Op for FastScanOp {
         }
     }
     fn poll(&mut self, now: Instant, out: &mut Vec<Frame>) -> Option<Instant> {
-        if self.done.is_none() {
-            return None;
-        }
+        self.done.as_ref()?;
         self.next = self.scan.poll(now, out);
         self.settle();
         self.deadline()

@@ -13,12 +13,13 @@ use drivebus_node::{Node, SimNode};
 use drivebus_od::NoHooks;
 use drivebus_transport::Hub;
 
-/// A device of a test world.
+/// A device of a test world (built, moved once; the size difference is harmless).
+#[allow(clippy::large_enum_variant)]
 pub enum Station {
     /// A plain CiA 301 node.
     Plain(Node),
     /// A CiA 402 virtual drive.
-    Drive(DriveNode),
+    Drive(Box<DriveNode>),
 }
 
 /// `DriveNode` as a hostable device.
@@ -66,7 +67,7 @@ where
                 bus.attach(SimNode::new(n, NoHooks));
             }
             Station::Drive(d) => {
-                bus.attach(d);
+                bus.attach(*d);
             }
         }
     }
@@ -88,7 +89,7 @@ where
                     hub.attach(),
                 )),
                 Station::Drive(d) => {
-                    hosts.push(spawn_device(Box::new(Real(d)) as Box<dyn Device>, hub.attach()))
+                    hosts.push(spawn_device(Box::new(Real(*d)) as Box<dyn Device>, hub.attach()))
                 }
             }
         }

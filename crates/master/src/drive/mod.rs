@@ -15,12 +15,17 @@ use std::fmt;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use drivebus_cia402::state_machine::State;
 use drivebus_nmt::RemoteState;
-use tokio::sync::{Notify, broadcast};
+use tokio::sync::Notify;
 
 use crate::master::Master;
+
+mod motion;
+
 use crate::pdo::{PdoDir, PdoMapEntry};
 use crate::sdo::{SdoError, SdoHandle};
+pub use motion::{MotionLimits, StopAction, StopReport, human_secs};
 
 /// Controlword 6040h.
 pub const CONTROLWORD: u16 = 0x6040;
@@ -38,65 +43,91 @@ pub const SW_BIT12: u16 = 1 << 12;
 /// Statusword bit 13: following error / homing error.
 pub const SW_BIT13: u16 = 1 << 13;
 
-/// Modes of operation (6060h) values.
-pub mod mode {
-    /// Profile position.
-    pub const PP: i8 = 1;
-    /// Velocity (vl).
-    pub const VL: i8 = 2;
-    /// Profile velocity.
-    pub const PV: i8 = 3;
-    /// Profile torque.
-    pub const TQ: i8 = 4;
-    /// Homing.
-    pub const HM: i8 = 6;
-    /// Interpolated position.
-    pub const IP: i8 = 7;
-    /// Cyclic synchronous position.
-    pub const CSP: i8 = 8;
-    /// Cyclic synchronous velocity.
-    pub const CSV: i8 = 9;
-    /// Cyclic synchronous torque.
-    pub const CST: i8 = 10;
+/// Modes of operation (6060h) values (`drivebus_cia402::drive::op`).
+pub use drivebus_cia402::drive::op as mode;
+
+/// The name of a mode of operation (6060h/6061h), CiA 402-2 §6.3.2.
+pub fn mode_name(m: i8) -> &'static str {
+    match m {
+        mode::PP => "profile position",
+        mode::VL => "velocity",
+        mode::PV => "profile velocity",
+        mode::TQ => "profile torque",
+        mode::HM => "homing",
+        mode::IP => "interpolated position",
+        mode::CSP => "cyclic sync position",
+        mode::CSV => "cyclic sync velocity",
+        mode::CST => "cyclic sync torque",
+        0 => "no mode",
+        m if m < 0 => "manufacturer specific",
+        _ => "reserved",
+    }
 }
 
-/// CiA 402 power drive system states (from the statusword, CiA 402-2 table 30).
+/// CiA 402 power drive system states, decoded by the state table of
+/// `drivebus_cia402::state_machine` (CiA 402-2 §6.2.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DriveState {
-    /// xxxx xxxx x0xx 0000.
+    /// Not ready to switch on.
     NotReadyToSwitchOn,
-    /// x1xx 0000.
+    /// Switch on disabled.
     SwitchOnDisabled,
-    /// x01x 0001.
+    /// Ready to switch on.
     ReadyToSwitchOn,
-    /// x01x 0011.
+    /// Switched on.
     SwitchedOn,
-    /// x01x 0111.
+    /// Operation enabled.
     OperationEnabled,
-    /// x00x 0111.
+    /// Quick stop active.
     QuickStopActive,
-    /// x0xx 1111.
+    /// Fault reaction active.
     FaultReactionActive,
-    /// x0xx 1000.
+    /// Fault.
     Fault,
     /// A pattern the table does not define.
     Unknown,
 }
 
+impl From<State> for DriveState {
+    fn from(s: State) -> Self {
+        match s {
+            State::NotReadyToSwitchOn => DriveState::NotReadyToSwitchOn,
+            State::SwitchOnDisabled => DriveState::SwitchOnDisabled,
+            State::ReadyToSwitchOn => DriveState::ReadyToSwitchOn,
+            State::SwitchedOn => DriveState::SwitchedOn,
+            State::OperationEnabled => DriveState::OperationEnabled,
+            State::QuickStopActive => DriveState::QuickStopActive,
+            State::FaultReactionActive => DriveState::FaultReactionActive,
+            State::Fault => DriveState::Fault,
+        }
+    }
+}
+
 impl DriveState {
     /// Decodes the state bits of a statusword.
     pub fn from_statusword(sw: u16) -> DriveState {
-        match (sw & 0x4F, sw & 0x6F) {
-            (0x00, _) => DriveState::NotReadyToSwitchOn,
-            (0x40, _) => DriveState::SwitchOnDisabled,
-            (_, 0x21) => DriveState::ReadyToSwitchOn,
-            (_, 0x23) => DriveState::SwitchedOn,
-            (_, 0x27) => DriveState::OperationEnabled,
-            (_, 0x07) => DriveState::QuickStopActive,
-            (0x0F, _) => DriveState::FaultReactionActive,
-            (0x08, _) => DriveState::Fault,
-            _ => DriveState::Unknown,
+        State::from_statusword(sw).map_or(DriveState::Unknown, DriveState::from)
+    }
+
+    /// The state's name as CiA 402 writes it, in lower case.
+    pub fn name(self) -> &'static str {
+        match self {
+            DriveState::NotReadyToSwitchOn => "not ready to switch on",
+            DriveState::SwitchOnDisabled => "switch on disabled",
+            DriveState::ReadyToSwitchOn => "ready to switch on",
+            DriveState::SwitchedOn => "switched on",
+            DriveState::OperationEnabled => "operation enabled",
+            DriveState::QuickStopActive => "quick stop active",
+            DriveState::FaultReactionActive => "fault reaction active",
+            DriveState::Fault => "fault",
+            DriveState::Unknown => "unknown",
         }
+    }
+}
+
+impl fmt::Display for DriveState {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -164,6 +195,24 @@ impl From<SdoError> for DriveError {
     }
 }
 
+/// Where a drive is while a command waits for it (see [`Drive::on_progress`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MotionProgress {
+    /// What the command waits for.
+    pub waiting_for: &'static str,
+    /// The statusword.
+    pub statusword: u16,
+    /// Its state.
+    pub state: DriveState,
+    /// Position actual value 6064h.
+    pub position: Option<i32>,
+    /// Velocity actual value 606Ch.
+    pub velocity: Option<i32>,
+}
+
+/// A progress callback.
+pub type ProgressFn = Arc<dyn Fn(&MotionProgress) + Send + Sync>;
+
 struct Rpdo {
     cob: u16,
     mapping: Vec<PdoMapEntry>,
@@ -198,6 +247,9 @@ pub struct Drive {
     sinks: Vec<u64>,
     timeout: Duration,
     poll: Duration,
+    progress: Option<ProgressFn>,
+    progress_every: Duration,
+    last_progress: Mutex<Option<drivebus_can::Instant>>,
 }
 
 impl Drop for Drive {
@@ -284,6 +336,9 @@ impl Master {
             sinks,
             timeout: Duration::from_secs(2),
             poll: Duration::from_millis(10),
+            progress: None,
+            progress_every: Duration::from_millis(200),
+            last_progress: Mutex::new(None),
         })
     }
 }
@@ -298,6 +353,18 @@ impl Drive {
     /// SDO polling interval while waiting without a TPDO (default 10 ms).
     pub fn with_poll_interval(mut self, t: Duration) -> Self {
         self.poll = t;
+        self
+    }
+
+    /// Calls `f` with the statusword, position and velocity while a call
+    /// waits for the drive, at most every `every` of the master's time.
+    pub fn on_progress(
+        mut self,
+        every: Duration,
+        f: impl Fn(&MotionProgress) + Send + Sync + 'static,
+    ) -> Self {
+        self.progress = Some(Arc::new(f));
+        self.progress_every = every;
         self
     }
 
@@ -375,7 +442,7 @@ impl Drive {
     }
 
     /// Waits until `pred(statusword)`; a Fault fails early unless `allow_fault`.
-    async fn wait_sw(
+    pub(crate) async fn wait_sw(
         &self,
         what: &'static str,
         allow_fault: bool,
@@ -384,7 +451,7 @@ impl Drive {
         self.wait_sw_for(what, allow_fault, self.timeout, pred).await
     }
 
-    async fn wait_sw_for(
+    pub(crate) async fn wait_sw_for(
         &self,
         what: &'static str,
         allow_fault: bool,
@@ -403,6 +470,19 @@ impl Drive {
                 return Err(DriveError::Fault { statusword: sw });
             }
             let now = self.master.now();
+            if self.progress.is_some() {
+                let due = {
+                    let mut last = self.last_progress.lock().unwrap_or_else(|e| e.into_inner());
+                    let due = last.is_none_or(|t| now.saturating_duration_since(t) >= self.progress_every);
+                    if due {
+                        *last = Some(now);
+                    }
+                    due
+                };
+                if due {
+                    self.report(what, sw).await;
+                }
+            }
             if now >= deadline {
                 return Err(DriveError::Timeout { waiting_for: what, statusword: sw });
             }
@@ -419,16 +499,23 @@ impl Drive {
         self.wait_sw(what, false, |sw| DriveState::from_statusword(sw) == target).await
     }
 
-    /// Fault reset: controlword bit 7 rising edge, then waits for Switch
-    /// on disabled.
-    pub async fn fault_reset(&self) -> Result<(), DriveError> {
+    /// Fault reset, only when the drive is in Fault (or fault reaction):
+    /// controlword bit 7 rising edge, then waits for the drive to leave
+    /// Fault. A drive that is not faulted is left alone (writing a
+    /// controlword would change its state). True if a fault was reset.
+    pub async fn fault_reset(&self) -> Result<bool, DriveError> {
+        let sw = self.statusword().await?;
+        if !matches!(DriveState::from_statusword(sw), DriveState::Fault | DriveState::FaultReactionActive) {
+            return Ok(false);
+        }
+        // In Fault the drive ignores every command but the bit 7 edge.
         self.controlword(0x0000).await?;
         self.controlword(0x0080).await?;
         self.wait_sw("fault reset", true, |sw| {
             !matches!(DriveState::from_statusword(sw), DriveState::Fault | DriveState::FaultReactionActive)
         })
         .await?;
-        Ok(())
+        Ok(true)
     }
 
     /// Walks the state machine to Operation enabled: fault reset if
@@ -439,7 +526,9 @@ impl Drive {
             let sw = self.statusword().await?;
             match DriveState::from_statusword(sw) {
                 DriveState::OperationEnabled => return Ok(()),
-                DriveState::Fault | DriveState::FaultReactionActive => self.fault_reset().await?,
+                DriveState::Fault | DriveState::FaultReactionActive => {
+                    self.fault_reset().await?;
+                }
                 DriveState::NotReadyToSwitchOn | DriveState::Unknown => {
                     self.wait_sw("leaving not ready to switch on", true, |sw| {
                         !matches!(
@@ -503,115 +592,6 @@ impl Drive {
             }
             self.master.sleep(self.poll).await;
         }
-    }
-
-    /// Profile position move (mode must be PP): optional profile
-    /// (6081h/6083h/6084h), target 607Ah, new set-point (bit 4, change
-    /// immediately bit 5, relative bit 6), waits for the acknowledge (bit
-    /// 12), clears bit 4, then waits for target reached (bit 10) within
-    /// `timeout`.
-    pub async fn move_to(
-        &self,
-        target: i32,
-        relative: bool,
-        profile: Option<Profile>,
-        timeout: Duration,
-    ) -> Result<(), DriveError> {
-        if let Some(p) = profile {
-            self.sdo.write(0x6081, 0, p.velocity).await?;
-            self.sdo.write(0x6083, 0, p.acceleration).await?;
-            self.sdo.write(0x6084, 0, p.deceleration).await?;
-        }
-        self.write_raw(0x607A, 0, &target.to_le_bytes()).await?;
-        let base = 0x0F | 0x20 | if relative { 0x40 } else { 0 };
-        self.controlword(base).await?;
-        self.controlword(base | 0x10).await?;
-        self.wait_sw("set-point acknowledge", false, |sw| sw & SW_BIT12 != 0).await?;
-        self.controlword(base).await?;
-        self.wait_sw_for("target reached", false, timeout, |sw| {
-            sw & SW_BIT12 == 0 && sw & SW_TARGET_REACHED != 0
-        })
-        .await
-        .map(|_| ())
-    }
-
-    /// Target velocity 60FFh (profile velocity / CSV).
-    pub async fn velocity(&self, v: i32) -> Result<(), DriveError> {
-        self.write_raw(0x60FF, 0, &v.to_le_bytes()).await
-    }
-
-    /// Target torque 6071h (profile torque / CST).
-    pub async fn torque(&self, t: i16) -> Result<(), DriveError> {
-        self.write_raw(0x6071, 0, &t.to_le_bytes()).await
-    }
-
-    /// Homing: writes 6098h, switches to homing mode, starts (bit 4) and
-    /// waits for homing attained (bit 12) or error (bit 13).
-    pub async fn home(&self, method: i8, timeout: Duration) -> Result<(), DriveError> {
-        self.sdo.write(0x6098, 0, method).await?;
-        self.set_mode(mode::HM).await?;
-        self.controlword(0x0F).await?;
-        self.controlword(0x1F).await?;
-        let sw =
-            self.wait_sw_for("homing attained", false, timeout, |sw| sw & (SW_BIT12 | SW_BIT13) != 0).await?;
-        self.controlword(0x0F).await?;
-        if sw & SW_BIT13 != 0 {
-            return Err(DriveError::HomingError { statusword: sw });
-        }
-        Ok(())
-    }
-
-    /// Streams values of `index`/`sub`, one right after each SYNC the
-    /// master produces (RPDO when mapped, else SDO, which cannot keep up
-    /// with short cycles). Returns how many were sent.
-    pub async fn stream_raw(
-        &self,
-        index: u16,
-        sub: u8,
-        values: impl IntoIterator<Item = Vec<u8>>,
-    ) -> Result<usize, DriveError> {
-        if !self.master.sync_running() {
-            return Err(DriveError::NoSync);
-        }
-        let mut ticks = self.master.subscribe_sync();
-        let mut n = 0;
-        for v in values {
-            loop {
-                match self.master.timeout(Duration::from_secs(1), ticks.recv()).await {
-                    Ok(Ok(_)) => {
-                        // Behind by whole cycles: align to the latest SYNC
-                        // rather than sending a burst for the old ones.
-                        while !matches!(
-                            ticks.try_recv(),
-                            Err(broadcast::error::TryRecvError::Empty
-                                | broadcast::error::TryRecvError::Closed)
-                        ) {}
-                        break;
-                    }
-                    // Behind by several cycles: send now, aligned to the latest.
-                    Ok(Err(broadcast::error::RecvError::Lagged(_))) => {}
-                    Ok(Err(broadcast::error::RecvError::Closed)) | Err(_) => return Err(DriveError::NoSync),
-                }
-            }
-            self.write_raw(index, sub, &v).await?;
-            n += 1;
-        }
-        Ok(n)
-    }
-
-    /// Cyclic synchronous position: target positions 607Ah, one per SYNC.
-    pub async fn stream_csp(&self, positions: impl IntoIterator<Item = i32>) -> Result<usize, DriveError> {
-        self.stream_raw(0x607A, 0, positions.into_iter().map(|p| p.to_le_bytes().to_vec())).await
-    }
-
-    /// Cyclic synchronous velocity: target velocities 60FFh, one per SYNC.
-    pub async fn stream_csv(&self, velocities: impl IntoIterator<Item = i32>) -> Result<usize, DriveError> {
-        self.stream_raw(0x60FF, 0, velocities.into_iter().map(|p| p.to_le_bytes().to_vec())).await
-    }
-
-    /// Cyclic synchronous torque: target torques 6071h, one per SYNC.
-    pub async fn stream_cst(&self, torques: impl IntoIterator<Item = i16>) -> Result<usize, DriveError> {
-        self.stream_raw(0x6071, 0, torques.into_iter().map(|p| p.to_le_bytes().to_vec())).await
     }
 }
 
