@@ -54,6 +54,9 @@ pub use scan::{ScanOptions, ScannedNode};
 pub use sdo::{SdoError, SdoHandle, SdoValue};
 
 /// Re-exports so users need one dependency.
+pub use drivebus_bus::{Bus as VirtualBus, BusConfig as VirtualBusConfig, candump};
+pub use drivebus_can::{CanId, Frame, Instant};
+pub use drivebus_emcy::describe as emcy_description;
 pub use drivebus_lss::codec::LssField;
 pub use drivebus_lss::{FastScan, LssAddress, LssAddressRange, LssMode};
 pub use drivebus_nmt::{NmtCommand, RemoteState};

@@ -218,6 +218,8 @@ struct Rpdo {
     mapping: Vec<PdoMapEntry>,
     image: Mutex<[u8; 8]>,
     len: usize,
+    /// Transmission type 0..240: the drive applies it at the next SYNC.
+    synchronous: bool,
 }
 
 /// Byte offset of `index`/`sub` in a byte-aligned mapping.
@@ -321,6 +323,7 @@ impl Master {
             rpdos.push(Rpdo {
                 cob: rec.can_id(),
                 len: rec.len_bytes(),
+                synchronous: rec.transmission_type <= 240,
                 mapping: rec.mapping,
                 image: Mutex::new(image),
             });
@@ -400,22 +403,43 @@ impl Drive {
         Ok(self.sdo.upload(index, sub).await?)
     }
 
-    /// Writes an object: by RPDO when mapped and the node is Operational,
-    /// else by SDO. Every RPDO image holding the object is updated, so an
-    /// RPDO sent later for another object (e.g. 607Ah next to 6040h)
-    /// repeats the current value instead of a stale one.
+    /// Writes an object: by an event-driven RPDO (transmission type
+    /// 254/255) when one maps it and the node is Operational, else by SDO.
+    /// A synchronous RPDO is not used here: it takes effect only at the
+    /// next SYNC, after later writes by other means (a controlword by an
+    /// event RPDO would be overwritten by a stale copy); streams use it
+    /// ([`stream_raw`](Self::stream_raw)). Every RPDO image holding the
+    /// object is updated, so an RPDO sent later for another object (e.g.
+    /// 607Ah next to 6040h) repeats the current value instead of a stale one.
     pub async fn write_raw(&self, index: u16, sub: u8, data: &[u8]) -> Result<(), DriveError> {
+        self.write_via(index, sub, data, false).await
+    }
+
+    /// [`write_raw`](Self::write_raw), by a synchronous RPDO first when
+    /// `cyclic` (then any RPDO mapping the object).
+    pub(crate) async fn write_via(
+        &self,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+        cyclic: bool,
+    ) -> Result<(), DriveError> {
         let mut first: Option<(u16, Vec<u8>)> = None;
+        let mut fallback: Option<(u16, Vec<u8>)> = None;
         for r in &self.rpdos {
             if let Some((off, len)) = offset_of(&r.mapping, index, sub)
                 && data.len() >= len
             {
                 let mut img = r.image.lock().unwrap_or_else(|e| e.into_inner());
                 img[off..off + len].copy_from_slice(&data[..len]);
-                if first.is_none() {
-                    first = Some((r.cob, img[..r.len].to_vec()));
+                let slot = if r.synchronous == cyclic { &mut first } else { &mut fallback };
+                if slot.is_none() {
+                    *slot = Some((r.cob, img[..r.len].to_vec()));
                 }
             }
+        }
+        if cyclic {
+            first = first.or(fallback);
         }
         match first {
             Some((cob, frame)) if self.operational() => {
@@ -579,7 +603,9 @@ impl Drive {
         self.write_raw(MODES_OF_OPERATION, 0, &mode.to_le_bytes()).await?;
         let deadline = self.master.now() + self.timeout;
         loop {
-            let v = self.read_raw(MODES_DISPLAY, 0).await?;
+            // By SDO: a mode change need not trigger an event TPDO, so a
+            // TPDO copy of 6061h may be stale.
+            let v = self.sdo.upload(MODES_DISPLAY, 0).await?;
             if v.first().map(|b| *b as i8) == Some(mode) {
                 return Ok(());
             }

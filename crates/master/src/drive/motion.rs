@@ -71,19 +71,20 @@ impl MotionLimits {
         })
     }
 
-    /// Seconds a profile move over `distance` units takes on a trapezoid
-    /// with the drive's velocity, acceleration and deceleration (`None`
-    /// when a value is missing; infinite when the velocity is 0).
+    /// Seconds a profile move over `distance` units takes at least, on a
+    /// trapezoid with the drive's velocity, acceleration and deceleration.
+    /// `None` when the velocity is missing or 0 (drives differ on what 0
+    /// means, some "no limit"); an acceleration of 0 or missing leaves the
+    /// ramps out (the time at the velocity alone, a lower bound).
     pub fn move_seconds(&self, distance: f64) -> Option<f64> {
-        let v = f64::from(self.effective_velocity()?);
-        let a = f64::from(self.profile_acceleration?);
-        let d = f64::from(self.profile_deceleration.unwrap_or(self.profile_acceleration?));
+        let v = f64::from(self.effective_velocity().filter(|&v| v > 0)?);
         let s = distance.abs();
+        let (a, d) = match (self.profile_acceleration, self.profile_deceleration) {
+            (Some(a), d) if a > 0 => (f64::from(a), f64::from(d.filter(|&d| d > 0).unwrap_or(a))),
+            _ => return Some(s / v),
+        };
         if s == 0.0 {
             return Some(0.0);
-        }
-        if v <= 0.0 || a <= 0.0 || d <= 0.0 {
-            return Some(f64::INFINITY);
         }
         // Reaching v takes v/a; if the distance is too short, a triangle.
         let ramps = v * v / (2.0 * a) + v * v / (2.0 * d);
@@ -135,15 +136,11 @@ impl MotionLimits {
         if let (Some(p), Some(t)) = (position, target)
             && let Some(secs) = self.move_seconds(f64::from(t) - f64::from(p))
         {
-            v.push(if secs.is_finite() {
-                format!(
-                    "at these values the remaining {} units take about {}",
-                    (t - p).abs(),
-                    human_secs(secs)
-                )
-            } else {
-                "at these values the axis does not move (velocity or acceleration 0)".to_owned()
-            });
+            v.push(format!(
+                "at these values the remaining {} units take at least {}",
+                (i64::from(t) - i64::from(p)).abs(),
+                human_secs(secs)
+            ));
         }
         v
     }
@@ -356,8 +353,9 @@ impl Drive {
     }
 
     /// Streams values of `index`/`sub`, one right after each SYNC the
-    /// master produces (RPDO when mapped, else SDO, which cannot keep up
-    /// with short cycles). Returns how many were sent.
+    /// master produces (by a synchronous RPDO when one maps it, else any
+    /// RPDO, else SDO, which cannot keep up with short cycles). Returns how
+    /// many were sent.
     pub async fn stream_raw(
         &self,
         index: u16,
@@ -387,7 +385,7 @@ impl Drive {
                     Ok(Err(broadcast::error::RecvError::Closed)) | Err(_) => return Err(DriveError::NoSync),
                 }
             }
-            self.write_raw(index, sub, &v).await?;
+            self.write_via(index, sub, &v, true).await?;
             n += 1;
         }
         Ok(n)
@@ -432,9 +430,13 @@ mod tests {
         // 607Fh caps 6081h.
         let capped = MotionLimits { max_profile_velocity: Some(5), ..l.clone() };
         assert_eq!(capped.effective_velocity(), Some(5));
-        let none = MotionLimits { profile_velocity: Some(0), ..l };
-        assert_eq!(none.move_seconds(10.0), Some(f64::INFINITY));
-        let lines = none.describe(Some(0), Some(10), false);
-        assert!(lines.iter().any(|l| l.contains("6081h profile velocity: 0")), "{lines:?}");
+        // 0 velocity: unknown (some drives read it as no limit); 0 acceleration: no ramps.
+        let none = MotionLimits { profile_velocity: Some(0), ..l.clone() };
+        assert_eq!(none.move_seconds(10.0), None);
+        let flat = MotionLimits { profile_acceleration: Some(0), ..l };
+        assert_eq!(flat.move_seconds(100.0), Some(10.0));
+        let lines = flat.describe(Some(0), Some(100), false);
+        assert!(lines.iter().any(|l| l.contains("6081h profile velocity: 10")), "{lines:?}");
+        assert!(lines.iter().any(|l| l.contains("take at least 10.0 s")), "{lines:?}");
     }
 }
