@@ -5,6 +5,7 @@
 use crate::app::Application;
 use crate::storage::{Slot, Storage, encode_image};
 use alloc::boxed::Box;
+use alloc::vec::Vec;
 use drivebus_can::Instant;
 use drivebus_emcy::{Emcy, EmcyConsumer};
 use drivebus_nmt::Nmt;
@@ -75,16 +76,16 @@ impl<A: Application + ?Sized> CommHooks<'_, A> {
         if value != signature {
             return Err(SdoAbort::CANNOT_STORE);
         }
-        for &slot in slots(sub) {
-            let r = if save {
-                let image = encode_image(od, group(slot));
-                self.s.storage.save(slot, &image)
-            } else {
-                // Restored defaults take effect at the next reset (§7.5.2.14).
-                self.s.storage.erase(slot)
-            };
-            r.map_err(|_| SdoAbort::HARDWARE_ERROR)?;
-        }
+        // One commit for every group the sub-index covers: a crash in the
+        // middle of "save all" must not leave a mix of old and new groups.
+        let images: Vec<(Slot, Option<Vec<u8>>)> = slots(sub)
+            .iter()
+            // Restored defaults take effect at the next reset (§7.5.2.14).
+            .map(|&slot| (slot, save.then(|| encode_image(od, group(slot)))))
+            .collect();
+        let changes: Vec<(Slot, Option<&[u8]>)> =
+            images.iter().map(|(slot, image)| (*slot, image.as_deref())).collect();
+        self.s.storage.commit(&changes).map_err(|_| SdoAbort::HARDWARE_ERROR)?;
         // The object keeps reading its capability (1: on command), not the signature.
         Ok(WriteOutcome::Handled)
     }

@@ -36,13 +36,21 @@ impl Slot {
 
 /// Where stored parameter images live.
 pub trait Storage {
-    /// Replace the stored image of `slot`. Must be atomic: after a crash
-    /// either the old or the new image is found, never a mix.
-    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError>;
+    /// Apply every change at once (`Some(image)`: replace the slot's image,
+    /// `None`: forget it). Must be atomic as a whole: after a crash either
+    /// all changes or none are found, never a mix of groups (a 1010h:01
+    /// "save all" writes three groups in one commit).
+    fn commit(&mut self, changes: &[(Slot, Option<&[u8]>)]) -> Result<(), StorageError>;
     /// The stored image of `slot`, if any.
     fn load(&mut self, slot: Slot) -> Result<Option<Vec<u8>>, StorageError>;
-    /// Forget the stored image of `slot` (1011h: defaults after the next reset).
-    fn erase(&mut self, slot: Slot) -> Result<(), StorageError>;
+    /// Replace the stored image of one slot.
+    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError> {
+        self.commit(&[(slot, Some(image))])
+    }
+    /// Forget the stored image of one slot (1011h: defaults after the next reset).
+    fn erase(&mut self, slot: Slot) -> Result<(), StorageError> {
+        self.commit(&[(slot, None)])
+    }
 }
 
 /// A storage failure (reported to the SDO client as `0606 0000`).
@@ -53,6 +61,8 @@ pub enum StorageError {
     Io(std::io::Error),
     /// Storage is not available for this group.
     Unsupported,
+    /// The stored data is damaged (checksum or structure; byte offset).
+    Corrupt(usize),
 }
 
 impl fmt::Display for StorageError {
@@ -61,6 +71,7 @@ impl fmt::Display for StorageError {
             #[cfg(feature = "std")]
             StorageError::Io(e) => write!(f, "storage I/O error: {e}"),
             StorageError::Unsupported => f.write_str("storage not supported"),
+            StorageError::Corrupt(at) => write!(f, "stored parameters damaged at byte {at}"),
         }
     }
 }
@@ -89,16 +100,17 @@ impl MemoryStorage {
 }
 
 impl Storage for MemoryStorage {
-    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError> {
-        self.images.insert(slot as u8, image.to_vec());
+    fn commit(&mut self, changes: &[(Slot, Option<&[u8]>)]) -> Result<(), StorageError> {
+        for &(slot, image) in changes {
+            match image {
+                Some(img) => self.images.insert(slot as u8, img.to_vec()),
+                None => self.images.remove(&(slot as u8)),
+            };
+        }
         Ok(())
     }
     fn load(&mut self, slot: Slot) -> Result<Option<Vec<u8>>, StorageError> {
         Ok(self.images.get(&(slot as u8)).cloned())
-    }
-    fn erase(&mut self, slot: Slot) -> Result<(), StorageError> {
-        self.images.remove(&(slot as u8));
-        Ok(())
     }
 }
 
@@ -197,12 +209,30 @@ pub fn apply_image(
     Ok((applied, skipped))
 }
 
-/// Parameter images in files, one per group, replaced atomically.
+/// Parameter images of every slot in one file, `parameters.bin`,
+/// replaced as a whole (temporary file, fsync, rename, fsync of the
+/// directory): a save of several groups is one rename, so a crash at any
+/// point leaves the complete old set or the complete new set.
+///
+/// Directories written by earlier versions (one `<group>.params` file per
+/// slot) are read as long as no `parameters.bin` exists; the first commit
+/// replaces them.
 #[cfg(feature = "std")]
 #[derive(Clone, Debug)]
 pub struct FileStorage {
     dir: std::path::PathBuf,
 }
+
+/// `parameters.bin`: magic, version, record count, records
+/// `(slot u8, len u32, image)`, CRC-32 of everything before it.
+#[cfg(feature = "std")]
+const SET_MAGIC: &[u8; 4] = b"DBST";
+#[cfg(feature = "std")]
+const SET_VERSION: u8 = 1;
+#[cfg(feature = "std")]
+const SET_CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISCSI);
+#[cfg(feature = "std")]
+const ALL_SLOTS: [Slot; 4] = [Slot::Communication, Slot::Application, Slot::Manufacturer, Slot::Lss];
 
 #[cfg(feature = "std")]
 impl FileStorage {
@@ -213,7 +243,11 @@ impl FileStorage {
         Ok(FileStorage { dir })
     }
 
-    fn path(&self, slot: Slot) -> std::path::PathBuf {
+    fn set_path(&self) -> std::path::PathBuf {
+        self.dir.join("parameters.bin")
+    }
+
+    fn legacy_path(&self, slot: Slot) -> std::path::PathBuf {
         let name = match slot {
             Slot::Communication => "communication.params",
             Slot::Application => "application.params",
@@ -222,38 +256,107 @@ impl FileStorage {
         };
         self.dir.join(name)
     }
+
+    /// Every stored image, from `parameters.bin` or the legacy files.
+    fn read_set(&self) -> Result<BTreeMap<u8, Vec<u8>>, StorageError> {
+        match std::fs::read(self.set_path()) {
+            Ok(bytes) => decode_set(&bytes),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                let mut set = BTreeMap::new();
+                for slot in ALL_SLOTS {
+                    match std::fs::read(self.legacy_path(slot)) {
+                        Ok(b) => {
+                            set.insert(slot as u8, b);
+                        }
+                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                        Err(e) => return Err(e.into()),
+                    }
+                }
+                Ok(set)
+            }
+            Err(e) => Err(e.into()),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+fn encode_set(set: &BTreeMap<u8, Vec<u8>>) -> Vec<u8> {
+    let mut out = Vec::new();
+    out.extend_from_slice(SET_MAGIC);
+    out.push(SET_VERSION);
+    out.push(set.len() as u8);
+    for (slot, image) in set {
+        out.push(*slot);
+        out.extend_from_slice(&(image.len() as u32).to_le_bytes());
+        out.extend_from_slice(image);
+    }
+    let crc = SET_CRC.checksum(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+#[cfg(feature = "std")]
+fn decode_set(bytes: &[u8]) -> Result<BTreeMap<u8, Vec<u8>>, StorageError> {
+    if bytes.len() < 10 || &bytes[..4] != SET_MAGIC || bytes[4] != SET_VERSION {
+        return Err(StorageError::Corrupt(0));
+    }
+    let (body, crc) = bytes.split_at(bytes.len() - 4);
+    if SET_CRC.checksum(body) != u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]) {
+        return Err(StorageError::Corrupt(body.len()));
+    }
+    let mut set = BTreeMap::new();
+    let mut at = 6;
+    for _ in 0..body[5] {
+        let head = body.get(at..at + 5).ok_or(StorageError::Corrupt(at))?;
+        let len = u32::from_le_bytes([head[1], head[2], head[3], head[4]]) as usize;
+        let image = body.get(at + 5..at + 5 + len).ok_or(StorageError::Corrupt(at))?;
+        set.insert(head[0], image.to_vec());
+        at += 5 + len;
+    }
+    if at != body.len() {
+        return Err(StorageError::Corrupt(at));
+    }
+    Ok(set)
 }
 
 #[cfg(feature = "std")]
 impl Storage for FileStorage {
-    /// Temporary file, fsync, rename over the old one, fsync the directory:
-    /// a crash at any point leaves either the old or the new image.
-    fn save(&mut self, slot: Slot, image: &[u8]) -> Result<(), StorageError> {
+    fn commit(&mut self, changes: &[(Slot, Option<&[u8]>)]) -> Result<(), StorageError> {
         use std::io::Write;
-        let path = self.path(slot);
+        let mut set = match self.read_set() {
+            Ok(set) => set,
+            // A damaged set (which a rename-based commit cannot produce,
+            // but a failing medium can) is replaced rather than blocking
+            // every later save.
+            Err(StorageError::Corrupt(_)) => BTreeMap::new(),
+            Err(e) => return Err(e),
+        };
+        for &(slot, image) in changes {
+            match image {
+                Some(img) => set.insert(slot as u8, img.to_vec()),
+                None => set.remove(&(slot as u8)),
+            };
+        }
+        let path = self.set_path();
         let tmp = path.with_extension("tmp");
         {
             let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(image)?;
+            f.write_all(&encode_set(&set))?;
             f.sync_all()?;
         }
         std::fs::rename(&tmp, &path)?;
         std::fs::File::open(&self.dir)?.sync_all()?;
+        // The set is now authoritative: legacy files would only mislead a reader.
+        for slot in ALL_SLOTS {
+            match std::fs::remove_file(self.legacy_path(slot)) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e.into()),
+                _ => {}
+            }
+        }
         Ok(())
     }
     fn load(&mut self, slot: Slot) -> Result<Option<Vec<u8>>, StorageError> {
-        match std::fs::read(self.path(slot)) {
-            Ok(b) => Ok(Some(b)),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(e.into()),
-        }
-    }
-    fn erase(&mut self, slot: Slot) -> Result<(), StorageError> {
-        match std::fs::remove_file(self.path(slot)) {
-            Ok(()) => Ok(()),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-            Err(e) => Err(e.into()),
-        }
+        Ok(self.read_set()?.remove(&(slot as u8)))
     }
 }
 
@@ -318,13 +421,52 @@ mod tests {
         s.save(Slot::Communication, b"two").unwrap();
         assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"two"[..]));
         // A stale temporary file from a crash mid-save does not shadow the image.
-        std::fs::write(dir.path().join("communication.tmp"), b"torn").unwrap();
+        std::fs::write(dir.path().join("parameters.tmp"), b"torn").unwrap();
         assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"two"[..]));
         s.erase(Slot::Communication).unwrap();
         assert!(s.load(Slot::Communication).unwrap().is_none());
     }
 
+    #[test]
+    fn file_storage_commits_several_slots_at_once_and_reads_legacy_files() {
+        let dir = tempfile::tempdir().unwrap();
+        // A directory written by the one-file-per-group version.
+        std::fs::write(dir.path().join("communication.params"), b"old comm").unwrap();
+        std::fs::write(dir.path().join("lss.params"), [5, 0]).unwrap();
+        let mut s = FileStorage::new(dir.path()).unwrap();
+        assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"old comm"[..]));
+        s.commit(&[(Slot::Communication, Some(b"comm")), (Slot::Application, Some(b"app"))]).unwrap();
+        assert!(!dir.path().join("communication.params").exists(), "legacy files go after the first commit");
+        assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"comm"[..]));
+        assert_eq!(s.load(Slot::Application).unwrap().as_deref(), Some(&b"app"[..]));
+        assert_eq!(s.load(Slot::Lss).unwrap().as_deref(), Some(&[5u8, 0][..]), "untouched slots are kept");
+        s.commit(&[(Slot::Communication, None), (Slot::Application, None)]).unwrap();
+        assert!(
+            s.load(Slot::Communication).unwrap().is_none() && s.load(Slot::Application).unwrap().is_none()
+        );
+        assert!(s.load(Slot::Lss).unwrap().is_some());
+    }
+
+    #[test]
+    fn damaged_parameter_set_is_reported_then_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = FileStorage::new(dir.path()).unwrap();
+        s.save(Slot::Application, b"app").unwrap();
+        let path = dir.path().join("parameters.bin");
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[8] ^= 0x40;
+        std::fs::write(&path, &bytes).unwrap();
+        assert!(matches!(s.load(Slot::Application), Err(StorageError::Corrupt(_))));
+        s.save(Slot::Communication, b"comm").unwrap();
+        assert_eq!(s.load(Slot::Communication).unwrap().as_deref(), Some(&b"comm"[..]));
+    }
+
     proptest::proptest! {
+        #[test]
+        fn garbage_parameter_sets_never_panic(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..64)) {
+            let _ = decode_set(&bytes);
+        }
+
         #[test]
         fn garbage_images_never_panic(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..64)) {
             let mut b = od();
