@@ -134,10 +134,15 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
                 for (&node, row) in rows.iter_mut() {
                     for (k, w) in watches.iter().enumerate() {
                         let from_pdo = by_pdo.get(&node).is_some_and(|v| v.contains(&k));
-                        let data = if from_pdo {
-                            latest.lock().unwrap_or_else(|e| e.into_inner()).get(&(node, k)).cloned()
-                        } else {
-                            m.sdo(node).upload(w.index, w.sub).await.ok()
+                        // The TPDO copy while the node sends it; by SDO otherwise
+                        // (pre-operational, or nothing received yet).
+                        let operational = m.node_state(node) == Some(RemoteState::Operational);
+                        let cached = (from_pdo && operational)
+                            .then(|| latest.lock().unwrap_or_else(|e| e.into_inner()).get(&(node, k)).cloned())
+                            .flatten();
+                        let data = match cached {
+                            Some(d) => Some(d),
+                            None => m.sdo(node).upload(w.index, w.sub).await.ok(),
                         };
                         if let Some(d) = data {
                             row.values.insert(k, format_value(*w, conn.dict.data_type(w.index, w.sub), &d));

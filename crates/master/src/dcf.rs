@@ -113,7 +113,14 @@ impl Master {
             }
         }
         let mut eds = Eds { objects, ..Eds::default() };
-        eds.device_info.product_name = format!("node {node}");
+        let info = &mut eds.device_info;
+        info.product_name = sdo.read::<String>(0x1008, 0).await.unwrap_or_else(|_| format!("node {node}"));
+        info.vendor_number = sdo.read::<u32>(0x1018, 1).await.ok();
+        info.product_number = sdo.read::<u32>(0x1018, 2).await.ok();
+        info.revision_number = sdo.read::<u32>(0x1018, 3).await.ok();
+        let count = |base: u16| eds.objects.range(base..base + 0x200).count() as u16;
+        eds.device_info.nr_of_rx_pdo = count(0x1400);
+        eds.device_info.nr_of_tx_pdo = count(0x1800);
         eds.commissioning = Some(Commissioning { node_id: node, ..Commissioning::default() });
         Ok((eds, report))
     }
