@@ -103,7 +103,6 @@ fn eds_maps(eds: &drivebus_eds::Eds, node: u8) -> PdoMaps {
 pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
     let ranges = a.ids.iter().map(|s| id_range(s)).collect::<anyhow::Result<Vec<_>>>()?;
     let conn = Conn::open(g).await?;
-    let mut frames = conn.master.subscribe_frames();
     let pdos = if !a.pdo {
         PdoMaps::new()
     } else if let (Some(eds), Some(node)) = (&conn.dict.eds, g.node) {
@@ -118,6 +117,8 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
         };
         read_maps(&conn, &nodes).await
     };
+    // From here on: not the answers to the mapping reads above.
+    let mut frames = conn.master.subscribe_frames();
     let start = conn.master.now();
     let end = a.seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
     let stop = crate::serve::wait_for_signal();

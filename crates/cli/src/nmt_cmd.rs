@@ -25,7 +25,7 @@ pub async fn scan(g: &Global, a: &ScanArgs) -> anyhow::Result<()> {
     let found = m.scan_with(opts).await;
     let mut rows = Vec::new();
     for n in found {
-        let name = m.sdo(n.node).read::<String>(0x1008, 0).await.ok();
+        let name = m.sdo(n.node).read::<String>(0x1008, 0).await.ok().filter(|s| !s.is_empty());
         rows.push((n, name));
     }
     conn.close().await?;
