@@ -53,6 +53,7 @@ fn deliver(g: &Global, out_path: Option<&Path>, text: &str) -> anyhow::Result<()
                 || format!("wrote {} ({} bytes)", path.display(), text.len()),
             );
         }
+        None if g.json => outln!("{}", serde_json::json!({ "text": text })),
         None => out!("{text}"),
     }
     Ok(())

@@ -58,8 +58,11 @@ fn the_workflow_section_runs_as_written() {
                 .spawn()
                 .unwrap();
             let mut first = String::new();
-            std::io::BufRead::read_line(&mut std::io::BufReader::new(child.stdout.take().unwrap()), &mut first)
-                .unwrap();
+            std::io::BufRead::read_line(
+                &mut std::io::BufReader::new(child.stdout.take().unwrap()),
+                &mut first,
+            )
+            .unwrap();
             last_out = first;
             serve = Some(child);
             continue;
@@ -88,7 +91,23 @@ fn the_install_section_and_the_command_table_match_the_tool() {
     let help = std::process::Command::new(common::bin()).arg("--help").output().unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
     // Every command in the README's table exists.
-    for cmd in ["scan", "sdo", "nmt", "pdo", "drive", "dump", "monitor", "send", "replay", "gateway", "lss", "eds", "demo", "serve", "slcan-pty"] {
+    for cmd in [
+        "scan",
+        "sdo",
+        "nmt",
+        "pdo",
+        "drive",
+        "dump",
+        "monitor",
+        "send",
+        "replay",
+        "gateway",
+        "lss",
+        "eds",
+        "demo",
+        "serve",
+        "slcan-pty",
+    ] {
         assert!(text.contains(&format!("`{cmd}")), "README table lists {cmd}");
         assert!(help.contains(&format!("  {cmd} ")), "`drivebus --help` lists {cmd}");
     }

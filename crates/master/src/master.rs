@@ -240,6 +240,13 @@ impl Master {
         crate::driver::tokio::spawn(bus, config)
     }
 
+    /// Opens the bus named by `url` (`socketcand://HOST:PORT/CHANNEL`,
+    /// `slcan:///dev/ttyUSB0?bitrate=N`, `socketcan://can0`, `virtual`;
+    /// see `drivebus_transport::BusUrl`) and starts a master on it.
+    pub async fn open(url: &str, config: MasterConfig) -> Result<Master, drivebus_transport::TransportError> {
+        Ok(Master::with_config(drivebus_transport::open(url).await?, config))
+    }
+
     /// The configuration.
     pub fn config(&self) -> &MasterConfig {
         &self.inner.config

@@ -21,7 +21,10 @@
 
 extern crate alloc;
 
+#[macro_use]
+mod macros;
 mod table;
+mod table402;
 
 use alloc::borrow::Cow;
 use alloc::string::String;
@@ -176,13 +179,13 @@ impl EntryInfo {
 }
 
 /// Every description, ascending by index.
-pub fn defs() -> &'static [Def] {
-    table::DEFS
+pub fn defs() -> impl Iterator<Item = &'static Def> {
+    table::CIA301.iter().chain(table402::CIA402)
 }
 
 /// The standard object at `index`.
 pub fn object(index: u16) -> Option<ObjectInfo> {
-    let defs = table::DEFS;
+    let defs = if index < 0x6000 { table::CIA301 } else { table402::CIA402 };
     let i = defs.partition_point(|d| d.last < index);
     let def = defs.get(i)?;
     (def.first <= index).then_some(ObjectInfo { index, def })
@@ -215,7 +218,7 @@ pub fn find(name: &str) -> Option<(u16, Option<u8>)> {
         return None;
     }
     let mut hits: alloc::vec::Vec<(u16, Option<u8>)> = alloc::vec::Vec::new();
-    for def in table::DEFS {
+    for def in defs() {
         let base = norm(def.name);
         for index in def.first..=def.last {
             let n = u32::from(index - def.first) + 1;
@@ -239,7 +242,7 @@ pub fn find(name: &str) -> Option<(u16, Option<u8>)> {
     }
     if hits.is_empty() && sub_part.is_none() {
         // A unique entry name inside a record (vendor-id, serial number).
-        for def in table::DEFS.iter().filter(|d| d.first == d.last && d.kind != Kind::Var) {
+        for def in defs().filter(|d| d.first == d.last && d.kind != Kind::Var) {
             let o = ObjectInfo { index: def.first, def };
             for e in o.entries() {
                 if norm(&e.name()) == want && e.sub != 0 {

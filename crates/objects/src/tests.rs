@@ -2,7 +2,8 @@ use super::*;
 
 #[test]
 fn table_is_sorted_and_runs_do_not_overlap() {
-    for w in defs().windows(2) {
+    let all: alloc::vec::Vec<&Def> = defs().collect();
+    for w in all.windows(2) {
         assert!(w[0].first <= w[0].last && w[0].last < w[1].first, "{:04X} / {:04X}", w[0].first, w[1].first);
     }
     for d in defs() {
