@@ -158,3 +158,37 @@ fn stdin_lines_and_a_default_node() {
     assert!(out.status.success());
     assert_eq!(String::from_utf8_lossy(&out.stdout), "[1] 131474\r\n[2] OK\r\n\r\n[3] 300\r\n");
 }
+
+/// With the real `cocomm` (CANopenLinux; `COCOMM=/path/to/cocomm`, or on
+/// the PATH): its command-line form, its exit status and its split of
+/// values (stdout) from statuses (stderr). Skipped, saying so, without it.
+#[test]
+fn the_real_cocomm_if_available() {
+    let cocomm = std::env::var("COCOMM").unwrap_or_else(|_| "cocomm".into());
+    if std::process::Command::new(&cocomm).arg("--help").stderr(Stdio::null()).status().is_err() {
+        eprintln!(
+            "skipped: no cocomm (set COCOMM=/path/to/cocomm, built from CANopenLinux's cocomm/cocomm.c)"
+        );
+        return;
+    }
+    let srv = Serve::start(&["--drive", "generic:4"], None);
+    let gw = gateway(&srv.url(), None);
+    let port = gw.port.to_string();
+    let run = |args: &[&str]| {
+        std::process::Command::new(&cocomm)
+            .args(["-t", "127.0.0.1", "-p", &port, "-o", "data"])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&[
+        "4 write 0x1017 0 u16 500",
+        "4 read 0x1017 0 u16",
+        "4 read 0x1000 0 x32",
+        "4 read 0x1008 0 vs",
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "5000x00020192\"drivebus generic servo\"");
+    let out = run(&["4 read 0x2FFF 0 u8"]);
+    assert!(!out.status.success(), "an SDO abort is a failure for cocomm");
+}
