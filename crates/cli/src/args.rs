@@ -45,8 +45,8 @@ pub struct Global {
     /// socketcan://IFACE or virtual.
     #[arg(long, global = true, env = "DRIVEBUS_BUS", default_value = "virtual")]
     pub bus: String,
-    /// Node-ID (1..127) of the device to talk to.
-    #[arg(long, short = 'n', global = true, value_parser = clap::value_parser!(u8).range(1..=127))]
+    /// Node-ID (1..127, decimal or 0x hex) of the device to talk to.
+    #[arg(long, short = 'n', global = true, value_parser = node_id)]
     pub node: Option<u8>,
     /// EDS or DCF file of the device: object names and data types (CiA 301/402
     /// standard objects are known without it).
@@ -65,6 +65,14 @@ pub struct Global {
     /// process (repeatable), e.g. --sim akd:1.
     #[arg(long = "sim", global = true, value_name = "PROFILE:NODE")]
     pub sim: Vec<String>,
+}
+
+/// A node-ID as people write it: `5`, `0x05`, `05h`.
+pub fn node_id(s: &str) -> Result<u8, String> {
+    match crate::dict::number(s) {
+        Ok(n @ 1..=127) => Ok(n as u8),
+        _ => Err(format!("`{s}` is not a node-ID 1..127 (decimal, or hex as 0x7F)")),
+    }
 }
 
 /// The subcommands.
