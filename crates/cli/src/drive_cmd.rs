@@ -252,7 +252,7 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 d.write_raw(0x6083, 0, &acc.to_le_bytes()).await.map_err(ex)?;
                 d.write_raw(0x6084, 0, &acc.to_le_bytes()).await.map_err(ex)?;
             }
-            let wait = Duration::from_secs_f64(a.wait.clamp(0.01, 86_400.0));
+            let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
             let from = d.position().await;
             let target = match (a.relative, from) {
                 (true, Some(p)) => Some(p.saturating_add(a.target)),
@@ -310,7 +310,7 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 Some(m) => m,
                 None => d.read_raw(0x6098, 0).await.map_err(ex)?.first().map_or(0, |b| *b as i8),
             };
-            let wait = Duration::from_secs_f64(a.wait.clamp(0.01, 86_400.0));
+            let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
             let r = guarded(&d, node, timeout, "homing", None, true, d.home(method, wait)).await;
             pb.finish_and_clear();
             r?;

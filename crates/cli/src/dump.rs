@@ -4,7 +4,7 @@
 
 use std::io::Write;
 use std::ops::RangeInclusive;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
 use anyhow::anyhow;
 use drivebus_master::{Frame, PdoDir, PdoMapEntry, candump};
@@ -120,7 +120,7 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
     // From here on: not the answers to the mapping reads above.
     let mut frames = conn.master.subscribe_frames();
     let start = conn.master.now();
-    let end = a.seconds.map(|s| Duration::from_secs_f64(s.max(0.0)));
+    let end = a.seconds.map(|s| crate::error::seconds("--seconds", s)).transpose()?;
     let stop = crate::serve::wait_for_signal();
     tokio::pin!(stop);
     let deadline = async {

@@ -29,6 +29,15 @@ pub fn coded(code: &'static str, e: anyhow::Error) -> anyhow::Error {
     anyhow::Error::new(Coded { code, error: e })
 }
 
+/// A duration option in seconds (`--seconds`, `--wait`), at most a year:
+/// NaN, negative or absurd values are usage errors, never a panic.
+pub fn seconds(option: &str, secs: f64) -> anyhow::Result<Duration> {
+    if !(0.0..=365.0 * 86_400.0).contains(&secs) {
+        return Err(coded("usage", anyhow::anyhow!("{option}: give a number of seconds from 0 to a year")));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
 /// An SDO transfer that failed, with everything needed to explain it.
 #[derive(Debug)]
 pub struct SdoFailure {

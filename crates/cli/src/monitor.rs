@@ -91,10 +91,11 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
         callbacks.extend(cbs);
     }
     let tty = std::io::stdout().is_terminal() && !g.json;
-    let end = a.seconds.map(|s| tokio::time::Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let end = a.seconds.map(|s| crate::error::seconds("--seconds", s)).transpose()?;
+    let end = end.map(|d| tokio::time::Instant::now() + d);
     let stop = crate::serve::wait_for_signal();
     tokio::pin!(stop);
-    let mut tick = tokio::time::interval(Duration::from_millis(a.period.max(20)));
+    let mut tick = tokio::time::interval(Duration::from_millis(a.period.clamp(20, 3_600_000)));
     let mut shown: BTreeMap<u8, Row> = BTreeMap::new();
     loop {
         tokio::select! {

@@ -87,9 +87,8 @@ pub async fn run(g: &Global, a: &ReplayArgs) -> anyhow::Result<()> {
                 coded("usage", anyhow!("bad --loop `{n}`: a count (1, 2, ...) or i for ever"))
             })?),
         };
-    if !(a.gap.is_finite() && a.gap >= 0.0) || a.skip_gaps.is_some_and(|s| !(s.is_finite() && s >= 0.0)) {
-        bail!(coded("usage", anyhow!("--gap and --skip-gaps take a number ≥ 0")));
-    }
+    let gap = crate::error::seconds("--gap", a.gap / 1000.0)?;
+    let skip_gaps = a.skip_gaps.map(|s| crate::error::seconds("--skip-gaps", s)).transpose()?;
     let conn = Conn::open(g).await?;
     let m = &conn.master;
     let stop = crate::serve::wait_for_signal();
@@ -103,17 +102,19 @@ pub async fn run(g: &Global, a: &ReplayArgs) -> anyhow::Result<()> {
         let mut prev = 0u64;
         for (k, (t, f)) in frames.iter().enumerate() {
             let wait_until = if a.ignore_timestamps {
-                start + Duration::from_secs_f64(a.gap / 1000.0) * (k as u32)
+                start + gap.saturating_mul(u32::try_from(k).unwrap_or(u32::MAX))
             } else {
-                let mut gap = Duration::from_micros(t - prev);
-                if let Some(max) = a.skip_gaps
-                    && gap > Duration::from_secs_f64(max)
+                // A log whose time goes backwards sends at once.
+                let gap = Duration::from_micros(t.saturating_sub(prev));
+                if let Some(max) = skip_gaps
+                    && gap > max
                 {
-                    skipped += gap - Duration::from_secs_f64(max);
-                    gap = Duration::from_secs_f64(max);
+                    skipped += gap - max;
                 }
-                let _ = gap;
-                start + Duration::from_micros(*t) - skipped
+                let Some(at) = start.checked_add(Duration::from_micros(*t)) else {
+                    bail!(coded("bad_log", anyhow!("the log spans more time than can be replayed")));
+                };
+                at.checked_sub(skipped).unwrap_or(start)
             };
             prev = *t;
             tokio::select! {
