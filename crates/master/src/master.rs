@@ -141,6 +141,10 @@ pub(crate) enum Driver {
         sent: AtomicU64,
         /// Signalled whenever `sent` grows.
         sent_notify: Notify,
+        /// Held while taking the core's queue and handing it to the
+        /// transport: whoever holds it sends everything queued so far, in
+        /// order (the driver task, or an API call that queued frames).
+        send_lock: tokio::sync::Mutex<()>,
     },
     /// The simulated-time loop of `driver::sim` (it polls and sends after
     /// every step of the caller's future, so nothing needs waking).
@@ -198,16 +202,53 @@ impl Shared {
     /// Runs `f` on the core at the driver's now, then wakes the driver if
     /// `f` queued frames or armed an earlier deadline.
     pub(crate) fn with_core<R>(&self, f: impl FnOnce(&mut Core) -> R) -> R {
+        self.with_core_then(true, f)
+    }
+
+    fn with_core_then<R>(&self, kick_for_frames: bool, f: impl FnOnce(&mut Core) -> R) -> R {
         let now = self.now();
         let mut c = self.core();
         c.advance(now);
         let r = f(&mut c);
-        let wake = c.has_tx() || c.next_deadline().is_some_and(|t| c.wakes_driver(t));
+        let wake = (kick_for_frames && c.has_tx()) || c.next_deadline().is_some_and(|t| c.wakes_driver(t));
         drop(c);
         if wake && let Driver::Tokio { kick, .. } = &self.driver {
             kick.notify_one();
         }
         r
+    }
+
+    /// [`with_core`](Self::with_core), then sends what `f` queued from the
+    /// calling task when it can take the send lock at once (no hop through
+    /// the driver task; the driver sends it otherwise).
+    pub(crate) async fn with_core_and_send<R>(&self, f: impl FnOnce(&mut Core) -> R) -> R {
+        let r = self.with_core_then(false, f);
+        self.pump().await;
+        r
+    }
+
+    /// Sends the core's queue under the send lock, or leaves it to the
+    /// driver task (kicked) when another sender holds the lock.
+    pub(crate) async fn pump(&self) {
+        let Driver::Tokio { tx, kick, sent, sent_notify, send_lock, .. } = &self.driver else { return };
+        if !self.core().has_tx() {
+            return;
+        }
+        let Ok(_sending) = send_lock.try_lock() else {
+            kick.notify_one();
+            return;
+        };
+        let mut out = Vec::new();
+        self.core().take_tx(&mut out);
+        let n = out.len() as u64;
+        for f in out {
+            if let Err(e) = tx.send(f).await {
+                self.core().bus_error(e.to_string());
+                return;
+            }
+        }
+        sent.fetch_add(n, Ordering::AcqRel);
+        sent_notify.notify_waiters();
     }
 }
 
@@ -294,13 +335,15 @@ impl Master {
                 "this transport cannot carry RTR frames (socketcand)",
             ));
         }
-        self.inner.with_core(|c| match &c.closed {
-            Some(why) => Err(io::Error::new(io::ErrorKind::BrokenPipe, why.clone())),
-            None => {
-                c.send(frame);
-                Ok(())
-            }
-        })
+        self.inner
+            .with_core_and_send(|c| match &c.closed {
+                Some(why) => Err(io::Error::new(io::ErrorKind::BrokenPipe, why.clone())),
+                None => {
+                    c.send(frame);
+                    Ok(())
+                }
+            })
+            .await
     }
 
     /// Waits until every frame queued so far has been written by the

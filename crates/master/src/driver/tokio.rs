@@ -23,6 +23,7 @@ pub(crate) fn spawn(bus: CanBus, config: MasterConfig) -> Master {
         kick: kick.clone(),
         sent: AtomicU64::new(0),
         sent_notify: Notify::new(),
+        send_lock: tokio::sync::Mutex::new(()),
     };
     let shared = Arc::new(Shared::new(config, driver, clock.now()));
     // The task holds the master weakly: dropping the last `Master` ends it.
@@ -35,6 +36,10 @@ async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, 
     let mut out: Vec<Frame> = Vec::with_capacity(64);
     loop {
         let Some(s) = shared.upgrade() else { return };
+        let Driver::Tokio { send_lock, .. } = &s.driver else { return };
+        // Taken before the queue: frames go out in the core's order even
+        // when an API call sends from its own task.
+        let sending = send_lock.lock().await;
         let next = {
             let mut c = s.core();
             let next = c.poll(clock.now());
@@ -55,6 +60,7 @@ async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, 
             sent.fetch_add(n, Ordering::AcqRel);
             sent_notify.notify_waiters();
         }
+        drop(sending);
         drop(s);
         let sleep = tokio::time::sleep_until(match next {
             Some(t) => clock.at(t),
