@@ -34,6 +34,8 @@ pub(crate) fn spawn(bus: CanBus, config: MasterConfig) -> Master {
 
 async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, clock: Clock) {
     let mut out: Vec<Frame> = Vec::with_capacity(64);
+    let sleep = tokio::time::sleep(std::time::Duration::from_secs(3600));
+    tokio::pin!(sleep);
     loop {
         let Some(s) = shared.upgrade() else { return };
         let Driver::Tokio { send_lock, .. } = &s.driver else { return };
@@ -62,10 +64,17 @@ async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, 
         }
         drop(sending);
         drop(s);
-        let sleep = tokio::time::sleep_until(match next {
-            Some(t) => clock.at(t),
-            None => tokio::time::Instant::now() + std::time::Duration::from_secs(3600),
-        });
+        // One timer, re-armed only when the deadline moves: a new one per
+        // received frame costs a timer-wheel registration each time. With
+        // no deadline, a fired timer is pushed far out (a stale one only
+        // wakes the loop once, harmlessly).
+        match next.map(|t| clock.at(t)) {
+            Some(d) if sleep.deadline() != d => sleep.as_mut().reset(d),
+            None if sleep.is_elapsed() => {
+                sleep.as_mut().reset(tokio::time::Instant::now() + std::time::Duration::from_secs(3600))
+            }
+            _ => {}
+        }
         tokio::select! {
             // A frame already queued is handled before a deadline that
             // passed meanwhile (a late SDO answer still counts, CiA 301).
@@ -81,7 +90,7 @@ async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, 
                 }
             }
             () = kick.notified() => {}
-            () = sleep => {}
+            () = &mut sleep => {}
         }
     }
 }
