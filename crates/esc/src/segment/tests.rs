@@ -1,0 +1,137 @@
+use super::*;
+use crate::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
+use crate::tests::image;
+use crate::{ClockConfig, EscConfig};
+use alloc::vec::Vec;
+
+fn line(n: usize) -> Segment<Esc> {
+    let escs = (0..n)
+        .map(|i| {
+            let clock = ClockConfig { offset_ns: 1_000_000 * i as u64 + 17, drift_ppb: 0 };
+            Esc::new(EscConfig { clock, ..EscConfig::with_sii(image()) })
+        })
+        .collect();
+    Segment::with_devices(SegmentConfig::default(), escs)
+}
+
+/// One datagram through the segment; returns (data, wkc, report).
+fn send(
+    s: &mut Segment<Esc>,
+    cmd: Command,
+    addr: u32,
+    data: &[u8],
+    t_us: u64,
+) -> (Vec<u8>, u16, SegmentReport) {
+    let mut buf = [0u8; 256];
+    let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
+    b.push(cmd, 9, addr, data).unwrap();
+    let n = b.finish();
+    let r = s.process_frame(&mut buf[..n], Instant::from_micros(t_us));
+    let d = datagrams(&buf[14..n]).next().unwrap();
+    (d.data.to_vec(), d.wkc, r)
+}
+
+fn address_all(s: &mut Segment<Esc>) {
+    for i in 0..s.len() as u16 {
+        let a = 0x1000 + i;
+        assert_eq!(send(s, Command::Apwr, position_address(i, 0x0010), &a.to_le_bytes(), 0).1, 1);
+    }
+}
+
+#[test]
+fn every_slave_counts_and_positions_increment() {
+    let mut s = line(4);
+    let (_, wkc, r) = send(&mut s, Command::Brd, station_address(0, 0), &[0], 0);
+    assert_eq!((wkc, r.reached), (4, 4));
+    address_all(&mut s);
+    for i in 0..4 {
+        assert_eq!(s.device(i).unwrap().station_address(), 0x1000 + i as u16);
+    }
+    let (_, wkc, _) = send(&mut s, Command::Fprd, station_address(0x1002, 0x0010), &[0, 0], 0);
+    assert_eq!(wkc, 1);
+}
+
+#[test]
+fn dl_status_first_slaves_two_ports_last_one() {
+    let mut s = line(3);
+    address_all(&mut s);
+    let dl = |s: &mut Segment<Esc>, a: u16| {
+        let (d, _, _) = send(s, Command::Fprd, station_address(a, 0x0110), &[0, 0], 0);
+        u16::from_le_bytes([d[0], d[1]])
+    };
+    assert_eq!(dl(&mut s, 0x1000) & 0x00F0, 0x0030, "ports 0 and 1 linked");
+    assert_eq!(dl(&mut s, 0x1001) & 0x00F0, 0x0030);
+    assert_eq!(dl(&mut s, 0x1002) & 0x00F0, 0x0010, "last slave: port 0 only");
+}
+
+#[test]
+fn cable_break_hides_downstream_slaves_and_counts_lost_links() {
+    let mut s = line(4);
+    address_all(&mut s);
+    s.set_cable(1, false);
+    let (_, wkc, r) = send(&mut s, Command::Brd, station_address(0, 0), &[0], 0);
+    assert_eq!((wkc, r.reached), (2, 2));
+    let (d, _, _) = send(&mut s, Command::Fprd, station_address(0x1001, 0x0311), &[0], 0);
+    assert_eq!(d, [1], "slave 1 lost the link on port 1");
+    s.set_cable(1, true);
+    assert_eq!(send(&mut s, Command::Brd, station_address(0, 0), &[0], 0).1, 4);
+    // Remove slave 2: the line closes up.
+    let removed = s.remove(2).unwrap();
+    assert_eq!(removed.station_address(), 0x1002);
+    assert_eq!(send(&mut s, Command::Brd, station_address(0, 0), &[0], 0).1, 3);
+    s.insert(0, Esc::new(EscConfig::with_sii(image())));
+    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1000, 0), &[0], 0).1, 1);
+    assert_eq!(send(&mut s, Command::Aprd, position_address(1, 0x0010), &[0, 0], 0).0, [0x00, 0x10]);
+}
+
+#[test]
+fn dl_control_loop_closed_stops_forwarding() {
+    let mut s = line(3);
+    address_all(&mut s);
+    // Close port 1 of slave 0 (0x0101 bits 3:2 = 11).
+    send(&mut s, Command::Fpwr, station_address(0x1000, 0x0101), &[0x0C], 0);
+    assert_eq!(send(&mut s, Command::Brd, station_address(0, 0), &[0], 0).1, 1);
+}
+
+/// The master's propagation delay computation (ethercrab dc.rs: halve the
+/// port 1 − port 0 difference between neighbours) gives link + esc delay.
+#[test]
+fn port_receive_times_give_consistent_delays() {
+    let n = 5;
+    let mut s = line(n);
+    address_all(&mut s);
+    let (_, wkc, r) = send(&mut s, Command::Bwr, station_address(0, 0x0900), &[0; 4], 50);
+    assert_eq!(wkc, n as u16);
+    let cfg = SegmentConfig::default();
+    let hop = (cfg.link_delay + cfg.esc_delay).as_nanos() as u64;
+    let mut totals = Vec::new();
+    let mut rx_pu = Vec::new();
+    for i in 0..n as u16 {
+        let (d, _, _) = send(&mut s, Command::Fprd, station_address(0x1000 + i, 0x0900), &[0; 16], 60);
+        let p0 = u32::from_le_bytes(d[0..4].try_into().unwrap());
+        let p1 = u32::from_le_bytes(d[4..8].try_into().unwrap());
+        totals.push(if i + 1 < n as u16 { p1.wrapping_sub(p0) as u64 } else { 0 });
+        let (d, _, _) = send(&mut s, Command::Fprd, station_address(0x1000 + i, 0x0918), &[0; 8], 60);
+        rx_pu.push(u64::from_le_bytes(d.try_into().unwrap()));
+    }
+    for i in 0..n - 1 {
+        assert_eq!((totals[i] - totals[i + 1]) / 2, hop, "slave {i} -> {}", i + 1);
+    }
+    // Each ESC latched its own local time (offset i ms) of its arrival.
+    for (i, t) in rx_pu.iter().enumerate() {
+        assert_eq!(*t, 1_000_000 * i as u64 + 17 + 50_000 + 300 + hop * i as u64);
+    }
+    // n hops out and back, 2n - 1 passes through an ESC.
+    let esc = cfg.esc_delay.as_nanos() as u64;
+    assert_eq!(r.returns_at.as_nanos(), 50_000 + 2 * (n as u64) * hop - esc, "round trip");
+}
+
+#[test]
+fn frmw_distributes_the_reference_time_down_the_line() {
+    let mut s = line(3);
+    address_all(&mut s);
+    let (d, wkc, _) = send(&mut s, Command::Frmw, station_address(0x1000, 0x0910), &[0; 8], 100);
+    assert_eq!(wkc, 3, "reference reads, two followers write");
+    let reference = u64::from_le_bytes(d.try_into().unwrap());
+    assert_eq!(reference, 17 + 100_000 + 300);
+}

@@ -1,0 +1,195 @@
+//! The ESI agrees with the dictionary it came from and with the EDS of the
+//! same profile; what EtherCAT needs and the shipped `ipos.eds` lacks is
+//! reported item by item.
+
+mod common;
+
+use drivebus_esi::{
+    CheckOptions, Finding, SlaveDescription, check_dictionary, check_eds, check_ethercat, ipos,
+};
+use drivebus_personality::Profile;
+
+fn opts(p: Profile) -> CheckOptions {
+    match p {
+        Profile::Ipos => ipos::check_options(),
+        _ => CheckOptions { state_rules: common::facts(p).state_rules, ..CheckOptions::default() },
+    }
+}
+
+fn keys(f: &[Finding]) -> Vec<(Option<u16>, Option<u8>, String, String)> {
+    let mut k: Vec<_> = f.iter().map(|f| (f.index, f.sub, f.field.clone(), f.esi.clone())).collect();
+    k.sort();
+    k
+}
+
+fn show(f: &[Finding]) -> String {
+    f.iter().map(|f| format!("\n  {f}")).collect()
+}
+
+/// The iPOS ESI states the revision as the firmware ID (§1.5.4.6, FA00G
+/// → "A00G"); the manual's 1018h:03 table (§4.8.6), and so `ipos.eds` and
+/// the dictionary, say "0100". Whoever owns the EDS decides which one the
+/// twin reports; until then this is the one expected disagreement.
+const IPOS_REVISION: (Option<u16>, Option<u8>, &str, &str) =
+    (Some(0x1018), Some(3), "revision number", "#x41303047 (\"A00G\")");
+
+#[test]
+fn every_profile_round_trips_and_agrees_with_its_dictionary_and_eds() {
+    for &p in Profile::all() {
+        let (desc, od, eds) = common::build(p);
+        let xml = drivebus_esi::write(&desc);
+        let errors: Vec<_> = drivebus_esi::validate(&xml).into_iter().filter(|x| x.is_error()).collect();
+        assert!(errors.is_empty(), "{p}: {errors:?}");
+        let back = common::round_trip(&desc);
+        assert!(back == desc, "{p}: the file does not read back to the description");
+        let expected: Vec<_> = if p == Profile::Ipos {
+            vec![(IPOS_REVISION.0, IPOS_REVISION.1, IPOS_REVISION.2.to_string(), IPOS_REVISION.3.to_string())]
+        } else {
+            vec![]
+        };
+        let d = check_dictionary(&back, &od, &opts(p));
+        assert_eq!(keys(&d), expected, "{p} vs dictionary:{}", show(&d));
+        let e = check_eds(&back, &eds, &opts(p));
+        assert_eq!(keys(&e), expected, "{p} vs EDS:{}", show(&e));
+    }
+}
+
+#[test]
+fn an_esi_of_the_running_twin_agrees_with_the_running_dictionary() {
+    // The running drives carry hooks and objects the stack installs beyond
+    // the EDS (see the crate report); an ESI built from them must still
+    // describe them exactly.
+    for &p in Profile::all() {
+        let node = p.build(common::NODE_ID).unwrap_or_else(|e| panic!("{p}: {e:?}"));
+        let od = node.node.od();
+        let desc = SlaveDescription::new(od, &common::facts(p));
+        let back = common::round_trip(&desc);
+        assert!(back == desc, "{p}");
+        let mut o = opts(p);
+        o.mapping_entries = None;
+        let f = check_dictionary(&back, od, &o);
+        let f: Vec<_> = f.into_iter().filter(|f| !(f.index == Some(0x1018) && f.sub == Some(3))).collect();
+        assert!(f.is_empty(), "{p}:{}", show(&f));
+    }
+}
+
+/// What the shipped `ipos.eds` lacks for EtherCAT, with the manual's
+/// reason. The EDS belongs to another engineer; this list is what the
+/// check must find until the file is fixed (then update it, and run the
+/// ignored `ipos_eds_meets_ethercat_needs`).
+///
+/// * 1C00h:04 = 3: §2.3.9 prints 3, its value range says 4 = process
+///   data input (SM3), and ETG.1000.6 says 4.
+/// * 1C12h has only sub 1 and 1C13h subs 1–2, while 4 RxPDOs and 4 TxPDOs
+///   exist and §2.3.10/§2.3.11 and examples E10/E11 write 1C12h:03 and
+///   1C13h:04.
+/// * 1C12h:00 and 1C13h:00 are printed RO but every example (§2.4, E10,
+///   E11) writes them: 0, the entries, then the count.
+/// * Mapping objects have 1–3 entries; §2.4 offers 8 per PDO, and E11
+///   maps two objects into 1A03h, which has one.
+const IPOS_EDS_GAPS: &[(u16, Option<u8>, &str, &str)] = &[
+    (0x1600, None, "sub-indices", "3–8 missing"),
+    (0x1601, None, "sub-indices", "3–8 missing"),
+    (0x1602, None, "sub-indices", "3–8 missing"),
+    (0x1603, None, "sub-indices", "3–8 missing"),
+    (0x1A00, None, "sub-indices", "4–8 missing"),
+    (0x1A01, None, "sub-indices", "3–8 missing"),
+    (0x1A02, None, "sub-indices", "2–8 missing"),
+    (0x1A03, None, "sub-indices", "2–8 missing"),
+    (0x1C00, Some(4), "default", "3"),
+    (0x1C12, None, "sub-indices", "2–4 missing"),
+    (0x1C12, Some(0), "access", "ro"),
+    (0x1C13, None, "sub-indices", "3–4 missing"),
+    (0x1C13, Some(0), "access", "ro"),
+];
+
+#[test]
+fn ipos_eds_gaps_for_ethercat_are_the_known_ones() {
+    let (desc, od, _) = common::build(Profile::Ipos);
+    let f = check_ethercat(&common::round_trip(&desc), &od, &ipos::check_options());
+    let want: Vec<_> = IPOS_EDS_GAPS
+        .iter()
+        .map(|(i, s, fld, esi)| (Some(*i), *s, fld.to_string(), esi.to_string()))
+        .collect();
+    let mut want = want;
+    want.sort();
+    assert_eq!(keys(&f), want, "{}", show(&f));
+    let text = f.iter().find(|f| f.index == Some(0x1C00)).map(ToString::to_string);
+    assert_eq!(
+        text.as_deref(),
+        Some("1C00h:04 default: dictionary 3; EtherCAT needs 4 (SM3 is Inputs)"),
+        "the report names index, sub, field and both values"
+    );
+}
+
+#[test]
+#[ignore = "ipos.eds lacks what EtherCAT needs (IPOS_EDS_GAPS); run with --ignored once the EDS is fixed"]
+fn ipos_eds_meets_ethercat_needs() {
+    let (desc, od, _) = common::build(Profile::Ipos);
+    let f = check_ethercat(&desc, &od, &ipos::check_options());
+    assert!(f.is_empty(), "{}", show(&f));
+}
+
+#[test]
+fn generic_lacks_only_the_sync_manager_objects() {
+    // `generic` is a CAN drive: its dictionary has no 1C00h/1C12h/1C13h.
+    let (desc, od, _) = common::build(Profile::Generic);
+    let f = check_ethercat(&common::round_trip(&desc), &od, &opts(Profile::Generic));
+    let got: Vec<_> = f.iter().map(|f| (f.index, f.sub, f.field.as_str())).collect();
+    assert_eq!(
+        got,
+        [(Some(0x1C00), None, "exists"), (Some(0x1C12), None, "exists"), (Some(0x1C13), None, "exists")],
+        "{}",
+        show(&f)
+    );
+    // On CAN the PDOs with a valid COB-ID make the default assignment.
+    assert!(desc.rx_pdos.iter().all(|p| p.sm == Some(2)) && desc.tx_pdos.iter().all(|p| p.sm == Some(3)));
+}
+
+#[test]
+fn sync_manager_sizes_follow_the_default_assignment() {
+    // §2.3: RxPDO1 (6040h + 607Ah = 48 bits) assigned; TxPDO1 (64) and TxPDO2 (64).
+    let (desc, _, _) = common::build(Profile::Ipos);
+    let size = |k| desc.sm(k).and_then(|(_, s)| s.default_size);
+    assert_eq!(size(drivebus_esi::SmKind::Outputs), Some(6));
+    assert_eq!(size(drivebus_esi::SmKind::Inputs), Some(16));
+    let assigned: Vec<_> = desc.tx_pdos.iter().filter(|p| p.sm.is_some()).map(|p| p.index).collect();
+    assert_eq!(assigned, [0x1A00, 0x1A01]);
+    assert!(desc.ethercrab_min_mailbox_in() <= 512, "{}", desc.ethercrab_min_mailbox_in());
+    assert_eq!(desc.object_count(), 190);
+}
+
+#[test]
+fn disagreements_are_itemised_with_both_values() {
+    let (desc, od, eds) = common::build(Profile::Ipos);
+    let mut bad = desc.clone();
+    bad.vendor_id = 2;
+    let i = bad.objects.iter().position(|o| o.index == 0x6065).unwrap();
+    bad.objects[i].subs[0].default = 1234u32.to_le_bytes().to_vec();
+    bad.objects[i].subs[0].access &= !drivebus_coe::access_bits::WRITE;
+    let j = bad.objects.iter().position(|o| o.index == 0x6099).unwrap();
+    bad.objects[j].subs.pop();
+    bad.objects.retain(|o| o.index != 0x2000);
+    bad.rx_pdos[0].entries[1].bit_len = 16;
+    bad.tx_pdos[1].sm = None;
+    bad.sync_managers[3].default_size = Some(8);
+    let bad = common::round_trip(&bad);
+    let f = check_dictionary(&bad, &od, &ipos::check_options());
+    let lines: Vec<String> = f.iter().map(ToString::to_string).collect();
+    for want in [
+        "1018h:01 vendor ID: ESI #x00000002; dictionary #x000001A3",
+        "2000h exists: ESI absent; dictionary present",
+        "6065h:00 access: ESI ro; dictionary rw",
+        "6065h:00 default: ESI #x000004D2; dictionary #x",
+        "6099h:02 exists: ESI absent; dictionary present",
+        "1600h RxPdo entries: ESI 6040:00/16, 607A:00/16; dictionary 6040:00/16, 607A:00/32",
+        "1A01h TxPdo Sm: ESI not assigned; dictionary SM3",
+        "1C13h default assignment: ESI 1A00h; dictionary 1A00h, 1A01h",
+        "Sm Inputs DefaultSize: ESI 8; dictionary 16",
+    ] {
+        assert!(lines.iter().any(|l| l.starts_with(want)), "missing {want:?} in{}", show(&f));
+    }
+    // The EDS check sees the same object-level differences.
+    let e = check_eds(&bad, &eds, &ipos::check_options());
+    assert!(e.iter().any(|f| f.to_string().starts_with("6065h:00 default: ESI #x000004D2; EDS #x")));
+}

@@ -1,0 +1,28 @@
+//! Hosting drivebus EtherCAT slaves ([`drivebus_esc`]) for real masters.
+//!
+//! * [`Host`]: a [`Segment`](drivebus_esc::segment::Segment) of devices on
+//!   a [`Clock`] (real or simulated), the single entry point for frames,
+//!   with optional pcapng [`capture`].
+//! * [`link`]: an in-process link for ethercrab 0.7.1 — its `PduTx`/`PduRx`
+//!   served straight from a host, no root, no network (feature
+//!   `ethercrab`, on by default).
+//! * [`server`]: an AF_PACKET raw-socket server on a named interface
+//!   (Linux, root), so masters on a wire or a veth pair see the segment.
+//! * [`dio`]: a digital I/O test slave (no mailbox, SII-described PDOs).
+//!
+//! The CoE mailbox server and the CiA 402 drives plug in as
+//! [`drivebus_esc::slave::SlaveApp`]s on the same hosts.
+
+pub mod capture;
+pub mod clock;
+pub mod dio;
+pub mod host;
+#[cfg(feature = "ethercrab")]
+pub mod link;
+#[cfg(feature = "ethercrab")]
+pub mod probe;
+#[cfg(target_os = "linux")]
+pub mod server;
+
+pub use clock::Clock;
+pub use host::{BoxDevice, Host, HostStats};
