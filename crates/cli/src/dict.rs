@@ -198,4 +198,14 @@ mod tests {
         assert_eq!(number("106").unwrap(), 106);
         assert!(number("x").is_err());
     }
+
+    proptest::proptest! {
+        /// Whatever the user types as an object or sub-index: a result or an error.
+        #[test]
+        fn any_object_text_resolves_or_errs(obj in "[0-9A-Fa-fxXhH:sub ]{0,14}|\\PC{0,30}", sub in proptest::option::of("\\PC{0,6}")) {
+            let _ = Dict::default().resolve(&obj, sub.as_deref());
+            let _ = number(&obj);
+            let _ = sub_index(&obj);
+        }
+    }
 }

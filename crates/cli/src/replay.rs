@@ -154,4 +154,12 @@ mod tests {
             assert!(e.contains("bad frame"), "{bad}: {e}");
         }
     }
+
+    proptest::proptest! {
+        /// Malformed cansend text is an error naming the column, never a panic.
+        #[test]
+        fn any_frame_text_parses_or_errs(text in "[0-9A-Fa-f#R.xX ]{0,40}|\\PC{0,40}") {
+            let _ = frame(&text);
+        }
+    }
 }

@@ -585,4 +585,24 @@ mod tests {
         assert!(encode(t("hex"), &v("123")).is_none());
         assert_eq!(encode(t("d"), &v("TWFu")).unwrap(), b"Man");
     }
+
+    proptest::proptest! {
+        /// Any value text for any type, and any bytes shown as any type:
+        /// a value or `None` (answered as a 309-3 error), never a panic.
+        #[test]
+        fn any_value_encodes_or_errs(
+            ty in proptest::sample::select(vec![
+                "b", "i8", "i16", "i32", "i64", "u8", "u16", "u32", "u64", "x8", "x16", "x32", "x64",
+                "r32", "r64", "t", "td", "vs", "os", "us", "d", "hex",
+            ]),
+            words in proptest::collection::vec("\\PC{0,12}", 0..4),
+            data in proptest::collection::vec(proptest::num::u8::ANY, 0..12),
+        ) {
+            if let Some(t) = GwType::parse(ty) {
+                let _ = encode(t, &words);
+                let _ = show(Some(t), &data);
+            }
+            let _ = unbase64(words.first().map_or("", String::as_str));
+        }
+    }
 }

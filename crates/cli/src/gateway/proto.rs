@@ -505,4 +505,23 @@ mod tests {
             let _ = parse(line);
         }
     }
+
+    proptest::proptest! {
+        /// Any line, printable or not, gives a request or a 309-3 error.
+        #[test]
+        fn any_line_parses_or_errs(line in "\\PC{0,60}", raw in proptest::collection::vec(proptest::num::u8::ANY, 0..60)) {
+            let _ = parse(&line);
+            let _ = parse(&String::from_utf8_lossy(&raw));
+        }
+
+        /// Lines built from the gateway's own words in random order.
+        #[test]
+        fn shuffled_words_never_panic(words in proptest::collection::vec(proptest::sample::select(vec![
+            "[1]", "[", "]", "4", "0x1017", "0", "-1", "65536", "r", "w", "read", "write", "u8", "i64", "vs", "d",
+            "r32", "\"", "start", "reset", "comm", "node", "set", "sdo_timeout", "network", "lss_switch_glob",
+            "lss_set_node", "lss_fastscan", "info", "version", "p", "tpdo", "rpdo", "#",
+        ]), 0..8)) {
+            let _ = parse(&words.join(" "));
+        }
+    }
 }
