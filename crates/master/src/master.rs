@@ -13,7 +13,7 @@ use drivebus_can::{Frame, Instant};
 use drivebus_nmt::{NmtCommand, RemoteState};
 use drivebus_od::ObjectDictionary;
 use drivebus_sync::TimeOfDay;
-use drivebus_transport::{CanBus, CanTx};
+use drivebus_transport::{CanBus, CanTx, TrySendError};
 use tokio::sync::{Notify, broadcast};
 use tokio::task::AbortHandle;
 
@@ -219,36 +219,50 @@ impl Shared {
     }
 
     /// [`with_core`](Self::with_core), then sends what `f` queued from the
-    /// calling task when it can take the send lock at once (no hop through
+    /// calling task when the transport takes it at once (no hop through
     /// the driver task; the driver sends it otherwise).
-    pub(crate) async fn with_core_and_send<R>(&self, f: impl FnOnce(&mut Core) -> R) -> R {
+    pub(crate) fn with_core_and_send<R>(&self, f: impl FnOnce(&mut Core) -> R) -> R {
         let r = self.with_core_then(false, f);
-        self.pump().await;
+        self.pump();
         r
     }
 
-    /// Sends the core's queue under the send lock, or leaves it to the
-    /// driver task (kicked) when another sender holds the lock.
-    pub(crate) async fn pump(&self) {
+    /// Hands the core's queue to the transport without waiting. Never
+    /// awaits: the caller's future may be left unpolled (a select, a
+    /// probe polled once), and a lock held across an await there would
+    /// stall the driver task. What the transport cannot take at once, or
+    /// what another sender is busy with, is left to the driver (kicked).
+    fn pump(&self) {
         let Driver::Tokio { tx, kick, sent, sent_notify, send_lock, .. } = &self.driver else { return };
-        if !self.core().has_tx() {
-            return;
-        }
         let Ok(_sending) = send_lock.try_lock() else {
             kick.notify_one();
             return;
         };
-        let mut out = Vec::new();
-        self.core().take_tx(&mut out);
-        let n = out.len() as u64;
-        for f in out {
-            if let Err(e) = tx.send(f).await {
-                self.core().bus_error(e.to_string());
-                return;
+        let mut n = 0u64;
+        {
+            let mut c = self.core();
+            let mut out = Vec::new();
+            c.take_tx(&mut out);
+            let mut frames = out.into_iter();
+            while let Some(f) = frames.next() {
+                match tx.try_send(f) {
+                    Ok(()) => n += 1,
+                    Err(TrySendError::Busy(f)) => {
+                        c.requeue_front(std::iter::once(f).chain(frames));
+                        kick.notify_one();
+                        break;
+                    }
+                    Err(TrySendError::Failed(e)) => {
+                        c.bus_error(e.to_string());
+                        break;
+                    }
+                }
             }
         }
-        sent.fetch_add(n, Ordering::AcqRel);
-        sent_notify.notify_waiters();
+        if n > 0 {
+            sent.fetch_add(n, Ordering::AcqRel);
+            sent_notify.notify_waiters();
+        }
     }
 }
 
@@ -335,15 +349,13 @@ impl Master {
                 "this transport cannot carry RTR frames (socketcand)",
             ));
         }
-        self.inner
-            .with_core_and_send(|c| match &c.closed {
-                Some(why) => Err(io::Error::new(io::ErrorKind::BrokenPipe, why.clone())),
-                None => {
-                    c.send(frame);
-                    Ok(())
-                }
-            })
-            .await
+        self.inner.with_core_and_send(|c| match &c.closed {
+            Some(why) => Err(io::Error::new(io::ErrorKind::BrokenPipe, why.clone())),
+            None => {
+                c.send(frame);
+                Ok(())
+            }
+        })
     }
 
     /// Waits until every frame queued so far has been written by the

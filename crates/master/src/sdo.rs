@@ -231,21 +231,19 @@ impl SdoHandle {
             progress: self.progress.clone(),
             done,
         };
-        let id = shared
-            .with_core_and_send(|c| {
-                if let Some(why) = &c.closed {
-                    return Err(SdoError::Transport(why.clone()));
-                }
-                let id = c.id();
-                let now = c.now();
-                let mut out = Vec::new();
-                c.sdo.start(id, req, now, &mut out);
-                for f in out {
-                    c.send(f);
-                }
-                Ok(id)
-            })
-            .await?;
+        let id = shared.with_core_and_send(|c| {
+            if let Some(why) = &c.closed {
+                return Err(SdoError::Transport(why.clone()));
+            }
+            let id = c.id();
+            let now = c.now();
+            let mut out = Vec::new();
+            c.sdo.start(id, req, now, &mut out);
+            for f in out {
+                c.send(f);
+            }
+            Ok(id)
+        })?;
         // Dropping this future aborts the transfer on the bus.
         let mut guard = CancelGuard { master: &self.master, id: Some(id) };
         let r = rx.await;

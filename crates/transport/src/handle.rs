@@ -45,6 +45,15 @@ enum RxInner {
     Chan { rx: mpsc::Receiver<Frame>, status: Arc<LinkStatus> },
 }
 
+/// Why [`CanTx::try_send`] did not queue a frame.
+#[derive(Debug)]
+pub enum TrySendError {
+    /// The transport cannot take it without waiting; here it is back.
+    Busy(Frame),
+    /// The transport failed or cannot carry this frame.
+    Failed(io::Error),
+}
+
 /// What a user handle asks of its transport task, in order: a frame
 /// queued after a flush is written after the flush completed.
 pub(crate) enum Out {
@@ -108,6 +117,29 @@ impl CanTx {
                 "this transport cannot carry RTR frames (socketcand)",
             )),
             TxInner::Chan { tx, status, .. } => tx.send(Out::Frame(frame)).await.map_err(|_| status.error()),
+        }
+    }
+
+    /// Queues `frame` without waiting. [`TrySendError::Busy`] hands it
+    /// back when the transport cannot take it at once (its queue is full,
+    /// or a paced hub must wait for the frame's slot): call
+    /// [`send`](Self::send) then.
+    pub fn try_send(&self, frame: Frame) -> Result<(), TrySendError> {
+        match &self.0 {
+            TxInner::Hub { hub, .. } if hub.is_paced() => Err(TrySendError::Busy(frame)),
+            TxInner::Hub { hub, id } => {
+                hub.publish_now(*id, frame);
+                Ok(())
+            }
+            TxInner::Chan { rtr: false, .. } if frame.is_rtr() => Err(TrySendError::Failed(io::Error::new(
+                io::ErrorKind::Unsupported,
+                "this transport cannot carry RTR frames (socketcand)",
+            ))),
+            TxInner::Chan { tx, status, .. } => match tx.try_send(Out::Frame(frame)) {
+                Ok(()) => Ok(()),
+                Err(mpsc::error::TrySendError::Full(_)) => Err(TrySendError::Busy(frame)),
+                Err(mpsc::error::TrySendError::Closed(_)) => Err(TrySendError::Failed(status.error())),
+            },
         }
     }
 

@@ -142,6 +142,14 @@ impl Core {
         into.append(&mut self.tx);
     }
 
+    /// Puts frames taken by [`take_tx`](Self::take_tx) but not sent back
+    /// in front of the queue (still counted as queued).
+    pub(crate) fn requeue_front(&mut self, frames: impl IntoIterator<Item = Frame>) {
+        let rest = std::mem::take(&mut self.tx);
+        self.tx.extend(frames);
+        self.tx.extend(rest);
+    }
+
     /// True when frames wait to be sent.
     pub(crate) fn has_tx(&self) -> bool {
         !self.tx.is_empty()
