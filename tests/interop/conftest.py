@@ -234,10 +234,10 @@ class Served:
         assert rc == 0, f"`drivebus serve` exited {rc} after SIGTERM (contract: 0)\n{self.proc.describe()}"
 
 
-def start_serve(*drives: str, state_dir=None, bitrate=None, port: int | None = None) -> Served:
+def start_serve(*drives: str, state_dir=None, bitrate=None, port: int | None = None, extra: tuple = ()) -> Served:
     require_command("serve")
     port = port or free_port()
-    args = ["serve", "--listen", f"{LOCALHOST}:{port}", "--channel", CHANNEL]
+    args = ["serve", "--listen", f"{LOCALHOST}:{port}", "--channel", CHANNEL, *extra]
     for d in drives:
         args += ["--drive", d]
     if state_dir is not None:
@@ -256,14 +256,16 @@ def start_serve(*drives: str, state_dir=None, bitrate=None, port: int | None = N
 
 @pytest.fixture
 def serve():
-    """Factory: `serve("generic:5", state_dir=None, bitrate=None)` starts
+    """Factory: `serve("generic:5", state_dir=None, bitrate=None, extra=())` starts
     `drivebus serve`, waits for `listening on` and returns a `Served`
     ((host, port) when unpacked). Teardown stops every server still running
     with SIGTERM and checks exit code 0."""
     started: list[Served] = []
 
-    def start(*drives, state_dir=None, bitrate=None, port=None):
-        s = start_serve(*(drives or ("generic:5",)), state_dir=state_dir, bitrate=bitrate, port=port)
+    def start(*drives, state_dir=None, bitrate=None, port=None, extra=()):
+        s = start_serve(
+            *(drives or ("generic:5",)), state_dir=state_dir, bitrate=bitrate, port=port, extra=tuple(extra)
+        )
         started.append(s)
         return s
 

@@ -74,3 +74,44 @@ fn object_descriptions() {
     // 608Fh:1 is the encoder: 2^20 increments per revolution.
     assert_eq!(node.od().get_u32(0x608F, 1), Some(1 << 20));
 }
+
+/// A device without some CiA 402 objects (a manufacturer whose manual does
+/// not list them): withdrawn, they are gone from the dictionary, the drive
+/// keeps working with the parameter's value, takes what the application
+/// writes into it, and goes back to the power-on value at reset
+/// application — through a reload from the dictionary too.
+#[test]
+fn withdrawn_objects_keep_their_parameters() {
+    use drivebus_node::{Application, NmtState, NodeEvent};
+    use drivebus_od::ObjectHooks;
+    let mut node = Node::new(NodeConfig::new(1));
+    let mut drive = Drive::install(&mut node, DriveConfig::default()).unwrap();
+    let max = drive.mode_params().max_profile_velocity;
+    assert!(max > 1000);
+    for index in [0x607F, 0x6062, 0x6075] {
+        assert!(drive.withdraw_object(node.od_mut(), index));
+        assert!(node.od().object(index).is_none() && drive.is_withdrawn(index));
+    }
+    assert!(!drive.withdraw_object(node.od_mut(), 0x607F), "already out");
+    let od = node.od_mut();
+    let reload = |d: &mut Drive, od: &mut drivebus_od::ObjectDictionary| {
+        d.on_event(
+            od,
+            NodeEvent::NmtState { from: NmtState::Stopped, to: NmtState::PreOperational },
+            drivebus_can::Instant::ZERO,
+        )
+    };
+    reload(&mut drive, od);
+    assert_eq!(drive.mode_params().max_profile_velocity, max, "power-on value kept");
+    // The application sets it (a personality's own object maps onto it).
+    drive.on_write(od, 0x607F, 0, &1000u32.to_le_bytes()).unwrap();
+    reload(&mut drive, od);
+    assert_eq!(drive.mode_params().max_profile_velocity, 1000, "the written value survives a reload");
+    drive.on_event(od, NodeEvent::ResetApplication, drivebus_can::Instant::ZERO);
+    reload(&mut drive, od);
+    assert_eq!(drive.mode_params().max_profile_velocity, max, "reset application: power-on value");
+    // Live values of withdrawn objects are not published; the others are.
+    drive.poll(od, drivebus_can::Instant::from_millis(1));
+    assert!(od.get(0x6062, 0).is_none());
+    assert!(od.get_u32(0x6041, 0).is_some_and(|sw| sw != 0));
+}

@@ -240,7 +240,8 @@ type Callbacks = Vec<drivebus_master::PdoCallback>;
 
 /// RPDO1 controlword (event), RPDO2 controlword + target (SYNC); TPDO1
 /// statusword + mode display (event), TPDO2 position + velocity, TPDO3
-/// following error + demand (every SYNC); the other TPDOs off (an
+/// following error (every SYNC; the demand is position + following error:
+/// the AKD has no 6062h, §7.1.5); the other TPDOs off (an
 /// event-driven default with a position in it would send every period).
 async fn configure(m: &Master, trace: Arc<Mutex<Trace>>) -> anyhow::Result<(Drive, Drive, Callbacks)> {
     let e = PdoMapEntry::new;
@@ -274,14 +275,9 @@ async fn configure(m: &Master, trace: Arc<Mutex<Trace>>) -> anyhow::Result<(Driv
         .await
         .context("TPDO2")?;
         let last = if node == 1 {
-            m.write_pdo(
-                node,
-                PdoDir::Tx,
-                3,
-                &PdoRecord::new(0x380 + n, 1, vec![e(0x60F4, 0, 32), e(0x6062, 0, 32)]),
-            )
-            .await
-            .context("TPDO3")?;
+            m.write_pdo(node, PdoDir::Tx, 3, &PdoRecord::new(0x380 + n, 1, vec![e(0x60F4, 0, 32)]))
+                .await
+                .context("TPDO3")?;
             4
         } else {
             3
@@ -306,14 +302,19 @@ async fn configure(m: &Master, trace: Arc<Mutex<Trace>>) -> anyhow::Result<(Driv
         t.cur.position = i32_at(f.data(), 0);
         t.cur.velocity = i32_at(f.data(), 4);
         t.cur.t = at.saturating_duration_since(t0).as_nanos() as f64 / 1e9;
-        let s = t.cur;
-        t.samples.push(s);
     }));
+    // TPDO3 is the last of a SYNC's node-1 frames (highest COB-ID after
+    // 282h): the sample is complete.
     let t = trace.clone();
     cbs.push(m.on_pdo(0x381, move |f: &Frame, _| {
         let mut t = t.lock().unwrap_or_else(|e| e.into_inner());
+        if t.t0.is_none() {
+            return;
+        }
         t.cur.following = i32_at(f.data(), 0);
-        t.cur.demand = i32_at(f.data(), 4);
+        t.cur.demand = t.cur.position + t.cur.following;
+        let s = t.cur;
+        t.samples.push(s);
     }));
     let t = trace.clone();
     cbs.push(m.on_pdo(0x282, move |f: &Frame, _| {

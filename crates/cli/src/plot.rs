@@ -11,7 +11,7 @@ use plotters::prelude::*;
 pub struct Sample {
     /// Seconds since the nodes were started.
     pub t: f64,
-    /// Node 1 6062h position demand value \[m°\].
+    /// Node 1 position demand \[m°\]: 6064h + 60F4h (the AKD has no 6062h).
     pub demand: f64,
     /// Node 1 6064h position actual value \[m°\].
     pub position: f64,
@@ -41,7 +41,10 @@ const PANELS: [(&str, &str, &[Series]); 4] = [
     (
         "Node 1 (AKD) position",
         "degrees",
-        &[("actual 6064h", BLUE, |x| x.position / 1000.0), ("demand 6062h", RED, |x| x.demand / 1000.0)],
+        &[
+            ("actual 6064h", BLUE, |x| x.position / 1000.0),
+            ("demand (6064h + 60F4h)", RED, |x| x.demand / 1000.0),
+        ],
     ),
     ("Node 2 (DDS6) position", "position units", &[("actual 6064h", GREEN, |x| x.position2)]),
     ("Node 1 velocity", "degrees/s", &[("actual 606Ch", BLUE, |x| x.velocity / 1000.0)]),

@@ -242,7 +242,7 @@ impl Ctx<'_> {
             let (mi, ms, len) = ((e >> 16) as u16, (e >> 8) as u8, e & 0xFF);
             bits += len;
             if (1..=7).contains(&mi) {
-                if !self.eds.dummy_usage[mi as usize] {
+                if !self.eds.dummy_supported(mi) {
                     self.push(
                         Severity::Error,
                         Some(index),

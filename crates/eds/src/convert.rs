@@ -129,6 +129,8 @@ pub fn from_od(od: &ObjectDictionary, device_info: DeviceInfo, node_id: u8, as_d
             }
         }
         match o.index {
+            // CiA 306 §4.5: data type definitions are in no object list.
+            0x0000..=0x0FFF => {}
             0x1000 | 0x1001 | 0x1018 => eds.mandatory.push(o.index),
             0x2000..=0x5FFF => eds.manufacturer.push(o.index),
             _ => eds.optional.push(o.index),

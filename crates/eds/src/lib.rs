@@ -1,5 +1,5 @@
-//! EDS and DCF files (CiA 306): read, write, check, and convert to and from
-//! a running object dictionary.
+//! EDS and DCF files (CiA 306): read, write, check, convert to and from a
+//! running object dictionary, and the DCF of a configured device ([`dcf`]).
 //!
 //! ```
 //! let text = "[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x20192\n";
@@ -10,6 +10,7 @@
 
 mod check;
 mod convert;
+mod dcf;
 mod ini;
 mod model;
 mod read;
@@ -18,6 +19,7 @@ mod write;
 
 pub use check::{Finding, Severity, check};
 pub use convert::{from_od, to_od};
+pub use dcf::{dcf, dcf_from_od};
 pub use model::{Commissioning, DeviceInfo, Diagnostic, Eds, EdsError, EdsObject, EdsVar};
 pub use read::{Parsed, parse};
 pub use value::{eval, format as format_value, is_node_relative};

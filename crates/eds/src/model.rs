@@ -14,8 +14,10 @@ pub struct Eds {
     pub file_info: Vec<(String, String)>,
     /// `[DeviceInfo]`.
     pub device_info: DeviceInfo,
-    /// `[DummyUsage]`: `Dummy0000`..`Dummy0007` (index = data type index).
-    pub dummy_usage: [bool; 8],
+    /// `[DummyUsage]` (CiA 306 §4.5): the `DummyXXXX` entries the file has,
+    /// by data type index (standard files list 0001h–0007h; tools such as
+    /// Lely's write 0010h–001Bh too), `true` where the dummy is supported.
+    pub dummy_usage: BTreeMap<u16, bool>,
     /// `[Comments]` lines.
     pub comments: Vec<String>,
     /// Objects by index.
@@ -33,6 +35,12 @@ pub struct Eds {
 }
 
 impl Eds {
+    /// Whether the file declares dummy mapping of data type `index`
+    /// (`DummyXXXX=1`).
+    pub fn dummy_supported(&self, index: u16) -> bool {
+        self.dummy_usage.get(&index).copied().unwrap_or(false)
+    }
+
     /// Forget the line numbers (for comparing files read from different texts).
     pub fn strip_lines(&mut self) {
         for o in self.objects.values_mut() {
@@ -101,6 +109,8 @@ pub struct Commissioning {
     pub canopen_manager: bool,
     /// LSS_SerialNumber.
     pub lss_serial_number: Option<u32>,
+    /// Keys this reader does not interpret (`NodeRefd`, `NetRefd`), verbatim.
+    pub other: Vec<(String, String)>,
 }
 
 /// One object section and its sub-objects.

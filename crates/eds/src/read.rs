@@ -17,6 +17,10 @@ pub struct Parsed {
 
 const BAUD_RATES: [u32; 9] = [10, 20, 50, 125, 250, 500, 800, 1000, 0];
 
+/// The `[DeviceComissioning]` keys [`Commissioning`] has fields for.
+const COMMISSIONING_KEYS: [&str; 7] =
+    ["nodeid", "nodename", "baudrate", "netnumber", "networkname", "canopenmanager", "lss_serialnumber"];
+
 enum Kind {
     Object(u16),
     Sub(u16, u8),
@@ -182,8 +186,24 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
         None => r.warn(0, "[DeviceInfo] missing".into()),
     }
     if let Some(s) = ini.section("DummyUsage") {
-        for (i, slot) in eds.dummy_usage.iter_mut().enumerate() {
-            *slot = r.flag(s, &format!("Dummy{i:04X}"));
+        for e in &s.entries {
+            let index = e
+                .key
+                .split_at_checked(5)
+                .filter(|(p, t)| p.eq_ignore_ascii_case("dummy") && t.len() == 4)
+                .filter(|(_, t)| t.chars().all(|c| c.is_ascii_hexdigit()))
+                .and_then(|(_, t)| u16::from_str_radix(t, 16).ok());
+            match (index, parse_int(&e.value)) {
+                (Some(i), Some(v)) => {
+                    eds.dummy_usage.insert(i, v != 0);
+                }
+                (Some(_), None) => {
+                    r.err(e.line, format!("[DummyUsage] {}={:?} is not a valid number", e.key, e.value))
+                }
+                (None, _) => {
+                    r.warn(e.line, format!("[DummyUsage] key {:?} is not DummyXXXX; ignored", e.key))
+                }
+            }
         }
     }
     if let Some(s) = ini.section("Comments") {
@@ -212,6 +232,12 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
             network_name: Reader::text(s, "NetworkName"),
             canopen_manager: r.flag(s, "CANopenManager"),
             lss_serial_number: r.num(s, "LSS_SerialNumber"),
+            other: s
+                .entries
+                .iter()
+                .filter(|e| !COMMISSIONING_KEYS.contains(&e.key.to_ascii_lowercase().as_str()))
+                .map(|e| (e.key.clone(), e.value.clone()))
+                .collect(),
         });
     }
 
@@ -393,6 +419,17 @@ fn object(r: &mut Reader, sec: &Section, index: u16) -> Option<EdsObject> {
     Some(o)
 }
 
+/// Whether sub 0 of `index` is "highest sub-index supported" (CiA 301
+/// §7.4.3), so its DefaultValue must reach the sub-objects described. Not
+/// so where CiA 301 gives sub 0 a value of its own and the sub-objects are
+/// the room for it: 1003h (number of errors, §7.5.2.5) and the PDO mapping
+/// records (number of mapped objects, §7.5.2.36/38; a default mapping
+/// uses fewer entries than the record has), and the EtherCAT sync manager
+/// PDO assignments 1C10h–1C2Fh (number of assigned PDOs, ETG.1000.6).
+fn sub0_is_highest(index: u16) -> bool {
+    !matches!(index, 0x1003 | 0x1600..=0x17FF | 0x1A00..=0x1BFF | 0x1C10..=0x1C2F)
+}
+
 /// Expand compact objects and check sub-index 0 against the sub-objects.
 fn finish_object(r: &mut Reader, o: &mut EdsObject) {
     if !matches!(o.object_type, ObjectCode::Array | ObjectCode::Record) || o.compact_sub_obj.is_some() {
@@ -431,7 +468,7 @@ fn finish_object(r: &mut Reader, o: &mut EdsObject) {
             let v = s0.default.as_deref().and_then(parse_int);
             if s0.data_type != DataType::Unsigned8 as u16 {
                 r.warn(s0.line, format!("object {:04X} sub 0 is not UNSIGNED8", o.index));
-            } else if v.is_some_and(|v| v < highest as i128) {
+            } else if sub0_is_highest(o.index) && v.is_some_and(|v| v < highest as i128) {
                 r.warn(
                     s0.line,
                     format!("object {:04X} sub 0 default is below the highest sub-index {highest}", o.index),

@@ -37,11 +37,15 @@ pub fn write(eds: &Eds) -> String {
     ]);
     di.extend(d.other.iter().cloned());
     section(&mut w, "DeviceInfo", di.into_iter());
-    section(
-        &mut w,
-        "DummyUsage",
-        eds.dummy_usage.iter().enumerate().map(|(i, u)| (format!("Dummy{i:04X}"), (*u as u8).to_string())),
-    );
+    // The entries the file has, and only those (CiA 306 §4.5 lists none for
+    // 0000h; a tool's 0010h–001Bh entries stay).
+    if !eds.dummy_usage.is_empty() {
+        section(
+            &mut w,
+            "DummyUsage",
+            eds.dummy_usage.iter().map(|(i, u)| (format!("Dummy{i:04X}"), (*u as u8).to_string())),
+        );
+    }
     let mut comments = vec![("Lines".to_string(), eds.comments.len().to_string())];
     comments.extend(eds.comments.iter().enumerate().map(|(i, l)| (format!("Line{}", i + 1), l.clone())));
     section(&mut w, "Comments", comments.into_iter());
@@ -69,6 +73,7 @@ pub fn write(eds: &Eds) -> String {
         if let Some(s) = c.lss_serial_number {
             e.push(("LSS_SerialNumber".to_string(), format!("0x{s:08X}")));
         }
+        e.extend(c.other.iter().cloned());
         section(&mut w, "DeviceComissioning", e.into_iter());
     }
     for (name, entries) in &eds.other_sections {

@@ -18,7 +18,8 @@ fn every_section_is_read() {
     assert!(d.simple_boot_up_slave && !d.simple_boot_up_master && d.lss_supported);
     assert_eq!((d.granularity, d.nr_of_rx_pdo, d.nr_of_tx_pdo), (8, 1, 1));
     assert_eq!(d.other, vec![("VendorSpecificKey".into(), "kept".into())]);
-    assert_eq!(e.dummy_usage, [false, false, true, true, true, true, true, true]);
+    let dummies: Vec<(u16, bool)> = e.dummy_usage.iter().map(|(k, v)| (*k, *v)).collect();
+    assert_eq!(dummies, [(1, false), (2, true), (3, true), (4, true), (5, true), (6, true), (7, true)]);
     assert_eq!(e.comments, vec!["first comment line".to_string(), "second ; with a semicolon".into()]);
     assert_eq!(e.mandatory, vec![0x1000, 0x1001, 0x1018]);
     assert_eq!(e.manufacturer, vec![0x2000, 0x2001, 0x1F50]);
@@ -143,4 +144,98 @@ fn od_to_eds_and_back() {
     // Node-relative COB-IDs are written as $NODEID expressions and move with the node.
     assert!(text.contains("DefaultValue=$NODEID+0x200"), "{text}");
     assert_eq!(to_od(&parse(&text).unwrap().eds, 9).unwrap().get_u32(0x1400, 1), Some(0x209));
+}
+
+const THIRD_PARTY: &str = include_str!("data/third_party.dcf");
+
+/// The lines of section `name` of `text`, in order.
+fn section<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
+    let head = format!("[{name}]");
+    text.lines()
+        .skip_while(|l| l.trim() != head)
+        .skip(1)
+        .take_while(|l| !l.starts_with('['))
+        .filter(|l| !l.trim().is_empty())
+        .collect()
+}
+
+/// Rewriting a third-party DCF keeps its `[DummyUsage]` entries as they
+/// are (CiA 306 §4.5; Lely's dcfgen writes 0010h–001Bh too) and adds none
+/// (no `Dummy0000`), and keeps the `[DeviceComissioning]` keys it does not
+/// interpret (`NodeRefd`, `NetRefd`), `ParameterValue` and `Denotation`.
+#[test]
+fn third_party_dcf_is_rewritten_faithfully() {
+    let p = parse(THIRD_PARTY).expect("parses");
+    let text = write(&p.eds);
+    assert_eq!(section(&text, "DummyUsage"), section(THIRD_PARTY, "DummyUsage"), "{text}");
+    let c = section(&text, "DeviceComissioning");
+    for key in ["NodeRefd=", "NetRefd=", "NodeName=master", "Baudrate=500", "NetworkName=line"] {
+        assert!(c.contains(&key), "{key} missing: {c:?}");
+    }
+    let hb = &p.eds.objects[&0x1017].var.as_ref().unwrap();
+    assert_eq!(
+        (hb.parameter_value.as_deref(), hb.denotation.as_deref()),
+        (Some("50"), Some("master heartbeat"))
+    );
+    let (mut a, mut b) = (p.eds, parse(&text).unwrap().eds);
+    a.strip_lines();
+    b.strip_lines();
+    assert_eq!(a, b);
+}
+
+/// The DCF of a device (CiA 306 §5): every readable value as
+/// `ParameterValue`, `[DeviceComissioning]` as given, `LastEDS`; read back,
+/// it gives the device's values with the EDS's defaults.
+#[test]
+fn dcf_of_a_device_holds_its_values() {
+    let eds = parse(QUIRKS).unwrap().eds;
+    let mut od = to_od(&eds, 7).unwrap();
+    od.set_value(0x1017, 0, &Value::U16(250)).unwrap();
+    let c = drivebus_eds::Commissioning {
+        node_id: 7,
+        node_name: "axis 7".into(),
+        baudrate: 250,
+        net_number: 2,
+        lss_serial_number: Some(0x1234),
+        ..Default::default()
+    };
+    let d = drivebus_eds::dcf_from_od(&eds, &od, c.clone());
+    let text = write(&d);
+    assert!(text.contains("LastEDS=quirks.eds"), "{text}");
+    let back = parse(&text).unwrap_or_else(|e| panic!("{e}\n{text}")).eds;
+    assert_eq!(back.commissioning, Some(c));
+    let got = to_od(&back, 7).unwrap();
+    for o in od.objects() {
+        for s in o.subs().iter().filter(|s| s.access.readable() && s.data_type != DataType::Domain) {
+            let g = got.get(o.index, s.sub).unwrap();
+            assert_eq!(g.bytes(), s.bytes(), "{:04X}:{}", o.index, s.sub);
+            assert_eq!(g.default, s.default, "{:04X}:{} default", o.index, s.sub);
+        }
+    }
+    assert_eq!(got.get_u32(0x1017, 0), Some(250));
+    assert!(check(&back).iter().all(|f| f.severity != Severity::Error), "{:#?}", check(&back));
+}
+
+/// Sub 0 of an ARRAY/RECORD is the highest sub-index supported (CiA 301
+/// §7.4.3): a DefaultValue below the sub-objects described is a warning —
+/// except where sub 0 counts something of its own, 1003h (number of
+/// errors, §7.5.2.5) and the PDO mapping records (mapped objects,
+/// §7.5.2.36/38).
+#[test]
+fn sub_0_below_the_highest_sub_index() {
+    let obj = |index: &str, n: u8| {
+        format!(
+            "[{index}]\nParameterName=x\nObjectType=0x8\nSubNumber=3\n[{index}sub0]\nParameterName=n\nDataType=0x0005\nAccessType=rw\nDefaultValue={n}\n[{index}sub1]\nParameterName=a\nDataType=0x0007\nAccessType=rw\nDefaultValue=0\n[{index}sub2]\nParameterName=b\nDataType=0x0007\nAccessType=rw\nDefaultValue=0\n"
+        )
+    };
+    let warned = |index: &str, n: u8| {
+        let w = parse(&obj(index, n)).unwrap().warnings;
+        w.iter().any(|d| d.message.contains("below the highest sub-index"))
+    };
+    assert!(warned("2000", 1));
+    assert!(warned("1016", 0));
+    assert!(!warned("2000", 2));
+    for index in ["1003", "1600", "17FF", "1A00", "1BFF"] {
+        assert!(!warned(index, 0), "{index}");
+    }
 }

@@ -246,6 +246,22 @@ impl Emcy {
         self.enqueue(code, register, bytes, now);
     }
 
+    /// Record an entry in the 1003h history without signalling it: no
+    /// frame, no 1001h change, nothing made active. For a device that sends
+    /// its own EMCY frame ([`Emcy::send_raw`]), so that 1003h and its reads
+    /// ([`Emcy::check_read`]) keep one history. `entry`: low 16 bits the
+    /// error code, high 16 bits additional information (CiA 301 §7.5.2.5).
+    pub fn record(&mut self, od: &mut ObjectDictionary, entry: u32) {
+        if self.history_len == 0 {
+            return;
+        }
+        if self.history.len() == self.history_len as usize {
+            self.history.pop();
+        }
+        self.history.insert(0, entry);
+        self.write_history(od);
+    }
+
     /// Empty the 1003h history (what writing 0 to 1003h sub 0 does).
     pub fn clear_history(&mut self, od: &mut ObjectDictionary) {
         self.history.clear();
@@ -378,6 +394,10 @@ impl Emcy {
         if let Ok(r) = od.find(OD_ERROR_REGISTER, 0) {
             od.set_le(r, &[reg]);
         }
+        self.write_history(od);
+    }
+
+    fn write_history(&self, od: &mut ObjectDictionary) {
         if self.history_len == 0 {
             return;
         }

@@ -73,57 +73,11 @@ fn an_esi_of_the_running_twin_agrees_with_the_running_dictionary() {
     }
 }
 
-/// What the shipped `ipos.eds` lacks for EtherCAT, with the manual's
-/// reason. The EDS belongs to another engineer; this list is what the
-/// check must find until the file is fixed (then update it, and run the
-/// ignored `ipos_eds_meets_ethercat_needs`).
-///
-/// * 1C00h:04 = 3: §2.3.9 prints 3, its value range says 4 = process
-///   data input (SM3), and ETG.1000.6 says 4.
-/// * 1C12h has only sub 1 and 1C13h subs 1–2, while 4 RxPDOs and 4 TxPDOs
-///   exist and §2.3.10/§2.3.11 and examples E10/E11 write 1C12h:03 and
-///   1C13h:04.
-/// * 1C12h:00 and 1C13h:00 are printed RO but every example (§2.4, E10,
-///   E11) writes them: 0, the entries, then the count.
-/// * Mapping objects have 1–3 entries; §2.4 offers 8 per PDO, and E11
-///   maps two objects into 1A03h, which has one.
-const IPOS_EDS_GAPS: &[(u16, Option<u8>, &str, &str)] = &[
-    (0x1600, None, "sub-indices", "3–8 missing"),
-    (0x1601, None, "sub-indices", "3–8 missing"),
-    (0x1602, None, "sub-indices", "3–8 missing"),
-    (0x1603, None, "sub-indices", "3–8 missing"),
-    (0x1A00, None, "sub-indices", "4–8 missing"),
-    (0x1A01, None, "sub-indices", "3–8 missing"),
-    (0x1A02, None, "sub-indices", "2–8 missing"),
-    (0x1A03, None, "sub-indices", "2–8 missing"),
-    (0x1C00, Some(4), "default", "3"),
-    (0x1C12, None, "sub-indices", "2–4 missing"),
-    (0x1C12, Some(0), "access", "ro"),
-    (0x1C13, None, "sub-indices", "3–4 missing"),
-    (0x1C13, Some(0), "access", "ro"),
-];
-
+/// The shipped `ipos.eds` has what EtherCAT needs, as the manual means it:
+/// 1C00h:04 = 4 (§2.3.9 prints 3, its value range and ETG.1000.6 say 4),
+/// 1C12h/1C13h with an entry per PDO and a writable sub 0 (§2.3.10/11,
+/// §2.4, E10/E11), mapping records with the 8 entries of §2.4.
 #[test]
-fn ipos_eds_gaps_for_ethercat_are_the_known_ones() {
-    let (desc, od, _) = common::build(Profile::Ipos);
-    let f = check_ethercat(&common::round_trip(&desc), &od, &ipos::check_options());
-    let want: Vec<_> = IPOS_EDS_GAPS
-        .iter()
-        .map(|(i, s, fld, esi)| (Some(*i), *s, fld.to_string(), esi.to_string()))
-        .collect();
-    let mut want = want;
-    want.sort();
-    assert_eq!(keys(&f), want, "{}", show(&f));
-    let text = f.iter().find(|f| f.index == Some(0x1C00)).map(ToString::to_string);
-    assert_eq!(
-        text.as_deref(),
-        Some("1C00h:04 default: dictionary 3; EtherCAT needs 4 (SM3 is Inputs)"),
-        "the report names index, sub, field and both values"
-    );
-}
-
-#[test]
-#[ignore = "ipos.eds lacks what EtherCAT needs (IPOS_EDS_GAPS); run with --ignored once the EDS is fixed"]
 fn ipos_eds_meets_ethercat_needs() {
     let (desc, od, _) = common::build(Profile::Ipos);
     let f = check_ethercat(&desc, &od, &ipos::check_options());
@@ -156,7 +110,10 @@ fn sync_manager_sizes_follow_the_default_assignment() {
     let assigned: Vec<_> = desc.tx_pdos.iter().filter(|p| p.sm.is_some()).map(|p| p.index).collect();
     assert_eq!(assigned, [0x1A00, 0x1A01]);
     assert!(desc.ethercrab_min_mailbox_in() <= 512, "{}", desc.ethercrab_min_mailbox_in());
-    assert_eq!(desc.object_count(), 190);
+    // 190 of the CoE manual, and served on CAN 1005h, 1006h, 1014h, the PDO
+    // communication records 1400h–1403h/1800h–1801h and the dummy types
+    // 0002h–0007h (ipos.eds).
+    assert_eq!(desc.object_count(), 205);
 }
 
 #[test]

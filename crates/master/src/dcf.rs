@@ -1,7 +1,8 @@
 //! A live node's dictionary as a DCF (CiA 306): every readable entry of a
 //! template (the node's EDS, or the CiA 301/402 standard objects the node
-//! has) uploaded by SDO and written as its `ParameterValue`, plus the
-//! `[DeviceComissioning]` section. `drivebus_eds::write` turns it into text.
+//! has) uploaded by SDO, then `drivebus_eds::dcf` makes the DCF model
+//! (`ParameterValue`s, `[DeviceComissioning]`) and `drivebus_eds::write`
+//! turns it into text.
 
 use std::collections::BTreeMap;
 
@@ -25,25 +26,26 @@ fn missing(e: &SdoError) -> bool {
     matches!(e.abort_code(), Some(c) if c == SdoAbort::NO_OBJECT || c == SdoAbort::NO_SUB_INDEX)
 }
 
-/// Uploads one entry into `var.parameter_value`; `Ok(false)` when the
-/// entry does not exist.
+/// Values read so far, by index and sub-index, as the SDO upload gave them.
+type Values = BTreeMap<(u16, u8), Vec<u8>>;
+
+/// Uploads one entry into `values`; `Ok(false)` when the entry does not
+/// exist. Write-only entries and DOMAINs are not read (a DCF keeps no
+/// value for them, and a DOMAIN may be megabytes: 1021h, 1F50h).
 async fn fill(
     sdo: &SdoHandle,
     index: u16,
     sub: u8,
-    var: &mut EdsVar,
+    var: &EdsVar,
+    values: &mut Values,
     report: &mut DumpReport,
 ) -> Result<bool, SdoError> {
-    if !var.access.readable() {
+    if !var.access.readable() || DataType::from_index(var.data_type) == Some(DataType::Domain) {
         return Ok(true);
     }
     match sdo.upload(index, sub).await {
         Ok(data) => {
-            let text = match DataType::from_index(var.data_type) {
-                Some(dt) => drivebus_eds::format_value(dt, &data),
-                None => data.iter().map(|b| format!("{b:02X}")).collect(),
-            };
-            var.parameter_value = Some(text);
+            values.insert((index, sub), data);
             report.read += 1;
             Ok(true)
         }
@@ -62,39 +64,53 @@ fn var_of(e: &drivebus_objects::EntryInfo) -> EdsVar {
     v
 }
 
+/// The DCF text model: `template` with `values` as `ParameterValue`s and
+/// `[DeviceComissioning]`, written by `drivebus_eds::dcf` (compact objects
+/// expanded, `LastEDS`, values that fit CiA 306).
+fn finish(template: &Eds, node: u8, values: &Values) -> Eds {
+    let commissioning = Commissioning { node_id: node, ..Commissioning::default() };
+    drivebus_eds::dcf(template, commissioning, |index, sub, _| values.get(&(index, sub)).cloned())
+}
+
 impl Master {
     /// Reads every readable entry of `template` (an EDS of the node) from
-    /// `node` into its `ParameterValue`s and adds `[DeviceComissioning]`.
+    /// `node` and returns the node's DCF: the EDS with the values as
+    /// `ParameterValue`s and `[DeviceComissioning]` (`drivebus_eds::dcf`).
     /// Entries the node does not have are dropped from the result.
     pub async fn dump_dcf(&self, node: u8, mut template: Eds) -> Result<(Eds, DumpReport), SdoError> {
         let sdo = self.sdo(node);
         let mut report = DumpReport::default();
-        let mut gone = Vec::new();
-        for (index, obj) in template.objects.iter_mut() {
-            if let Some(v) = &mut obj.var {
-                if !fill(&sdo, *index, 0, v, &mut report).await? {
-                    gone.push(*index);
+        let mut values = Values::new();
+        let mut absent: Vec<(u16, Vec<u8>)> = Vec::new();
+        for (index, obj) in &template.objects {
+            // A VAR is its own sub 0; records, arrays and compact objects
+            // have their sub-objects listed.
+            let entries: Vec<(u8, &EdsVar)> = if obj.subs.is_empty() {
+                obj.var.iter().map(|v| (0, v)).collect()
+            } else {
+                obj.subs.iter().map(|(k, v)| (*k, v)).collect()
+            };
+            let mut lacks = Vec::new();
+            for (sub, var) in entries {
+                if !fill(&sdo, *index, sub, var, &mut values, &mut report).await? {
+                    lacks.push(sub);
                 }
+            }
+            if !lacks.is_empty() {
+                absent.push((*index, lacks));
+            }
+        }
+        for (index, subs) in absent {
+            let Some(obj) = template.objects.get_mut(&index) else { continue };
+            if subs.contains(&0) {
+                template.objects.remove(&index);
                 continue;
             }
-            let mut absent = Vec::new();
-            for (sub, v) in obj.subs.iter_mut() {
-                if !fill(&sdo, *index, *sub, v, &mut report).await? {
-                    absent.push(*sub);
-                }
-            }
-            if absent.contains(&0) {
-                gone.push(*index);
-            }
-            for s in absent {
+            for s in subs {
                 obj.subs.remove(&s);
             }
         }
-        for i in gone {
-            template.objects.remove(&i);
-        }
-        template.commissioning = Some(Commissioning { node_id: node, ..Commissioning::default() });
-        Ok((template, report))
+        Ok((finish(&template, node, &values), report))
     }
 
     /// Like [`dump_dcf`](Self::dump_dcf) without an EDS: the CiA 301/402
@@ -104,11 +120,12 @@ impl Master {
     pub async fn dump_standard_dcf(&self, node: u8) -> Result<(Eds, DumpReport), SdoError> {
         let sdo = self.sdo(node);
         let mut report = DumpReport::default();
+        let mut values = Values::new();
         let mut objects = BTreeMap::new();
         for def in drivebus_objects::defs() {
             for index in def.first..=def.last {
                 let Some(info) = drivebus_objects::object(index) else { break };
-                let Some(obj) = self.probe_object(&sdo, info, &mut report).await? else { break };
+                let Some(obj) = probe_object(&sdo, info, &mut values, &mut report).await? else { break };
                 objects.insert(index, obj);
             }
         }
@@ -121,65 +138,65 @@ impl Master {
         let count = |base: u16| eds.objects.range(base..base + 0x200).count() as u16;
         eds.device_info.nr_of_rx_pdo = count(0x1400);
         eds.device_info.nr_of_tx_pdo = count(0x1800);
-        eds.commissioning = Some(Commissioning { node_id: node, ..Commissioning::default() });
-        Ok((eds, report))
+        Ok((finish(&eds, node, &values), report))
     }
+}
 
-    async fn probe_object(
-        &self,
-        sdo: &SdoHandle,
-        info: drivebus_objects::ObjectInfo,
-        report: &mut DumpReport,
-    ) -> Result<Option<EdsObject>, SdoError> {
-        let index = info.index;
-        let code = match info.def.kind {
-            Kind::Var => ObjectCode::Var,
-            Kind::Array => ObjectCode::Array,
-            Kind::Record => ObjectCode::Record,
-        };
-        let mut obj = EdsObject {
-            index,
-            name: info.name().into_owned(),
-            object_type: code,
-            sub_number: None,
-            compact_sub_obj: None,
-            obj_flags: 0,
-            var: None,
-            subs: BTreeMap::new(),
-            compact_names: BTreeMap::new(),
-            compact_values: BTreeMap::new(),
-            line: 0,
-        };
-        let Some(zero) = info.entry(0) else { return Ok(None) };
-        if info.def.kind == Kind::Var {
-            let mut v = var_of(&zero);
-            if !fill(sdo, index, 0, &mut v, report).await? {
-                return Ok(None);
-            }
-            // A write-only VAR cannot prove it exists: keep it only when read.
-            if v.parameter_value.is_none() && !zero.access.readable() {
-                return Ok(None);
-            }
-            obj.var = Some(v);
-            return Ok(Some(obj));
-        }
-        let mut v0 = var_of(&zero);
-        if !fill(sdo, index, 0, &mut v0, report).await? {
+async fn probe_object(
+    sdo: &SdoHandle,
+    info: drivebus_objects::ObjectInfo,
+    values: &mut Values,
+    report: &mut DumpReport,
+) -> Result<Option<EdsObject>, SdoError> {
+    let index = info.index;
+    let code = match info.def.kind {
+        Kind::Var => ObjectCode::Var,
+        Kind::Array => ObjectCode::Array,
+        Kind::Record => ObjectCode::Record,
+    };
+    let mut obj = EdsObject {
+        index,
+        name: info.name().into_owned(),
+        object_type: code,
+        sub_number: None,
+        compact_sub_obj: None,
+        obj_flags: 0,
+        var: None,
+        subs: BTreeMap::new(),
+        compact_names: BTreeMap::new(),
+        compact_values: BTreeMap::new(),
+        line: 0,
+    };
+    let Some(zero) = info.entry(0) else { return Ok(None) };
+    if info.def.kind == Kind::Var {
+        // A DOMAIN VAR (1021h …) is not read, so nothing proves it exists;
+        // a DCF would hold no value for it anyway.
+        if zero.data_type == DataType::Domain {
             return Ok(None);
         }
-        let highest = v0
-            .parameter_value
-            .as_deref()
-            .and_then(|t| u8::from_str_radix(t.trim_start_matches("0x"), 16).ok())
-            .unwrap_or(0);
-        obj.subs.insert(0, v0);
-        for e in info.entries().filter(|e| e.sub != 0 && e.sub <= highest) {
-            let mut v = var_of(&e);
-            if fill(sdo, index, e.sub, &mut v, report).await? {
-                obj.subs.insert(e.sub, v);
-            }
+        let v = var_of(&zero);
+        if !fill(sdo, index, 0, &v, values, report).await? {
+            return Ok(None);
         }
-        obj.sub_number = Some(obj.subs.len() as u8);
-        Ok(Some(obj))
+        // A write-only VAR cannot prove it exists: keep it only when read.
+        if !values.contains_key(&(index, 0)) && !zero.access.readable() {
+            return Ok(None);
+        }
+        obj.var = Some(v);
+        return Ok(Some(obj));
     }
+    let v0 = var_of(&zero);
+    if !fill(sdo, index, 0, &v0, values, report).await? {
+        return Ok(None);
+    }
+    let highest = values.get(&(index, 0)).and_then(|b| b.first().copied()).unwrap_or(0);
+    obj.subs.insert(0, v0);
+    for e in info.entries().filter(|e| e.sub != 0 && e.sub <= highest) {
+        let v = var_of(&e);
+        if fill(sdo, index, e.sub, &v, values, report).await? {
+            obj.subs.insert(e.sub, v);
+        }
+    }
+    obj.sub_number = Some(obj.subs.len() as u8);
+    Ok(Some(obj))
 }

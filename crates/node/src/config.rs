@@ -71,6 +71,13 @@ pub struct NodeConfig {
     /// 1021h "store EDS" (generated from the running dictionary on read)
     /// and 1022h storage format (0: ASCII). Needs the `std` feature.
     pub eds_object: bool,
+    /// `[DeviceInfo]` of the EDS served at 1021h: what only the device's
+    /// own description knows (vendor and product names, order code, bit
+    /// rates). What the running node knows (1018h, PDO counts and
+    /// granularity, LSS) is taken from it. `None`: no names, every CiA
+    /// 301 bit rate.
+    #[cfg(feature = "std")]
+    pub eds_device_info: Option<drivebus_eds::DeviceInfo>,
 }
 
 impl NodeConfig {
@@ -101,6 +108,8 @@ impl NodeConfig {
             lss: true,
             store_restore: true,
             eds_object: false,
+            #[cfg(feature = "std")]
+            eds_device_info: None,
         }
     }
 }

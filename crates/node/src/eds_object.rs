@@ -6,30 +6,39 @@ use drivebus_eds::{DeviceInfo, from_od, write};
 use drivebus_od::ObjectDictionary;
 use drivebus_pdo::PdoConfig;
 
-/// The EDS text of `od` as node `node_id` has it now. The 1021h value
-/// itself is left out of the description's default (it would describe
-/// itself recursively); everything else is exactly the dictionary.
-pub(crate) fn generate(od: &ObjectDictionary, node_id: u8, pdo: &PdoConfig) -> String {
-    let info = DeviceInfo {
-        vendor_name: String::new(),
-        vendor_number: od.get_u32(0x1018, 1),
+/// The EDS text of `od` as node `node_id` has it now, with `[DeviceInfo]`
+/// from `given` (the device's own description: names, numbers, bit
+/// rates), the PDO counts, granularity and LSS from the running node. The 1021h value itself is left out of the description's default (it
+/// would describe itself recursively); everything else is exactly the
+/// dictionary.
+pub(crate) fn generate(
+    od: &ObjectDictionary,
+    node_id: u8,
+    pdo: &PdoConfig,
+    lss: bool,
+    given: Option<&DeviceInfo>,
+) -> String {
+    let mut info = given.cloned().unwrap_or_else(|| DeviceInfo {
         product_name: od
             .get(0x1008, 0)
             .map(|s| String::from_utf8_lossy(s.bytes()).into_owned())
             .unwrap_or_default(),
-        product_number: od.get_u32(0x1018, 2),
-        revision_number: od.get_u32(0x1018, 3),
         baud_rates: vec![10, 20, 50, 125, 250, 500, 800, 1000],
         simple_boot_up_slave: true,
-        granularity: match pdo.granularity {
-            drivebus_pdo::Granularity::Bit => 1,
-            drivebus_pdo::Granularity::Byte => 8,
-        },
-        nr_of_rx_pdo: pdo.rpdo_count,
-        nr_of_tx_pdo: pdo.tpdo_count,
-        lss_supported: od.object(0x1018).is_some(),
+        // CiA 306 §4.4: the numbers are 1018h's.
+        vendor_number: od.get_u32(0x1018, 1),
+        product_number: od.get_u32(0x1018, 2),
+        revision_number: od.get_u32(0x1018, 3),
         ..DeviceInfo::default()
+    });
+    // What the running node knows better than any description.
+    info.granularity = match pdo.granularity {
+        drivebus_pdo::Granularity::Bit => 1,
+        drivebus_pdo::Granularity::Byte => 8,
     };
+    info.nr_of_rx_pdo = pdo.rpdo_count;
+    info.nr_of_tx_pdo = pdo.tpdo_count;
+    info.lss_supported = lss;
     let mut described = od.clone();
     if let Some(s) = described.get_mut(0x1021, 0) {
         s.default.clear();
@@ -38,8 +47,8 @@ pub(crate) fn generate(od: &ObjectDictionary, node_id: u8, pdo: &PdoConfig) -> S
         described.set_raw(r, &[]);
     }
     let mut eds = from_od(&described, info, node_id, false);
-    for t in 2..=7u16 {
-        eds.dummy_usage[t as usize] = pdo.dummy_supported(t);
+    for t in 1..=7u16 {
+        eds.dummy_usage.insert(t, pdo.dummy_supported(t));
     }
     write(&eds)
 }

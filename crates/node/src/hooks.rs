@@ -34,6 +34,10 @@ pub(crate) struct Services {
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
     pub now: Instant,
+    /// What the EDS served at 1021h says besides the dictionary: LSS
+    /// slave or not, and the device's own `[DeviceInfo]`.
+    #[cfg(feature = "std")]
+    pub eds_info: (bool, Option<drivebus_eds::DeviceInfo>),
 }
 
 /// Hooks seen by the SDO server and the PDO service of a node.
@@ -99,7 +103,14 @@ impl<A: Application + ?Sized> ObjectHooks for CommHooks<'_, A> {
         self.app.on_read(od, index, sub)?;
         #[cfg(feature = "std")]
         if index == 0x1021 {
-            let text = crate::eds_object::generate(od, self.s.nmt.node_id(), self.s.pdo.config());
+            let (lss, info) = &self.s.eds_info;
+            let text = crate::eds_object::generate(
+                od,
+                self.s.nmt.node_id(),
+                self.s.pdo.config(),
+                *lss,
+                info.as_ref(),
+            );
             let r = od.find(index, sub)?;
             od.set_raw(r, text.as_bytes());
         }

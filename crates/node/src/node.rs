@@ -89,6 +89,20 @@ impl Node {
         let generated = build_dictionary(&cfg, node_id);
         crate::dictionary::merge_services(&mut od, &generated);
         mark_node_relative(&cfg, &generated, node_id, &mut od);
+        // CiA 305 §3.2: the LSS address is 1018h:01h–04h. A dictionary
+        // from elsewhere (an EDS) keeps its own 1018h, so the identity is
+        // read back from it: one source for SDO and LSS.
+        let ident = &mut cfg.identity;
+        for (sub, part) in [
+            (1, &mut ident.vendor_id),
+            (2, &mut ident.product_code),
+            (3, &mut ident.revision),
+            (4, &mut ident.serial),
+        ] {
+            if let Some(v) = od.get_u32(0x1018, sub) {
+                *part = v;
+            }
+        }
         let s = Services {
             nmt: Nmt::new(cfg.nmt),
             pdo: Pdo::new(&cfg.pdo, &od),
@@ -101,6 +115,8 @@ impl Node {
             comm_changed: false,
             pending_nmt: None,
             now: Instant::ZERO,
+            #[cfg(feature = "std")]
+            eds_info: (cfg.lss, cfg.eds_device_info.clone()),
         };
         let lss = cfg.lss.then(|| {
             let id = cfg.identity;
@@ -222,6 +238,14 @@ impl Node {
     pub fn clear_all_emcy(&mut self, now: Instant) {
         self.dirty = true;
         self.s.emcy.clear_all(&mut self.od, now)
+    }
+
+    /// Record an entry in the 1003h history without an EMCY frame (a
+    /// personality that sends its own frame with [`Node::send_raw_emcy`]):
+    /// low 16 bits the error code, high 16 bits additional information.
+    pub fn record_emcy_history(&mut self, entry: u32) {
+        self.dirty = true;
+        self.s.emcy.record(&mut self.od, entry)
     }
 
     /// Send an EMCY outside the error bookkeeping (personality quirks).

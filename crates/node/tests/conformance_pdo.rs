@@ -92,9 +92,12 @@ fn pdo_04_sync_rpdo_takes_effect_at_next_sync() {
 #[test]
 fn pdo_05_mapping_procedure_aborts() {
     let mut r = rig();
-    // Mapping while the PDO is valid is refused.
-    let resp = r.sdo_write(5, 0x1A00, 0, &[0]);
+    // Changing the mapping while the PDO is valid is refused; writing the
+    // value sub 0 holds changes nothing and is taken.
+    let held = r.node().od().get_u64(0x1A00, 0).unwrap() as u8;
+    let resp = r.sdo_write(5, 0x1A00, 0, &[held + 1]);
     assert_eq!(resp.data()[0], 0x80, "mapping a valid PDO must abort: {resp}");
+    assert_eq!(r.sdo_write(5, 0x1A00, 0, &[held]).data()[0], 0x60);
     w(&mut r, 0x1800, 1, &0x8000_0185u32.to_le_bytes());
     w(&mut r, 0x1A00, 0, &[0]);
     // Object absent, object not mappable, too long.

@@ -5,8 +5,8 @@ use crate::cobid::{COB_ID_BITS, COB_NO_RTR, can_id, is_valid};
 use crate::config::PdoConfig;
 use crate::mapping::{PdoKind, resolve, validate_entry, validate_mapping};
 use crate::objects::{
-    SUB_COB_ID, SUB_EVENT_TIMER, SUB_INHIBIT_TIME, SUB_SYNC_START, SUB_TRANSMISSION_TYPE, TT_EVENT_RTR,
-    TT_SYNC_RTR, classify, comm_index, map_index,
+    SUB_COB_ID, SUB_EVENT_TIMER, SUB_INHIBIT_TIME, SUB_RESERVED, SUB_SYNC_START, SUB_TRANSMISSION_TYPE,
+    TT_EVENT_RTR, TT_SYNC_RTR, classify, comm_index, map_index,
 };
 use alloc::vec::Vec;
 use drivebus_od::{DataType, ObjectDictionary, SdoAbort, check_len, le_u64};
@@ -84,6 +84,10 @@ pub(crate) fn check_write(
             Ok(())
         }
         SUB_EVENT_TIMER => value(DataType::Unsigned16, data).map(|_| ()),
+        // CiA 301 7.5.2.35: TPDO sub 4 is a compatibility entry; where a
+        // device implements it (it is in the dictionary), writes are
+        // taken and ignored.
+        SUB_RESERVED if kind == PdoKind::Tpdo => value(DataType::Unsigned8, data).map(|_| ()),
         SUB_SYNC_START if kind == PdoKind::Tpdo => {
             let new = value(DataType::Unsigned8, data)?;
             if new > 240 {
@@ -112,6 +116,11 @@ fn check_mapping_write(
     }
     let dt = if sub == 0 { DataType::Unsigned8 } else { DataType::Unsigned32 };
     let v = value(dt, data)?;
+    // Writing the value an entry holds changes no mapping: accepted in
+    // any state (the procedure of 7.5.2.36 is about changes).
+    if od.get_u64(mi, sub) == Some(v) {
+        return Ok(());
+    }
     // CiA 301 7.5.2.36 step 1: the PDO must be destroyed (bit 31 = 1) first.
     if valid {
         return Err(SdoAbort::INVALID_VALUE);

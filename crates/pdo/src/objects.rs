@@ -16,6 +16,8 @@ pub const SUB_INHIBIT_TIME: u8 = 3;
 /// Communication record sub-index: event timer, ms (UNSIGNED16). On an RPDO
 /// it is the deadline monitoring time.
 pub const SUB_EVENT_TIMER: u8 = 5;
+/// TPDO communication sub 4: reserved, a compatibility entry (CiA 301 7.5.2.35).
+pub const SUB_RESERVED: u8 = 4;
 /// Communication record sub-index: SYNC start value (UNSIGNED8; TPDO only).
 pub const SUB_SYNC_START: u8 = 6;
 

@@ -183,9 +183,12 @@ fn mapping_procedure_aborts() {
     let cfg = PdoConfig::new(1);
     let (mut od, mut pdo) = setup(&cfg);
     let e = map_entry(0x2000, 4, 16);
-    // PDO valid (bit 31 clear): neither sub 0 nor entries may change.
-    assert_eq!(sdo8(&mut od, &mut pdo, 0x1A00, 0, 0), Err(SdoAbort::INVALID_VALUE));
+    // PDO valid (bit 31 clear): neither sub 0 nor entries may change;
+    // writing back the value held changes nothing and is taken.
+    let held = od.get_u64(0x1A00, 0).unwrap() as u8;
+    assert_eq!(sdo8(&mut od, &mut pdo, 0x1A00, 0, held + 1), Err(SdoAbort::INVALID_VALUE));
     assert_eq!(sdo32(&mut od, &mut pdo, 0x1A00, 1, e), Err(SdoAbort::INVALID_VALUE));
+    sdo8(&mut od, &mut pdo, 0x1A00, 0, held).unwrap();
     sdo32(&mut od, &mut pdo, 0x1800, 1, 0x8000_0181).unwrap();
     sdo32(&mut od, &mut pdo, 0x1A00, 1, e).unwrap();
     sdo8(&mut od, &mut pdo, 0x1A00, 0, 1).unwrap();

@@ -65,6 +65,7 @@ use drivebus_pdo::{DEFAULT_DUMMY_TYPES, Granularity, PdoDefaults, PdoKind, set_d
 
 extern crate alloc;
 
+mod conform;
 mod node;
 
 use node::ModeState;
@@ -548,7 +549,11 @@ pub fn build_full(
     let parsed = profile.parse_eds();
     let od =
         drivebus_eds::to_od(&parsed.eds, node_id).map_err(|e| BuildError::Eds(alloc::format!("{e:?}")))?;
+    // What the drive must answer with, after the build (`conform`).
+    let described = od.clone();
     let mut nc = node_config(info, node_id);
+    // The EDS served at 1021h says what the shipped one says.
+    nc.eds_device_info = Some(parsed.eds.device_info.clone());
     behaviour.adjust_node_config(&mut nc);
     // An option adds to the personality; it never takes 1021h away.
     nc.eds_object |= options.eds_object;
@@ -559,7 +564,7 @@ pub fn build_full(
     behaviour.adjust_drive_config(&mut dc);
     machine(&mut dc);
     let hs = handlers(info, &*behaviour);
-    let drive = Drive::install_with(&mut node, dc, hs).map_err(BuildError::Drive)?;
+    let mut drive = Drive::install_with(&mut node, dc, hs).map_err(BuildError::Drive)?;
 
     {
         let od = node.od_mut();
@@ -604,6 +609,8 @@ pub fn build_full(
         }
     }
     behaviour.finish(&mut node);
+    let keep: &[u16] = if node.config().eds_object { &[0x1021, 0x1022] } else { &[] };
+    conform::conform(node.od_mut(), &mut drive, &described, keep);
     // Re-resolve every service's handles after the edits above.
     if let Some(o) = node.od().object(0x1000).cloned() {
         node.insert_object(o);

@@ -192,7 +192,8 @@ pub struct ProfileInfo {
     pub device_type: u32,
     /// CAN or EtherCAT.
     pub transport: Transport,
-    /// Bit rates in kbit/s (empty for EtherCAT).
+    /// CAN bit rates in kbit/s (an EtherCAT drive: those it takes when
+    /// served on CAN).
     pub baud_rates_kbit: &'static [u32],
     /// 6502h supported drive modes as the drive reports it (which may
     /// disagree with `modes`; the quirks say so).
@@ -233,7 +234,7 @@ pub struct ProfileInfo {
     pub emcy_inhibit: bool,
     /// 1003h history length (0 = no 1003h).
     pub error_history: u8,
-    /// LSS (CiA 305). None of the five drives supports it.
+    /// LSS slave (CiA 305). None of the five drives supports it; `generic` does.
     pub lss: bool,
     /// Manufacturer behaviours to reproduce.
     pub quirks: &'static [Quirk],

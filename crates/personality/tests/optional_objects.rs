@@ -10,8 +10,9 @@
 //!   object dictionary", reference B.7/B.14);
 //! * AKD (seed001) §7.1.3 "Kommunikations-SDOs": the same list;
 //! * iPOS (seed002): no SYNC/EMCY/SDO communication objects at all
-//!   (EtherCAT); 1005h/1006h/1014h stay because the CAN services need them,
-//!   1007h, 1015h, 1019h and 1200h have no meaning there and are left out;
+//!   (EtherCAT); served on CAN it answers 1005h/1006h/1014h and the PDO
+//!   communication records its EDS describes, not 1007h, 1015h, 1019h,
+//!   1200h;
 //! * SSD 630 (seed003) §4 object list: 1015h "Inhibit time EMCY" but no
 //!   1007h/1019h/1200h; a missing object is answered 0601 0000h (§14.1);
 //! * DDS6 (seed004) §6.3.13: 1015h in 0.1 ms, §6.3.18: 1200h;
@@ -62,6 +63,8 @@ fn optional_objects_follow_the_manuals() {
             assert_eq!(upload(p, index), want, "{p} {index:04X}h");
         }
     }
-    // 1006h (absent from the DDS6's §6.3 list too) stays: the node's SYNC
-    // service has no switch for it (a SYNC consumer never needs it).
+    // 1006h is absent from the DDS6's §6.3 list too: not answered either
+    // (the SYNC consumer never needs it; build/conform.rs).
+    assert_eq!(upload(Dds6, 0x1006), Err(NO_OBJECT));
+    assert_eq!(upload(Kc1, 0x1006), Ok(()));
 }

@@ -320,9 +320,10 @@ fn akd_manufacturer_mode_analog_velocity_ignores_bus_setpoint() {
     assert!(r.velocity() > 0x4000 * 9 / 10);
 }
 
-/// §6.10.2.2 (edition R): 60E3h lists −7..−3 with the standard methods;
-/// −5 "set reference here" homes at once (position := 607Ch); −4 searches
-/// the reference switch positive and references on it without index.
+/// §6.10.2.2 (edition R): 6098h takes −7..−3 besides the standard methods
+/// (the AKD has no 60E3h: its object list §7.1.5 does not have it); −5
+/// "set reference here" homes at once (position := 607Ch); −4 searches the
+/// reference switch positive and references on it without index.
 #[test]
 fn akd_manufacturer_homing_methods() {
     let pn = build_on_machine(Profile::Akd, 3, Box::new(MemoryStorage::new()), |c| {
@@ -330,9 +331,10 @@ fn akd_manufacturer_homing_methods() {
     })
     .unwrap();
     let (mut r, _) = Rig::with(pn);
-    let listed: Vec<i8> =
-        (1..=r.read_u32(3, 0x60E3, 0) as u8).map(|i| r.read_u32(3, 0x60E3, i) as u8 as i8).collect();
-    assert_eq!(&listed[..5], &[-7, -6, -5, -4, -3]);
+    Rig::assert_abort(r.sdo_read(3, 0x60E3, 0), 3, 0x60E3, 0, 0x0602_0000);
+    for m in -7i8..=-3 {
+        Rig::assert_written(r.sdo_write(3, 0x6098, 0, &[m as u8]), 3, 0x6098, 0);
+    }
     Rig::assert_abort(r.sdo_write(3, 0x6098, 0, &[(-8i8) as u8]), 3, 0x6098, 0, 0x0609_0030);
     Rig::assert_written(r.sdo_write(3, 0x6060, 0, &[6]), 3, 0x6060, 0);
     Rig::assert_written(r.sdo_write(3, 0x607C, 0, &1234i32.to_le_bytes()), 3, 0x607C, 0);

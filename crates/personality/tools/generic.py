@@ -141,7 +141,8 @@ var(0x6075, "Motor rated current", U32, "rw", "0x000003E8")
 var(0x6076, "Motor rated torque", U32, "rw", "0x000003E8")
 var(0x6077, "Torque actual value", I16, "ro", "0", pdo=True)
 var(0x6078, "Current actual value", I16, "ro", "0", pdo=True)
-var(0x6079, "DC link circuit voltage", U32, "ro", "0x0000BB80", pdo=True)
+# mV: the small servo's 320 V bus (DriveParams::servo_small).
+var(0x6079, "DC link circuit voltage", U32, "ro", "0x0004E200", pdo=True)
 var(0x607A, "Target position", I32, "rww", "0", pdo=True)
 arr(0x607B, "Position range limit", ARRAY, [e("Min position range limit", I32, "rw", "-2147483648", True),
                                             e("Max position range limit", I32, "rw", "2147483647", True)])
@@ -184,7 +185,11 @@ var(0x60BB, "Touch probe 1 negative edge", I32, "ro", "0", pdo=True)
 var(0x60BC, "Touch probe 2 positive edge", I32, "ro", "0", pdo=True)
 var(0x60BD, "Touch probe 2 negative edge", I32, "ro", "0", pdo=True)
 var(0x60C0, "Interpolation sub mode select", I16, "rw", "0")
-arr(0x60C1, "Interpolation data record", ARRAY, [e("Interpolation data record 1", I32, "rww", "0", True)])
+# Sub 1 the position; subs 2 (velocity) and 3 (segment time, ms) for the
+# PT (60C0h = -1) and PVT (-2) sub-modes the generic drive offers.
+arr(0x60C1, "Interpolation data record", ARRAY, [e("Interpolation data record 1", I32, "rww", "0", True),
+                                                 e("Interpolation data record 2", I32, "rww", "0", True),
+                                                 e("Interpolation data record 3", I32, "rww", "0", True)])
 o = Obj(0x60C2)
 o.name, o.code = "Interpolation time period", RECORD
 o.subs = {0: e("Highest sub-index supported", U8, "ro", "2"),
@@ -234,19 +239,25 @@ WORKING = {
     (0x6087, 0): "0x00002710", (0x608F, 1): "0x00100000", (0x6090, 1): "0x00100000",
     (0x6092, 1): "0x00057E40", (0x6099, 1): "0x0044AA20", (0x6099, 2): "0x0006DDD0",
     (0x609A, 0): "0x15752A00", (0x60A8, 0): "0xFD410000", (0x60A9, 0): "0xFD410300",
-    (0x60AA, 0): "0xFD410357", (0x60C4, 2): "0x00000010", (0x60C4, 5): "4",
+    (0x60AA, 0): "0xFD410357", (0x60C4, 1): "0x00000010", (0x60C4, 2): "0x00000010", (0x60C4, 5): "4",
     (0x60C4, 6): "1", (0x60C5, 0): "0xFFFFFFFF", (0x60C6, 0): "0xFFFFFFFF",
     (0x60FE, 2): "0xFFFF0000",
 }
 for (i, s), v in WORKING.items():
     objs[i].subs[s]["default"] = v
+# 608Fh/6090h describe the encoder the generic servo's motor has (2^20
+# counts per revolution): writable as CiA 402-2 has them, but only with the
+# value of that encoder (another value would describe other hardware).
+for i in (0x608F, 0x6090):
+    for sub in (1, 2):
+        objs[i].subs[sub]["low"] = objs[i].subs[sub]["high"] = objs[i].subs[sub]["default"]
 
 cfg = {
     "product": "drivebus generic CiA 402 servo", "manual": "CiA 301 / CiA 402-2 (no vendor manual)",
     "tsv": "-", "description": "Generic CiA 402 servo drive with every mode, every CiA 301 service drivebus implements",
     "vendor": "drivebus", "vendor_number": 0, "product_number": 0x402, "revision_number": 0x00010000,
     "baud": (10, 20, 50, 125, 250, 500, 800, 1000), "granularity": 1, "nr_rx": 4, "nr_tx": 4,
-    "dummies": (2, 3, 4, 5, 6, 7),
+    "dummies": (2, 3, 4, 5, 6, 7), "lss": 1,
     "header": "; Written from CiA 301 and CiA 402-2 (no vendor manual); uncertain defaults: docs/personalities.md",
 }
 write_eds("generic", cfg, objs)

@@ -28,7 +28,7 @@ PROFILES = {
         "description": "Technosoft iPOS intelligent drive, CoE (CiA 301/402 over EtherCAT) (drivebus personality)",
         "vendor": "Technosoft S.A.", "vendor_number": 0x1A3,
         "product": "iPOS360x VX-CAT", "product_number": 28002021, "revision_number": 0x30313030,
-        "baud": (), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (1, 2, 3, 4, 5, 6, 7),
+        "baud": (125, 250, 500, 1000), "granularity": 8, "nr_rx": 4, "nr_tx": 4, "dummies": (2, 3, 4, 5, 6, 7),
         "overrides": {},
     },
     "ssd630": {
@@ -73,6 +73,8 @@ KC1_AKD_COMMON = {
     (0x6072, 0): ov(default="4000", why="no default given; drivebus's working value 4000 per mille (the motor's peak / rated current) written", sec="KC1 8.1.4 / AKD 7.1.5"),
 }
 
+KC1_AKD_COMMON[(0x6063, 0)] = ov(default="0", why="default: the table prints 2^20 ('as printed'), the increments of one turn (PRBASE 20, §7.8.2.1), not a position; the drive starts at 0 increments (what the running drive reads)", sec="KC1 7.8.2.1 / AKD 6.8.2.1")
+
 PROFILES["kc1"]["overrides"] = dict(KC1_AKD_COMMON)
 PROFILES["kc1"]["overrides"].update({
     (0x60C2, 2): ov(type=I8, default="-3", why="type/default: table gives INTEGER16 default 1 (as printed); the §8.2 example writes FDh (-3) with a 1-byte SDO and CiA 402 defines INTEGER8: INTEGER8, default -3 (1 ms) chosen", sec="7.9.2.3; 8.1.4"),
@@ -80,10 +82,11 @@ PROFILES["kc1"]["overrides"].update({
     (0x35B9, 1): ov(type=I32, why="type not given; INTEGER32 as the AKD appendix lists MT.CNTL (35B9h)", sec="7.11.2.1"),
 })
 PROFILES["akd"]["overrides"] = dict(KC1_AKD_COMMON)
+PROFILES["akd"]["remove_subs"] = [(0x60C1, 2), (0x60C1, 3)]
 PROFILES["akd"]["overrides"].update({
     (0x6099, 2): ov(default="18000", why="default '50 % of sub 1': 36000 / 2 = 18000 written", sec="6.10.2.3"),
     (0x6087, 0): ov(default="10000", why="no default given ('-'); drivebus's working value 10000 per mille/s written (above the ~2385 minimum)", sec="6.7.2.6; 7.1.5"),
-    (0x60C1, 0): ov(why="sub 0 = 1 kept (body: linear interpolation only); subs 2 and 3 kept from the appendix as PVT remnants", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
+    (0x60C1, 0): ov(why="sub 0 = 1 (body: linear interpolation only); subs 2 and 3 of the appendix are remnants of the PVT mode removed in edition M and left out, so sub 0 is the highest sub-index", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
 })
 PROFILES["ipos"]["overrides"] = {
     (0x1000, 0): ov(default="0x00060192", why="default: table prints '60192' meaning hex; 0x00060192 written", sec="4.8.1"),
@@ -107,12 +110,70 @@ PROFILES["ipos"]["overrides"].update({
         (0x6085, "0x00040000", "4.0 IU", "7.2.4"),
     )
 })
+# The iPOS on CAN (drivebus serves the CoE drive on CAN too): the CiA 301
+# objects the CAN services answer with, which the CoE manual has no reason
+# to list (EtherCAT has no COB-IDs): 1005h/1006h (SYNC), 1014h (EMCY), the
+# PDO communication records 1400h-1403h/1800h-1803h. Valid exactly where
+# the PDO is assigned in 1C12h/1C13h (§2.3.7, §2.3.8: "disabled by setting
+# bit 31"), so the CAN and the EtherCAT view of the defaults agree.
+CAN_ONLY = "CAN only (the CoE manual lists no COB-IDs)"
+for (i, name, default) in ((0x1005, "COB-ID SYNC message", "0x00000080"),
+                           (0x1006, "Communication cycle period", "0"),
+                           (0x1014, "COB-ID EMCY", "$NODEID+0x80")):
+    PROFILES["ipos"]["overrides"][(i, 0)] = ov(name=name, type=U32, access="rw", default=default,
+                                               why=f"{name}: the object the CAN service answers with; CiA 301 type and default", sec=CAN_ONLY)
+for n, (valid, base) in enumerate(((True, 0x200), (False, 0x300), (False, 0x400), (False, 0x500))):
+    i = 0x1400 + n
+    cob = f"$NODEID+0x{base:X}" if valid else f"$NODEID+0x{0x80000000 | base:X}"
+    o = PROFILES["ipos"]["overrides"]
+    o[(i, 0)] = ov(obj_name=f"RPDO{n + 1} communication parameter", name="Highest sub-index supported", type=U8,
+                   access="ro", default="5", why=f"RPDO{n + 1} communication record: valid = assigned in 1C12h ({'yes' if valid else 'no'}, §2.3.10)", sec=CAN_ONLY)
+    o[(i, 1)] = ov(name=f"COB-ID used by RPDO{n + 1}", type=U32, access="rw", default=cob, sec=CAN_ONLY)
+    o[(i, 2)] = ov(name="Transmission type", type=U8, access="rw", default="0xFF", sec=CAN_ONLY)
+    o[(i, 3)] = ov(name="Inhibit time (not used)", type=U16, access="rw", default="0", sec=CAN_ONLY)
+    o[(i, 5)] = ov(name="Event timer (deadline)", type=U16, access="rw", default="0", sec=CAN_ONLY)
+for n, (valid, base) in enumerate(((True, 0x180), (True, 0x280), (False, 0x380), (False, 0x480))):
+    i = 0x1800 + n
+    cob = f"$NODEID+0x{base:X}" if valid else f"$NODEID+0x{0x80000000 | base:X}"
+    o = PROFILES["ipos"]["overrides"]
+    o[(i, 0)] = ov(obj_name=f"TPDO{n + 1} communication parameter", name="Highest sub-index supported", type=U8,
+                   access="ro", default="6", why=f"TPDO{n + 1} communication record: valid = assigned in 1C13h ({'yes' if valid else 'no'}, §2.3.11)", sec=CAN_ONLY)
+    o[(i, 1)] = ov(name=f"COB-ID used by TPDO{n + 1}", type=U32, access="rw", default=cob, sec=CAN_ONLY)
+    o[(i, 2)] = ov(name="Transmission type", type=U8, access="rw", default="0xFF", sec=CAN_ONLY)
+    o[(i, 3)] = ov(name="Inhibit time", type=U16, access="rw", default="0", sec=CAN_ONLY)
+    o[(i, 5)] = ov(name="Event timer", type=U16, access="rw", default="0", sec=CAN_ONLY)
+    o[(i, 6)] = ov(name="SYNC start value", type=U8, access="rw", default="0", low="0", high="0xF0", sec=CAN_ONLY)
+# §2.4: "sub-indexes (1-8)": every mapping record has 8 entries; the table
+# lists only the default ones.
+for i in (0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03):
+    for k in range(1, 9):
+        PROFILES["ipos"]["overrides"].setdefault((i, k), ov(name=f"Mapped object {k}", type=U32, access="rw", default="0x00000000",
+                                                        if_missing=True, sec="2.4"))
+    PROFILES["ipos"]["overrides"][(i, 8)]["why"] = "entries up to sub 8 added (§2.4: 'sub-indexes (1-8)'; the table lists the default ones)"
+# The EtherCAT side (ETG.1000.6 sync managers), as the manual means it.
+o = PROFILES["ipos"]["overrides"]
+o[(0x1C00, 4)] = ov(default="4", why="SM3 communication type: printed 3, but the value range of the same entry gives 4 = process data input, and ETG.1000.6 has SM3 inputs = 4", sec="2.3.9")
+for i, first, n_pdo, kind in ((0x1C12, 0x1600, 4, "RxPDO"), (0x1C13, 0x1A00, 4, "TxPDO")):
+    o[(i, 0)] = ov(access="rw", why=f"{i:04X}h:00: printed RO, but the text and every example (§2.4, E10, E11) write 0, the entries, then the count (in pre-operational)", sec="2.3.10; 2.3.11; 2.4")
+    for k in range(1, n_pdo + 1):
+        o.setdefault((i, k), ov(name=f"PDO Mapping object index of assigned {kind} ({k})", type=U16, access="rw", default="0x0000",
+                                if_missing=True, sec="2.3.10; 2.3.11"))
+    o[(i, n_pdo)]["why"] = f"{i:04X}h: entries up to sub {n_pdo}, one per {kind} (range 1-4; E10/E11 write sub {n_pdo}); the table lists the default ones"
+
+# 60C1h X1/X2 "interpolated mode dependent (32-bit)": linear ip puts a
+# signed target position in X1; CiA 402-2 types 60C1h INTEGER32.
+for k in (1, 2):
+    PROFILES["ipos"]["overrides"][(0x60C1, k)] = ov(type=I32, why="type: 'interpolated mode dependent (32-bit)'; X1 carries a signed position in linear ip; INTEGER32 (CiA 402-2) written", sec="9.2.2")
+
 PROFILES["ssd630"]["overrides"] = {
     (0x1008, 0): ov(default="631_402", why="device name of a 631 from the segmented-upload example", sec="14.7"),
     (0x1010, 1): ov(default="1", why="read value bit 0 = 1 (saves on command)", sec="7; 11"),
     (0x1011, 1): ov(default="1", why="read value bit 0 = 1 (restores on command); the 'load' signature bytes are misprinted (73h 61h 61h 64h), 0x64616F6C is what the node accepts", sec="7; 11"),
     (0x60C2, 2): ov(type=I8, default="-3", why="ip time index: table gives UNSIGNED8; CiA 402 defines INTEGER8 (negative exponents); INTEGER8 chosen. No default given; drivebus's working value -3 (with sub 1 = 1: 1 ms) written", sec="12"),
     (0x6502, 0): ov(default="0x00000067", why="value not given; derived from the evidenced modes pp, vl (6042h-6048h), pv, hm, ip = bits 0,1,2,5,6", sec="4; 12; 14"),
+    (0x100B, 0): ov(default="$NODEID", why="node-ID: the drive reads its own node-ID (§14.6 reads 4 on node 4; the table's 1 is the lowest), $NODEID written", sec="4; 11; 14.6"),
+    (0x6080, 1): ov(default="3000", why="no default given; the drive's power-on limit, 3000 min^-1 (= 607Fh), for both directions", sec="12"),
+    (0x6080, 2): ov(default="3000", why="no default given; the drive's power-on limit, 3000 min^-1 (= 607Fh), for both directions", sec="12"),
 }
 # Power-on values the manual does not give (§4 and §12 list the objects
 # without defaults): the EDS states what the drive starts with
@@ -149,6 +210,7 @@ for i in range(0x2014, 0x2018):
     for s in (1, 2):
         PROFILES["ssd630"]["overrides"][(i, s)] = ov(default="0xFFFFFFFF", why="default 'all bits event-driven' = all mask bits set", sec="4; 11")
 PROFILES["dds6"]["overrides"] = {
+    (0x1008, 0): ov(default="DDS6244", why="device name: §6.3.5 gives no value; the model whose product code 1018h:02 reports (00624400h = DDS6244, §6.3.16 table) written", sec="6.3.5; 6.3.16"),
     (0x1016, 0): ov(default="4", why="sub 0 printed 02h but four consumer entries are described; 4 written", sec="6.3.14"),
     (0x1018, 2): ov(default="0x00624400", why="product code is per model; DDS6244 (digital + analog I/O + encoder, all modes incl. torque) chosen", sec="6.3.16"),
     (0x2310, 0): ov(type=U8, access="const", why="type/access lost in extraction; UNSIGNED8 const like the other sub 0s", sec="6.4.1"),
@@ -170,4 +232,5 @@ for i in (0x3210, 0x3230, 0x3260, 0x3261, 0x3450, 0x3470):
     PROFILES["dds6"]["overrides"][(i, 0)] = ov(type=U8, access="const", why="sub 0 type/access lost; UNSIGNED8 const", sec="6.4")
 PROFILES["dds6"]["overrides"][(0x2360, 0)] = ov(default="5", why="sub 0 printed 06h but five sub-indices are described; 5 written", sec="6.4.3")
 PROFILES["dds6"]["overrides"][(0x2810, 0)] = ov(default="13", why="sub 0 printed 08h but sub-indices up to 0Dh are described; 13 written", sec="6.4.8")
+PROFILES["dds6"]["overrides"][(0x6061, 0)] = ov(default="1", why="no default given; the display of the power-on mode 6060h = 1 (pp, §6.5.4)", sec="6.5.4; 6.5.5")
 PROFILES["dds6"]["overrides"][(0x6087, 0)] = ov(default="10000", why="no default given; 10000 (1000 %/s) written, a 0 would never ramp", sec="6.5.29")

@@ -364,6 +364,8 @@ def build(name, cfg):
     for (index, sub), ov in cfg.get("overrides", {}).items():
         ov = dict(ov)
         o = objs.setdefault(index, Obj(index))
+        if ov.pop("if_missing", False) and sub in o.subs:
+            continue
         why = ov.pop("why", None)
         if "obj_name" in ov:
             o.name = ov.pop("obj_name")
@@ -376,6 +378,8 @@ def build(name, cfg):
             log(index, sub, why, ov.get("sec", ""))
     for index in cfg.get("remove", []):
         objs.pop(index, None)
+    for index, sub in cfg.get("remove_subs", []):
+        objs[index].subs.pop(sub, None)
 
     # Finish objects: names, object codes, sub 0.
     for index, o in objs.items():
@@ -410,7 +414,7 @@ def build(name, cfg):
             n = e["name"]
             if " / " in n and slash:
                 n = n.split(" / ", 1)[1]
-            elif colon:
+            elif colon and ": " in n:
                 n = n.split(": ", 1)[1]
             elif s == 0 and re.search(r": (number|Number)", n):
                 n = n.split(": ", 1)[1]
@@ -492,7 +496,7 @@ def write_eds(name, cfg, objs):
         di.append(f"BaudRate_{b}={1 if b in cfg['baud'] else 0}")
     di += ["SimpleBootUpMaster=0", "SimpleBootUpSlave=1", f"Granularity={cfg['granularity']}",
            "DynamicChannelsSupported=0", "GroupMessaging=0", f"NrOfRXPDO={cfg['nr_rx']}",
-           f"NrOfTXPDO={cfg['nr_tx']}", "LSS_Supported=0"]
+           f"NrOfTXPDO={cfg['nr_tx']}", f"LSS_Supported={cfg.get('lss', 0)}"]
     sec("DeviceInfo", di)
     sec("DummyUsage", [f"Dummy{i:04X}={1 if i in cfg.get('dummies', ()) else 0}" for i in range(1, 8)])
     comments = cfg.get("comments", [])
@@ -502,6 +506,13 @@ def write_eds(name, cfg, objs):
     man = [i for i in sorted(objs) if 0x2000 <= i <= 0x5FFF]
     for title, lst in (("MandatoryObjects", mand), ("OptionalObjects", opt), ("ManufacturerObjects", man)):
         sec(title, [f"SupportedObjects={len(lst)}"] + [f"{k + 1}=0x{i:04X}" for k, i in enumerate(lst)])
+    # The data type entries of the dummy types (CiA 301 §7.4.7.1): DEFTYPE,
+    # the size in bits, as the node's PDO service installs them. Not in any
+    # object list (CiA 306 lists no data type objects there).
+    bits = {1: 1, 2: 8, 3: 16, 4: 32, 5: 8, 6: 16, 7: 32}
+    for t in sorted(cfg.get("dummies", ())):
+        sec(f"{t:04X}", [f"ParameterName={TYPE_NAME[t]}", "ObjectType=0x5", "DataType=0x0007", "AccessType=const",
+                         f"DefaultValue=0x{bits[t]:08X}", "PDOMapping=0"])
     for i in sorted(objs):
         for title, kv in fmt_obj_sections(objs[i]):
             sec(title, kv)

@@ -109,7 +109,7 @@ impl Drive {
     }
 
     fn actual_pos_f(&self) -> f64 {
-        self.units.inc_to_pos_f(self.position_increments() as f64)
+        self.units.inc_to_pos_f(self.model.position_counts() as f64 + self.inc_offset_f())
     }
 
     fn actual_vel_frame(&self) -> f64 {
@@ -219,7 +219,7 @@ impl Drive {
     fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
         let u = &self.units;
         Command::Position {
-            position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset as f64),
+            position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset_f()),
             velocity: u.pos_to_rad(v),
             acceleration: u.pos_to_rad(a),
         }
@@ -310,7 +310,7 @@ impl Drive {
         for i in 0..self.events.len() {
             let e = self.events.as_slice()[i];
             let inc = e.counts.saturating_add(self.inc_offset);
-            self.probe.on_event(&e, self.units.inc_to_pos(inc));
+            self.probe.on_event(&e, self.units.inc_frac_to_pos(inc, self.inc_frac));
         }
         if self.probe.dedicated_pending() {
             self.probe.sample_dedicated(self.position());
@@ -520,10 +520,13 @@ impl Drive {
         }
         if let Some(r) = out.position_reset {
             // Shift the reference so the actual position reads `r`; the
-            // demand moves with it (no motion).
-            let want = self.units.pos_to_inc(r);
+            // demand moves with it (no motion). The shift keeps its part of
+            // an increment: `r` is exact even in units finer than the
+            // encoder (CiA 402-2 homing: home position = 607Ch).
+            let (want, frac) = self.units.pos_to_inc_exact(r);
             let delta_pos = r as f64 - pos as f64;
             self.inc_offset = self.inc_offset.saturating_add(want.saturating_sub(inc));
+            self.inc_frac = frac;
             self.dem.pos += delta_pos;
         }
         if let Some(c) = out.fault {
@@ -765,7 +768,7 @@ impl Drive {
         let Some(r) = self.refs else { return };
         let sw = self.statusword_value();
         let inc = self.position_increments();
-        let pos = self.units.inc_to_pos(inc);
+        let pos = self.units.inc_frac_to_pos(inc, self.inc_frac);
         let (lo, hi) = self.params.position_range;
         let pos_shown = if lo < hi { wrap(pos as f64, lo, hi) as i64 } else { pos };
         let vel_act = self.units.frame_to_velocity(self.actual_vel_frame());
@@ -775,25 +778,31 @@ impl Drive {
             if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
         };
         let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
-        od.set_le(r.statusword, &sw.to_le_bytes());
-        od.set_le(r.error_code, &self.sm.fault_code().to_le_bytes());
-        od.set_le(r.mode_display, &self.mode.to_le_bytes());
-        od.set_le(r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
-        od.set_le(r.pos_internal, &(inc as i32).to_le_bytes());
-        od.set_le(r.pos_actual, &(pos_shown as i32).to_le_bytes());
-        od.set_le(r.vel_demand, &i32s(vel_dem).to_le_bytes());
-        od.set_le(r.vel_actual, &i32s(vel_act).to_le_bytes());
-        od.set_le(r.torque_demand, &i16s(self.dem.torque).to_le_bytes());
-        od.set_le(r.torque_actual, &i16s(self.torque_per_mille(self.model.torque())).to_le_bytes());
-        od.set_le(r.current_actual, &i16s(self.model.current() / rated_i * 1000.0).to_le_bytes());
+        // Objects the device lacks are not published (`withdraw_object`).
+        let put = |od: &mut ObjectDictionary, r: Option<drivebus_od::EntryRef>, b: &[u8]| {
+            if let Some(r) = r {
+                od.set_le(r, b);
+            }
+        };
+        put(od, r.statusword, &sw.to_le_bytes());
+        put(od, r.error_code, &self.sm.fault_code().to_le_bytes());
+        put(od, r.mode_display, &self.mode.to_le_bytes());
+        put(od, r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
+        put(od, r.pos_internal, &(inc as i32).to_le_bytes());
+        put(od, r.pos_actual, &(pos_shown as i32).to_le_bytes());
+        put(od, r.vel_demand, &i32s(vel_dem).to_le_bytes());
+        put(od, r.vel_actual, &i32s(vel_act).to_le_bytes());
+        put(od, r.torque_demand, &i16s(self.dem.torque).to_le_bytes());
+        put(od, r.torque_actual, &i16s(self.torque_per_mille(self.model.torque())).to_le_bytes());
+        put(od, r.current_actual, &i16s(self.model.current() / rated_i * 1000.0).to_le_bytes());
         let mv = (self.model.bus_voltage() * 1000.0).clamp(0.0, f64::from(u32::MAX)) as u32;
-        od.set_le(r.dc_link, &mv.to_le_bytes());
-        od.set_le(r.following_error, &i32s(self.dem.pos - pos as f64).to_le_bytes());
+        put(od, r.dc_link, &mv.to_le_bytes());
+        put(od, r.following_error, &i32s(self.dem.pos - pos as f64).to_le_bytes());
         let di = self.digital_inputs();
-        od.set_le(r.inputs, &di.to_le_bytes());
-        od.set_le(r.probe_status, &self.probe.status.to_le_bytes());
+        put(od, r.inputs, &di.to_le_bytes());
+        put(od, r.probe_status, &self.probe.status.to_le_bytes());
         for k in 0..4 {
-            od.set_le(r.probe_pos[k], &self.probe.pos[k].to_le_bytes());
+            put(od, r.probe_pos[k], &self.probe.pos[k].to_le_bytes());
         }
         if let (Some(d), Some(a)) = (r.vl_demand, r.vl_actual) {
             let rpm_act = self.model.velocity_measured() * 60.0 / (2.0 * PI);

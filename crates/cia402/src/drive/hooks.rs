@@ -21,6 +21,13 @@ fn pair(od: &ObjectDictionary, index: u16) -> (u32, u32) {
     (od.get_u32(index, 1).unwrap_or(1), od.get_u32(index, 2).unwrap_or(1))
 }
 
+/// Where a parameter's object is: the drive's withdrawn objects
+/// (`Drive::withdraw_object`; the device may have another object at that
+/// index, e.g. a manufacturer-shaped one), else the dictionary.
+fn source<'a>(od: &'a ObjectDictionary, withdrawn: &'a ObjectDictionary, index: u16) -> &'a ObjectDictionary {
+    if withdrawn.object(index).is_some() { withdrawn } else { od }
+}
+
 impl Drive {
     /// Validates and applies a write to one of the drive's hooked objects.
     pub(crate) fn write_hook(
@@ -59,6 +66,12 @@ impl Drive {
             }
             (0x6060, 0) => {
                 let m = s as i8;
+                // CiA 402-2 6060h: 0 is "no mode change / no mode
+                // assigned" (the power-on value of a drive without a
+                // default mode): stored, the mode in force stays.
+                if m == 0 {
+                    return Ok(WriteOutcome::Store);
+                }
                 if op::supported_bit(m) & self.modes == 0 {
                     // CiA 402-2 §6.3.2: an unsupported mode is refused.
                     return Err(SdoAbort::INVALID_VALUE);
@@ -305,6 +318,10 @@ impl Drive {
     pub(crate) fn refresh_handler_objects(&mut self, od: &mut ObjectDictionary) {
         for sub in 1..=6 {
             self.read_handler_object(od, 0x60C4, sub);
+            // The handler's state now is the power-on value (1011h restores it).
+            if let Some(s) = od.get_mut(0x60C4, sub) {
+                s.default = s.bytes().to_vec();
+            }
         }
         // Replaced in place only: inserting a new object would move the
         // handles the node's PDO service holds (a handler added after
@@ -324,6 +341,9 @@ impl Drive {
         let u = Units::new(&self.factor).ok_or(SdoAbort::INVALID_VALUE)?;
         // Keep the position where it is: the demand is in user units.
         let inc = self.units.pos_to_inc_f(self.dem.pos);
+        // The reference shift's fraction, over the new denominator.
+        let frac = self.units.frac_to_inc_f(self.inc_frac) * u.position_ratio().den as f64;
+        self.inc_frac = (libm::floor(frac) as i128).clamp(0, u.position_ratio().den as i128 - 1);
         self.units = u;
         self.dem.pos = self.units.inc_to_pos_f(inc);
         self.dem.vel = 0.0;
@@ -334,8 +354,9 @@ impl Drive {
     /// Reads every parameter from the dictionary (after install, and after
     /// the node restored or loaded values behind the hooks).
     pub(crate) fn reload(&mut self, od: &mut ObjectDictionary) {
-        let i = |idx: u16, sub: u8| od.get_i64(idx, sub).unwrap_or(0);
-        let u = |idx: u16, sub: u8| od.get_u64(idx, sub).unwrap_or(0);
+        let w = &self.withdrawn;
+        let i = |idx: u16, sub: u8| source(od, w, idx).get_i64(idx, sub).unwrap_or(0);
+        let u = |idx: u16, sub: u8| source(od, w, idx).get_u64(idx, sub).unwrap_or(0);
         let p = &mut self.params;
         p.target_position = i(0x607A, 0) as i32;
         p.target_velocity = i(0x60FF, 0) as i32;
@@ -391,9 +412,10 @@ impl Drive {
         // 60A4h (stored or restored values) sets the jerk rates; a jerk
         // time (configured or set by the personality) stays in force until
         // 60A4h itself is written.
+        let jerk = source(od, w, 0x60A4);
         if self.cfg.profile_jerk_object
             && matches!(self.jerk, super::ProfileJerk::Rate { .. })
-            && let (Some(a), Some(d)) = (od.get_u32(0x60A4, 1), od.get_u32(0x60A4, 2))
+            && let (Some(a), Some(d)) = (jerk.get_u32(0x60A4, 1), jerk.get_u32(0x60A4, 2))
         {
             self.jerk = super::ProfileJerk::Rate { acceleration: a, deceleration: d };
         }
@@ -407,17 +429,17 @@ impl Drive {
         self.probe.configure(x.probe_function);
         let f = &mut self.factor;
         if !self.cfg.fixed_factor_group {
-            f.gear = pair(od, 0x6091);
-            f.feed = pair(od, 0x6092);
-            f.velocity_factor = pair(od, 0x6096);
-            f.acceleration_factor = pair(od, 0x6097);
+            f.gear = pair(source(od, w, 0x6091), 0x6091);
+            f.feed = pair(source(od, w, 0x6092), 0x6092);
+            f.velocity_factor = pair(source(od, w, 0x6096), 0x6096);
+            f.acceleration_factor = pair(source(od, w, 0x6097), 0x6097);
         }
-        f.polarity = od.get_u64(0x607E, 0).unwrap_or(0) as u8;
+        f.polarity = u(0x607E, 0) as u8;
         if let Some(units) = Units::new(&self.factor) {
             self.units = units;
         }
         let o = self.sm.options_mut();
-        let opt = |idx: u16| od.get_i64(idx, 0).unwrap_or(0) as i16;
+        let opt = |idx: u16| i(idx, 0) as i16;
         // Stored values passed the hooks once; a failure keeps the old code.
         let _ = o.set_quick_stop(opt(0x605A));
         let _ = o.set_shutdown(opt(0x605B));
@@ -425,7 +447,7 @@ impl Drive {
         let _ = o.set_halt(opt(0x605D));
         let _ = o.set_fault_reaction(opt(0x605E));
         let _ = o.set_abort_connection(opt(0x6007));
-        let m = od.get_i64(0x6060, 0).unwrap_or(0) as i8;
+        let m = i(0x6060, 0) as i8;
         if op::supported_bit(m) & self.modes != 0 {
             self.request_mode(od, m);
         }

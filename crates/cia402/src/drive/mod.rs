@@ -126,6 +126,9 @@ pub struct Drive {
     params: ModeParams,
     extra: Extra,
     refs: Option<Refs>,
+    /// The drive's objects the device does not have ([`Drive::withdraw_object`]):
+    /// their parameters keep the drive's own values here.
+    withdrawn: ObjectDictionary,
     handlers: Vec<Box<dyn ModeHandler + Send>>,
     modes: u32,
     // time
@@ -139,6 +142,10 @@ pub struct Drive {
     mode_active: bool,
     dem: Demand,
     inc_offset: i64,
+    /// The part of an increment the reference shift adds beyond
+    /// `inc_offset`, as `Units::pos_to_inc_exact` gives it: a home position
+    /// is exact in position units finer than an increment.
+    inc_frac: i128,
     pp: pp::Pp,
     vel_ramp: Ramp,
     torque_ramp: Ramp,
@@ -213,6 +220,7 @@ impl Drive {
             params: ModeParams::default(),
             extra: Extra::default(),
             refs: None,
+            withdrawn: ObjectDictionary::new(),
             handlers,
             modes,
             dt,
@@ -224,6 +232,7 @@ impl Drive {
             mode_active: false,
             dem: Demand::default(),
             inc_offset: 0,
+            inc_frac: 0,
             pp: pp::Pp::default(),
             vel_ramp: Ramp::default(),
             torque_ramp: Ramp::default(),
@@ -256,6 +265,26 @@ impl Drive {
         d.sm.self_test_passed();
         d.publish(node.od_mut());
         Ok(d)
+    }
+
+    /// Takes the drive's object `index` out of the dictionary because the
+    /// device has no such object (a personality whose manual does not list
+    /// it): SDO and PDO no longer reach it, and the drive keeps working
+    /// with the parameter's value — the power-on value, or what
+    /// [`ObjectHooks::on_write`](drivebus_od::ObjectHooks::on_write) sets
+    /// from the application side. Live values it published are no longer
+    /// published. Returns whether the object was there. The caller
+    /// re-resolves the node's services (`Node::insert_object`).
+    pub fn withdraw_object(&mut self, od: &mut ObjectDictionary, index: u16) -> bool {
+        let Some(o) = od.remove(index) else { return false };
+        self.withdrawn.insert(o);
+        self.refs = Refs::resolve(od);
+        true
+    }
+
+    /// Whether [`Drive::withdraw_object`] took `index` out.
+    pub fn is_withdrawn(&self, index: u16) -> bool {
+        self.withdrawn.object(index).is_some()
     }
 
     /// The configuration.
@@ -322,7 +351,12 @@ impl Drive {
     }
     /// Position actual value \[position units\] (6064h before range wrap).
     pub fn position(&self) -> i64 {
-        self.units.inc_to_pos(self.position_increments())
+        self.units.inc_frac_to_pos(self.position_increments(), self.inc_frac)
+    }
+
+    /// The reference shift in increments, its fraction included.
+    pub(crate) fn inc_offset_f(&self) -> f64 {
+        self.inc_offset as f64 + self.units.frac_to_inc_f(self.inc_frac)
     }
 
     /// Applies a fault injection; faults show at the next control period.
@@ -485,7 +519,12 @@ impl drivebus_od::ObjectHooks for Drive {
         sub: u8,
         data: &[u8],
     ) -> Result<drivebus_od::WriteOutcome, drivebus_od::SdoAbort> {
-        self.write_hook(od, index, sub, data)
+        let r = self.write_hook(od, index, sub, data)?;
+        // A withdrawn object's value lives here (see `withdraw_object`).
+        if r == drivebus_od::WriteOutcome::Store && self.is_withdrawn(index) {
+            let _ = self.withdrawn.find(index, sub).map(|e| self.withdrawn.set_le(e, data));
+        }
+        Ok(r)
     }
 }
 
@@ -529,6 +568,8 @@ impl Application for Drive {
                 self.sm = StateMachine::new(*self.sm.options());
                 self.sm.self_test_passed();
                 self.cw = 0;
+                // Withdrawn parameters restart at their power-on values.
+                self.withdrawn.restore_defaults(|_, _| true);
                 self.pp = pp::Pp::default();
                 self.pp.reset(self.dem.pos);
             }

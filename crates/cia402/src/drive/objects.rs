@@ -71,6 +71,8 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
     let max_torque = (m.max_current / m.rated_current * 1000.0).clamp(0.0, 65535.0) as u16;
     let max_motor_speed = p.max_profile_velocity;
     let pair = |v: (u32, u32)| [U32(v.0), U32(v.1)];
+    let power_on_mode = if op::supported_bit(cfg.initial_mode) & modes != 0 { cfg.initial_mode } else { 0 };
+    let dc_link_mv = (cfg.params.bus.nominal_voltage * 1000.0).clamp(0.0, 4e9) as u32;
     let mut v = alloc::vec![
         var(0x6007, "Abort connection option code", T::Integer16, Rw, I16(o.abort_connection()), HOOK),
         var(0x603F, "Error code", T::Unsigned16, Ro, U16(0), MAP),
@@ -82,7 +84,8 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
         var(0x605D, "Halt option code", T::Integer16, Rw, I16(o.halt()), HOOK),
         var(0x605E, "Fault reaction option code", T::Integer16, Rw, I16(o.fault_reaction()), HOOK),
         var(0x6060, "Modes of operation", T::Integer8, Rww, I8(cfg.initial_mode), MAP_HOOK),
-        var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(0), MAP),
+        // The display starts with the power-on mode the drive enters.
+        var(0x6061, "Modes of operation display", T::Integer8, Ro, I8(power_on_mode), MAP),
         var(0x6062, "Position demand value", T::Integer32, Ro, I32(0), MAP),
         var(0x6063, "Position actual internal value", T::Integer32, Ro, I32(0), MAP),
         var(0x6064, "Position actual value", T::Integer32, Ro, I32(0), MAP),
@@ -104,7 +107,8 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
         var(0x6076, "Motor rated torque", T::Unsigned32, Rw, U32(rated_torque_mnm), HOOK),
         var(0x6077, "Torque actual value", T::Integer16, Ro, I16(0), MAP),
         var(0x6078, "Current actual value", T::Integer16, Ro, I16(0), MAP),
-        var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(0), MAP),
+        // mV; the bus starts at its nominal voltage.
+        var(0x6079, "DC link circuit voltage", T::Unsigned32, Ro, U32(dc_link_mv), MAP),
         var(0x607A, "Target position", T::Integer32, Rww, I32(0), MAP_HOOK),
         array(0x607B, "Position range limit", T::Integer32, Rw, &[I32(0), I32(0)], HOOK),
         var(0x607C, "Home offset", T::Integer32, Rw, I32(0), MAP_HOOK),
@@ -231,25 +235,26 @@ pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> alloc::vec::Vec<Object> 
     v
 }
 
-/// Handles of the values the drive pushes every period.
+/// Handles of the values the drive pushes every period; `None` where the
+/// device does not have the object (`Drive::withdraw_object`).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Refs {
-    pub statusword: EntryRef,
-    pub error_code: EntryRef,
-    pub mode_display: EntryRef,
-    pub pos_demand: EntryRef,
-    pub pos_internal: EntryRef,
-    pub pos_actual: EntryRef,
-    pub vel_demand: EntryRef,
-    pub vel_actual: EntryRef,
-    pub torque_demand: EntryRef,
-    pub torque_actual: EntryRef,
-    pub current_actual: EntryRef,
-    pub dc_link: EntryRef,
-    pub following_error: EntryRef,
-    pub inputs: EntryRef,
-    pub probe_status: EntryRef,
-    pub probe_pos: [EntryRef; 4],
+    pub statusword: Option<EntryRef>,
+    pub error_code: Option<EntryRef>,
+    pub mode_display: Option<EntryRef>,
+    pub pos_demand: Option<EntryRef>,
+    pub pos_internal: Option<EntryRef>,
+    pub pos_actual: Option<EntryRef>,
+    pub vel_demand: Option<EntryRef>,
+    pub vel_actual: Option<EntryRef>,
+    pub torque_demand: Option<EntryRef>,
+    pub torque_actual: Option<EntryRef>,
+    pub current_actual: Option<EntryRef>,
+    pub dc_link: Option<EntryRef>,
+    pub following_error: Option<EntryRef>,
+    pub inputs: Option<EntryRef>,
+    pub probe_status: Option<EntryRef>,
+    pub probe_pos: [Option<EntryRef>; 4],
     pub vl_demand: Option<EntryRef>,
     pub vl_actual: Option<EntryRef>,
     /// Number of objects when resolved: inserting an object moves handles.
@@ -257,26 +262,27 @@ pub(crate) struct Refs {
 }
 
 impl Refs {
-    /// Resolves every handle; `None` if the drive's objects are missing.
+    /// Resolves every handle; `None` without a statusword (not a drive's
+    /// dictionary).
     pub fn resolve(od: &ObjectDictionary) -> Option<Refs> {
         let f = |i: u16| od.find(i, 0).ok();
         Some(Refs {
-            statusword: f(0x6041)?,
-            error_code: f(0x603F)?,
-            mode_display: f(0x6061)?,
-            pos_demand: f(0x6062)?,
-            pos_internal: f(0x6063)?,
-            pos_actual: f(0x6064)?,
-            vel_demand: f(0x606B)?,
-            vel_actual: f(0x606C)?,
-            torque_demand: f(0x6074)?,
-            torque_actual: f(0x6077)?,
-            current_actual: f(0x6078)?,
-            dc_link: f(0x6079)?,
-            following_error: f(0x60F4)?,
-            inputs: f(0x60FD)?,
-            probe_status: f(0x60B9)?,
-            probe_pos: [f(0x60BA)?, f(0x60BB)?, f(0x60BC)?, f(0x60BD)?],
+            statusword: Some(f(0x6041)?),
+            error_code: f(0x603F),
+            mode_display: f(0x6061),
+            pos_demand: f(0x6062),
+            pos_internal: f(0x6063),
+            pos_actual: f(0x6064),
+            vel_demand: f(0x606B),
+            vel_actual: f(0x606C),
+            torque_demand: f(0x6074),
+            torque_actual: f(0x6077),
+            current_actual: f(0x6078),
+            dc_link: f(0x6079),
+            following_error: f(0x60F4),
+            inputs: f(0x60FD),
+            probe_status: f(0x60B9),
+            probe_pos: [f(0x60BA), f(0x60BB), f(0x60BC), f(0x60BD)],
             vl_demand: f(0x6043),
             vl_actual: f(0x6044),
             objects: od.objects().len(),

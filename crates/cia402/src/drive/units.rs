@@ -171,6 +171,32 @@ impl Units {
         self.pos.inv().apply_round(inc).saturating_mul(self.pos_sign_i)
     }
 
+    /// Position \[units\] → increments, exact and unrounded: a whole part
+    /// and `frac / den` of an increment (`den` = [`Units::position_ratio`]
+    /// denominator, `0 <= frac < den`). Where a position unit is finer than
+    /// an increment, a reference taken at `p` (homing) keeps the part of an
+    /// increment [`Units::pos_to_inc`] would round away.
+    pub fn pos_to_inc_exact(&self, p: i64) -> (i64, i128) {
+        let (num, den) = (self.pos.num as i128, self.pos.den as i128);
+        let x = i128::from(p.saturating_mul(self.pos_sign_i)).saturating_mul(num);
+        (x.div_euclid(den).clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64, x.rem_euclid(den))
+    }
+
+    /// Increments plus `frac / den` of an increment (see
+    /// [`Units::pos_to_inc_exact`]) → position \[units\], exact (rounded to
+    /// the nearest unit).
+    pub fn inc_frac_to_pos(&self, inc: i64, frac: i128) -> i64 {
+        let (num, den) = (self.pos.num as i128, self.pos.den as i128);
+        let p = i128::from(inc).saturating_mul(den).saturating_add(frac);
+        let q = if p >= 0 { (p + num / 2) / num } else { -((-p + num / 2) / num) };
+        (q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64).saturating_mul(self.pos_sign_i)
+    }
+
+    /// `frac / den` of an increment (see [`Units::pos_to_inc_exact`]) as a float.
+    pub fn frac_to_inc_f(&self, frac: i128) -> f64 {
+        frac as f64 / self.pos.den as f64
+    }
+
     /// Position \[units\] → increments as a float (set-points, derivatives).
     pub fn pos_to_inc_f(&self, p: f64) -> f64 {
         p * self.inc_per_pos * self.pos_sign
@@ -295,6 +321,22 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// A reference taken at `p` reads back `p` exactly, from any
+        /// encoder position, whichever of unit and increment is finer.
+        #[test]
+        fn exact_reference_reads_back(p in -2_000_000_000i64..2_000_000_000, counts in -1i64 << 40..1i64 << 40,
+                                      enc in 1u32..1 << 24, feed in 1u32..1_000_000, pol in 0u8..2) {
+            let f = FactorGroup { feed: (feed, 1), polarity: pol << 7, ..FactorGroup::increments(enc) };
+            let u = Units::new(&f).unwrap();
+            let (whole, frac) = u.pos_to_inc_exact(p);
+            proptest::prop_assert!((0..u.position_ratio().den as i128).contains(&frac));
+            // A shift by `whole - counts` from `counts` lands on `whole`.
+            let offset = whole - counts;
+            proptest::prop_assert_eq!(u.inc_frac_to_pos(counts + offset, frac), p);
+            // Without a fraction it is the plain conversion.
+            proptest::prop_assert_eq!(u.inc_frac_to_pos(whole, 0), u.inc_to_pos(whole));
+        }
+
         #[test]
         fn carry_never_drifts(moves in proptest::collection::vec(-1_000_000i64..1_000_000, 1..200),
                               num in 1u32..100_000, den in 1u32..100_000) {

@@ -269,8 +269,9 @@ impl IpMode {
             (0x60C4, 3) => ok(buf.set_organisation(v as u8)),
             (0x60C4, 4) => {
                 if buf.organisation() == Organisation::Fifo {
-                    // A FIFO has no writable position.
-                    Err(SdoAbort::INVALID_VALUE)
+                    // A FIFO has no writable position; the one it reads
+                    // is taken back unchanged.
+                    if v as u64 == buf.position() as u64 { Ok(true) } else { Err(SdoAbort::INVALID_VALUE) }
                 } else if v as u64 >= buf.size() as u64 {
                     Err(SdoAbort::VALUE_TOO_HIGH)
                 } else {

@@ -99,6 +99,9 @@ impl Behaviour for Akd {
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
         self.0.adjust_drive_config(cfg);
     }
+    fn ip_mode(&self) -> drivebus_cia402::interp::IpMode {
+        self.0.ip_mode()
+    }
     fn finish(&mut self, node: &mut Node) {
         self.0.finish(node);
         let od = node.od_mut();

@@ -388,7 +388,8 @@ impl Dds6 {
         self.at_rest = cx.drive.demand_velocity().abs() < 1e-6;
         self.target_velocity = od.get_i64(0x60FF, 0).unwrap_or(0) as i32;
         self.torque_target = od.get_i64(0x6071, 0).unwrap_or(0);
-        self.torque_demand = od.get_i64(0x6074, 0).unwrap_or(0);
+        // The DDS6 has no 6074h (§6.5): the drive's demand itself.
+        self.torque_demand = cx.drive.demand_torque().round() as i64;
         self.velocity_window = od.get_u32(0x606D, 0).unwrap_or(100) as u16;
         let drive_sw = cx.drive.statusword();
         if cx.drive.mode() == 6 && drive_sw & 0x6F == 0x27 && !self.just_enabled {
@@ -612,11 +613,11 @@ impl Behaviour for Dds6 {
         }
         if enabled && cx.drive.mode() == 4 && self.feedback & 1 != 0 {
             // Closed loop the current loop follows the ramped demand: 6077h
-            // shows 6074h (§4.4.3 EX6: C8h after the 400 ms ramp, F301h one
-            // step into the ramp down). The stepper model itself has no
-            // torque loop.
-            if let (Ok(d), Ok(a)) = (od.find(0x6074, 0), od.find(0x6077, 0)) {
-                let v = drivebus_od::le_i64(od.bytes(d)) as i16;
+            // shows the torque demand (§4.4.3 EX6: C8h after the 400 ms
+            // ramp, F301h one step into the ramp down). The stepper model
+            // itself has no torque loop.
+            if let Ok(a) = od.find(0x6077, 0) {
+                let v = cx.drive.demand_torque().round().clamp(-32768.0, 32767.0) as i16;
                 od.set_le(a, &v.to_le_bytes());
             }
         }

@@ -70,7 +70,6 @@ impl Behaviour for Generic {
     }
 
     fn adjust_node_config(&self, cfg: &mut NodeConfig) {
-        cfg.lss = true;
         cfg.eds_object = true;
         cfg.sdo.block_transfer = true;
     }

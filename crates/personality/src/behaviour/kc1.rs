@@ -23,8 +23,9 @@ extern crate alloc;
 use crate::build::{Action, Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
 use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp};
+use drivebus_cia402::interp::IpMode;
 use drivebus_node::{Node, NodeConfig, NodeEvent};
-use drivebus_od::{ObjectDictionary, SdoAbort, Value, le_u64};
+use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort, Value, le_u64};
 use drivebus_pdo::PdoConfig;
 
 /// Largest 6099h homing speed the Kollmorgen drives take (example 9:
@@ -46,6 +47,9 @@ pub struct Kollmorgen {
     lifted: Option<(u16, u32)>,
     /// A SYNC was received (FBUS.PARAM04 supervision starts with the first).
     sync_seen: bool,
+    /// A PVT point's position (60C1h:1), held until the point's last item
+    /// (60C1h:3) completes the record (§7.9.2.2).
+    pvt_position: Option<[u8; 4]>,
     /// 2026h ASCII channel: the command being received, the reply being read.
     ascii_in: alloc::string::String,
     ascii_out: alloc::collections::VecDeque<u8>,
@@ -59,6 +63,7 @@ impl Kollmorgen {
             dc_bus_before_switch_on: false,
             lifted: None,
             sync_seen: false,
+            pvt_position: None,
             ascii_in: alloc::string::String::new(),
             ascii_out: alloc::collections::VecDeque::new(),
         }
@@ -98,6 +103,14 @@ impl Behaviour for Kollmorgen {
 
     fn hooked_objects(&self) -> &'static [u16] {
         Self::HOOKED
+    }
+
+    fn ip_mode(&self) -> IpMode {
+        // KC1 §7.9.2.4 / AKD §6.9.2.4: maximum buffer size 10 (60C4h:1),
+        // actual buffer size 9 (60C4h:2, 0..9).
+        let mut m = IpMode::new(10);
+        m.engine_mut().buffer_mut().set_size(9);
+        m
     }
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
@@ -185,6 +198,32 @@ impl Behaviour for Kollmorgen {
             }
             // §8.2.2.1: the placeholder takes the RPDO bytes and ignores them.
             0x2100 => Ok(Verdict::Handled),
+            // §7.9.2.2: 60C1h:2 is the time to the next point (ms,
+            // UNSIGNED32), :3 the target velocity; the drive's ip engine
+            // takes the velocity at :2 and the time at :3. In PVT (60C0h =
+            // −2) a record is complete with its last item: "after the last
+            // item … is written … the pointer of the buffer is automatically
+            // incremented", so the position waits for :3.
+            0x60C1 if (1..=3).contains(&sub) => {
+                let pvt = od.get_i64(0x60C0, 0) == Some(-2);
+                match sub {
+                    1 if pvt => {
+                        let mut b = [0u8; 4];
+                        b[..data.len().min(4)].copy_from_slice(&data[..data.len().min(4)]);
+                        self.pvt_position = Some(b);
+                    }
+                    1 => return Ok(Verdict::Pass),
+                    _ => {
+                        cx.drive.on_write(od, 0x60C1, 5 - sub, data)?;
+                        if sub == 3
+                            && let Some(p) = self.pvt_position.take()
+                        {
+                            cx.drive.on_write(od, 0x60C1, 1, &p)?;
+                        }
+                    }
+                }
+                Ok(Verdict::Store)
+            }
             // §7.9.2.4: the size of a data record counts records; only 1 is
             // possible for linear interpolation (the drive's ip engine counts
             // bytes and is not asked).

@@ -180,7 +180,7 @@ use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection};
 use drivebus_cia402::state_machine::State;
 use drivebus_nmt::NmtCommand;
 use drivebus_node::{NmtState, Node, NodeConfig, NodeEvent};
-use drivebus_od::{ObjectDictionary, SdoAbort, Value};
+use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort, Value};
 
 /// Encoder increments per motor revolution of the emulated 630 (the manual
 /// gives none; 5C03h "encoder resolution" has no value): a 1024-line
@@ -346,7 +346,7 @@ impl Behaviour for Ssd630 {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x100C, 0x100D, 0x1400, 0x1401, 0x1402, 0x1403, 0x1600, 0x1601, 0x1602, 0x1603, 0x1800, 0x1801,
-            0x1802, 0x1803, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6040, 0x6099, 0x1006,
+            0x1802, 0x1803, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6040, 0x6099, 0x1006, 0x6080,
         ]
     }
 
@@ -373,6 +373,22 @@ impl Behaviour for Ssd630 {
             // §8: "not being evaluated by the controller and are always 0":
             // accepted (§4 lists them rw) and dropped.
             0x100C | 0x100D => Ok(Verdict::Handled),
+            // §12: 6080h is an ARRAY, sub 1 the negative and sub 2 the
+            // positive max motor speed (UNSIGNED16, min⁻¹). The drive
+            // model limits both directions alike: with the lower one.
+            0x6080 if sub == 1 || sub == 2 => {
+                let other = od.get_u64(0x6080, 3 - sub).unwrap_or(0);
+                let limit = drivebus_od::le_u64(data).min(other) as u32;
+                cx.drive.on_write(od, 0x6080, 0, &limit.to_le_bytes())?;
+                Ok(Verdict::Store)
+            }
+            // Writing back what a PDO object holds modifies nothing: taken
+            // in any NMT state.
+            0x1400..=0x1403 | 0x1600..=0x1603 | 0x1800..=0x1803 | 0x1A00..=0x1A03
+                if od.get_u64(index, sub) == Some(drivebus_od::le_u64(data)) =>
+            {
+                Ok(Verdict::Handled)
+            }
             0x1400..=0x1403 | 0x1600..=0x1603 | 0x1800..=0x1803 | 0x1A00..=0x1A03 => {
                 // §7: "Modifications of the PDO definitions are permitted in
                 // operating state Pre-operational only" — elsewhere §5's

@@ -65,6 +65,12 @@ impl ObjectHooks for Composite<'_> {
             Verdict::Pass => {}
         }
         match (index, sub) {
+            // CiA 402-2 6060h: 0 "no mode change" (the drive's power-on
+            // value where the manual gives no default mode): the mode in
+            // force stays, a manufacturer mode included.
+            (0x6060, 0) if data.first().copied().unwrap_or(0) == 0 => {
+                return self.drive.on_write(od, index, sub, data);
+            }
             (0x6060, 0) => {
                 let m = data.first().copied().unwrap_or(0) as i8;
                 if !self.state.modes.contains(&m) {
@@ -224,24 +230,10 @@ impl PersonalityNode {
         if let Ok(r) = od.find(0x1001, 0) {
             od.set_raw(r, &[reg]);
         }
-        // 1003h: newest first, sub 0 = number of entries.
-        let depth = od.object(0x1003).map(|o| o.subs().len().saturating_sub(1)).unwrap_or(0);
-        if depth > 0 {
-            let n = od.get_u32(0x1003, 0).unwrap_or(0) as usize;
-            for i in (1..depth.min(n + 1)).rev() {
-                let v = od.get_u32(0x1003, i as u8).unwrap_or(0);
-                if let Ok(r) = od.find(0x1003, i as u8 + 1) {
-                    od.set_raw(r, &v.to_le_bytes());
-                }
-            }
-            let entry = u32::from(e.code) | (u32::from(e.bytes[0]) << 16);
-            if let Ok(r) = od.find(0x1003, 1) {
-                od.set_raw(r, &entry.to_le_bytes());
-            }
-            if let Ok(r) = od.find(0x1003, 0) {
-                od.set_raw(r, &[(n + 1).min(depth) as u8]);
-            }
-        }
+        // 1003h through the node's EMCY producer, so its reads agree (CiA
+        // 301 §7.5.2.5; KC1 §7.2.1.4: the code, with the manufacturer's
+        // first byte as additional information).
+        self.node.record_emcy_history(u32::from(e.code) | (u32::from(e.bytes[0]) << 16));
     }
 
     /// Clears an error raised by [`Self::raise_own`]; the error-reset EMCY

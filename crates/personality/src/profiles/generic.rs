@@ -38,7 +38,7 @@ pub static INFO: ProfileInfo = ProfileInfo {
     error_behaviour: true,
     emcy_inhibit: true,
     error_history: 8,
-    lss: false,
+    lss: true,
     quirks: &[],
 };
 

@@ -12,8 +12,10 @@ pub static INFO: ProfileInfo = ProfileInfo {
     revision: Some(0x3031_3030),    // §4.8.6: ASCII "0100"
     device_type: 0x0006_0192,       // §4.8.1
     transport: Transport::EtherCatCoe,
-    baud_rates_kbit: &[],                      // EtherCAT
-    supported_drive_modes: 0x001C_03E5,        // §4.8.2: no tq, ECAM or EGEAR bit
+    // EtherCAT has none; served on CAN, the bit rates of Technosoft's CAN
+    // drives (the CoE manual gives none; docs/personalities.md).
+    baud_rates_kbit: &[125, 250, 500, 1000],
+    supported_drive_modes: 0x001C_03E5, // §4.8.2: no tq, ECAM or EGEAR bit
     modes: &[-2, -1, 1, 3, 4, 6, 7, 8, 9, 10], // §4.2.3, §8 (tq from F515K), §11 (-1 gearing), §12 (-2 camming)
     // §6: -4..-1 mechanical-limit methods, 1..14, 17..30, 33..35
     homing_methods: &[

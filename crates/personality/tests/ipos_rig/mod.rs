@@ -213,9 +213,14 @@ impl Rig {
     }
 
     /// A live value straight from the dictionary (what the master's
-    /// process image would show every cycle).
+    /// process image would show every cycle). The iPOS has no 6074h (its
+    /// object list, Appendix A): for it, the drive's torque demand.
     pub fn od_i64(&self, index: u16, sub: u8) -> i64 {
-        self.dn().node.od().get_i64(index, sub).unwrap()
+        match self.dn().node.od().get_i64(index, sub) {
+            Some(v) => v,
+            None if (index, sub) == (0x6074, 0) => self.dn().drive.demand_torque().round() as i64,
+            None => panic!("{index:04X}h:{sub} is not in the dictionary"),
+        }
     }
 }
 

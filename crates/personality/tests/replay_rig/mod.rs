@@ -127,6 +127,90 @@ impl Rig {
         r[0]
     }
 
+    /// One SDO request to `node`, exactly one response from it.
+    fn sdo_exchange(&mut self, node: u8, data: [u8; 8]) -> Frame {
+        self.take();
+        self.bus.send_from(self.probe, Frame::new(0x600 + node as u16, &data));
+        self.bus.run_for(Duration::from_micros(1));
+        let r: Vec<Frame> =
+            self.take().into_iter().filter(|f| f.std_id() == Some(0x580 + node as u16)).collect();
+        assert_eq!(r.len(), 1, "one SDO response: {r:?}");
+        r[0]
+    }
+
+    /// SDO upload (CiA 301 §7.2.4.3.3–8), expedited or segmented: the
+    /// value, or the abort code.
+    pub fn upload(&mut self, node: u8, index: u16, sub: u8) -> Result<Vec<u8>, u32> {
+        let [il, ih] = index.to_le_bytes();
+        let d = *self.sdo_exchange(node, [0x40, il, ih, sub, 0, 0, 0, 0]).raw_data();
+        let abort = |d: &[u8; 8]| u32::from_le_bytes([d[4], d[5], d[6], d[7]]);
+        match d[0] & 0xE0 {
+            0x80 => return Err(abort(&d)),
+            0x40 => {}
+            _ => panic!("upload of {index:04X}h:{sub}: {d:02X?}"),
+        }
+        if d[0] & 0x02 != 0 {
+            let n = if d[0] & 1 != 0 { 4 - usize::from((d[0] >> 2) & 3) } else { 4 };
+            return Ok(d[4..4 + n].to_vec());
+        }
+        let size = (d[0] & 1 != 0).then(|| abort(&d) as usize);
+        let mut data = Vec::new();
+        let mut toggle = 0u8;
+        loop {
+            let s = *self.sdo_exchange(node, [0x60 | toggle << 4, 0, 0, 0, 0, 0, 0, 0]).raw_data();
+            if s[0] == 0x80 {
+                return Err(abort(&s));
+            }
+            assert_eq!(s[0] & 0xF0, toggle << 4, "segment toggle of {index:04X}h:{sub}: {s:02X?}");
+            let n = 7 - usize::from((s[0] >> 1) & 7);
+            data.extend_from_slice(&s[1..1 + n]);
+            if s[0] & 1 != 0 {
+                break;
+            }
+            toggle ^= 1;
+        }
+        if let Some(size) = size {
+            assert_eq!(data.len(), size, "size of {index:04X}h:{sub}");
+        }
+        Ok(data)
+    }
+
+    /// SDO download, expedited up to 4 bytes, segmented above: `Ok` on
+    /// the confirmation, else the abort code.
+    pub fn download(&mut self, node: u8, index: u16, sub: u8, value: &[u8]) -> Result<(), u32> {
+        let [il, ih] = index.to_le_bytes();
+        let abort = |d: &[u8; 8]| Err(u32::from_le_bytes([d[4], d[5], d[6], d[7]]));
+        if (1..=4).contains(&value.len()) {
+            let mut b = [0x23 | ((4 - value.len() as u8) << 2), il, ih, sub, 0, 0, 0, 0];
+            b[4..4 + value.len()].copy_from_slice(value);
+            let d = *self.sdo_exchange(node, b).raw_data();
+            return if d[0] == 0x60 { Ok(()) } else { abort(&d) };
+        }
+        let [s0, s1, s2, s3] = (value.len() as u32).to_le_bytes();
+        let d = *self.sdo_exchange(node, [0x21, il, ih, sub, s0, s1, s2, s3]).raw_data();
+        if d[0] != 0x60 {
+            return abort(&d);
+        }
+        let mut toggle = 0u8;
+        let mut chunks = value.chunks(7).peekable();
+        if value.is_empty() {
+            let d = *self.sdo_exchange(node, [0x0F, 0, 0, 0, 0, 0, 0, 0]).raw_data();
+            return if d[0] == 0x20 { Ok(()) } else { abort(&d) };
+        }
+        while let Some(c) = chunks.next() {
+            let last = chunks.peek().is_none();
+            let mut b = [0u8; 8];
+            b[0] = toggle << 4 | ((7 - c.len() as u8) << 1) | u8::from(last);
+            b[1..1 + c.len()].copy_from_slice(c);
+            let d = *self.sdo_exchange(node, b).raw_data();
+            if d[0] != 0x20 | toggle << 4 {
+                return abort(&d);
+            }
+            toggle ^= 1;
+        }
+        Ok(())
+    }
+
     /// An expedited upload's value (little-endian, up to 4 bytes).
     pub fn read_u32(&mut self, node: u8, index: u16, sub: u8) -> u32 {
         let f = self.sdo_read(node, index, sub);

@@ -179,12 +179,12 @@ impl Ipos {
 
     /// kₜ × 6075h: the torque the drive's ‰ refer to (§8.2.1: 6071h, 6072h,
     /// 6074h, 6077h are ‰ of the motor rated current 6075h; the drive
-    /// computes with at least 1 mA).
+    /// computes with at least 1 mA). The iPOS has no 6076h: the drive keeps
+    /// its rated torque as a withdrawn parameter (build/conform.rs).
     fn sync_torque_reference(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         let ma = od.get_u32(0x6075, 0).unwrap_or(0).max(1);
         let kt = cx.drive.config().params.motor.kt;
         let mnm = (kt * f64::from(ma)).round().clamp(1.0, f64::from(u32::MAX)) as u32;
-        crate::build::set_default(od, 0x6076, 0, &drivebus_od::Value::U32(mnm));
         let _ = cx.drive.on_write(od, 0x6076, 0, &mnm.to_le_bytes());
     }
 }
@@ -320,8 +320,8 @@ impl Behaviour for Ipos {
 
     fn hooked_objects(&self) -> &'static [u16] {
         &[
-            0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x6076, 0x60C0,
-            0x60C1, 0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8,
+            0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
+            0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8,
         ]
     }
 
@@ -335,9 +335,13 @@ impl Behaviour for Ipos {
     ) -> Result<Verdict, SdoAbort> {
         let le = |d: &[u8]| drivebus_od::le_u64(d);
         match (index, sub) {
-            // 6076h is the drive's internal torque reference kₜ × 6075h
-            // (the iPOS has no 6076h; §8.2.1).
-            (0x6076, _) => return Err(SdoAbort::WRITE_READ_ONLY),
+            (0x6075, 0) => {
+                // §8.2.2: default 0, set by the master; the drive computes
+                // with at least 1 mA (the generic drive refuses 0).
+                let ma = (le(data) as u32).max(1);
+                cx.drive.on_write(od, 0x6075, 0, &ma.to_le_bytes())?;
+                return Ok(Verdict::Store);
+            }
             (0x60C0, 0) => {
                 let v = le(data) as i16;
                 let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
@@ -461,8 +465,8 @@ impl Behaviour for Ipos {
                 self.started = false;
             }
             NodeEvent::NmtState { .. } => {
-                // The drive re-reads 60C0h and 6076h from the dictionary
-                // (stored parameters): give it the iPOS meaning again.
+                // The drive re-reads 60C0h and its rated torque (stored
+                // parameters): give them the iPOS meaning again.
                 let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
                 let _ = Self::sync_sub_mode(cx, od, od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux);
                 Self::sync_torque_reference(cx, od);
