@@ -104,6 +104,9 @@ impl Master {
             let Some(obj) = template.objects.get_mut(&index) else { continue };
             if subs.contains(&0) {
                 template.objects.remove(&index);
+                for list in [&mut template.mandatory, &mut template.optional, &mut template.manufacturer] {
+                    list.retain(|i| *i != index);
+                }
                 continue;
             }
             for s in subs {
@@ -130,6 +133,14 @@ impl Master {
             }
         }
         let mut eds = Eds { objects, ..Eds::default() };
+        // CiA 306 §4.6: tools find the objects through these lists.
+        for &index in eds.objects.keys() {
+            match index {
+                0x1000 | 0x1001 | 0x1018 => eds.mandatory.push(index),
+                0x2000..=0x5FFF => eds.manufacturer.push(index),
+                _ => eds.optional.push(index),
+            }
+        }
         let info = &mut eds.device_info;
         info.product_name = sdo.read::<String>(0x1008, 0).await.unwrap_or_else(|_| format!("node {node}"));
         info.vendor_number = sdo.read::<u32>(0x1018, 1).await.ok();
