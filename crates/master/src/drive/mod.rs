@@ -15,13 +15,17 @@ use std::fmt;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use drivebus_cia402::codes::State;
 use drivebus_nmt::RemoteState;
-use tokio::sync::{Notify, broadcast};
-use tokio::time::Instant as TokioInstant;
+use tokio::sync::Notify;
 
 use crate::master::Master;
+
+mod motion;
+
 use crate::pdo::{PdoDir, PdoMapEntry};
 use crate::sdo::{SdoError, SdoHandle};
+pub use motion::{MotionLimits, StopAction, StopReport, human_secs};
 
 /// Controlword 6040h.
 pub const CONTROLWORD: u16 = 0x6040;
@@ -39,65 +43,78 @@ pub const SW_BIT12: u16 = 1 << 12;
 /// Statusword bit 13: following error / homing error.
 pub const SW_BIT13: u16 = 1 << 13;
 
-/// Modes of operation (6060h) values.
-pub mod mode {
-    /// Profile position.
-    pub const PP: i8 = 1;
-    /// Velocity (vl).
-    pub const VL: i8 = 2;
-    /// Profile velocity.
-    pub const PV: i8 = 3;
-    /// Profile torque.
-    pub const TQ: i8 = 4;
-    /// Homing.
-    pub const HM: i8 = 6;
-    /// Interpolated position.
-    pub const IP: i8 = 7;
-    /// Cyclic synchronous position.
-    pub const CSP: i8 = 8;
-    /// Cyclic synchronous velocity.
-    pub const CSV: i8 = 9;
-    /// Cyclic synchronous torque.
-    pub const CST: i8 = 10;
+/// Modes of operation (6060h) values (`drivebus_cia402::codes::mode`).
+pub use drivebus_cia402::codes::mode;
+
+/// The name of a mode of operation (6060h/6061h), CiA 402-2 §6.3.2.
+pub fn mode_name(m: i8) -> &'static str {
+    if m == 0 { "no mode" } else { mode::name(m) }
 }
 
-/// CiA 402 power drive system states (from the statusword, CiA 402-2 table 30).
+/// CiA 402 power drive system states, decoded by the state table of
+/// `drivebus_cia402::state_machine` (CiA 402-2 §6.2.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DriveState {
-    /// xxxx xxxx x0xx 0000.
+    /// Not ready to switch on.
     NotReadyToSwitchOn,
-    /// x1xx 0000.
+    /// Switch on disabled.
     SwitchOnDisabled,
-    /// x01x 0001.
+    /// Ready to switch on.
     ReadyToSwitchOn,
-    /// x01x 0011.
+    /// Switched on.
     SwitchedOn,
-    /// x01x 0111.
+    /// Operation enabled.
     OperationEnabled,
-    /// x00x 0111.
+    /// Quick stop active.
     QuickStopActive,
-    /// x0xx 1111.
+    /// Fault reaction active.
     FaultReactionActive,
-    /// x0xx 1000.
+    /// Fault.
     Fault,
     /// A pattern the table does not define.
     Unknown,
 }
 
+impl From<State> for DriveState {
+    fn from(s: State) -> Self {
+        match s {
+            State::NotReadyToSwitchOn => DriveState::NotReadyToSwitchOn,
+            State::SwitchOnDisabled => DriveState::SwitchOnDisabled,
+            State::ReadyToSwitchOn => DriveState::ReadyToSwitchOn,
+            State::SwitchedOn => DriveState::SwitchedOn,
+            State::OperationEnabled => DriveState::OperationEnabled,
+            State::QuickStopActive => DriveState::QuickStopActive,
+            State::FaultReactionActive => DriveState::FaultReactionActive,
+            State::Fault => DriveState::Fault,
+        }
+    }
+}
+
 impl DriveState {
     /// Decodes the state bits of a statusword.
     pub fn from_statusword(sw: u16) -> DriveState {
-        match (sw & 0x4F, sw & 0x6F) {
-            (0x00, _) => DriveState::NotReadyToSwitchOn,
-            (0x40, _) => DriveState::SwitchOnDisabled,
-            (_, 0x21) => DriveState::ReadyToSwitchOn,
-            (_, 0x23) => DriveState::SwitchedOn,
-            (_, 0x27) => DriveState::OperationEnabled,
-            (_, 0x07) => DriveState::QuickStopActive,
-            (0x0F, _) => DriveState::FaultReactionActive,
-            (0x08, _) => DriveState::Fault,
-            _ => DriveState::Unknown,
+        State::from_statusword(sw).map_or(DriveState::Unknown, DriveState::from)
+    }
+
+    /// The state's name as CiA 402 writes it, in lower case.
+    pub fn name(self) -> &'static str {
+        match self {
+            DriveState::NotReadyToSwitchOn => "not ready to switch on",
+            DriveState::SwitchOnDisabled => "switch on disabled",
+            DriveState::ReadyToSwitchOn => "ready to switch on",
+            DriveState::SwitchedOn => "switched on",
+            DriveState::OperationEnabled => "operation enabled",
+            DriveState::QuickStopActive => "quick stop active",
+            DriveState::FaultReactionActive => "fault reaction active",
+            DriveState::Fault => "fault",
+            DriveState::Unknown => "unknown",
         }
+    }
+}
+
+impl fmt::Display for DriveState {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -165,11 +182,31 @@ impl From<SdoError> for DriveError {
     }
 }
 
+/// Where a drive is while a command waits for it (see [`Drive::on_progress`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MotionProgress {
+    /// What the command waits for.
+    pub waiting_for: &'static str,
+    /// The statusword.
+    pub statusword: u16,
+    /// Its state.
+    pub state: DriveState,
+    /// Position actual value 6064h.
+    pub position: Option<i32>,
+    /// Velocity actual value 606Ch.
+    pub velocity: Option<i32>,
+}
+
+/// A progress callback.
+pub type ProgressFn = Arc<dyn Fn(&MotionProgress) + Send + Sync>;
+
 struct Rpdo {
     cob: u16,
     mapping: Vec<PdoMapEntry>,
     image: Mutex<[u8; 8]>,
     len: usize,
+    /// Transmission type 0..240: the drive applies it at the next SYNC.
+    synchronous: bool,
 }
 
 /// Byte offset of `index`/`sub` in a byte-aligned mapping.
@@ -199,6 +236,9 @@ pub struct Drive {
     sinks: Vec<u64>,
     timeout: Duration,
     poll: Duration,
+    progress: Option<ProgressFn>,
+    progress_every: Duration,
+    last_progress: Mutex<Option<drivebus_can::Instant>>,
 }
 
 impl Drop for Drive {
@@ -239,7 +279,7 @@ impl Master {
             let (latest, updated) = (latest.clone(), updated.clone());
             // Decoded in the receive task, in frame order: once an SDO
             // answer is in, every TPDO sent before it is in `latest`.
-            let sink = move |f: &drivebus_can::Frame| {
+            let sink = move |f: &drivebus_can::Frame, _: drivebus_can::Instant| {
                 let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
                 for m in mapping.iter().filter(|m| m.index >= 0x1000) {
                     if let Some((off, len)) = offset_of(&mapping, m.index, m.sub)
@@ -270,6 +310,7 @@ impl Master {
             rpdos.push(Rpdo {
                 cob: rec.can_id(),
                 len: rec.len_bytes(),
+                synchronous: rec.transmission_type <= 240,
                 mapping: rec.mapping,
                 image: Mutex::new(image),
             });
@@ -285,6 +326,9 @@ impl Master {
             sinks,
             timeout: Duration::from_secs(2),
             poll: Duration::from_millis(10),
+            progress: None,
+            progress_every: Duration::from_millis(200),
+            last_progress: Mutex::new(None),
         })
     }
 }
@@ -299,6 +343,18 @@ impl Drive {
     /// SDO polling interval while waiting without a TPDO (default 10 ms).
     pub fn with_poll_interval(mut self, t: Duration) -> Self {
         self.poll = t;
+        self
+    }
+
+    /// Calls `f` with the statusword, position and velocity while a call
+    /// waits for the drive, at most every `every` of the master's time.
+    pub fn on_progress(
+        mut self,
+        every: Duration,
+        f: impl Fn(&MotionProgress) + Send + Sync + 'static,
+    ) -> Self {
+        self.progress = Some(Arc::new(f));
+        self.progress_every = every;
         self
     }
 
@@ -334,22 +390,43 @@ impl Drive {
         Ok(self.sdo.upload(index, sub).await?)
     }
 
-    /// Writes an object: by RPDO when mapped and the node is Operational,
-    /// else by SDO. Every RPDO image holding the object is updated, so an
-    /// RPDO sent later for another object (e.g. 607Ah next to 6040h)
-    /// repeats the current value instead of a stale one.
+    /// Writes an object: by an event-driven RPDO (transmission type
+    /// 254/255) when one maps it and the node is Operational, else by SDO.
+    /// A synchronous RPDO is not used here: it takes effect only at the
+    /// next SYNC, after later writes by other means (a controlword by an
+    /// event RPDO would be overwritten by a stale copy); streams use it
+    /// ([`stream_raw`](Self::stream_raw)). Every RPDO image holding the
+    /// object is updated, so an RPDO sent later for another object (e.g.
+    /// 607Ah next to 6040h) repeats the current value instead of a stale one.
     pub async fn write_raw(&self, index: u16, sub: u8, data: &[u8]) -> Result<(), DriveError> {
+        self.write_via(index, sub, data, false).await
+    }
+
+    /// [`write_raw`](Self::write_raw), by a synchronous RPDO first when
+    /// `cyclic` (then any RPDO mapping the object).
+    pub(crate) async fn write_via(
+        &self,
+        index: u16,
+        sub: u8,
+        data: &[u8],
+        cyclic: bool,
+    ) -> Result<(), DriveError> {
         let mut first: Option<(u16, Vec<u8>)> = None;
+        let mut fallback: Option<(u16, Vec<u8>)> = None;
         for r in &self.rpdos {
             if let Some((off, len)) = offset_of(&r.mapping, index, sub)
                 && data.len() >= len
             {
                 let mut img = r.image.lock().unwrap_or_else(|e| e.into_inner());
                 img[off..off + len].copy_from_slice(&data[..len]);
-                if first.is_none() {
-                    first = Some((r.cob, img[..r.len].to_vec()));
+                let slot = if r.synchronous == cyclic { &mut first } else { &mut fallback };
+                if slot.is_none() {
+                    *slot = Some((r.cob, img[..r.len].to_vec()));
                 }
             }
+        }
+        if cyclic {
+            first = first.or(fallback);
         }
         match first {
             Some((cob, frame)) if self.operational() => {
@@ -376,7 +453,7 @@ impl Drive {
     }
 
     /// Waits until `pred(statusword)`; a Fault fails early unless `allow_fault`.
-    async fn wait_sw(
+    pub(crate) async fn wait_sw(
         &self,
         what: &'static str,
         allow_fault: bool,
@@ -385,14 +462,14 @@ impl Drive {
         self.wait_sw_for(what, allow_fault, self.timeout, pred).await
     }
 
-    async fn wait_sw_for(
+    pub(crate) async fn wait_sw_for(
         &self,
         what: &'static str,
         allow_fault: bool,
         timeout: Duration,
         pred: impl Fn(u16) -> bool,
     ) -> Result<u16, DriveError> {
-        let deadline = TokioInstant::now() + timeout;
+        let deadline = self.master.now() + timeout;
         loop {
             // Register for the next TPDO before reading, so none is missed.
             let notified = self.updated.notified();
@@ -403,14 +480,27 @@ impl Drive {
             if !allow_fault && DriveState::from_statusword(sw) == DriveState::Fault {
                 return Err(DriveError::Fault { statusword: sw });
             }
-            let now = TokioInstant::now();
+            let now = self.master.now();
+            if self.progress.is_some() {
+                let due = {
+                    let mut last = self.last_progress.lock().unwrap_or_else(|e| e.into_inner());
+                    let due = last.is_none_or(|t| now.saturating_duration_since(t) >= self.progress_every);
+                    if due {
+                        *last = Some(now);
+                    }
+                    due
+                };
+                if due {
+                    self.report(what, sw).await;
+                }
+            }
             if now >= deadline {
                 return Err(DriveError::Timeout { waiting_for: what, statusword: sw });
             }
-            let wake = deadline.min(now + self.poll);
+            let wake = deadline.saturating_duration_since(now).min(self.poll);
             tokio::select! {
                 () = notified => {}
-                () = tokio::time::sleep_until(wake) => {}
+                () = self.master.sleep(wake) => {}
             }
         }
     }
@@ -420,16 +510,23 @@ impl Drive {
         self.wait_sw(what, false, |sw| DriveState::from_statusword(sw) == target).await
     }
 
-    /// Fault reset: controlword bit 7 rising edge, then waits for Switch
-    /// on disabled.
-    pub async fn fault_reset(&self) -> Result<(), DriveError> {
+    /// Fault reset, only when the drive is in Fault (or fault reaction):
+    /// controlword bit 7 rising edge, then waits for the drive to leave
+    /// Fault. A drive that is not faulted is left alone (writing a
+    /// controlword would change its state). True if a fault was reset.
+    pub async fn fault_reset(&self) -> Result<bool, DriveError> {
+        let sw = self.statusword().await?;
+        if !matches!(DriveState::from_statusword(sw), DriveState::Fault | DriveState::FaultReactionActive) {
+            return Ok(false);
+        }
+        // In Fault the drive ignores every command but the bit 7 edge.
         self.controlword(0x0000).await?;
         self.controlword(0x0080).await?;
         self.wait_sw("fault reset", true, |sw| {
             !matches!(DriveState::from_statusword(sw), DriveState::Fault | DriveState::FaultReactionActive)
         })
         .await?;
-        Ok(())
+        Ok(true)
     }
 
     /// Walks the state machine to Operation enabled: fault reset if
@@ -440,7 +537,9 @@ impl Drive {
             let sw = self.statusword().await?;
             match DriveState::from_statusword(sw) {
                 DriveState::OperationEnabled => return Ok(()),
-                DriveState::Fault | DriveState::FaultReactionActive => self.fault_reset().await?,
+                DriveState::Fault | DriveState::FaultReactionActive => {
+                    self.fault_reset().await?;
+                }
                 DriveState::NotReadyToSwitchOn | DriveState::Unknown => {
                     self.wait_sw("leaving not ready to switch on", true, |sw| {
                         !matches!(
@@ -489,130 +588,23 @@ impl Drive {
     /// Writes 6060h and waits for 6061h to show `mode`.
     pub async fn set_mode(&self, mode: i8) -> Result<(), DriveError> {
         self.write_raw(MODES_OF_OPERATION, 0, &mode.to_le_bytes()).await?;
-        let deadline = TokioInstant::now() + self.timeout;
+        let deadline = self.master.now() + self.timeout;
         loop {
-            let v = self.read_raw(MODES_DISPLAY, 0).await?;
+            // By SDO: a mode change need not trigger an event TPDO, so a
+            // TPDO copy of 6061h may be stale.
+            let v = self.sdo.upload(MODES_DISPLAY, 0).await?;
             if v.first().map(|b| *b as i8) == Some(mode) {
                 return Ok(());
             }
-            if TokioInstant::now() >= deadline {
+            if self.master.now() >= deadline {
                 let sw = self.statusword().await.unwrap_or(0);
                 return Err(DriveError::Timeout {
                     waiting_for: "modes of operation display",
                     statusword: sw,
                 });
             }
-            tokio::time::sleep(self.poll).await;
+            self.master.sleep(self.poll).await;
         }
-    }
-
-    /// Profile position move (mode must be PP): optional profile
-    /// (6081h/6083h/6084h), target 607Ah, new set-point (bit 4, change
-    /// immediately bit 5, relative bit 6), waits for the acknowledge (bit
-    /// 12), clears bit 4, then waits for target reached (bit 10) within
-    /// `timeout`.
-    pub async fn move_to(
-        &self,
-        target: i32,
-        relative: bool,
-        profile: Option<Profile>,
-        timeout: Duration,
-    ) -> Result<(), DriveError> {
-        if let Some(p) = profile {
-            self.sdo.write(0x6081, 0, p.velocity).await?;
-            self.sdo.write(0x6083, 0, p.acceleration).await?;
-            self.sdo.write(0x6084, 0, p.deceleration).await?;
-        }
-        self.write_raw(0x607A, 0, &target.to_le_bytes()).await?;
-        let base = 0x0F | 0x20 | if relative { 0x40 } else { 0 };
-        self.controlword(base).await?;
-        self.controlword(base | 0x10).await?;
-        self.wait_sw("set-point acknowledge", false, |sw| sw & SW_BIT12 != 0).await?;
-        self.controlword(base).await?;
-        self.wait_sw_for("target reached", false, timeout, |sw| {
-            sw & SW_BIT12 == 0 && sw & SW_TARGET_REACHED != 0
-        })
-        .await
-        .map(|_| ())
-    }
-
-    /// Target velocity 60FFh (profile velocity / CSV).
-    pub async fn velocity(&self, v: i32) -> Result<(), DriveError> {
-        self.write_raw(0x60FF, 0, &v.to_le_bytes()).await
-    }
-
-    /// Target torque 6071h (profile torque / CST).
-    pub async fn torque(&self, t: i16) -> Result<(), DriveError> {
-        self.write_raw(0x6071, 0, &t.to_le_bytes()).await
-    }
-
-    /// Homing: writes 6098h, switches to homing mode, starts (bit 4) and
-    /// waits for homing attained (bit 12) or error (bit 13).
-    pub async fn home(&self, method: i8, timeout: Duration) -> Result<(), DriveError> {
-        self.sdo.write(0x6098, 0, method).await?;
-        self.set_mode(mode::HM).await?;
-        self.controlword(0x0F).await?;
-        self.controlword(0x1F).await?;
-        let sw =
-            self.wait_sw_for("homing attained", false, timeout, |sw| sw & (SW_BIT12 | SW_BIT13) != 0).await?;
-        self.controlword(0x0F).await?;
-        if sw & SW_BIT13 != 0 {
-            return Err(DriveError::HomingError { statusword: sw });
-        }
-        Ok(())
-    }
-
-    /// Streams values of `index`/`sub`, one right after each SYNC the
-    /// master produces (RPDO when mapped, else SDO, which cannot keep up
-    /// with short cycles). Returns how many were sent.
-    pub async fn stream_raw(
-        &self,
-        index: u16,
-        sub: u8,
-        values: impl IntoIterator<Item = Vec<u8>>,
-    ) -> Result<usize, DriveError> {
-        if !self.master.sync_running() {
-            return Err(DriveError::NoSync);
-        }
-        let mut ticks = self.master.subscribe_sync();
-        let mut n = 0;
-        for v in values {
-            loop {
-                match tokio::time::timeout(Duration::from_secs(1), ticks.recv()).await {
-                    Ok(Ok(_)) => {
-                        // Behind by whole cycles: align to the latest SYNC
-                        // rather than sending a burst for the old ones.
-                        while !matches!(
-                            ticks.try_recv(),
-                            Err(broadcast::error::TryRecvError::Empty
-                                | broadcast::error::TryRecvError::Closed)
-                        ) {}
-                        break;
-                    }
-                    // Behind by several cycles: send now, aligned to the latest.
-                    Ok(Err(broadcast::error::RecvError::Lagged(_))) => {}
-                    Ok(Err(broadcast::error::RecvError::Closed)) | Err(_) => return Err(DriveError::NoSync),
-                }
-            }
-            self.write_raw(index, sub, &v).await?;
-            n += 1;
-        }
-        Ok(n)
-    }
-
-    /// Cyclic synchronous position: target positions 607Ah, one per SYNC.
-    pub async fn stream_csp(&self, positions: impl IntoIterator<Item = i32>) -> Result<usize, DriveError> {
-        self.stream_raw(0x607A, 0, positions.into_iter().map(|p| p.to_le_bytes().to_vec())).await
-    }
-
-    /// Cyclic synchronous velocity: target velocities 60FFh, one per SYNC.
-    pub async fn stream_csv(&self, velocities: impl IntoIterator<Item = i32>) -> Result<usize, DriveError> {
-        self.stream_raw(0x60FF, 0, velocities.into_iter().map(|p| p.to_le_bytes().to_vec())).await
-    }
-
-    /// Cyclic synchronous torque: target torques 6071h, one per SYNC.
-    pub async fn stream_cst(&self, torques: impl IntoIterator<Item = i16>) -> Result<usize, DriveError> {
-        self.stream_raw(0x6071, 0, torques.into_iter().map(|p| p.to_le_bytes().to_vec())).await
     }
 }
 
