@@ -186,10 +186,10 @@ fn lss_refuses_to_configure_two_slaves_at_once() {
         let mut cfg = drivebus_node::NodeConfig::new(0xFF);
         cfg.lss = true;
         cfg.identity = drivebus_node::Identity { vendor_id: 0xABC, product_code: 0x77, revision: 3, serial };
-        drivebus_master::NodeDevice { node: drivebus_node::Node::new(cfg), app: drivebus_od::NoHooks }
+        drivebus_node::NodeDevice::new(drivebus_node::Node::new(cfg), drivebus_od::NoHooks)
     };
     let _hosts = rt.block_on(async {
-        drivebus_master::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub())
+        drivebus_transport::host::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub())
     });
     let u = format!("socketcand://{addr}/can0");
     db(&u, &["--timeout", "300", "lss", "set-node-id", "9"]).failure().stderr(

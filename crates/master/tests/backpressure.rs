@@ -11,7 +11,9 @@ use std::task::Poll;
 use std::time::Duration;
 
 use common::{bounded, node};
-use drivebus_master::{Master, NodeDevice, spawn_on_hub};
+use drivebus_master::Master;
+use drivebus_node::NodeDevice;
+use drivebus_transport::host::spawn_on_hub;
 use drivebus_od::NoHooks;
 use drivebus_transport::socketcand::SocketcandServer;
 
@@ -19,7 +21,7 @@ use drivebus_transport::socketcand::SocketcandServer;
 async fn futures_polled_once_and_left_do_not_stall_the_master() {
     bounded(async {
         let (server, addr) = SocketcandServer::bind("127.0.0.1:0", "can0").await.unwrap();
-        let devices = [3u8, 90].map(|id| NodeDevice { node: node(id), app: NoHooks });
+        let devices = [3u8, 90].map(|id| NodeDevice::new(node(id), NoHooks));
         let _hosts = spawn_on_hub(devices, server.hub());
         // A fresh connection per scan, scanning at once (as `drivebus scan`
         // does): the first probes meet the server's rawmode grace.

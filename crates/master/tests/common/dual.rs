@@ -6,12 +6,13 @@ use std::future::Future;
 use std::time::Duration;
 
 use drivebus_bus::{Bus, BusConfig};
-use drivebus_can::{Frame, Instant};
-use drivebus_cia402::drive::DriveNode;
-use drivebus_master::{Device, Master, MasterConfig, NodeDevice, SimBus, spawn_device};
-use drivebus_node::{Node, SimNode};
+use drivebus_can::Device;
+use drivebus_cia402::drive::Drive;
+use drivebus_master::{Master, MasterConfig, SimBus};
+use drivebus_node::{Node, NodeDevice};
 use drivebus_od::NoHooks;
 use drivebus_transport::Hub;
+use drivebus_transport::host::spawn;
 
 /// A device of a test world (built, moved once; the size difference is harmless).
 #[allow(clippy::large_enum_variant)]
@@ -19,21 +20,16 @@ pub enum Station {
     /// A plain CiA 301 node.
     Plain(Node),
     /// A CiA 402 virtual drive.
-    Drive(Box<DriveNode>),
+    Drive(Box<NodeDevice<Drive>>),
 }
 
-/// `DriveNode` as a hostable device.
-struct Real(DriveNode);
-
-impl Device for Real {
-    fn boot(&mut self, now: Instant, out: &mut Vec<Frame>) {
-        self.0.poll_into(now, out);
-    }
-    fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut Vec<Frame>) {
-        self.0.handle_frame_into(frame, now, out);
-    }
-    fn poll(&mut self, now: Instant, out: &mut Vec<Frame>) -> Option<Instant> {
-        self.0.poll_into(now, out)
+impl Station {
+    /// The station as a device any host runs.
+    fn device(self) -> Box<dyn Device + Send> {
+        match self {
+            Station::Plain(n) => Box::new(NodeDevice::new(n, NoHooks)),
+            Station::Drive(d) => d,
+        }
     }
 }
 
@@ -62,14 +58,7 @@ where
     // Simulated time at 1 Mbit/s.
     let mut bus = Bus::new(BusConfig::with_bitrate(1_000_000));
     for s in world() {
-        match s {
-            Station::Plain(n) => {
-                bus.attach(SimNode::new(n, NoHooks));
-            }
-            Station::Drive(d) => {
-                bus.attach(*d);
-            }
-        }
+        bus.attach(s.device());
     }
     let mut sim = SimBus::with_config(bus, config());
     sim.set_limit(Duration::from_secs(600));
@@ -83,15 +72,7 @@ where
         let hub = Hub::default();
         let mut hosts = Vec::new();
         for s in world() {
-            match s {
-                Station::Plain(n) => hosts.push(spawn_device(
-                    Box::new(NodeDevice { node: n, app: NoHooks }) as Box<dyn Device>,
-                    hub.attach(),
-                )),
-                Station::Drive(d) => {
-                    hosts.push(spawn_device(Box::new(Real(*d)) as Box<dyn Device>, hub.attach()))
-                }
-            }
+            hosts.push(spawn(s.device(), hub.attach()));
         }
         let m = Master::with_config(hub.attach(), config());
         super::bounded(body(m, Which::Tokio)).await;
