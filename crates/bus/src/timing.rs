@@ -85,10 +85,81 @@ impl Bits {
         self.v = (self.v << n) | (u128::from(value) & mask);
         self.len += n;
     }
-    #[inline]
-    fn iter(&self) -> impl Iterator<Item = bool> + '_ {
-        (0..self.len).rev().map(move |i| (self.v >> i) & 1 == 1)
+}
+
+/// CRC-15/CAN of one byte shifted through the register (MSB first).
+const CRC15_TABLE: [u16; 256] = {
+    let mut t = [0u16; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut crc = (i as u16) << 7;
+        let mut k = 0;
+        while k < 8 {
+            crc = if crc & 0x4000 != 0 { ((crc << 1) ^ CRC15_POLY) & 0x7FFF } else { (crc << 1) & 0x7FFF };
+            k += 1;
+        }
+        t[i] = crc;
+        i += 1;
     }
+    t
+};
+
+/// CRC-15/CAN of the `len` low bits of `v`, most significant first: the
+/// leading `len % 8` bits one by one, then a byte per table step (the
+/// virtual bus prices every frame, so this is on its hot path).
+fn crc15_bits(v: u128, len: u32) -> u16 {
+    let mut crc: u16 = 0;
+    let head = len % 8;
+    for i in (len - head..len).rev() {
+        let next = ((v >> i) & 1 == 1) ^ ((crc >> 14) & 1 == 1);
+        crc = (crc << 1) & 0x7FFF;
+        if next {
+            crc ^= CRC15_POLY;
+        }
+    }
+    let mut i = len - head;
+    while i >= 8 {
+        i -= 8;
+        let byte = (v >> i) as u8;
+        crc = ((crc << 8) ^ CRC15_TABLE[usize::from((crc >> 7) as u8 ^ byte)]) & 0x7FFF;
+    }
+    crc
+}
+
+/// Stuff bits ISO 11898-1 inserts into the `len` low bits of `v` (after
+/// five equal bits, the complement, which starts the next run), counted a
+/// run at a time.
+fn stuff_bits(v: u128, len: u32) -> u32 {
+    if len == 0 {
+        return 0;
+    }
+    // Top-aligned: bit `p` of the stream is bit 127 of `x << p`.
+    let x = v << (128 - len);
+    let (mut p, mut stuff) = (0u32, 0u32);
+    let mut last = x >> 127 == 1;
+    let mut run = 0u32;
+    while p < len {
+        let y = x << p;
+        // Bits from `p` equal to `last`.
+        let same = if last { (!y).leading_zeros() } else { y.leading_zeros() }.min(len - p);
+        if run + same >= 5 {
+            // A stuff bit after the run's fifth bit; its complement starts
+            // a run of one.
+            p += 5 - run;
+            stuff += 1;
+            last = !last;
+            run = 1;
+        } else {
+            p += same;
+            run += same;
+            if p < len {
+                // The next bit differs: a new run starts there.
+                last = !last;
+                run = 0;
+            }
+        }
+    }
+    stuff
 }
 
 /// Counts the bits of `frame` on the wire.
@@ -115,27 +186,9 @@ pub fn frame_bits(frame: &Frame) -> FrameBits {
     for &byte in frame.data() {
         b.push(u64::from(byte), 8);
     }
-    let crc = crc15(b.iter());
+    let crc = crc15_bits(b.v, b.len);
     b.push(u64::from(crc), 15);
-
-    let mut stuff = 0;
-    let mut last = None;
-    let mut run = 0u32;
-    for bit in b.iter() {
-        if last == Some(bit) {
-            run += 1;
-        } else {
-            last = Some(bit);
-            run = 1;
-        }
-        if run == 5 {
-            // The complement is inserted and itself starts the next run.
-            stuff += 1;
-            last = Some(!bit);
-            run = 1;
-        }
-    }
-    FrameBits { unstuffed: b.len, stuff, crc }
+    FrameBits { unstuffed: b.len, stuff: stuff_bits(b.v, b.len), crc }
 }
 
 /// Duration of `bits` bit times at `bitrate` bit/s (truncated to ns).
@@ -171,6 +224,68 @@ mod tests {
         let fb = frame_bits(&Frame::new(0, &[]));
         assert_eq!(fb, FrameBits { unstuffed: 34, stuff: 6, crc: 0 });
         assert_eq!(fb.total(), 53);
+    }
+
+    /// The bit-by-bit definitions the fast forms must equal.
+    fn reference(frame: &Frame) -> FrameBits {
+        let mut b = Bits { v: 0, len: 0 };
+        let rtr = u64::from(frame.is_rtr());
+        b.push(0, 1);
+        match frame.id() {
+            CanId::Standard(id) => {
+                b.push(u64::from(id), 11);
+                b.push(rtr, 1);
+                b.push(0, 2);
+            }
+            CanId::Extended(id) => {
+                b.push(u64::from(id >> 18), 11);
+                b.push(0b11, 2);
+                b.push(u64::from(id & 0x3_FFFF), 18);
+                b.push(rtr, 1);
+                b.push(0, 2);
+            }
+        }
+        b.push(frame.len() as u64, 4);
+        for &byte in frame.data() {
+            b.push(u64::from(byte), 8);
+        }
+        let bits = |b: &Bits| (0..b.len).rev().map(|i| (b.v >> i) & 1 == 1).collect::<Vec<_>>();
+        let crc = crc15(bits(&b));
+        b.push(u64::from(crc), 15);
+        let (mut stuff, mut last, mut run) = (0, None, 0u32);
+        for bit in bits(&b) {
+            if last == Some(bit) {
+                run += 1;
+            } else {
+                last = Some(bit);
+                run = 1;
+            }
+            if run == 5 {
+                stuff += 1;
+                last = Some(!bit);
+                run = 1;
+            }
+        }
+        FrameBits { unstuffed: b.len, stuff, crc }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn fast_forms_equal_the_bitwise_definition(id in 0u32..1 << 29, ext: bool, rtr: bool,
+                                                    data in proptest::collection::vec(proptest::num::u8::ANY, 0..=8)) {
+            let cid = if ext { CanId::Extended(id) } else { CanId::Standard((id & 0x7FF) as u16) };
+            let f = if rtr { Frame::try_remote(cid, data.len() as u8) } else { Frame::try_new(cid, &data) };
+            let f = f.expect("valid frame");
+            proptest::prop_assert_eq!(frame_bits(&f), reference(&f));
+        }
+    }
+
+    #[test]
+    fn stuffing_of_long_runs() {
+        // 0xFF bytes and an all-zero id give long runs on both levels.
+        for f in [Frame::new(0, &[0xFF; 8]), Frame::new(0x7FF, &[0; 8]), Frame::new(0x555, &[0x55; 8])] {
+            assert_eq!(frame_bits(&f), reference(&f));
+        }
     }
 
     #[test]

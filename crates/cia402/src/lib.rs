@@ -7,9 +7,14 @@
 //! of it is pure, deterministic logic (no clocks, no I/O, no allocation per
 //! step).
 //!
+//! [`codes`] holds the CiA 402 tables a drive and a master share (states
+//! and their statusword coding, controlword commands, modes and their
+//! names). Without the default `drive` feature the crate is only those
+//! tables and the state machine: what a master depends on.
+//!
 //! # A generic drive on the bus
 //!
-//! [`drive::generic_drive`] is a complete CiA 402 servo (CiA 301 node,
+//! (With the `drive` feature.) [`drive::generic_drive`] is a complete CiA 402 servo (CiA 301 node,
 //! pre-defined PDO set, pp/vl/pv/tq); [`drive::generic_drive_with`] adds a
 //! configuration and mode handlers:
 //!
@@ -121,10 +126,16 @@
 //! ```
 #![cfg_attr(not(feature = "std"), no_std)]
 
+#[cfg(feature = "drive")]
 extern crate alloc;
 
+pub mod codes;
+#[cfg(feature = "drive")]
 pub mod drive;
+#[cfg(feature = "drive")]
 pub mod homing;
+#[cfg(feature = "drive")]
 pub mod interp;
+#[cfg(feature = "drive")]
 pub mod model;
 pub mod state_machine;

@@ -10,122 +10,15 @@
 //! axis has come to rest the mode layer calls [`StateMachine::motion_stopped`]
 //! to complete the transition that waited for it.
 
-/// The eight states of the CiA 402 state machine (CiA 402-2 §6.2.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum State {
-    /// Low-level power applied, drive initialising / self-testing.
-    NotReadyToSwitchOn,
-    /// Initialisation complete, high voltage may be off, drive function disabled.
-    SwitchOnDisabled,
-    /// High voltage may be applied, drive function disabled.
-    ReadyToSwitchOn,
-    /// Power amplifier ready, drive function disabled.
-    SwitchedOn,
-    /// Drive function enabled, power applied to the motor.
-    OperationEnabled,
-    /// Quick stop function being executed (or holding after it, options 5–8).
-    QuickStopActive,
-    /// A fault occurred; the fault reaction (605Eh) is being executed.
-    FaultReactionActive,
-    /// Fault reaction completed, drive function disabled.
-    Fault,
-}
+pub use crate::codes::{Command, State};
 
-impl State {
-    /// All states, in the order of the statusword coding table.
-    pub const ALL: [State; 8] = [
-        State::NotReadyToSwitchOn,
-        State::SwitchOnDisabled,
-        State::ReadyToSwitchOn,
-        State::SwitchedOn,
-        State::OperationEnabled,
-        State::QuickStopActive,
-        State::FaultReactionActive,
-        State::Fault,
-    ];
-
-    /// `(mask, value)` identifying this state in the statusword
-    /// (CiA 402-2 §6.2.1, table "State coding": `sw & mask == value`).
-    pub const fn statusword_pattern(self) -> (u16, u16) {
-        match self {
-            State::NotReadyToSwitchOn => (0x4F, 0x00),
-            State::SwitchOnDisabled => (0x4F, 0x40),
-            State::ReadyToSwitchOn => (0x6F, 0x21),
-            State::SwitchedOn => (0x6F, 0x23),
-            State::OperationEnabled => (0x6F, 0x27),
-            State::QuickStopActive => (0x6F, 0x07),
-            State::FaultReactionActive => (0x4F, 0x0F),
-            State::Fault => (0x4F, 0x08),
-        }
-    }
-
-    /// Decodes the state from a statusword; `None` if no pattern matches.
-    pub fn from_statusword(sw: u16) -> Option<State> {
-        State::ALL.into_iter().find(|s| {
-            let (m, v) = s.statusword_pattern();
-            sw & m == v
-        })
-    }
-}
-
-/// Statusword 6041h bits owned by device control (bits 0–6).
+/// Statusword 6041h bits owned by device control (bits 0–6); the whole
+/// table is [`crate::codes::sw`].
 pub mod sw {
-    /// Bit 0: ready to switch on.
-    pub const READY_TO_SWITCH_ON: u16 = 1 << 0;
-    /// Bit 1: switched on.
-    pub const SWITCHED_ON: u16 = 1 << 1;
-    /// Bit 2: operation enabled.
-    pub const OPERATION_ENABLED: u16 = 1 << 2;
-    /// Bit 3: fault.
-    pub const FAULT: u16 = 1 << 3;
-    /// Bit 4: voltage enabled (high voltage applied to the drive).
-    pub const VOLTAGE_ENABLED: u16 = 1 << 4;
-    /// Bit 5: quick stop — *cleared* while a quick stop is active.
-    pub const QUICK_STOP: u16 = 1 << 5;
-    /// Bit 6: switch on disabled.
-    pub const SWITCH_ON_DISABLED: u16 = 1 << 6;
-    /// Mask of all bits this module sets; the mode layer owns the rest.
-    pub const DEVICE_CONTROL_MASK: u16 = 0x7F;
-}
-
-/// Device control commands decoded from controlword 6040h bits 0–3 and 7
-/// (CiA 402-2 §6.2.1, table "Command coding").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Command {
-    /// `0xxx x110` (mask 0x87 = 0x06): transitions 2, 6, 8.
-    Shutdown,
-    /// `0xxx 0111` (mask 0x8F = 0x07): transition 3; the same coding is
-    /// "disable operation" (transition 5) in Operation enabled.
-    SwitchOn,
-    /// `0xxx 1111` (mask 0x8F = 0x0F): transitions 4, 16; in Ready to
-    /// switch on it is "switch on + enable operation" (3 then 4).
-    EnableOperation,
-    /// `0xxx xx0x` (mask 0x82 = 0x00): transitions 7, 9, 10, 12.
-    DisableVoltage,
-    /// `0xxx x01x` (mask 0x86 = 0x02): transitions 7, 10, 11.
-    QuickStop,
-    /// Rising edge of bit 7: transition 15.
-    FaultReset,
-}
-
-impl Command {
-    /// Decodes bits 0–3 and 7 of a controlword (without edge detection on
-    /// bit 7: a set bit 7 yields `None`, see [`StateMachine::controlword`]).
-    pub const fn decode(cw: u16) -> Option<Command> {
-        if cw & 0x82 == 0x00 {
-            Some(Command::DisableVoltage)
-        } else if cw & 0x86 == 0x02 {
-            Some(Command::QuickStop)
-        } else if cw & 0x87 == 0x06 {
-            Some(Command::Shutdown)
-        } else if cw & 0x8F == 0x07 {
-            Some(Command::SwitchOn)
-        } else if cw & 0x8F == 0x0F {
-            Some(Command::EnableOperation)
-        } else {
-            None
-        }
-    }
+    pub use crate::codes::sw::{
+        DEVICE_CONTROL_MASK, FAULT, OPERATION_ENABLED, QUICK_STOP, READY_TO_SWITCH_ON, SWITCH_ON_DISABLED,
+        SWITCHED_ON, VOLTAGE_ENABLED,
+    };
 }
 
 /// How the drive has to bring the motor to rest (or let it go).

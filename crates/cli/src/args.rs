@@ -1,8 +1,11 @@
-//! The command line: global options and every subcommand (clap derive).
+//! The command line: global options and the subcommands (clap derive).
+//! Node-level command arguments are in `args_node.rs`.
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand};
+
+pub use crate::args_node::*;
 
 /// Default socketcand port and address of `drivebus serve`.
 pub const DEFAULT_LISTEN: &str = "127.0.0.1:29536";
@@ -12,10 +15,12 @@ Examples:
   drivebus demo                                   the main job, on an in-process virtual bus
   drivebus serve --drive akd:1 --drive dds6:2     virtual drives for python-can (socketcand)
   drivebus --bus socketcand://127.0.0.1:29536/can0 scan
-  drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 sdo read 0x1000 0
+  drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 sdo read 1000
   drivebus --bus virtual --sim akd:1 --node 1 drive status
   drivebus --bus slcan:///dev/ttyUSB0?bitrate=1000000 dump --candump
 
+Object indices and sub-indices are hexadecimal (6041, 0x6041, 6041h, 6041:00);
+CiA 301/402 objects also go by name (statusword, identity/vendor-id).
 Bus URLs: socketcand://HOST:PORT/CHANNEL, slcan:///dev/ttyUSB0?bitrate=1000000,
 socketcan://can0, virtual (in-process; add drives with --sim PROFILE:NODE).
 Environment: DRIVEBUS_BUS sets the default --bus; RUST_LOG the log level.";
@@ -32,35 +37,48 @@ pub struct Cli {
     pub cmd: Command,
 }
 
-/// Options every command understands.
+/// Options of the commands that talk to a bus. A command refuses the ones
+/// it has no use for.
 #[derive(Args, Debug, Clone)]
 pub struct Global {
     /// The bus: socketcand://HOST:PORT/CHANNEL, slcan:///dev/ttyUSB0?bitrate=N,
     /// socketcan://IFACE or virtual.
     #[arg(long, global = true, env = "DRIVEBUS_BUS", default_value = "virtual")]
     pub bus: String,
-    /// Node-ID (1..127) of the device to talk to.
-    #[arg(long, short = 'n', global = true, value_parser = clap::value_parser!(u8).range(1..=127))]
+    /// Node-ID (1..127, decimal or 0x hex) of the device to talk to.
+    #[arg(long, short = 'n', global = true, value_parser = node_id)]
     pub node: Option<u8>,
-    /// EDS or DCF file of the device: object names and data types.
+    /// EDS or DCF file of the device: object names and data types (CiA 301/402
+    /// standard objects are known without it).
     #[arg(long, global = true)]
     pub eds: Option<PathBuf>,
-    /// Machine-readable output (JSON) instead of text.
+    /// Machine-readable output: one JSON object (errors too: {"error":{"code","message"}}).
     #[arg(long, global = true)]
     pub json: bool,
     /// SDO and response timeout in milliseconds.
     #[arg(long, global = true, default_value_t = 1000)]
     pub timeout: u64,
+    /// SDO retries after a timeout.
+    #[arg(long, global = true, default_value_t = 0)]
+    pub retries: u8,
     /// On the `virtual` bus: host a virtual drive PROFILE:NODE in this
     /// process (repeatable), e.g. --sim akd:1.
     #[arg(long = "sim", global = true, value_name = "PROFILE:NODE")]
     pub sim: Vec<String>,
 }
 
+/// A node-ID as people write it: `5`, `0x05`, `05h`.
+pub fn node_id(s: &str) -> Result<u8, String> {
+    match crate::dict::number(s) {
+        Ok(n @ 1..=127) => Ok(n as u8),
+        _ => Err(format!("`{s}` is not a node-ID 1..127 (decimal, or hex as 0x7F)")),
+    }
+}
+
 /// The subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Serve virtual drives on a socketcand TCP server (python-can, canopen).
+    /// Serve virtual drives on a socketcand TCP server (python-can, canopen), or on any bus (--bus).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(ServeArgs),
     /// Run the demo: two virtual drives, PDOs, homing, a move and a CSP sine; writes an SVG plot.
@@ -69,41 +87,38 @@ pub enum Command {
     /// Find the nodes on the bus (SDO 1000h sweep).
     #[command(after_help = SCAN_EXAMPLES)]
     Scan(ScanArgs),
-    /// Read and write objects (SDO).
-    #[command(
-        subcommand,
-        after_help = "Examples:\n  drivebus --node 1 sdo read 0x1000 0\n  drivebus --node 1 sdo write 0x1017 0 100 --type u16\n  drivebus --node 1 sdo upload 0x1008 0 name.bin"
-    )]
+    /// Read and write objects (SDO), store/restore parameters, dump a node to a DCF.
+    #[command(subcommand, after_help = SDO_EXAMPLES)]
     Sdo(SdoCmd),
     /// Network management: start, stop, pre-operational, reset.
     #[command(after_help = NMT_EXAMPLES)]
     Nmt(NmtArgs),
     /// Show or change PDO configuration.
-    #[command(
-        subcommand,
-        after_help = "Examples:\n  drivebus --node 1 pdo show\n  drivebus --node 1 pdo map tpdo 1 0x6041:0:16 0x6064:0:32 --type 1"
-    )]
+    #[command(subcommand, after_help = PDO_EXAMPLES)]
     Pdo(PdoCmd),
-    /// Control a CiA 402 drive (state machine, moves).
-    #[command(
-        subcommand,
-        after_help = "Examples:\n  drivebus --node 1 drive enable\n  drivebus --node 1 drive home --method 35\n  drivebus --node 1 drive move 90000\n  drivebus --node 1 drive status --json"
-    )]
+    /// Control a CiA 402 drive (state machine, moves, homing).
+    #[command(subcommand, after_help = DRIVE_EXAMPLES)]
     Drive(DriveCmd),
-    /// Live decoded trace of the bus.
+    /// Live decoded trace of the bus (filters, PDOs decoded by their mapping).
     #[command(after_help = DUMP_EXAMPLES)]
     Dump(DumpArgs),
+    /// Live table of the nodes: NMT state, last EMCY, chosen values.
+    #[command(after_help = MONITOR_EXAMPLES)]
+    Monitor(MonitorArgs),
+    /// Send raw frames (cansend syntax: 601#40.00.10.00, 123#R, 1ABCDEF0#11).
+    #[command(after_help = SEND_EXAMPLES)]
+    Send(SendArgs),
+    /// Replay a candump log with its timing (canplayer).
+    #[command(after_help = REPLAY_EXAMPLES)]
+    Replay(ReplayArgs),
+    /// CiA 309-3 ASCII gateway on stdin/stdout or TCP (cocomm, coctl lines).
+    #[command(after_help = GATEWAY_EXAMPLES)]
+    Gateway(GatewayArgs),
     /// EDS/DCF files: check, show, export.
-    #[command(
-        subcommand,
-        after_help = "Examples:\n  drivebus eds check drive.eds\n  drivebus eds show --profile akd\n  drivebus eds export --profile akd --out akd.eds"
-    )]
+    #[command(subcommand, after_help = EDS_EXAMPLES)]
     Eds(EdsCmd),
-    /// Layer setting services (CiA 305).
-    #[command(
-        subcommand,
-        after_help = "Examples:\n  drivebus lss scan\n  drivebus lss set-node-id 5 --store"
-    )]
+    /// Layer setting services (CiA 305): find unconfigured slaves, set node-IDs.
+    #[command(subcommand, after_help = LSS_EXAMPLES)]
     Lss(LssCmd),
     /// Emulate an slcan adapter on a pseudo-terminal, with virtual drives behind it.
     #[command(name = "slcan-pty", after_help = SLCAN_EXAMPLES)]
@@ -120,16 +135,25 @@ Examples:
   drivebus serve --drive generic:5 --bitrate 1000000
   drivebus serve --drive generic:5 --fault drop:0x185,every=10   (lose every 10th TPDO1)
   drivebus serve --drive akd:1 --eds-object   (then: drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 eds export)
+  drivebus serve --bus socketcan://can0 --drive akd:1            (virtual drive on a real bus)
+  drivebus serve --bus 'slcan:///dev/ttyACM0?bitrate=500000' --drive kc1:3
+  drivebus serve --bus socketcand://192.0.2.10:29536/can0 --drive dds6:2 --listen 127.0.0.1:29536
 
-Prints one line containing `listening on` when ready; stops on SIGINT/SIGTERM (exit 0).
+Without --bus (or with --bus virtual) the drives sit on an in-process bus served over socketcand at
+--listen (default 127.0.0.1:29536). With --bus URL they sit on that bus, keeping their own timing
+(heartbeats, SYNC-driven PDOs, EMCY inhibit times); the socketcand listener is then off unless
+--listen is given (it shares the drives and the bus traffic).
+Prints one line when ready: `listening on HOST:PORT (channel NAME)` when listening, `serving on URL`
+otherwise; stops on SIGINT/SIGTERM (exit 0).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
 
 /// `drivebus serve`.
 #[derive(Args, Debug)]
 pub struct ServeArgs {
-    /// TCP address to listen on.
-    #[arg(long, default_value = DEFAULT_LISTEN, value_name = "HOST:PORT")]
-    pub listen: String,
+    /// TCP address of the socketcand listener [default: 127.0.0.1:29536 on the virtual bus; off
+    /// with --bus URL unless given].
+    #[arg(long, value_name = "HOST:PORT")]
+    pub listen: Option<String>,
     /// The bus name clients open (`< open NAME >`).
     #[arg(long, default_value = "can0")]
     pub channel: String,
@@ -139,7 +163,8 @@ pub struct ServeArgs {
     /// Directory where each drive keeps its stored parameters (1010h).
     #[arg(long)]
     pub state_dir: Option<PathBuf>,
-    /// Pace frames like a CAN bus at this bit rate.
+    /// Pace frames like a CAN bus at this bit rate (the in-process bus the drives and the
+    /// listener share; a real bus paces itself).
     #[arg(long, value_name = "BPS")]
     pub bitrate: Option<u32>,
     /// Fault injection on the hosting bus (repeatable): `drop:IDS[,every=N][,skip=N][,times=N]`
@@ -157,7 +182,10 @@ const DEMO_EXAMPLES: &str = "\
 Examples:
   drivebus demo
   drivebus demo --out /tmp/demo.svg --no-progress
-  drivebus demo --realtime          (watch it run at 1 kHz SYNC in wall-clock time)";
+  drivebus demo --realtime          (watch it run at 1 kHz SYNC in wall-clock time)
+
+The demo runs the master library (the same code as `drivebus --bus URL drive ...`)
+against an AKD (node 1) and a DDS6 (node 2) on the virtual bus in simulated time.";
 
 /// `drivebus demo`.
 #[derive(Args, Debug)]
@@ -179,7 +207,8 @@ pub struct DemoArgs {
 const SCAN_EXAMPLES: &str = "\
 Examples:
   drivebus --bus socketcand://127.0.0.1:29536/can0 scan
-  drivebus --bus virtual --sim akd:1 --sim dds6:2 scan --json";
+  drivebus --bus virtual --sim akd:1 --sim dds6:2 scan --json
+  drivebus scan --from 1 --to 16 --wait 50";
 
 /// `drivebus scan`.
 #[derive(Args, Debug)]
@@ -190,81 +219,18 @@ pub struct ScanArgs {
     /// Last node-ID to probe.
     #[arg(long, default_value_t = 127, value_parser = clap::value_parser!(u8).range(1..=127))]
     pub to: u8,
-    /// Time to wait for answers after the sweep, in ms.
+    /// Time each node has to answer 1000h, in ms.
     #[arg(long, default_value_t = 300)]
     pub wait: u64,
-}
-
-/// `drivebus sdo ...`.
-#[derive(Subcommand, Debug)]
-pub enum SdoCmd {
-    /// Read an object and print its value.
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 sdo read 0x1000 0\n  drivebus --node 1 sdo read 0x6041 0 --type u16\n  drivebus --node 1 --eds akd.eds sdo read 0x1008 0"
-    )]
-    Read(SdoRead),
-    /// Write a value to an object.
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 sdo write 0x1017 0 100 --type u16\n  drivebus --node 1 --eds akd.eds sdo write 0x6083 0 50000"
-    )]
-    Write(SdoWrite),
-    /// Read an object into a file (progress bar).
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 sdo upload 0x1008 0 name.bin\n  drivebus --node 1 sdo upload 0x1021 0 device.eds --block"
-    )]
-    Upload(SdoFile),
-    /// Write a file into an object (progress bar).
-    #[command(after_help = "Examples:\n  drivebus --node 1 sdo download 0x1F50 1 firmware.bin --block")]
-    Download(SdoFile),
-}
-
-/// `sdo read`.
-#[derive(Args, Debug)]
-pub struct SdoRead {
-    /// Object index (0x6041 or 6041h).
-    pub index: String,
-    /// Sub-index.
-    #[arg(default_value = "0")]
-    pub sub: String,
-    /// Data type (u8, u16, u32, i16, i32, str, bytes, UNSIGNED16, ...); default: from --eds, else hex bytes.
-    #[arg(long = "type", short = 't')]
-    pub ty: Option<String>,
-}
-
-/// `sdo write`.
-#[derive(Args, Debug)]
-pub struct SdoWrite {
-    /// Object index.
-    pub index: String,
-    /// Sub-index.
-    pub sub: String,
-    /// The value (decimal, 0x hex, text for strings, hex bytes for bytes).
-    #[arg(allow_hyphen_values = true)]
-    pub value: String,
-    /// Data type; default: from --eds.
-    #[arg(long = "type", short = 't')]
-    pub ty: Option<String>,
-}
-
-/// `sdo upload|download`.
-#[derive(Args, Debug)]
-pub struct SdoFile {
-    /// Object index.
-    pub index: String,
-    /// Sub-index.
-    pub sub: String,
-    /// The file.
-    pub file: PathBuf,
-    /// Use SDO block transfer.
-    #[arg(long)]
-    pub block: bool,
 }
 
 const NMT_EXAMPLES: &str = "\
 Examples:
   drivebus --node 1 nmt start
   drivebus nmt reset --all
-  drivebus --node 2 nmt preop";
+  drivebus --node 2 nmt preop
+
+The command's frame is on the bus (written by the transport) before it reports success.";
 
 /// `drivebus nmt`.
 #[derive(Args, Debug)]
@@ -277,7 +243,7 @@ pub struct NmtArgs {
 }
 
 /// NMT commands.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NmtKind {
     /// Start remote node (operational).
     Start,
@@ -291,130 +257,11 @@ pub enum NmtKind {
     ResetComm,
 }
 
-/// `drivebus pdo ...`.
-#[derive(Subcommand, Debug)]
-pub enum PdoCmd {
-    /// Show the RPDO and TPDO configuration of a node.
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 pdo show\n  drivebus --node 1 --eds akd.eds pdo show --json"
-    )]
-    Show,
-    /// Map objects into a PDO (node in pre-operational).
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 pdo map tpdo 1 0x6041:0:16 0x6064:0:32 --type 1\n  drivebus --node 1 pdo map rpdo 2 0x6040:0:16 0x607A:0:32"
-    )]
-    Map(PdoMapArgs),
-}
-
-/// Direction of a PDO.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PdoDir {
-    /// Receive PDO (master → device).
-    Rpdo,
-    /// Transmit PDO (device → master).
-    Tpdo,
-}
-
-/// `pdo map`.
-#[derive(Args, Debug)]
-pub struct PdoMapArgs {
-    /// rpdo or tpdo.
-    pub dir: PdoDir,
-    /// PDO number, 1-based.
-    #[arg(value_parser = clap::value_parser!(u16).range(1..=512))]
-    pub number: u16,
-    /// Entries INDEX:SUB:BITS (e.g. 0x6041:0:16).
-    #[arg(required = true)]
-    pub entries: Vec<String>,
-    /// Transmission type (0..255).
-    #[arg(long = "type")]
-    pub transmission: Option<u8>,
-    /// Event timer in ms (TPDO).
-    #[arg(long)]
-    pub event_timer: Option<u16>,
-    /// COB-ID (default: keep the current one).
-    #[arg(long)]
-    pub cob_id: Option<String>,
-}
-
-/// `drivebus drive ...`.
-#[derive(Subcommand, Debug)]
-pub enum DriveCmd {
-    /// State, mode, position, velocity and errors.
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 drive status\n  drivebus --node 1 drive status --json"
-    )]
-    Status,
-    /// Walk the state machine to operation enabled.
-    #[command(after_help = "Examples:\n  drivebus --node 1 drive enable")]
-    Enable,
-    /// Power stage off: shutdown to ready to switch on.
-    #[command(after_help = "Examples:\n  drivebus --node 1 drive disable")]
-    Disable,
-    /// Profile position move (mode 1), waits for target reached.
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 drive move 90000\n  drivebus --node 1 drive move -45000 --relative --velocity 100000"
-    )]
-    Move(MoveArgs),
-    /// Profile velocity (mode 3).
-    #[command(
-        after_help = "Examples:\n  drivebus --node 1 drive velocity 36000\n  drivebus --node 1 drive velocity 0"
-    )]
-    Velocity(ValueArg),
-    /// Profile torque (mode 4), per mille of rated torque.
-    #[command(after_help = "Examples:\n  drivebus --node 1 drive torque 100")]
-    Torque(ValueArg),
-    /// Homing (mode 6), waits for homing attained.
-    #[command(after_help = "Examples:\n  drivebus --node 1 drive home --method 35")]
-    Home(HomeArgs),
-    /// Quick stop.
-    #[command(after_help = "Examples:\n  drivebus --node 1 drive quickstop")]
-    Quickstop,
-    /// Fault reset.
-    #[command(after_help = "Examples:\n  drivebus --node 1 drive reset")]
-    Reset,
-}
-
-/// `drive move`.
-#[derive(Args, Debug)]
-pub struct MoveArgs {
-    /// Target position (position units).
-    #[arg(allow_hyphen_values = true)]
-    pub target: i32,
-    /// Relative to the current target.
-    #[arg(long)]
-    pub relative: bool,
-    /// Profile velocity (6081h).
-    #[arg(long)]
-    pub velocity: Option<u32>,
-    /// Seconds to wait for target reached.
-    #[arg(long, default_value_t = 30.0)]
-    pub wait: f64,
-}
-
-/// A single signed value.
-#[derive(Args, Debug)]
-pub struct ValueArg {
-    /// The value.
-    #[arg(allow_hyphen_values = true)]
-    pub value: i32,
-}
-
-/// `drive home`.
-#[derive(Args, Debug)]
-pub struct HomeArgs {
-    /// Homing method (6098h); default: keep the drive's.
-    #[arg(long, allow_hyphen_values = true)]
-    pub method: Option<i8>,
-    /// Seconds to wait for homing attained.
-    #[arg(long, default_value_t = 30.0)]
-    pub wait: f64,
-}
-
 const DUMP_EXAMPLES: &str = "\
 Examples:
   drivebus --bus socketcand://127.0.0.1:29536/can0 dump
-  drivebus --bus socketcand://127.0.0.1:29536/can0 --eds akd.eds dump --seconds 10
+  drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 dump --pdo   (node 1's frames, PDOs decoded)
+  drivebus --bus socketcand://127.0.0.1:29536/can0 dump --id 0x180-0x1FF --seconds 10
   drivebus dump --candump > bus.log";
 
 /// `drivebus dump`.
@@ -423,94 +270,122 @@ pub struct DumpArgs {
     /// Print candump log lines instead of the decoded trace.
     #[arg(long)]
     pub candump: bool,
-    /// Stop after this many frames.
+    /// Stop after this many frames (after filtering).
     #[arg(long)]
     pub count: Option<u64>,
     /// Stop after this many seconds.
     #[arg(long)]
     pub seconds: Option<f64>,
+    /// Only frames with these CAN-IDs (repeatable): 0x181, 181, 0x180-0x1FF.
+    #[arg(long = "id", value_name = "RANGE")]
+    pub ids: Vec<String>,
+    /// Decode PDOs by their mapping, read from the device(s) by SDO at start
+    /// (with --eds: the EDS default mapping instead).
+    #[arg(long)]
+    pub pdo: bool,
 }
 
-/// `drivebus eds ...`.
-#[derive(Subcommand, Debug)]
-pub enum EdsCmd {
-    /// Check a file: findings with severity and line; exit 1 on errors.
-    #[command(
-        after_help = "Examples:\n  drivebus eds check drive.eds\n  drivebus eds check drive.eds --json"
-    )]
-    Check(EdsFileArg),
-    /// Show the objects of a file or of a built-in profile.
-    #[command(after_help = "Examples:\n  drivebus eds show drive.eds\n  drivebus eds show --profile akd")]
-    Show(EdsSource),
-    /// Write an EDS: of a profile, of --eds re-written, or read from --node over 1021h.
-    #[command(
-        after_help = "Examples:\n  drivebus eds export --profile akd --out akd.eds\n  drivebus --eds in.eds eds export\n  drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 eds export --out node1.eds"
-    )]
-    Export(EdsExport),
-}
+const MONITOR_EXAMPLES: &str = "\
+Examples:
+  drivebus --bus socketcand://127.0.0.1:29536/can0 monitor
+  drivebus --bus socketcand://127.0.0.1:29536/can0 monitor --watch statusword --watch 6064 --period 200
+  drivebus --bus socketcand://127.0.0.1:29536/can0 --json monitor --seconds 5   (JSON lines)
 
-/// A file argument.
+On a terminal the table is redrawn in place; otherwise one line per change is printed.";
+
+/// `drivebus monitor`.
 #[derive(Args, Debug)]
-pub struct EdsFileArg {
-    /// The EDS or DCF file.
-    pub file: PathBuf,
+pub struct MonitorArgs {
+    /// An object to show per node (repeatable): index[:sub] in hex or a name.
+    /// Read from the node's TPDOs when mapped, else by SDO every --period.
+    #[arg(long = "watch", value_name = "OBJECT")]
+    pub watch: Vec<String>,
+    /// SDO refresh period in ms for watched objects not in a TPDO.
+    #[arg(long, default_value_t = 500)]
+    pub period: u64,
+    /// Stop after this many seconds (default: until Ctrl-C).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Scan for nodes at start (SDO 1000h sweep) instead of only listening.
+    #[arg(long)]
+    pub scan: bool,
 }
 
-/// A file or a built-in profile.
+const SEND_EXAMPLES: &str = "\
+Examples:
+  drivebus send 601#40.00.10.00.00.00.00.00     SDO read of 1000h from node 1
+  drivebus send 000#0100                        NMT start all nodes
+  drivebus send 701#R1                          node guarding request (RTR, DLC 1)
+  drivebus send 18FF50E5#0102                   extended (29-bit) identifier
+  drivebus send 080# 080# 080#                  three SYNCs (several frames in order)";
+
+/// `drivebus send`.
 #[derive(Args, Debug)]
-pub struct EdsSource {
-    /// The EDS or DCF file (default: --eds).
+pub struct SendArgs {
+    /// Frames in cansend syntax: ID#DATA (3 hex digits standard, 8 extended),
+    /// data bytes in hex with optional '.', ID#R[LEN] for a remote frame.
+    #[arg(required = true, value_name = "FRAME")]
+    pub frames: Vec<String>,
+}
+
+const REPLAY_EXAMPLES: &str = "\
+Examples:
+  drivebus --bus socketcand://127.0.0.1:29536/can0 replay bus.log
+  drivebus replay -I bus.log -l 3 -g 1            (three times, 1 ms between frames)
+  drivebus replay bus.log -t                      (ignore timestamps: as fast as possible)
+  drivebus replay bus.log -s 2                    (skip gaps longer than 2 s)
+
+The log is candump -l format: (SECONDS.MICROS) IFACE ID#DATA; a bad line is named with its number.";
+
+/// `drivebus replay`.
+#[derive(Args, Debug)]
+pub struct ReplayArgs {
+    /// The candump log.
+    #[arg(value_name = "FILE", required_unless_present = "input", conflicts_with = "input")]
     pub file: Option<PathBuf>,
-    /// A built-in profile instead: kc1, akd, ipos, ssd630, dds6, generic.
-    #[arg(long)]
-    pub profile: Option<String>,
+    /// The candump log (canplayer's -I).
+    #[arg(short = 'I', value_name = "FILE")]
+    pub input: Option<PathBuf>,
+    /// Play the log this many times; `i` for ever (canplayer's -l).
+    #[arg(short = 'l', long = "loop", value_name = "N|i", default_value = "1")]
+    pub loops: String,
+    /// Ignore the timestamps: send the frames back to back, or --gap apart (canplayer's -t).
+    #[arg(short = 't', long = "ignore-timestamps")]
+    pub ignore_timestamps: bool,
+    /// Milliseconds between frames when timestamps are ignored (canplayer's -g).
+    #[arg(short = 'g', long = "gap", value_name = "MS", default_value_t = 0.0)]
+    pub gap: f64,
+    /// Shorten gaps in the log longer than this many seconds to it (canplayer's -s).
+    #[arg(short = 's', long = "skip-gaps", value_name = "SECS")]
+    pub skip_gaps: Option<f64>,
+    /// Only frames of this log interface (e.g. can0); default: every line.
+    #[arg(long, value_name = "IFACE")]
+    pub interface: Option<String>,
+    /// Print each frame as it is sent (canplayer's -v).
+    #[arg(short = 'v', long)]
+    pub verbose: bool,
 }
 
-/// `eds export`.
+const GATEWAY_EXAMPLES: &str = "\
+Examples:
+  drivebus --bus socketcand://127.0.0.1:29536/can0 gateway                (stdin/stdout; a shell on a terminal)
+  drivebus --bus socketcand://127.0.0.1:29536/can0 gateway --listen 127.0.0.1:60000
+  cocomm -t 127.0.0.1 -p 60000 \"1 read 0x1017 0 u16\"                      (CANopenLinux's client)
+
+Lines (CiA 309-3): [seq] [[net] node] r[ead] INDEX SUB [TYPE] | w[rite] INDEX SUB TYPE VALUE
+| start | stop | preop | reset node | reset comm | set node N | set sdo_timeout MS | set network N
+| lss_* | info version | r[ead] p[do] N | w[rite] p[do] N ... | set rpdo/tpdo ... | help.
+Answers: [seq] OK | [seq] VALUE | [seq] ERROR:CODE (100..600) | [seq] ERROR:0xABORTCODE.";
+
+/// `drivebus gateway`.
 #[derive(Args, Debug)]
-pub struct EdsExport {
-    /// A built-in profile: kc1, akd, ipos, ssd630, dds6, generic.
+pub struct GatewayArgs {
+    /// Serve on TCP instead of stdin/stdout (cocomm's -t/-p), e.g. 127.0.0.1:60000.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub listen: Option<String>,
+    /// No line editing/history even on a terminal (plain stdin lines).
     #[arg(long)]
-    pub profile: Option<String>,
-    /// Output file (default: stdout).
-    #[arg(long, short = 'o')]
-    pub out: Option<PathBuf>,
-}
-
-/// `drivebus lss ...`.
-#[derive(Subcommand, Debug)]
-pub enum LssCmd {
-    /// Find unconfigured LSS slaves (fastscan) and print their addresses.
-    #[command(after_help = "Examples:\n  drivebus lss scan")]
-    Scan,
-    /// Give a node-ID to the LSS slave selected by its address (or the only one on the bus).
-    #[command(
-        after_help = "Examples:\n  drivebus lss set-node-id 5 --vendor 0x6A --product 0x1 --revision 1 --serial 1234\n  drivebus lss set-node-id 5   (only one LSS slave on the bus)"
-    )]
-    SetNodeId(LssSetArgs),
-}
-
-/// `lss set-node-id`.
-#[derive(Args, Debug)]
-pub struct LssSetArgs {
-    /// The new node-ID.
-    #[arg(value_parser = clap::value_parser!(u8).range(1..=127))]
-    pub new_id: u8,
-    /// 1018h:1.
-    #[arg(long)]
-    pub vendor: Option<String>,
-    /// 1018h:2.
-    #[arg(long)]
-    pub product: Option<String>,
-    /// 1018h:3.
-    #[arg(long)]
-    pub revision: Option<String>,
-    /// 1018h:4.
-    #[arg(long)]
-    pub serial: Option<String>,
-    /// Also store the configuration in the slave.
-    #[arg(long)]
-    pub store: bool,
+    pub no_shell: bool,
 }
 
 const SLCAN_EXAMPLES: &str = "\

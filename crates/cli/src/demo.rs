@@ -1,58 +1,46 @@
-//! `drivebus demo`: the main job on the simulated bus (1 Mbit/s, simulated
-//! time). An AKD at node 1 and a DDS6 at node 2 boot; the master scans,
-//! maps PDOs, starts the nodes, enables and homes both drives through
-//! RPDO/TPDO, runs a profile-position move, then streams a CSP sine at
-//! 1 kHz SYNC to node 1. Every plotted value arrived in a TPDO.
+//! `drivebus demo`: the main job, run by the master library on the
+//! simulated bus (1 Mbit/s, simulated time) — the same master code as
+//! `drivebus --bus URL ...`: scan, PDO configuration, the CiA 402 `Drive`
+//! handle's enable, homing and profile-position move, and CSP streaming
+//! at a 1 kHz SYNC. An AKD at node 1 and a DDS6 at node 2. Every plotted
+//! value arrived in a TPDO.
 
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use anyhow::{Context, anyhow, bail};
-use drivebus_can::{Duration, Frame, Instant};
+use drivebus_master::{
+    Drive, Frame, Instant, Master, MasterConfig, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, RemoteState,
+    ScanOptions, SimBus, drive::mode,
+};
 use drivebus_personality::Profile;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{DemoArgs, Global};
 use crate::output::outln;
-use crate::sim::SimMaster;
-use crate::vdrive::DriveSpec;
+use crate::plot::{Phase, Sample, plot};
+use crate::vdrive::{self, DriveSpec};
 
 /// Bit rate of the demo bus.
 const BITRATE: u32 = 1_000_000;
 /// SYNC period.
 const CYCLE: Duration = Duration::from_millis(1);
 
-/// One 1 ms sample of node 1, from its TPDOs.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Sample {
-    /// Seconds since the nodes were started.
-    pub t: f64,
-    /// Position demand \[m°\]: 6064h + 60F4h (the AKD has no 6062h, its
-    /// manual's object list §7.1.5 has the following error 60F4h).
-    pub demand: f64,
-    /// 6064h position actual value \[m°\].
-    pub position: f64,
-    /// 606Ch velocity actual value \[m°/s\].
-    pub velocity: f64,
-    /// 60F4h following error actual value \[m°\].
-    pub following: f64,
-    /// Node 2 position actual value \[m°\].
-    pub position2: f64,
-}
-
 /// What the demo measured.
 #[derive(Debug, Default)]
 pub struct Report {
     /// Nodes found by the scan: (node, device type, name).
     pub found: Vec<(u8, u32, String)>,
-    /// Homing method used per node.
+    /// Homing method used per node and its seconds.
     pub homing: Vec<(u8, i8, f64)>,
-    /// Profile-position move: distance \[m°\], time \[s\], max following error \[m°\].
+    /// Profile-position move of node 1: distance \[m°\].
     pub move_distance: f64,
     /// Seconds from new set-point to target reached.
     pub move_time: f64,
     /// Max |60F4h| during the move.
     pub move_ferr_max: f64,
-    /// CSP: max |60F4h| and RMS.
+    /// CSP: max |60F4h|.
     pub csp_ferr_max: f64,
     /// CSP RMS following error.
     pub csp_ferr_rms: f64,
@@ -70,347 +58,326 @@ pub struct Report {
     pub sdo: u64,
     /// The samples.
     pub samples: Vec<Sample>,
-}
-
-struct Demo {
-    m: SimMaster,
-    pb: ProgressBar,
-    /// Last statusword per node (index 0 = node 1).
-    sw: [u16; 2],
-    cur: Sample,
-    t0: Instant,
-    samples: Vec<Sample>,
-    sync_counter: u64,
-    /// Wall-clock start when pacing in real time.
-    realtime: Option<std::time::Instant>,
-    /// TPDO COB-IDs of node 1: TPDO1, TPDO2, TPDO3; of node 2: TPDO1, TPDO2.
-    cob: [u32; 5],
-}
-
-impl Demo {
-    /// One SYNC cycle: optional RPDO first, SYNC, run 1 ms, take TPDOs.
-    fn tick(&mut self, rpdo: Option<Frame>) {
-        if let Some(f) = rpdo {
-            self.m.send(f);
-        }
-        self.m.send(Frame::new(0x080, &[]));
-        self.sync_counter += 1;
-        self.m.run_for(CYCLE);
-        self.absorb();
-        if self.sync_counter.is_multiple_of(50) {
-            self.pb.set_position(self.sync_counter);
-        }
-        if let Some(start) = self.realtime {
-            let due = start + std::time::Duration::from_nanos(self.m.now().as_nanos());
-            if let Some(ahead) = due.checked_duration_since(std::time::Instant::now()) {
-                std::thread::sleep(ahead);
-            }
-        }
-    }
-
-    fn absorb(&mut self) {
-        for (t, f) in self.m.take() {
-            let Some(id) = f.std_id().map(u32::from) else { continue };
-            let d = f.raw_data();
-            let i32_at = |k: usize| f64::from(i32::from_le_bytes([d[k], d[k + 1], d[k + 2], d[k + 3]]));
-            if id == self.cob[0] {
-                self.sw[0] = u16::from_le_bytes([d[0], d[1]]);
-            } else if id == self.cob[3] {
-                self.sw[1] = u16::from_le_bytes([d[0], d[1]]);
-            } else if id == self.cob[1] {
-                self.cur.position = i32_at(0);
-                self.cur.velocity = i32_at(4);
-                self.cur.t = t.saturating_duration_since(self.t0).as_nanos() as f64 / 1e9;
-                self.samples.push(self.cur);
-            } else if id == self.cob[2] {
-                // After TPDO2 of the same SYNC (higher COB-ID, later).
-                self.cur.following = i32_at(0);
-                self.cur.demand = self.cur.position + self.cur.following;
-            } else if id == self.cob[4] {
-                self.cur.position2 = i32_at(0);
-            }
-        }
-    }
-
-    fn rpdo1(node: u8, cw: u16) -> Frame {
-        Frame::new(0x200 + u16::from(node), &cw.to_le_bytes())
-    }
-
-    /// Ticks until `done(statusword)` for `node`; fails on a fault or after `ms`.
-    fn wait_sw(&mut self, node: u8, what: &str, ms: u64, done: impl Fn(u16) -> bool) -> anyhow::Result<u64> {
-        let k = usize::from(node - 1);
-        for n in 0..ms {
-            if done(self.sw[k]) {
-                return Ok(n);
-            }
-            if self.sw[k] & 0x4F == 0x08 {
-                let code = self.m.read_int(node, 0x603F, 0, false).unwrap_or(0) as u16;
-                bail!(
-                    "node {node}: drive fault {code:04X}h ({}) while waiting for {what}",
-                    drivebus_emcy::describe(code).unwrap_or("manufacturer specific")
-                );
-            }
-            self.tick(None);
-        }
-        bail!("node {node}: timed out after {ms} ms waiting for {what} (statusword {:04X}h)", self.sw[k])
-    }
+    /// Homing, move and sine, in plot time.
+    pub phases: Vec<Phase>,
 }
 
 /// Runs the demo and prints the summary.
 pub async fn run(g: &Global, a: &DemoArgs) -> anyhow::Result<()> {
     if !(0.1..=60.0).contains(&a.sine_seconds) {
-        bail!("--sine-seconds {} is outside 0.1..60", a.sine_seconds);
+        bail!(crate::error::coded("usage", anyhow!("--sine-seconds {} is outside 0.1..60", a.sine_seconds)));
     }
     let show = !a.no_progress && !g.json;
     let (sine, realtime) = (a.sine_seconds, a.realtime);
     let report = tokio::task::spawn_blocking(move || simulate(show, sine, realtime))
         .await
         .map_err(|e| anyhow!("demo task failed: {e}"))??;
-    plot(&a.out, &report.samples).with_context(|| format!("cannot write the plot {}", a.out.display()))?;
+    plot(&a.out, &report.samples, &report.phases)
+        .with_context(|| format!("cannot write the plot {}", a.out.display()))?;
     print_summary(g, &report, &a.out);
     Ok(())
 }
 
+/// The samples, filled by PDO callbacks in frame order.
+#[derive(Default)]
+struct Trace {
+    t0: Option<Instant>,
+    cur: Sample,
+    samples: Vec<Sample>,
+}
+
+fn i32_at(d: &[u8], k: usize) -> f64 {
+    d.get(k..k + 4).map_or(0.0, |b| f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+}
+
+fn secs(m: &Master, since: Instant) -> f64 {
+    m.now().saturating_duration_since(since).as_nanos() as f64 / 1e9
+}
+
 fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Report> {
-    let specs = [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }];
-    let m = SimMaster::new(BITRATE, &specs)?;
-    // Estimate; corrected when the CSP phase starts and its length is known.
-    let total = 4_000 + (sine_seconds * 1000.0) as u64;
-    let pb = if show { ProgressBar::new(total) } else { ProgressBar::hidden() };
+    let mut bus = virtual_bus();
+    for spec in [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }]
+    {
+        bus.attach(vdrive::build(spec, None, Default::default())?);
+    }
+    let mut sim =
+        SimBus::with_config(bus, MasterConfig { sdo_timeout: Duration::from_secs(1), ..Default::default() });
+    sim.set_realtime(realtime);
+    let m = sim.master().clone();
+    let pb =
+        if show { ProgressBar::new(4_000 + (sine_seconds * 1000.0) as u64) } else { ProgressBar::hidden() };
     pb.set_style(
-        ProgressStyle::with_template("{spinner} {msg:<34} [{bar:30}] {pos}/{len} SYNC cycles")
+        ProgressStyle::with_template("{spinner} {msg:<34} [{bar:30}] {pos}/{len} ms simulated")
             .unwrap_or_else(|_| ProgressStyle::default_bar())
             .progress_chars("=> "),
     );
-    let mut d = Demo {
-        m,
-        pb,
-        sw: [0; 2],
-        cur: Sample::default(),
-        t0: Instant::ZERO,
-        samples: Vec::new(),
-        sync_counter: 0,
-        realtime: realtime.then(std::time::Instant::now),
-        cob: [0; 5],
-    };
+    let tick = |pb: &ProgressBar, m: &Master| pb.set_position(m.now().as_nanos() / 1_000_000);
     let mut r = Report::default();
+    let trace: Arc<Mutex<Trace>> = Arc::default();
 
-    // 1. Boot: both drives send their boot-up message.
-    d.pb.set_message("boot");
-    d.m.run_for(Duration::from_millis(20));
-    let boots: Vec<u16> =
-        d.m.take().iter().filter_map(|(_, f)| (f.data() == [0]).then(|| f.std_id()).flatten()).collect();
-    for n in [0x701u16, 0x702] {
-        if !boots.contains(&n) {
-            bail!("node {} sent no boot-up message", n - 0x700);
-        }
+    // 1. Boot and scan.
+    pb.set_message("boot and scan");
+    r.found = sim.block_on(boot_and_scan(&m))??;
+    // 2. PDOs, heartbeats, NMT start, SYNC for the trace.
+    pb.set_message("configure PDOs, start");
+    let (d1, d2, _callbacks) = sim.block_on(configure(&m, trace.clone()))??;
+    // 3. Enable both drives through RPDO1/TPDO1.
+    pb.set_message("enable drives");
+    sim.block_on(async {
+        let (a, b) = tokio::join!(d1.enable(), d2.enable());
+        a.context("node 1 enable")?;
+        b.context("node 2 enable")
+    })??;
+    tick(&pb, &m);
+    // 4. Home both at once.
+    pb.set_message("homing");
+    let t_plot = |trace: &Arc<Mutex<Trace>>| {
+        let t = trace.lock().unwrap_or_else(|e| e.into_inner());
+        t.t0.map_or(0.0, |t0| m.now().saturating_duration_since(t0).as_nanos() as f64 / 1e9)
+    };
+    let h0 = t_plot(&trace);
+    r.homing = sim.block_on(home_both(&m, &d1, &d2))??;
+    r.phases.push(Phase { name: "homing", start: h0, end: t_plot(&trace) });
+    tick(&pb, &m);
+    // 5. Profile-position move: node 1 one turn (0.001° units), node 2
+    // 20000 of its own position units.
+    pb.set_message("profile position move");
+    let m0 = t_plot(&trace);
+    let i0 = trace.lock().unwrap_or_else(|e| e.into_inner()).samples.len();
+    let start_pos = trace.lock().unwrap_or_else(|e| e.into_inner()).cur.position;
+    r.move_time = sim.block_on(move_both(&m, &d1, &d2))??;
+    {
+        let t = trace.lock().unwrap_or_else(|e| e.into_inner());
+        r.move_distance = t.cur.position - start_pos;
+        r.move_ferr_max = t.samples[i0..].iter().map(|s| s.following.abs()).fold(0.0, f64::max);
     }
+    sim.run_for(Duration::from_millis(100));
+    r.phases.push(Phase { name: "move", start: m0, end: t_plot(&trace) });
+    tick(&pb, &m);
+    // 6. CSP sine on node 1, one target per SYNC (RPDO2).
+    pb.set_message("CSP sine at 1 kHz SYNC");
+    let cycles = (sine_seconds * 1000.0).round() as u64;
+    pb.set_length(m.now().as_nanos() / 1_000_000 + cycles + 120);
+    let base = trace.lock().unwrap_or_else(|e| e.into_inner()).cur.position;
+    sim.block_on(async {
+        d1.set_mode(mode::CSP).await?;
+        // Hold the present position for a few cycles first.
+        d1.stream_csp(std::iter::repeat_n(base as i32, 5)).await
+    })??;
+    let busy0 = sim.bus().stats().busy;
+    let c0 = sim.now();
+    let s0 = t_plot(&trace);
+    let i0 = trace.lock().unwrap_or_else(|e| e.into_inner()).samples.len();
+    let (amp, freq) = (45_000.0, 1.0);
+    let targets = (0..cycles).map(move |k| {
+        let t = k as f64 / 1000.0;
+        (base + amp * (1.0 - (2.0 * PI * freq * t).cos())).round() as i32
+    });
+    let pb2 = pb.clone();
+    let m2 = m.clone();
+    r.csp_cycles = sim.block_on(async {
+        let n = d1.stream_csp(targets.inspect(|_| tick(&pb2, &m2))).await?;
+        let sw = d1.statusword().await?;
+        if drivebus_master::DriveState::from_statusword(sw) == drivebus_master::DriveState::Fault {
+            bail!("node 1 faulted during CSP (statusword {sw:04X}h)");
+        }
+        Ok(n as u64)
+    })??;
+    {
+        let t = trace.lock().unwrap_or_else(|e| e.into_inner());
+        let csp = &t.samples[i0..];
+        r.csp_ferr_max = csp.iter().map(|s| s.following.abs()).fold(0.0, f64::max);
+        r.csp_ferr_rms =
+            (csp.iter().map(|s| s.following * s.following).sum::<f64>() / csp.len().max(1) as f64).sqrt();
+    }
+    let busy = sim.bus().stats().busy.as_nanos().saturating_sub(busy0.as_nanos()) as f64;
+    r.csp_bus_load = busy / sim.now().saturating_duration_since(c0).as_nanos().max(1) as f64;
+    r.phases.push(Phase { name: "CSP sine", start: s0, end: t_plot(&trace) });
+    // 7. Hold a moment, then stop: NMT pre-operational.
+    sim.run_for(Duration::from_millis(100));
+    m.stop_sync();
+    sim.block_on(m.nmt(0, NmtCommand::EnterPreOperational))??;
+    sim.run_for(Duration::from_millis(5));
+    let st = sim.bus().stats();
+    r.frames = st.frames;
+    r.sim_seconds = sim.now().as_nanos() as f64 / 1e9;
+    r.bus_load = st.busy.as_nanos() as f64 / sim.now().as_nanos().max(1) as f64;
+    r.sdo = m.stats().sdo_transfers;
+    pb.finish_and_clear();
+    r.samples = std::mem::take(&mut trace.lock().unwrap_or_else(|e| e.into_inner()).samples);
+    Ok(r)
+}
 
-    // 2. Scan: SDO 1000h to every node-ID.
-    d.pb.set_message("scan");
-    for n in 1..=127u16 {
-        d.m.send(Frame::new(0x600 + n, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]));
-    }
-    d.m.run_for(Duration::from_millis(40));
-    for (_, f) in d.m.take() {
-        if let Some(id @ 0x581..=0x5FF) = f.std_id()
-            && f.raw_data()[0] == 0x43
-        {
-            let dd = f.raw_data();
-            r.found.push((
-                (id - 0x580) as u8,
-                u32::from_le_bytes([dd[4], dd[5], dd[6], dd[7]]),
-                String::new(),
-            ));
-        }
-    }
-    for (n, _, name) in &mut r.found {
-        let text =
-            d.m.read(*n, 0x1008, 0).map(|b| String::from_utf8_lossy(&b).trim_end_matches('\0').to_owned());
-        *name = match text {
+fn virtual_bus() -> drivebus_master::VirtualBus {
+    drivebus_master::VirtualBus::new(drivebus_master::VirtualBusConfig {
+        log: false,
+        ..drivebus_master::VirtualBusConfig::with_bitrate(BITRATE)
+    })
+}
+
+async fn boot_and_scan(m: &Master) -> anyhow::Result<Vec<(u8, u32, String)>> {
+    let (b1, b2) = (m.expect_bootup(1, Duration::from_secs(1)), m.expect_bootup(2, Duration::from_secs(1)));
+    b1.await.map_err(|_| anyhow!("node 1 sent no boot-up message"))?;
+    b2.await.map_err(|_| anyhow!("node 2 sent no boot-up message"))?;
+    let found = m
+        .scan_with(ScanOptions { identity: false, timeout: Duration::from_millis(40), ..Default::default() })
+        .await;
+    let mut out = Vec::new();
+    for n in found {
+        let name = match m.sdo(n.node).read::<String>(0x1008, 0).await {
             Ok(t) if !t.is_empty() => t,
             _ => "(no 1008h name)".to_owned(),
         };
+        out.push((n.node, n.device_type, name));
     }
-    if r.found.iter().map(|f| f.0).collect::<Vec<_>>() != [1, 2] {
-        bail!("scan found nodes {:?}, expected 1 and 2", r.found.iter().map(|f| f.0).collect::<Vec<_>>());
+    if out.iter().map(|f| f.0).collect::<Vec<_>>() != [1, 2] {
+        bail!("scan found nodes {:?}, expected 1 and 2", out.iter().map(|f| f.0).collect::<Vec<_>>());
     }
+    Ok(out)
+}
 
-    // 3. PDOs. RPDO1 controlword (event), RPDO2 controlword + target (SYNC);
-    // TPDO1 statusword (event), TPDO2 position + velocity, TPDO3 following
-    // error (every SYNC; the demand is position + following error).
-    d.pb.set_message("configure PDOs");
+type Callbacks = Vec<drivebus_master::PdoCallback>;
+
+/// RPDO1 controlword (event), RPDO2 controlword + target (SYNC); TPDO1
+/// statusword + mode display (event), TPDO2 position + velocity, TPDO3
+/// following error (every SYNC; the demand is position + following error:
+/// the AKD has no 6062h, §7.1.5); the other TPDOs off (an
+/// event-driven default with a position in it would send every period).
+async fn configure(m: &Master, trace: Arc<Mutex<Trace>>) -> anyhow::Result<(Drive, Drive, Callbacks)> {
+    let e = PdoMapEntry::new;
     for node in [1u8, 2] {
-        d.m.map_pdo(node, false, 0, &[0x6040_0010], 255).context("RPDO1")?;
-        d.m.map_pdo(node, false, 1, &[0x6040_0010, 0x607A_0020], 1).context("RPDO2")?;
-        let t1 = d.m.map_pdo(node, true, 0, &[0x6041_0010, 0x6061_0008], 255).context("TPDO1")?;
-        let t2 = d.m.map_pdo(node, true, 1, &[0x6064_0020, 0x606C_0020], 1).context("TPDO2")?;
-        if node == 1 {
-            let t3 = d.m.map_pdo(node, true, 2, &[0x60F4_0020], 1).context("TPDO3")?;
-            d.cob[..3].copy_from_slice(&[t1, t2, t3]);
+        let n = u16::from(node);
+        m.write_pdo(node, PdoDir::Rx, 1, &PdoRecord::new(0x200 + n, 255, vec![e(0x6040, 0, 16)]))
+            .await
+            .context("RPDO1")?;
+        m.write_pdo(
+            node,
+            PdoDir::Rx,
+            2,
+            &PdoRecord::new(0x300 + n, 1, vec![e(0x6040, 0, 16), e(0x607A, 0, 32)]),
+        )
+        .await
+        .context("RPDO2")?;
+        m.write_pdo(
+            node,
+            PdoDir::Tx,
+            1,
+            &PdoRecord::new(0x180 + n, 255, vec![e(0x6041, 0, 16), e(0x6061, 0, 8)]),
+        )
+        .await
+        .context("TPDO1")?;
+        m.write_pdo(
+            node,
+            PdoDir::Tx,
+            2,
+            &PdoRecord::new(0x280 + n, 1, vec![e(0x6064, 0, 32), e(0x606C, 0, 32)]),
+        )
+        .await
+        .context("TPDO2")?;
+        let last = if node == 1 {
+            m.write_pdo(node, PdoDir::Tx, 3, &PdoRecord::new(0x380 + n, 1, vec![e(0x60F4, 0, 32)]))
+                .await
+                .context("TPDO3")?;
+            4
         } else {
-            d.cob[3..].copy_from_slice(&[t1, t2]);
-        }
-        // The other TPDOs off: an event-driven default mapping with a
-        // position in it (AKD TPDO4) would send at every control period.
-        for n in if node == 1 { 3u16..4 } else { 2u16..4 } {
-            d.m.disable_tpdo(node, n)?;
+            3
+        };
+        for num in last..=4 {
+            if let Ok(mut rec) = m.read_pdo(node, PdoDir::Tx, num).await {
+                rec.cob_id |= 0x8000_0000;
+                m.write_pdo(node, PdoDir::Tx, num, &rec).await.context("TPDO off")?;
+            }
         }
         // 1 ms interpolation period for CSP (60C2h: 1 · 10^-3 s).
-        d.m.write(node, 0x60C2, 1, &[1])?;
-        d.m.write(node, 0x60C2, 2, &[(-3i8) as u8])?;
-        d.sw[usize::from(node - 1)] = d.m.read_int(node, 0x6041, 0, false)? as u16;
+        m.sdo(node).write::<u8>(0x60C2, 1, 1).await?;
+        m.sdo(node).write::<i8>(0x60C2, 2, -3).await?;
+        // A heartbeat tells the Drive handle the node is operational (RPDOs).
+        m.sdo(node).write::<u16>(0x1017, 0, 100).await?;
     }
-
-    // 4. Start the nodes.
-    d.pb.set_message("NMT start");
-    d.m.send(Frame::new(0x000, &[0x01, 0]));
-    d.t0 = d.m.now();
-    for _ in 0..10 {
-        d.tick(None);
-    }
-
-    // 5. Enable both drives through RPDO1/TPDO1.
-    d.pb.set_message("enable drives");
-    for (cw, want) in [(0x06u16, 0x21u16), (0x07, 0x23), (0x0F, 0x27)] {
-        for node in [1u8, 2] {
-            d.m.send(Demo::rpdo1(node, cw));
+    let mut cbs = Callbacks::new();
+    let t = trace.clone();
+    cbs.push(m.on_pdo(0x281, move |f: &Frame, at| {
+        let mut t = t.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(t0) = t.t0 else { return };
+        t.cur.position = i32_at(f.data(), 0);
+        t.cur.velocity = i32_at(f.data(), 4);
+        t.cur.t = at.saturating_duration_since(t0).as_nanos() as f64 / 1e9;
+    }));
+    // TPDO3 is the last of a SYNC's node-1 frames (highest COB-ID after
+    // 282h): the sample is complete.
+    let t = trace.clone();
+    cbs.push(m.on_pdo(0x381, move |f: &Frame, _| {
+        let mut t = t.lock().unwrap_or_else(|e| e.into_inner());
+        if t.t0.is_none() {
+            return;
         }
-        for node in [1u8, 2] {
-            d.wait_sw(node, "the next CiA 402 state", 500, |s| s & 0x6F == want)?;
-        }
-    }
-
-    // 6. Home both drives.
-    d.pb.set_message("homing");
+        t.cur.following = i32_at(f.data(), 0);
+        t.cur.demand = t.cur.position + t.cur.following;
+        let s = t.cur;
+        t.samples.push(s);
+    }));
+    let t = trace.clone();
+    cbs.push(m.on_pdo(0x282, move |f: &Frame, _| {
+        t.lock().unwrap_or_else(|e| e.into_inner()).cur.position2 = i32_at(f.data(), 0);
+    }));
+    m.nmt(0, NmtCommand::Start).await?;
+    trace.lock().unwrap_or_else(|e| e.into_inner()).t0 = Some(m.now());
+    m.start_sync(CYCLE, 0);
     for node in [1u8, 2] {
-        d.m.write(node, 0x6060, 0, &[6])?;
-        // Index pulse (34) where the drive has it, else the current position (35, 37).
-        let method = [34i8, 35, 37]
-            .into_iter()
-            .find(|&m| d.m.write(node, 0x6098, 0, &[m as u8]).is_ok())
-            .ok_or_else(|| anyhow!("node {node} accepts none of homing methods 34, 35, 37"))?;
-        r.homing.push((node, method, 0.0));
-        // Search the index pulse faster than the drive's default (6099h:2),
-        // as fast as the drive's limit allows; a drive without it keeps its own.
-        let current = d.m.read_int(node, 0x6099, 2, false).unwrap_or(i64::MAX);
-        for v in [90_000u32, 36_000].into_iter().filter(|&v| i64::from(v) > current) {
-            if d.m.write(node, 0x6099, 2, &v.to_le_bytes()).is_ok() {
-                break;
-            }
-        }
+        while m.wait_for_heartbeat(node, Duration::from_secs(1)).await? != RemoteState::Operational {}
     }
-    for _ in 0..5 {
-        d.tick(None);
+    let d1 = m.drive(1).await?.with_timeout(Duration::from_secs(2));
+    let d2 = m.drive(2).await?.with_timeout(Duration::from_secs(2));
+    if !(d1.statusword_by_pdo() && d1.controlword_by_pdo()) {
+        bail!("node 1: statusword/controlword are not in the PDOs configured");
     }
-    for node in [1u8, 2] {
-        d.m.send(Demo::rpdo1(node, 0x1F));
-    }
-    let h0 = d.m.now();
-    let mut left = 2;
-    for _ in 0..30_000 {
-        for k in 0..2 {
-            let sw = d.sw[k];
-            if r.homing[k].2 > 0.0 {
-                continue;
-            }
-            if sw & 0x2000 != 0 || sw & 0x4F == 0x08 {
-                bail!("node {}: homing error (statusword {sw:04X}h)", k + 1);
-            }
-            if sw & 0x3400 == 0x1400 {
-                r.homing[k].2 = d.m.now().saturating_duration_since(h0).as_nanos() as f64 / 1e9;
-                left -= 1;
-            }
-        }
-        if left == 0 {
+    Ok((d1, d2, cbs))
+}
+
+/// Homing method: index pulse (34) where the drive has it, else the
+/// current position (35, 37); the zero search at up to 90°/s.
+async fn prepare_homing(m: &Master, node: u8) -> anyhow::Result<i8> {
+    let sdo = m.sdo(node);
+    let mut method = None;
+    for candidate in [34i8, 35, 37] {
+        if sdo.write(0x6098, 0, candidate).await.is_ok() {
+            method = Some(candidate);
             break;
         }
-        d.tick(None);
     }
-    if left > 0 {
-        bail!("homing did not complete within 30 s (statuswords {:04X}h, {:04X}h)", d.sw[0], d.sw[1]);
-    }
-    for node in [1u8, 2] {
-        d.m.send(Demo::rpdo1(node, 0x0F));
-    }
-
-    // 7. Profile-position move: node 1 one turn (0.001° units), node 2
-    // 20000 of its own position units at its power-on profile.
-    d.pb.set_message("profile position move");
-    for (node, target) in [(1u8, 360_000i32), (2, 20_000)] {
-        d.m.write(node, 0x6060, 0, &[1])?;
-        d.m.write(node, 0x607A, 0, &target.to_le_bytes())?;
-    }
-    d.m.write(1, 0x6081, 0, &720_000u32.to_le_bytes())?;
-    d.m.write(1, 0x6083, 0, &3_600_000u32.to_le_bytes())?;
-    d.m.write(1, 0x6084, 0, &3_600_000u32.to_le_bytes())?;
-    for _ in 0..5 {
-        d.tick(None);
-    }
-    let start_pos = d.cur.position;
-    for node in [1u8, 2] {
-        d.m.send(Demo::rpdo1(node, 0x1F));
-    }
-    let m0 = d.m.now();
-    let i0 = d.samples.len();
-    d.wait_sw(1, "set-point acknowledge", 500, |s| s & 0x1000 != 0)?;
-    d.tick(Some(Demo::rpdo1(1, 0x0F)));
-    d.m.send(Demo::rpdo1(2, 0x0F));
-    d.wait_sw(1, "target reached", 20_000, |s| s & 0x1400 == 0x0400)?;
-    r.move_time = d.m.now().saturating_duration_since(m0).as_nanos() as f64 / 1e9;
-    r.move_distance = d.cur.position - start_pos;
-    r.move_ferr_max = d.samples[i0..].iter().map(|s| s.following.abs()).fold(0.0, f64::max);
-    d.wait_sw(2, "target reached", 20_000, |s| s & 0x1400 == 0x0400)?;
-    for _ in 0..100 {
-        d.tick(None);
-    }
-
-    // 8. CSP sine on node 1, streamed with RPDO2 before each SYNC.
-    d.pb.set_message("CSP sine at 1 kHz SYNC");
-    d.m.write(1, 0x6060, 0, &[8])?;
-    let base = d.cur.position;
-    let cycles = (sine_seconds * 1000.0).round() as u64;
-    d.pb.set_length(d.sync_counter + cycles + 105);
-    let (amp, freq) = (45_000.0, 1.0);
-    for _ in 0..5 {
-        let b = (base as i32).to_le_bytes();
-        d.tick(Some(Frame::new(0x301, &[0x0F, 0x00, b[0], b[1], b[2], b[3]])));
-    }
-    let busy0 = d.m.bus.stats().busy;
-    let c0 = d.m.now();
-    let i0 = d.samples.len();
-    for k in 0..cycles {
-        let t = k as f64 / 1000.0;
-        let target = base + amp * (1.0 - (2.0 * PI * freq * t).cos());
-        let b = (target.round() as i32).to_le_bytes();
-        d.tick(Some(Frame::new(0x301, &[0x0F, 0x00, b[0], b[1], b[2], b[3]])));
-        if d.sw[0] & 0x4F == 0x08 {
-            bail!("node 1 faulted during CSP (statusword {:04X}h)", d.sw[0]);
+    let method = method.ok_or_else(|| anyhow!("node {node} accepts none of homing methods 34, 35, 37"))?;
+    let current = sdo.read::<u32>(0x6099, 2).await.map_or(u64::MAX, u64::from);
+    for v in [90_000u32, 36_000].into_iter().filter(|&v| u64::from(v) > current) {
+        if sdo.write(0x6099, 2, v).await.is_ok() {
+            break;
         }
     }
-    r.csp_cycles = cycles;
-    let csp = &d.samples[i0..];
-    r.csp_ferr_max = csp.iter().map(|s| s.following.abs()).fold(0.0, f64::max);
-    r.csp_ferr_rms =
-        (csp.iter().map(|s| s.following * s.following).sum::<f64>() / csp.len().max(1) as f64).sqrt();
-    let st = d.m.bus.stats();
-    let busy = st.busy.as_nanos().saturating_sub(busy0.as_nanos()) as f64;
-    r.csp_bus_load = busy / d.m.now().saturating_duration_since(c0).as_nanos().max(1) as f64;
+    Ok(method)
+}
 
-    // Hold a moment, then stop: NMT pre-operational.
-    for _ in 0..100 {
-        d.tick(None);
-    }
-    d.m.send(Frame::new(0x000, &[0x80, 0]));
-    d.m.run_for(Duration::from_millis(5));
-    let st = d.m.bus.stats();
-    r.frames = st.frames;
-    r.sim_seconds = d.m.now().as_nanos() as f64 / 1e9;
-    r.bus_load = st.busy.as_nanos() as f64 / d.m.now().as_nanos().max(1) as f64;
-    r.sdo = d.m.sdo_count;
-    d.pb.finish_and_clear();
-    r.samples = std::mem::take(&mut d.samples);
-    Ok(r)
+async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<Vec<(u8, i8, f64)>> {
+    let k1 = prepare_homing(m, 1).await?;
+    let k2 = prepare_homing(m, 2).await?;
+    let h0 = m.now();
+    let (a, b) =
+        tokio::join!(async { d1.home(k1, Duration::from_secs(30)).await.map(|()| secs(m, h0)) }, async {
+            d2.home(k2, Duration::from_secs(30)).await.map(|()| secs(m, h0))
+        });
+    Ok(vec![(1, k1, a.context("node 1 homing")?), (2, k2, b.context("node 2 homing")?)])
+}
+
+async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<f64> {
+    d1.set_mode(mode::PP).await?;
+    d2.set_mode(mode::PP).await?;
+    let profile =
+        drivebus_master::Profile { velocity: 720_000, acceleration: 3_600_000, deceleration: 3_600_000 };
+    let t0 = m.now();
+    let one = async {
+        d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|()| secs(m, t0))
+    };
+    let (a, b) = tokio::join!(one, d2.move_to(20_000, false, None, Duration::from_secs(20)));
+    b.context("node 2 move")?;
+    a.context("node 1 move")
 }
 
 fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
@@ -433,7 +400,7 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
         );
         return;
     }
-    outln!("drivebus demo — virtual bus at 1 Mbit/s, simulated time");
+    outln!("drivebus demo — virtual bus at 1 Mbit/s, simulated time, master library");
     for (n, dt, name) in &r.found {
         outln!("  found node {n}: device type 0x{dt:08X} {name}");
     }
@@ -458,84 +425,4 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
     outln!("  {:<40} {:.3} s", "simulated time", r.sim_seconds);
     outln!();
     outln!("plot: {} ({} samples from TPDOs)", out.display(), r.samples.len());
-}
-
-/// One value of a sample to draw.
-type Series = (&'static str, plotters::style::RGBColor, Box<dyn Fn(&Sample) -> f64>);
-/// Title, unit, series.
-type Panel = (&'static str, &'static str, Vec<Series>);
-
-/// Writes the SVG: position, velocity and following error against time.
-pub fn plot(path: &std::path::Path, s: &[Sample]) -> anyhow::Result<()> {
-    use plotters::prelude::*;
-    if s.is_empty() {
-        bail!("no samples to plot");
-    }
-    let root = SVGBackend::new(path, (1000, 900)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-    let areas = root.split_evenly((3, 1));
-    let t_end = s.last().map_or(1.0, |x| x.t).max(0.001);
-    let range = |f: &dyn Fn(&Sample) -> f64| {
-        let (lo, hi) = s.iter().map(f).fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
-        let pad = ((hi - lo) * 0.05).max(1e-3);
-        (lo - pad)..(hi + pad)
-    };
-    let panels: [Panel; 3] = [
-        (
-            "Position: node 1 actual and demand [°], node 2 actual",
-            "degrees",
-            vec![
-                ("node 1 actual 6064h", BLUE, Box::new(|x: &Sample| x.position / 1000.0)),
-                ("node 1 demand (6064h + 60F4h)", RED, Box::new(|x: &Sample| x.demand / 1000.0)),
-                (
-                    "node 2 actual 6064h (1000 of its units)",
-                    GREEN,
-                    Box::new(|x: &Sample| x.position2 / 1000.0),
-                ),
-            ],
-        ),
-        (
-            "Velocity actual 606Ch (node 1)",
-            "degrees/s",
-            vec![("node 1", BLUE, Box::new(|x: &Sample| x.velocity / 1000.0))],
-        ),
-        (
-            "Following error 60F4h (node 1)",
-            "degrees",
-            vec![("node 1", MAGENTA, Box::new(|x: &Sample| x.following / 1000.0))],
-        ),
-    ];
-    for (area, (title, unit, series)) in areas.iter().zip(panels.iter()) {
-        let mut lo = f64::MAX;
-        let mut hi = f64::MIN;
-        for (_, _, f) in series {
-            let r = range(f.as_ref());
-            lo = lo.min(r.start);
-            hi = hi.max(r.end);
-        }
-        let mut chart = ChartBuilder::on(area)
-            .caption(*title, ("sans-serif", 18))
-            .margin(8)
-            .x_label_area_size(30)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_end, lo..hi)
-            .map_err(|e| anyhow!("{e}"))?;
-        chart.configure_mesh().x_desc("time [s]").y_desc(*unit).draw().map_err(|e| anyhow!("{e}"))?;
-        for (name, color, f) in series {
-            let c = *color;
-            chart
-                .draw_series(LineSeries::new(s.iter().map(|x| (x.t, f(x))), c))
-                .map_err(|e| anyhow!("{e}"))?
-                .label(*name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| anyhow!("{e}"))?;
-    }
-    root.present().map_err(|e| anyhow!("{e}"))?;
-    Ok(())
 }

@@ -1,189 +1,184 @@
-//! `drivebus dump`: a live decoded trace, or candump log lines.
+//! `drivebus dump`: a live decoded trace, or candump log lines; filters by
+//! node and CAN-ID; PDOs decoded by the mapping read from the devices (or
+//! from the EDS).
 
 use std::io::Write;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::ops::RangeInclusive;
+use std::time::{SystemTime, UNIX_EPOCH};
 
-use drivebus_can::{CanId, Frame};
-use drivebus_eds::Eds;
-use drivebus_od::SdoAbort;
+use anyhow::anyhow;
+use drivebus_master::{Frame, PdoDir, PdoMapEntry, candump};
+use tokio::sync::broadcast;
 
 use crate::args::{DumpArgs, Global};
-use crate::eds_cmd::{load_global_eds, object_name};
-use crate::link::Link;
+use crate::conn::Conn;
+use crate::decode::{PdoMaps, decode};
+use crate::error::coded;
+
+/// Parses `0x181`, `181`, `0x180-0x1FF` (CAN-IDs are hex).
+pub fn id_range(s: &str) -> anyhow::Result<RangeInclusive<u32>> {
+    let one = |t: &str| {
+        crate::dict::hex(t).filter(|v| *v <= 0x1FFF_FFFF).ok_or_else(|| {
+            coded("usage", anyhow!("bad --id `{s}`: CAN-IDs are hex, e.g. 181, 0x181 or 0x180-0x1FF"))
+        })
+    };
+    let (lo, hi) = match s.split_once('-') {
+        Some((a, b)) => (one(a)?, one(b)?),
+        None => (one(s)?, one(s)?),
+    };
+    if lo > hi {
+        return Err(coded("usage", anyhow!("bad --id `{s}`: {lo:X} is above {hi:X}")));
+    }
+    Ok(lo..=hi)
+}
+
+/// True for the frames of `node` in the pre-defined connection set, NMT
+/// commands to it (or to all) and its PDOs in `pdos`.
+pub fn of_node(f: &Frame, node: u8, pdos: &PdoMaps) -> bool {
+    let Some(id) = f.std_id() else { return false };
+    if id == 0x000 {
+        return f.data().get(1).is_some_and(|&n| n == 0 || n == node);
+    }
+    if let Some((label, _)) = pdos.get(&id) {
+        return label.ends_with(&format!("node {node}"));
+    }
+    matches!(
+        id & 0x780,
+        0x080 | 0x180 | 0x200 | 0x280 | 0x300 | 0x380 | 0x400 | 0x480 | 0x500 | 0x580 | 0x600 | 0x700
+    ) && (id & 0x7F) as u8 == node
+}
+
+/// The PDO mappings of `nodes`, read by SDO (valid PDOs only).
+pub async fn read_maps(conn: &Conn, nodes: &[u8]) -> PdoMaps {
+    let mut maps = PdoMaps::new();
+    for &node in nodes {
+        for dir in [PdoDir::Tx, PdoDir::Rx] {
+            for num in 1..=512u16 {
+                let Ok(rec) = conn.master.read_pdo(node, dir, num).await else { break };
+                if rec.valid() && !rec.mapping.is_empty() {
+                    let kind = if dir == PdoDir::Tx { "TPDO" } else { "RPDO" };
+                    maps.insert(rec.can_id(), (format!("{kind}{num} node {node}"), rec.mapping));
+                }
+            }
+        }
+    }
+    maps
+}
+
+/// The default mappings an EDS gives node `node` (ParameterValue, else DefaultValue).
+fn eds_maps(eds: &drivebus_eds::Eds, node: u8) -> PdoMaps {
+    let mut maps = PdoMaps::new();
+    let value = |v: &drivebus_eds::EdsVar, dt| {
+        let text = v.parameter_value.as_ref().or(v.default.as_ref())?;
+        drivebus_eds::eval(text, dt, node).ok()
+    };
+    for (kind, comm, map) in [("RPDO", 0x1400u16, 0x1600u16), ("TPDO", 0x1800, 0x1A00)] {
+        for n in 0..512u16 {
+            let (Some(c), Some(m)) = (eds.objects.get(&(comm + n)), eds.objects.get(&(map + n))) else {
+                continue;
+            };
+            let Some(cob) = c.subs.get(&1).and_then(|v| value(v, drivebus_master::DataType::Unsigned32))
+            else {
+                continue;
+            };
+            let cob = u32::from_le_bytes([cob[0], cob[1], cob[2], cob[3]]);
+            let count = m
+                .subs
+                .get(&0)
+                .and_then(|v| value(v, drivebus_master::DataType::Unsigned8))
+                .map_or(0, |b| b[0]);
+            let entries: Vec<PdoMapEntry> = (1..=count)
+                .filter_map(|s| m.subs.get(&s).and_then(|v| value(v, drivebus_master::DataType::Unsigned32)))
+                .map(|b| PdoMapEntry::from_raw(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+                .collect();
+            if cob & 0x8000_0000 == 0 && !entries.is_empty() {
+                maps.insert((cob & 0x7FF) as u16, (format!("{kind}{} node {node}", n + 1), entries));
+            }
+        }
+    }
+    maps
+}
 
 /// Runs the trace until `--count`, `--seconds`, SIGINT/SIGTERM or the bus closes.
 pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
-    let eds = load_global_eds(g)?;
-    let mut link = Link::open(g).await?;
-    let start = tokio::time::Instant::now();
-    let end = a.seconds.map(|s| start + Duration::from_secs_f64(s.max(0.0)));
-    let far = start + Duration::from_secs(86_400 * 365);
-    let mut n = 0u64;
+    let ranges = a.ids.iter().map(|s| id_range(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    let conn = Conn::open(g).await?;
+    let pdos = if !a.pdo {
+        PdoMaps::new()
+    } else if let (Some(eds), Some(node)) = (&conn.dict.eds, g.node) {
+        eds_maps(eds, node)
+    } else {
+        let nodes: Vec<u8> = match g.node {
+            Some(n) => vec![n],
+            None => {
+                let opts = drivebus_master::ScanOptions { identity: false, ..Default::default() };
+                conn.master.scan_with(opts).await.iter().map(|n| n.node).collect()
+            }
+        };
+        read_maps(&conn, &nodes).await
+    };
+    // From here on: not the answers to the mapping reads above.
+    let mut frames = conn.master.subscribe_frames();
+    let start = conn.master.now();
+    let end = a.seconds.map(|s| crate::error::seconds("--seconds", s)).transpose()?;
     let stop = crate::serve::wait_for_signal();
     tokio::pin!(stop);
+    let deadline = async {
+        match end {
+            Some(d) => tokio::time::sleep(d).await,
+            None => std::future::pending().await,
+        }
+    };
+    tokio::pin!(deadline);
     let mut out = std::io::stdout().lock();
+    let mut n = 0u64;
     loop {
         if a.count.is_some_and(|c| n >= c) {
             break;
         }
         let f = tokio::select! {
-            r = link.recv_until(end.unwrap_or(far)) => match r? {
-                Some(f) => f,
-                None => break,
+            r = frames.recv() => match r {
+                Ok(f) => f,
+                Err(broadcast::error::RecvError::Lagged(k)) => {
+                    eprintln!("dump: {k} frames lost (output too slow)");
+                    continue;
+                }
+                Err(broadcast::error::RecvError::Closed) => break,
             },
+            () = &mut deadline => break,
             _ = &mut stop => break,
         };
+        if !ranges.is_empty() && !ranges.iter().any(|r| r.contains(&f.id().raw())) {
+            continue;
+        }
+        if let Some(node) = g.node
+            && !of_node(&f, node, &pdos)
+        {
+            continue;
+        }
         n += 1;
+        let t = conn.master.now().saturating_duration_since(start).as_secs_f64();
         let line = if a.candump {
             let us = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_micros() as u64);
             let mut s = format!("({}.{:06}) can0 ", us / 1_000_000, us % 1_000_000);
-            let _ = drivebus_bus::candump::write_frame(&mut s, &f);
+            let _ = candump::write_frame(&mut s, &f);
             s
         } else if g.json {
-            serde_json::json!({"t": start.elapsed().as_secs_f64(), "id": f.id().raw(), "data": crate::sdo_cmd::hex(f.data()), "decoded": decode(&f, eds.as_ref())})
-                .to_string()
+            serde_json::json!({"t": t, "id": f.id().raw(), "extended": f.id().is_extended(), "rtr": f.is_rtr(),
+                "data": crate::sdo_cmd::hex(f.data()), "decoded": decode(&f, &conn.dict, &pdos)})
+            .to_string()
         } else {
             let mut raw = String::new();
-            let _ = drivebus_bus::candump::write_frame(&mut raw, &f);
-            format!("{:>10.6}  {raw:<24} {}", start.elapsed().as_secs_f64(), decode(&f, eds.as_ref()))
+            let _ = candump::write_frame(&mut raw, &f);
+            format!("{t:>10.6}  {raw:<24} {}", decode(&f, &conn.dict, &pdos))
         };
         // A closed pipe (`| head`) ends the trace quietly.
         if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
             break;
         }
     }
-    Ok(())
-}
-
-fn name(eds: Option<&Eds>, index: u16, sub: u8) -> String {
-    match eds.and_then(|e| object_name(e, index, sub)) {
-        Some(n) => format!("{index:04X}h:{sub:02X} ({n})"),
-        None => format!("{index:04X}h:{sub:02X}"),
-    }
-}
-
-fn u32_at(d: &[u8; 8], i: usize) -> u32 {
-    u32::from_le_bytes([d[i], d[i + 1], d[i + 2], d[i + 3]])
-}
-
-/// One frame in CANopen words (pre-defined connection set, CiA 301 §7.3.5).
-pub fn decode(f: &Frame, eds: Option<&Eds>) -> String {
-    let id = match f.id() {
-        CanId::Standard(id) => id,
-        CanId::Extended(id) => return format!("extended frame {id:08X}"),
-    };
-    let d = f.raw_data();
-    let len = f.len();
-    let node = id & 0x7F;
-    if f.is_rtr() {
-        return match id {
-            0x701..=0x77F => format!("node guarding request to node {node}"),
-            _ => format!("remote request {id:03X}"),
-        };
-    }
-    match id {
-        0x000 => {
-            let cs = match d[0] {
-                0x01 => "start",
-                0x02 => "stop",
-                0x80 => "enter pre-operational",
-                0x81 => "reset node",
-                0x82 => "reset communication",
-                _ => "unknown command",
-            };
-            let who = if d[1] == 0 { "all nodes".to_owned() } else { format!("node {}", d[1]) };
-            format!("NMT {cs} → {who}")
-        }
-        0x080 if len == 0 => "SYNC".to_owned(),
-        0x080 => format!("SYNC counter {}", d[0]),
-        0x081..=0x0FF => {
-            let code = u16::from_le_bytes([d[0], d[1]]);
-            if code == 0 {
-                return format!("EMCY node {node}: error reset / no error");
-            }
-            let text = drivebus_emcy::describe(code).unwrap_or("manufacturer specific");
-            format!("EMCY node {node}: {code:04X}h {text}, register {:02X}h", d[2])
-        }
-        0x100 => "TIME".to_owned(),
-        0x180..=0x57F => {
-            let (kind, n) = match id & 0x780 {
-                0x180 => ("TPDO1", node),
-                0x200 => ("RPDO1", node),
-                0x280 => ("TPDO2", node),
-                0x300 => ("RPDO2", node),
-                0x380 => ("TPDO3", node),
-                0x400 => ("RPDO3", node),
-                0x480 => ("TPDO4", node),
-                _ => ("RPDO4", node),
-            };
-            let hex: Vec<String> = f.data().iter().map(|b| format!("{b:02X}")).collect();
-            format!("{kind} node {n}: {}", hex.join(" "))
-        }
-        0x581..=0x5FF => format!("SDO node {node} → master: {}", sdo(d, true, eds)),
-        0x601..=0x67F => format!("SDO master → node {node}: {}", sdo(d, false, eds)),
-        0x701..=0x77F => {
-            let st = match d[0] & 0x7F {
-                0x00 => "boot-up",
-                0x04 => "stopped",
-                0x05 => "operational",
-                0x7F => "pre-operational",
-                _ => "unknown state",
-            };
-            if d[0] == 0 { format!("boot-up node {node}") } else { format!("heartbeat node {node}: {st}") }
-        }
-        0x7E4 => format!("LSS slave → master cs {:02X}h", d[0]),
-        0x7E5 => format!("LSS master → slave cs {:02X}h", d[0]),
-        _ => format!("frame {id:03X}"),
-    }
-}
-
-fn sdo(d: &[u8; 8], from_server: bool, eds: Option<&Eds>) -> String {
-    let idx = u16::from_le_bytes([d[1], d[2]]);
-    let sub = d[3];
-    if d[0] == 0x80 {
-        let a = SdoAbort(u32_at(d, 4));
-        return format!(
-            "abort {} code 0x{:08X} {}",
-            name(eds, idx, sub),
-            a.0,
-            a.description().unwrap_or("unknown abort code")
-        );
-    }
-    let cs = d[0] >> 5;
-    let expedited_len = |d0: u8| if d0 & 0x03 == 0x03 { 4 - usize::from((d0 >> 2) & 3) } else { 0 };
-    match (from_server, cs) {
-        (false, 1) => {
-            if d[0] & 0x02 != 0 {
-                let n = expedited_len(d[0]).max(1);
-                let hex: Vec<String> = d[4..4 + n].iter().map(|b| format!("{b:02X}")).collect();
-                format!("write {} = {}", name(eds, idx, sub), hex.join(" "))
-            } else {
-                format!("write {} ({} bytes, segmented)", name(eds, idx, sub), u32_at(d, 4))
-            }
-        }
-        (false, 2) => format!("read {}", name(eds, idx, sub)),
-        (false, 0) => "download segment".to_owned(),
-        (false, 3) => "upload segment request".to_owned(),
-        (false, 5) => "block upload".to_owned(),
-        (false, 6) => format!("block download {}", name(eds, idx, sub)),
-        (true, 2) => {
-            if d[0] & 0x02 != 0 {
-                let n = expedited_len(d[0]).max(1);
-                let mut b = [0u8; 4];
-                b[..n].copy_from_slice(&d[4..4 + n]);
-                let v = u32::from_le_bytes(b);
-                format!("{} = {v} (0x{v:0w$X})", name(eds, idx, sub), w = n * 2)
-            } else {
-                format!("{} is {} bytes (segmented)", name(eds, idx, sub), u32_at(d, 4))
-            }
-        }
-        (true, 3) => format!("written {}", name(eds, idx, sub)),
-        (true, 0) => "upload segment".to_owned(),
-        (true, 1) => "download segment ack".to_owned(),
-        (true, 5) => "block download response".to_owned(),
-        (true, 6) => "block upload response".to_owned(),
-        _ => format!("cs {:02X}h", d[0]),
-    }
+    drop(out);
+    conn.close().await
 }
 
 #[cfg(test)]
@@ -191,43 +186,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn decodes_the_predefined_connection_set() {
-        let d = |id: u16, data: &[u8]| decode(&Frame::new(id, data), None);
-        assert_eq!(d(0x000, &[0x01, 0x05]), "NMT start → node 5");
-        assert_eq!(d(0x000, &[0x81, 0x00]), "NMT reset node → all nodes");
-        assert_eq!(d(0x080, &[]), "SYNC");
-        assert_eq!(d(0x080, &[7]), "SYNC counter 7");
-        assert_eq!(d(0x705, &[0x00]), "boot-up node 5");
-        assert_eq!(d(0x705, &[0x7F]), "heartbeat node 5: pre-operational");
-        assert_eq!(d(0x705, &[0x05]), "heartbeat node 5: operational");
-        assert!(d(0x085, &[0x11, 0x86, 0x20, 0, 0, 0, 0, 0]).starts_with("EMCY node 5: 8611h"));
-        assert_eq!(d(0x185, &[0x37, 0x02]), "TPDO1 node 5: 37 02");
-        assert_eq!(d(0x305, &[0x0F, 0x00]), "RPDO2 node 5: 0F 00");
-        assert_eq!(d(0x605, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]), "SDO master → node 5: read 1000h:00");
-        assert_eq!(
-            d(0x585, &[0x43, 0x00, 0x10, 0, 0x92, 0x01, 0x02, 0x00]),
-            "SDO node 5 → master: 1000h:00 = 131474 (0x00020192)"
-        );
-        assert_eq!(
-            d(0x605, &[0x2B, 0x17, 0x10, 0, 0x64, 0x00, 0, 0]),
-            "SDO master → node 5: write 1017h:00 = 64 00"
-        );
-        assert!(
-            d(0x585, &[0x80, 0x00, 0x20, 0, 0x00, 0x00, 0x02, 0x06])
-                .contains("abort 2000h:00 code 0x06020000 Object does not exist")
-        );
-        // Short or odd frames never panic.
-        for id in [0x000u16, 0x080, 0x085, 0x185, 0x585, 0x605, 0x705, 0x7E4, 0x7E5, 0x123] {
-            for len in 0..=8 {
-                let _ = d(id, &[0xFF; 8][..len]);
-            }
-        }
-    }
-
-    #[test]
-    fn object_names_come_from_the_eds() {
-        let eds = drivebus_personality::Profile::Akd.parse_eds().eds;
-        let s = decode(&Frame::new(0x601, &[0x40, 0x41, 0x60, 0, 0, 0, 0, 0]), Some(&eds));
-        assert!(s.starts_with("SDO master → node 1: read 6041h:00 ("), "{s}");
+    fn id_ranges_and_node_filter() {
+        assert_eq!(id_range("181").unwrap(), 0x181..=0x181);
+        assert_eq!(id_range("0x180-0x1FF").unwrap(), 0x180..=0x1FF);
+        assert!(id_range("0x200-0x100").is_err());
+        assert!(id_range("zz").is_err());
+        let none = PdoMaps::new();
+        assert!(of_node(&Frame::new(0x185, &[1]), 5, &none));
+        assert!(of_node(&Frame::new(0x605, &[0x40, 0, 0x10, 0, 0, 0, 0, 0]), 5, &none));
+        assert!(of_node(&Frame::new(0x000, &[0x01, 0]), 5, &none));
+        assert!(of_node(&Frame::new(0x000, &[0x01, 5]), 5, &none));
+        assert!(!of_node(&Frame::new(0x000, &[0x01, 6]), 5, &none));
+        assert!(!of_node(&Frame::new(0x186, &[1]), 5, &none));
+        assert!(!of_node(&Frame::new(0x080, &[]), 5, &none));
+        let mut maps = PdoMaps::new();
+        maps.insert(0x1C0, ("TPDO1 node 5".into(), vec![]));
+        assert!(of_node(&Frame::new(0x1C0, &[1]), 5, &maps));
     }
 }

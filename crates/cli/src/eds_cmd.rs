@@ -4,12 +4,11 @@ use std::path::Path;
 
 use anyhow::{Context, anyhow, bail};
 use drivebus_eds::{Eds, EdsVar, Severity};
-use drivebus_od::DataType;
+use drivebus_master::{DataType, Protocol, SdoAbort, SdoError};
 use drivebus_personality::Profile;
-use drivebus_sdo::client::Protocol;
 
 use crate::args::{EdsCmd, Global};
-use crate::link::Link;
+use crate::conn::{Conn, need_node};
 use crate::output::{out, outln};
 
 /// Reads and parses an EDS/DCF file; the error lists the first problems with lines.
@@ -35,13 +34,6 @@ pub fn load_global_eds(g: &Global) -> anyhow::Result<Option<Eds>> {
     g.eds.as_deref().map(load_eds).transpose()
 }
 
-/// The device refused a block transfer (it has none, CiA 301 §7.2.4.3.17).
-fn refused_block(e: &anyhow::Error) -> bool {
-    e.downcast_ref::<crate::link::SdoFailure>().is_some_and(|f| {
-        f.error == drivebus_sdo::client::ClientError::ServerAbort(drivebus_od::SdoAbort::INVALID_COMMAND)
-    })
-}
-
 fn profile(name: &str) -> anyhow::Result<Profile> {
     Profile::from_name(name).ok_or_else(|| {
         let names = Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>().join(", ");
@@ -49,30 +41,22 @@ fn profile(name: &str) -> anyhow::Result<Profile> {
     })
 }
 
-/// The variable description of `index`/`sub`.
-pub fn var(eds: &Eds, index: u16, sub: u8) -> Option<&EdsVar> {
-    let o = eds.objects.get(&index)?;
-    match &o.var {
-        Some(v) if sub == 0 && o.subs.is_empty() => Some(v),
-        _ => o.subs.get(&sub),
+/// Writes `text` to `out` (reporting it) or to stdout.
+fn deliver(g: &Global, out_path: Option<&Path>, text: &str) -> anyhow::Result<()> {
+    match out_path {
+        Some(path) => {
+            std::fs::write(path, text.as_bytes())
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            crate::output::emit(
+                g.json,
+                serde_json::json!({"file": path.display().to_string(), "bytes": text.len()}),
+                || format!("wrote {} ({} bytes)", path.display(), text.len()),
+            );
+        }
+        None if g.json => outln!("{}", serde_json::json!({ "text": text })),
+        None => out!("{text}"),
     }
-}
-
-/// The data type of `index`/`sub` per the EDS.
-pub fn var_type(eds: &Eds, index: u16, sub: u8) -> Option<DataType> {
-    var(eds, index, sub).and_then(|v| DataType::from_index(v.data_type))
-}
-
-/// `Object name` or `Object name / sub name`.
-pub fn object_name(eds: &Eds, index: u16, sub: u8) -> Option<String> {
-    let o = eds.objects.get(&index)?;
-    if o.subs.is_empty() {
-        return Some(o.name.clone());
-    }
-    Some(match o.subs.get(&sub) {
-        Some(v) => format!("{} / {}", o.name, v.name),
-        None => o.name.clone(),
-    })
+    Ok(())
 }
 
 /// Runs an `eds` subcommand; returns the exit status (check: 1 on errors).
@@ -135,37 +119,54 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
             let text = if let Some(p) = &a.profile {
                 profile(p)?.eds_text().to_owned()
             } else if let Some(node) = g.node {
-                let mut link = Link::open(g).await?;
-                let data = match link.upload_with(node, 0x1021, 0, Protocol::Block, None).await {
+                let conn = Conn::open(g).await?;
+                let sdo = conn.master.sdo(node);
+                let r = match sdo.clone().protocol(Protocol::Block).upload(0x1021, 0).await {
                     // A server without block transfer refuses the command
                     // specifier (CiA 301 §7.2.4.3.17 0504 0001h): read it
                     // segmented instead.
-                    Err(e) if refused_block(&e) => {
-                        link.upload_with(node, 0x1021, 0, Protocol::Auto, None).await
+                    Err(SdoError::Abort { code, .. }) if code == SdoAbort::INVALID_COMMAND => {
+                        sdo.upload(0x1021, 0).await
                     }
                     r => r,
-                }
-                .with_context(|| format!("node {node} gives no EDS through 1021h (store EDS)"))?;
+                };
+                let timeout = conn.timeout;
+                conn.close().await?;
+                let data = r
+                    .map_err(crate::error::sdo(node, 0x1021, 0, false, timeout))
+                    .with_context(|| format!("node {node} gives no EDS through 1021h (store EDS)"))?;
                 String::from_utf8_lossy(&data).into_owned()
             } else if let Some(f) = &g.eds {
                 drivebus_eds::write(&load_eds(f)?)
             } else {
                 bail!("nothing to export: give --profile NAME, --node N (reads 1021h) or --eds FILE");
             };
-            match &a.out {
-                Some(path) => {
-                    std::fs::write(path, text.as_bytes())
-                        .with_context(|| format!("cannot write {}", path.display()))?;
-                    if !g.json {
-                        outln!("wrote {} ({} bytes)", path.display(), text.len());
-                    } else {
-                        outln!(
-                            "{}",
-                            serde_json::json!({"file": path.display().to_string(), "bytes": text.len()})
-                        );
-                    }
-                }
-                None => out!("{text}"),
+            deliver(g, a.out.as_deref(), &text)?;
+            Ok(0)
+        }
+        EdsCmd::Dcf(a) => {
+            let node = need_node(g)?;
+            let conn = Conn::open(g).await?;
+            let r = match &conn.dict.eds {
+                Some(eds) => conn.master.dump_dcf(node, eds.clone()).await,
+                None => conn.master.dump_standard_dcf(node).await,
+            };
+            let timeout = conn.timeout;
+            conn.close().await?;
+            let (dcf, report) = r.map_err(|e| crate::error::sdo(node, 0, 0, false, timeout)(e))?;
+            let text = drivebus_eds::write(&dcf);
+            deliver(g, a.out.as_deref(), &text)?;
+            if !g.json {
+                let source = if g.eds.is_some() {
+                    "the EDS"
+                } else {
+                    "the CiA 301/402 standard objects (manufacturer objects need --eds)"
+                };
+                eprintln!(
+                    "node {node}: {} values read from {source}, {} refused",
+                    report.read,
+                    report.refused.len()
+                );
             }
             Ok(0)
         }

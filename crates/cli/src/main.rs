@@ -1,30 +1,145 @@
 //! `drivebus`: the command-line tool of the drivebus CANopen stack.
 //!
-//! Every command runs on one tokio runtime; errors are printed as
-//! `error: ...` on stderr with their causes, and the exit status is 1
-//! (2 for usage errors, from clap).
+//! Every command that talks to a bus is argument parsing and formatting
+//! over one `drivebus_master::Master` (`conn.rs`); `demo` runs the same
+//! master on the simulated bus. Errors are printed as `error: ...` on
+//! stderr with their causes (under `--json`: one `{"error":{...}}` object
+//! on stdout), and the exit status is 1 (2 for usage errors).
 
 mod args;
+mod args_node;
+mod conn;
+mod decode;
 mod demo;
+mod dict;
+mod drive_cmd;
 mod dump;
 mod eds_cmd;
+mod error;
 mod ethercat;
 mod fault;
-mod link;
-mod misc;
-mod motion;
+mod gateway;
+mod lss_cmd;
+mod monitor;
+mod nmt_cmd;
 mod output;
+mod pdo_cmd;
+mod plot;
+mod replay;
 mod sdo_cmd;
 mod serve;
-mod sim;
+mod slcan_pty;
 mod vdrive;
 
-use clap::Parser;
+use clap::parser::ValueSource;
+use clap::{CommandFactory, FromArgMatches};
 
-use args::{Cli, Command};
+use args::{Cli, Command, EdsCmd, LssCmd};
+
+/// The global options a command uses; the others are refused.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Opt {
+    Bus,
+    Node,
+    Eds,
+    Json,
+    Timeout,
+    Retries,
+    Sim,
+}
+
+const ALL_OPTS: [(Opt, &str); 7] = [
+    (Opt::Bus, "bus"),
+    (Opt::Node, "node"),
+    (Opt::Eds, "eds"),
+    (Opt::Json, "json"),
+    (Opt::Timeout, "timeout"),
+    (Opt::Retries, "retries"),
+    (Opt::Sim, "sim"),
+];
+
+fn uses(cmd: &Command) -> &'static [Opt] {
+    use Opt::*;
+    const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim];
+    match cmd {
+        Command::Serve(_) => &[],
+        Command::Demo(_) => &[Json],
+        Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim],
+        Command::Sdo(_) | Command::Pdo(_) => NODE_SDO,
+        Command::Nmt(_) => &[Bus, Node, Json, Timeout, Retries, Sim],
+        Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim],
+        Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim],
+        Command::Monitor(_) => NODE_SDO,
+        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim],
+        Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim],
+        Command::Eds(EdsCmd::Check(_)) => &[Json],
+        Command::Eds(EdsCmd::Show(_)) => &[Eds, Json],
+        Command::Eds(EdsCmd::Export(_)) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim],
+        Command::Eds(EdsCmd::Dcf(_)) => NODE_SDO,
+        Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim],
+        Command::Lss(_) => &[Bus, Json, Timeout, Sim],
+        Command::SlcanPty(_) => &[Bus],
+        // EtherCAT commands take their interface and options after the subcommand.
+        Command::Ethercat(_) => &[],
+    }
+}
+
+/// The subcommand path as typed (`drive move`).
+fn path(m: &clap::ArgMatches) -> (Vec<String>, &clap::ArgMatches) {
+    let mut names = Vec::new();
+    let mut leaf = m;
+    while let Some((name, sub)) = leaf.subcommand() {
+        names.push(name.to_owned());
+        leaf = sub;
+    }
+    (names, leaf)
+}
+
+/// Refuses global options given on the command line that `cmd` ignores.
+fn check_options(cmd: &Command, m: &clap::ArgMatches) -> Result<(), String> {
+    let (names, leaf) = path(m);
+    let used = uses(cmd);
+    for (opt, id) in ALL_OPTS {
+        let given = [m, leaf].iter().any(|mm| mm.value_source(id) == Some(ValueSource::CommandLine));
+        if given && !used.contains(&opt) {
+            let why = match opt {
+                Opt::Bus | Opt::Sim if names[0] == "serve" => {
+                    " (serve hosts its own bus: use --listen, --drive)"
+                }
+                Opt::Bus | Opt::Sim if names[0] == "demo" => " (the demo runs on its own simulated bus)",
+                _ => "",
+            };
+            return Err(format!("--{id} does not apply to `drivebus {}`{why}", names.join(" ")));
+        }
+    }
+    Ok(())
+}
 
 fn main() {
-    let cli = Cli::parse();
+    let argv: Vec<String> = std::env::args().collect();
+    let json = argv.iter().any(|a| a == "--json");
+    let matches = match Cli::command().try_get_matches_from(&argv) {
+        Ok(m) => m,
+        Err(e) if json && e.use_stderr() => {
+            let msg = e.to_string();
+            let first = msg.lines().next().unwrap_or("").trim_start_matches("error: ").to_owned();
+            output::json_error("usage", &first, serde_json::json!({}));
+            std::process::exit(2);
+        }
+        Err(e) => e.exit(),
+    };
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
+    };
+    if let Err(msg) = check_options(&cli.cmd, &matches) {
+        if cli.global.json {
+            output::json_error("usage", &msg, serde_json::json!({}));
+        } else {
+            eprintln!("error: {msg}");
+        }
+        std::process::exit(2);
+    }
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
@@ -35,14 +150,20 @@ fn main() {
             std::process::exit(1);
         }
     };
+    let json = cli.global.json;
     let result = rt.block_on(run(cli));
     // Hosted drives and transports are tasks: do not wait for them.
     rt.shutdown_background();
     match result {
         Ok(code) => std::process::exit(code),
         Err(e) => {
-            eprintln!("error: {e:#}");
-            std::process::exit(1);
+            let (code, extra) = error::describe(&e);
+            if json {
+                output::json_error(code, &format!("{e:#}"), extra);
+            } else {
+                eprintln!("error: {e:#}");
+            }
+            std::process::exit(if code == "usage" { 2 } else { 1 });
         }
     }
 }
@@ -52,17 +173,51 @@ fn main() {
 async fn run(cli: Cli) -> anyhow::Result<i32> {
     let g = &cli.global;
     match &cli.cmd {
-        Command::Serve(a) => serve::run(a).await.map(|()| 0),
+        Command::Serve(a) => serve::run(g, a).await.map(|()| 0),
         Command::Demo(a) => demo::run(g, a).await.map(|()| 0),
-        Command::Scan(a) => misc::scan(g, a).await.map(|()| 0),
+        Command::Scan(a) => nmt_cmd::scan(g, a).await.map(|()| 0),
         Command::Sdo(c) => sdo_cmd::run(g, c).await.map(|()| 0),
-        Command::Nmt(a) => misc::nmt(g, a).await.map(|()| 0),
-        Command::Pdo(c) => misc::pdo(g, c).await.map(|()| 0),
-        Command::Drive(c) => motion::run(g, c).await.map(|()| 0),
+        Command::Nmt(a) => nmt_cmd::nmt(g, a).await.map(|()| 0),
+        Command::Pdo(c) => pdo_cmd::run(g, c).await.map(|()| 0),
+        Command::Drive(c) => drive_cmd::run(g, c).await.map(|()| 0),
         Command::Dump(a) => dump::run(g, a).await.map(|()| 0),
+        Command::Monitor(a) => monitor::run(g, a).await.map(|()| 0),
+        Command::Send(a) => replay::send(g, a).await.map(|()| 0),
+        Command::Replay(a) => replay::run(g, a).await.map(|()| 0),
+        Command::Gateway(a) => gateway::run(g, a).await.map(|()| 0),
         Command::Eds(c) => eds_cmd::run(g, c).await,
-        Command::Lss(c) => misc::lss(g, c).await.map(|()| 0),
-        Command::SlcanPty(a) => misc::slcan_pty(g, a).await.map(|()| 0),
+        Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
+        Command::SlcanPty(a) => slcan_pty::run(g, a).await.map(|()| 0),
         Command::Ethercat(c) => ethercat::run(c).await,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(args: &[&str]) -> Result<(), String> {
+        let m = Cli::command().try_get_matches_from(args).unwrap();
+        let cli = Cli::from_arg_matches(&m).unwrap();
+        check_options(&cli.cmd, &m)
+    }
+
+    #[test]
+    fn options_that_do_not_apply_are_refused() {
+        assert!(check(&["drivebus", "--node", "1", "sdo", "read", "1000"]).is_ok());
+        assert!(check(&["drivebus", "sdo", "read", "1000", "--node", "1"]).is_ok());
+        let e = check(&["drivebus", "--node", "3", "serve", "--drive", "akd:1"]).unwrap_err();
+        assert_eq!(e, "--node does not apply to `drivebus serve`");
+        let e = check(&["drivebus", "serve", "--drive", "akd:1", "--bus", "virtual"]).unwrap_err();
+        assert!(e.contains("serve hosts its own bus"), "{e}");
+        let e = check(&["drivebus", "--eds", "x.eds", "nmt", "start", "--all"]).unwrap_err();
+        assert_eq!(e, "--eds does not apply to `drivebus nmt`");
+        let e = check(&["drivebus", "demo", "--timeout", "5"]).unwrap_err();
+        assert!(e.contains("--timeout does not apply to `drivebus demo`"), "{e}");
+        let e = check(&["drivebus", "eds", "check", "x.eds", "--node", "1"]).unwrap_err();
+        assert!(e.contains("`drivebus eds check`"), "{e}");
+        assert!(check(&["drivebus", "--json", "demo"]).is_ok());
+        let e = check(&["drivebus", "--json", "gateway"]).unwrap_err();
+        assert!(e.contains("--json does not apply"), "{e}");
     }
 }

@@ -31,3 +31,21 @@ macro_rules! out {
 }
 
 pub(crate) use {out, outln};
+
+/// Prints the `--json` form of an error on stdout: one object.
+pub fn json_error(code: &str, message: &str, extra: serde_json::Value) {
+    let mut e = serde_json::json!({"code": code, "message": message});
+    if let (Some(obj), serde_json::Value::Object(x)) = (e.as_object_mut(), extra) {
+        obj.extend(x);
+    }
+    line(format_args!("{}", serde_json::json!({ "error": e })));
+}
+
+/// `--json` or a line of text.
+pub fn emit(json: bool, value: serde_json::Value, text: impl FnOnce() -> String) {
+    if json {
+        line(format_args!("{value}"));
+    } else {
+        line(format_args!("{}", text()));
+    }
+}

@@ -1,21 +1,28 @@
-//! `drivebus serve`: virtual drives on a socketcand server.
+//! `drivebus serve`: virtual drives on a socketcand server, or on any bus.
 //!
-//! Contract (other tools rely on it): one stdout line containing
-//! `listening on` once clients can connect; runs until SIGINT or SIGTERM,
-//! then exits 0.
+//! The drives sit on an in-process [`Hub`], each its own participant,
+//! hosted in real time by `drivebus_transport::host`. Without `--bus` (or
+//! with `--bus virtual`) a socketcand server on `--listen` shares that hub.
+//! With `--bus URL` the hub is bridged to that bus (SocketCAN, slcan,
+//! socketcand): the drives are stations on it and keep their own timing;
+//! the socketcand listener runs only when `--listen` is given.
+//!
+//! Contract (other tools rely on it): one stdout line once the drives are
+//! up — containing `listening on HOST:PORT (channel NAME)` when listening,
+//! `serving on URL` otherwise; runs until SIGINT or SIGTERM, then exits 0.
 
 use std::io::Write;
 
-use anyhow::Context;
+use anyhow::{Context, anyhow};
 use drivebus_personality::build::BuildOptions;
 use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
-use drivebus_transport::{Hub, HubConfig};
+use drivebus_transport::{BusUrl, Hub, HubConfig};
 
-use crate::args::ServeArgs;
+use crate::args::{DEFAULT_LISTEN, Global, ServeArgs};
 use crate::vdrive::{DriveSpec, spawn_on_hub};
 
-/// Runs the server until a termination signal.
-pub async fn run(a: &ServeArgs) -> anyhow::Result<()> {
+/// Runs the drives until a termination signal.
+pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     let specs = DriveSpec::parse_all(&a.drives)?;
     if a.channel.is_empty() || a.channel.contains(char::is_whitespace) || a.channel.contains(['<', '>']) {
         anyhow::bail!("bad --channel `{}`: a bus name without spaces or angle brackets", a.channel);
@@ -29,12 +36,42 @@ pub async fn run(a: &ServeArgs) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create --state-dir {}", dir.display()))?;
     }
+    // The transport's message already names the URL and the cause.
+    let parsed = BusUrl::parse(&g.bus).map_err(|e| anyhow!("{e}"))?;
+    let outer = match parsed {
+        BusUrl::Virtual { .. } => None,
+        _ => Some(
+            tokio::time::timeout(
+                std::time::Duration::from_secs(10),
+                drivebus_transport::open_parsed(&g.bus, &parsed),
+            )
+            .await
+            .map_err(|_| anyhow!("cannot open `{}`: timed out after 10 s", g.bus))?
+            .map_err(|e| anyhow!("{e}"))?,
+        ),
+    };
     let hub = Hub::new(HubConfig { bitrate: a.bitrate, ..HubConfig::default() });
     crate::fault::install(&hub, &a.faults)?;
-    let (server, addr) =
-        SocketcandServer::bind_with(a.listen.as_str(), ServerConfig::new(&a.channel), hub.clone())
-            .await
-            .with_context(|| format!("cannot listen on {}", a.listen))?;
+    let listen = match (&a.listen, &outer) {
+        (Some(l), _) => Some(l.clone()),
+        (None, None) => Some(DEFAULT_LISTEN.to_owned()),
+        (None, Some(_)) => None,
+    };
+    let server = match &listen {
+        Some(l) => Some(
+            SocketcandServer::bind_with(l.as_str(), ServerConfig::new(&a.channel), hub.clone())
+                .await
+                .with_context(|| format!("cannot listen on {l}"))?,
+        ),
+        None => None,
+    };
+    // The bridge first: the drives' boot-up messages reach the real bus.
+    let bridge = outer.map(|bus| drivebus_transport::host::bridge(&hub, bus));
+    if bridge.is_some() {
+        // An slcan adapter takes its open command, a socketcand server its
+        // rawmode grace time, before frames get through.
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    }
     let options = BuildOptions { eds_object: a.eds_object };
     let drives = spawn_on_hub(&specs, &hub, a.state_dir.as_deref(), options)?;
     let list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
@@ -44,18 +81,27 @@ pub async fn run(a: &ServeArgs) -> anyhow::Result<()> {
     let stop = Signals::install()?;
     {
         let mut out = std::io::stdout().lock();
-        writeln!(
-            out,
-            "drivebus serve: socketcand listening on {addr} channel {} ({pace}); drives {list}",
-            a.channel
-        )?;
+        let on = if bridge.is_some() { format!(" on {}", g.bus) } else { String::new() };
+        match &server {
+            Some((_, addr)) => writeln!(
+                out,
+                "drivebus serve: socketcand listening on {addr} (channel {}) ({pace}); drives {list}{on}",
+                a.channel
+            )?,
+            None => writeln!(out, "drivebus serve: serving on {} ({pace}); drives {list}", g.bus)?,
+        }
         out.flush()?;
     }
-    tracing::info!(%addr, "serving");
+    tracing::info!(bus = %g.bus, "serving");
     stop.wait().await?;
-    tracing::info!(clients = server.client_count(), relayed = server.hub().relayed(), "stopping");
+    if let Some((server, _)) = &server {
+        tracing::info!(clients = server.client_count(), relayed = server.hub().relayed(), "stopping");
+    }
     for d in drives {
         d.abort();
+    }
+    if let Some(b) = bridge {
+        b.abort();
     }
     drop(server);
     Ok(())

@@ -113,7 +113,7 @@ fn scan_finds_the_virtual_drives() {
 fn sdo_read_values_types_and_errors() {
     dbv(with(&AKD, &["--node", "1", "sdo", "read", "0x1000", "0"]))
         .success()
-        .stdout(contains("1000h:00 = 131474 (0x00020192)"));
+        .stdout(contains("1000h:00 Device type = 131474 (0x00020192) [UNSIGNED32]"));
     dbv(with(&AKD, &["--node", "1", "sdo", "read", "1008h", "--type", "str"]))
         .success()
         .stdout(contains("M006"));
@@ -133,7 +133,7 @@ fn sdo_read_values_types_and_errors() {
     dbv(with(&AKD, &["--node", "1", "sdo", "read", "0x2FFF", "0x7F"]))
         .failure()
         .stderr(contains("0x06020000").and(contains("Object does not exist")));
-    dbv(with(&AKD, &["--node", "1", "sdo", "read", "0xZZ"])).failure().stderr(contains("is not a number"));
+    dbv(with(&AKD, &["--node", "1", "sdo", "read", "0xZZ"])).failure().stderr(contains("is not an object"));
     dbv(with(&AKD, &["--node", "1", "sdo", "read", "0x1000", "0", "--type", "u17"]))
         .failure()
         .stderr(contains("unknown type `u17`"));
@@ -146,7 +146,11 @@ fn sdo_write_typed_and_by_eds() {
     dbv(with(&AKD, &["--node", "1", "sdo", "write", "0x1017", "0", "100", "--type", "u16"]))
         .success()
         .stdout(contains("wrote 1017h:00 = 100"));
+    // Standard objects are typed without --type or an EDS (CiA 301: UNSIGNED16).
     dbv(with(&AKD, &["--node", "1", "sdo", "write", "0x1017", "0", "100"]))
+        .success()
+        .stdout(contains("UNSIGNED16"));
+    dbv(with(&AKD, &["--node", "1", "sdo", "write", "0x2FFF", "0", "100"]))
         .failure()
         .stderr(contains("give --type"));
     dbv(with(&AKD, &["--node", "1", "sdo", "write", "0x1017", "0", "abc", "--type", "u16"]))
@@ -235,12 +239,19 @@ fn pdo_show_and_map() {
     dbv(with(&AKD, &["--node", "1", "pdo", "map", "tpdo", "2", "0x6041:0:16", "0x6064:0:32", "--type", "1"]))
         .success()
         .stdout(contains("TPDO2 mapped 2 entries"));
-    dbv(with(&AKD, &["--node", "1", "pdo", "map", "tpdo", "2", "0x6041"]))
+    // An object alone takes its size from the dictionary.
+    dbv(with(&AKD, &["--node", "1", "pdo", "map", "tpdo", "2", "statusword", "6064"]))
+        .success()
+        .stdout(contains("TPDO2 mapped 2 entries"));
+    dbv(with(&AKD, &["--node", "1", "pdo", "map", "tpdo", "2", "6041:0:99"]))
+        .failure()
+        .stderr(contains("BITS must be 1..64"));
+    dbv(with(&AKD, &["--node", "1", "pdo", "map", "tpdo", "2", "2FFF"]))
         .failure()
         .stderr(contains("INDEX:SUB:BITS"));
     dbv(with(&AKD, &["--node", "1", "pdo", "map", "rpdo", "1", "0x1000:0:32"]))
         .failure()
-        .stderr(contains("SDO write 1600h:01").and(contains("0x0604")));
+        .stderr(contains("SDO write 1600h:01").and(contains("0x0604")).and(contains("in force again")));
     dbv(with(&AKD, &["--node", "6", "--timeout", "200", "pdo", "show"]))
         .failure()
         .stderr(contains("timed out"));
@@ -297,7 +308,12 @@ fn demo_runs_and_writes_the_plot() {
         .success()
         .stdout(contains("following error RMS").and(contains("frames on the bus")).and(contains("bus load")));
     let text = std::fs::read_to_string(&svg).unwrap();
-    assert!(text.contains("<svg") && text.contains("Following error"));
+    assert!(text.contains("<svg") && text.contains("Node 1 following error"));
+    // Node 2 on its own axis in its own units; the phases named.
+    assert!(text.contains("Node 2 (DDS6) position") && text.contains("position units"));
+    for phase in ["homing", "move", "CSP sine"] {
+        assert!(text.contains(&format!(">\n{phase}\n</text>")), "phase {phase} marked");
+    }
     let out = db(&["--json", "demo", "--sine-seconds", "0.2", "--out", svg.to_str().unwrap()])
         .success()
         .get_output()

@@ -1,14 +1,20 @@
-//! Async CANopen master for drivebus (tokio). (Devices are hosted in real
-//! time by `drivebus_transport::host`.)
+//! CANopen master for drivebus: a sans-IO core with two drivers. (Devices
+//! are hosted in real time by `drivebus_transport::host`.)
 //!
-//! A [`Master`] sits on one [`CanBus`](drivebus_transport::CanBus). One
-//! receive task demultiplexes every frame: SDO responses go to the transfer
-//! waiting for them, heartbeats/boot-ups update the node table and become
-//! [`MasterEvent`]s, EMCYs are decoded with their texts, LSS answers go to
-//! the LSS operation running, and PDOs to their subscribers. The protocol
-//! work itself is done by the sans-IO machines of the core crates
-//! (`drivebus_sdo::client`, `drivebus_lss::FastScan`), driven in the
-//! caller's future with a monotonic clock derived from `tokio::time`.
+//! The core (frames and `now` in, frames and the next deadline out) keeps
+//! the node table, the heartbeat/guarding monitor, the EMCY consumer, the
+//! SYNC producer, and runs SDO transfers (`drivebus_sdo::client`), LSS
+//! exchanges and fastscan (`drivebus_lss::FastScan`). A [`Master`] is the
+//! async API over it; every procedure (SDO, scan, LSS, PDO configuration,
+//! the CiA 402 [`Drive`] sequences) is written once against it and runs
+//! on either driver:
+//!
+//! - **tokio** ([`Master::new`]): one task on a
+//!   [`CanBus`](drivebus_transport::CanBus) (socketcand, slcan, SocketCAN,
+//!   in-process hub), on the tokio clock;
+//! - **simulated time** ([`SimBus`]): the master as a station of the
+//!   deterministic virtual bus (`drivebus_bus::Bus`), exact and repeatable
+//!   (what `drivebus demo` and the dual-driver tests use).
 //!
 //! ```no_run
 //! # async fn demo() -> Result<(), Box<dyn std::error::Error>> {
@@ -18,26 +24,37 @@
 //! # let _ = device_type; Ok(()) }
 //! ```
 //!
-//! Modules: `master` (the core,
-//! events, NMT, heartbeat/guarding, EMCY, SYNC/TIME); [`sdo`]; [`scan`];
-//! [`lss`]; [`pdo`]; [`drive`] (CiA 402).
+//! Modules: [`driver`] (tokio,
+//! simulated time); `master` (events, NMT, heartbeat/guarding, EMCY,
+//! SYNC/TIME); [`sdo`]; [`scan`]; [`lss`]; [`pdo`]; [`drive`] (CiA 402).
 
 mod clock;
+mod core;
+pub mod dcf;
 pub mod drive;
+pub mod driver;
 pub mod lss;
 mod master;
 pub mod pdo;
 pub mod scan;
 pub mod sdo;
 
-pub use drive::{Drive, DriveError, DriveState, Profile};
-pub use lss::{LssError, LssMaster};
-pub use master::{Master, MasterConfig, MasterEvent, NodeStatus, SyncTick, WaitError};
-pub use pdo::{ConfigError, PdoDir, PdoMapEntry, PdoRecord};
+pub use crate::core::Stats;
+pub use dcf::DumpReport;
+pub use drive::{
+    Drive, DriveError, DriveState, MotionLimits, MotionProgress, Profile, StopAction, StopReport, mode_name,
+};
+pub use driver::sim::{SimBus, Stalled};
+pub use lss::{LssError, LssMaster, OnlySlave};
+pub use master::{Master, MasterConfig, MasterEvent, NodeStatus, PdoCallback, SyncTick, WaitError};
+pub use pdo::{ConfigError, PdoDir, PdoMapEntry, PdoRecord, PdoWriteError};
 pub use scan::{ScanOptions, ScannedNode};
 pub use sdo::{SdoError, SdoHandle, SdoValue};
 
 /// Re-exports so users need one dependency.
+pub use drivebus_bus::{Bus as VirtualBus, BusConfig as VirtualBusConfig, candump};
+pub use drivebus_can::{CanId, Frame, Instant};
+pub use drivebus_emcy::describe as emcy_description;
 pub use drivebus_lss::codec::LssField;
 pub use drivebus_lss::{FastScan, LssAddress, LssAddressRange, LssMode};
 pub use drivebus_nmt::{NmtCommand, RemoteState};

@@ -1,9 +1,9 @@
 //! LSS master (CiA 305) on the async bus.
 //!
 //! Operations are serialised on one lock (LSS has a single COB-ID pair, so
-//! two concurrent operations could take each other's answers). Each
-//! subscribes to the 7E4h frames before sending, then waits for the answer
-//! with the expected command specifier.
+//! two concurrent operations could take each other's answers). Each runs
+//! in the master core as an operation that sends its request and takes the
+//! 7E4h answer with the expected command specifier.
 
 use std::fmt;
 use std::time::Duration;
@@ -11,8 +11,8 @@ use std::time::Duration;
 use drivebus_can::Frame;
 use drivebus_lss::codec::{LssField, LssResponse, err};
 use drivebus_lss::{FastScan, FastScanOutcome, LssAddress, LssAddressRange, LssMode, master};
-use tokio::sync::broadcast;
 
+use crate::core::ops::{Exchange, FastScanOp, Matcher};
 use crate::master::Master;
 
 /// Why an LSS operation failed.
@@ -49,6 +49,18 @@ impl fmt::Display for LssError {
 
 impl std::error::Error for LssError {}
 
+/// What [`LssMaster::configure_only_slave`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnlySlave {
+    /// The one non-configured slave, now with the node-ID (and stored if asked).
+    Configured(LssAddress),
+    /// No non-configured slave answered.
+    NoneFound,
+    /// More than one non-configured slave is on the bus: nothing was
+    /// configured (the first one found is given, for a selective switch).
+    Several(LssAddress),
+}
+
 /// The LSS master; from [`Master::lss`].
 #[derive(Clone, Debug)]
 pub struct LssMaster {
@@ -78,18 +90,37 @@ impl LssMaster {
         self.master.send(f).await.map_err(|e| LssError::Transport(e.to_string()))
     }
 
-    /// Sends `frames` and returns the first answer `accept` maps to `Some`.
-    async fn request<T>(
+    /// Sends `frames` and collects the LSS answers `accept` takes: the
+    /// first one (`first_only`) or all within the timeout.
+    async fn exchange(
         &self,
         frames: &[Frame],
-        accept: impl Fn(LssResponse) -> Option<T>,
+        accept: impl Fn(LssResponse) -> bool + Send + 'static,
+        first_only: bool,
+    ) -> Result<Vec<LssResponse>, LssError> {
+        let matcher: Matcher = Box::new(move |f: &Frame| {
+            f.std_id() == Some(drivebus_lss::SLAVE_TO_MASTER)
+                && master::parse_response(f).is_some_and(&accept)
+        });
+        let (op, rx) = Exchange::new(frames.to_vec(), matcher, first_only, self.timeout);
+        let id = self.master.inner.with_core(|c| c.start_op(Box::new(op)));
+        let guard = OpGuard { master: &self.master, id };
+        let got = rx.await.map_err(|_| LssError::Transport("the master's bus is closed".into()))?;
+        drop(guard);
+        Ok(got.iter().filter_map(master::parse_response).collect())
+    }
+
+    /// Sends `frames` and returns the first answer `accept` maps to `Some`.
+    async fn request<T: Send + 'static>(
+        &self,
+        frames: &[Frame],
+        accept: impl Fn(LssResponse) -> Option<T> + Send + Sync + 'static,
     ) -> Result<T, LssError> {
         let _one = self.master.inner.lss_lock.lock().await;
-        let mut rx = self.master.inner.lss.subscribe();
-        for f in frames {
-            self.send(*f).await?;
-        }
-        wait(&mut rx, self.timeout, accept).await
+        let accept = std::sync::Arc::new(accept);
+        let a = accept.clone();
+        let got = self.exchange(frames, move |r| a(r).is_some(), true).await?;
+        got.into_iter().find_map(|r| accept(r)).ok_or(LssError::Timeout)
     }
 
     /// Switch state global: every slave enters `mode` (no answer).
@@ -109,7 +140,7 @@ impl LssMaster {
         let mut addr = LssAddress::default();
         for field in LssField::ALL {
             let v = self
-                .request(&[master::inquire_identity(field)], |r| match r {
+                .request(&[master::inquire_identity(field)], move |r| match r {
                     LssResponse::Identity { field: f, value } if f == field => Some(value),
                     _ => None,
                 })
@@ -210,55 +241,88 @@ impl LssMaster {
     }
 
     /// Fastscan with a prepared scanner (known parts, early advance).
-    pub async fn fastscan_with(&self, mut scan: FastScan) -> Result<Option<LssAddress>, LssError> {
-        let inner = &self.master.inner;
-        let _one = inner.lss_lock.lock().await;
-        let mut rx = inner.lss.subscribe();
-        let clock = inner.clock;
-        let mut out: Vec<Frame> = Vec::new();
-        scan.start(clock.now(), &mut out);
-        loop {
-            for f in out.drain(..) {
-                self.send(f).await?;
-            }
-            if let Some(o) = scan.outcome() {
-                return match o {
-                    FastScanOutcome::Found(a) => Ok(Some(a)),
-                    FastScanOutcome::NoneFound => Ok(None),
-                    FastScanOutcome::Lost(_) => Err(LssError::Timeout),
-                };
-            }
-            // Take every answer already queued before judging the question:
-            // after a late wake-up the deadline has passed too.
-            loop {
-                match rx.try_recv() {
-                    Ok(f) => {
-                        scan.handle_frame(&f, clock.now(), &mut out);
-                    }
-                    Err(broadcast::error::TryRecvError::Lagged(_)) => {}
-                    Err(_) => break,
-                }
-            }
-            if !out.is_empty() || scan.outcome().is_some() {
-                continue;
-            }
-            let next = scan.poll(clock.now(), &mut out);
-            if !out.is_empty() || scan.outcome().is_some() {
-                continue;
-            }
-            let Some(deadline) = next else { return Ok(None) };
-            tokio::select! {
-                // An answer already queued counts even if the deadline also
-                // passed while this task waited to be scheduled.
-                biased;
-                r = rx.recv() => match r {
-                    Ok(f) => { scan.handle_frame(&f, clock.now(), &mut out); }
-                    Err(broadcast::error::RecvError::Lagged(_)) => {}
-                    Err(broadcast::error::RecvError::Closed) => return Err(LssError::Transport("closed".into())),
-                },
-                () = tokio::time::sleep_until(clock.at(deadline)) => {}
-            }
+    pub async fn fastscan_with(&self, scan: FastScan) -> Result<Option<LssAddress>, LssError> {
+        let _one = self.master.inner.lss_lock.lock().await;
+        let (op, rx) = FastScanOp::new(scan);
+        let id = self.master.inner.with_core(|c| c.start_op(Box::new(op)));
+        let guard = OpGuard { master: &self.master, id };
+        let outcome = rx.await.map_err(|_| LssError::Transport("the master's bus is closed".into()))?;
+        drop(guard);
+        match outcome {
+            FastScanOutcome::Found(a) => Ok(Some(a)),
+            FastScanOutcome::NoneFound => Ok(None),
+            FastScanOutcome::Lost(_) => Err(LssError::Timeout),
         }
+    }
+
+    /// Configures `node_id` on the non-configured slave, refusing when
+    /// there is more than one (a global switch would give every slave the
+    /// same node-ID): fastscan isolates one slave, which gets the node-ID;
+    /// if another non-configured slave still answers "identify
+    /// non-configured remote slave", the first is unconfigured again
+    /// (node-ID FFh) and nothing changes. Otherwise the node-ID is stored
+    /// when `store`, and the slave returns to waiting (it starts under the
+    /// new node-ID, CiA 305).
+    pub async fn configure_only_slave(&self, node_id: u8, store: bool) -> Result<OnlySlave, LssError> {
+        self.configure_only_slave_with(FastScan::new(self.timeout), node_id, store).await
+    }
+
+    /// [`configure_only_slave`](Self::configure_only_slave) with a prepared scanner.
+    pub async fn configure_only_slave_with(
+        &self,
+        scan: FastScan,
+        node_id: u8,
+        store: bool,
+    ) -> Result<OnlySlave, LssError> {
+        if !drivebus_lss::is_configurable_node_id(node_id) || node_id == 0xFF {
+            return Err(LssError::InvalidArgument(format!("node-ID {node_id} is not 1..=127")));
+        }
+        let Some(addr) = self.fastscan_with(scan).await? else { return Ok(OnlySlave::NoneFound) };
+        self.configure_node_id(node_id).await?;
+        if self.identify_non_configured().await? {
+            self.configure_node_id(0xFF).await?;
+            self.switch_global(LssMode::Waiting).await?;
+            return Ok(OnlySlave::Several(addr));
+        }
+        if store {
+            self.store().await?;
+        }
+        self.switch_global(LssMode::Waiting).await?;
+        Ok(OnlySlave::Configured(addr))
+    }
+
+    /// Finds the non-configured slave with the lowest LSS address (fastscan)
+    /// and whether others are on the bus, leaving every slave as it was
+    /// (the found one is given node-ID 1 for the check, then FFh again).
+    pub async fn probe_unconfigured(&self) -> Result<Option<(LssAddress, bool)>, LssError> {
+        let Some(addr) = self.fastscan().await? else { return Ok(None) };
+        self.configure_node_id(1).await?;
+        let more = self.identify_non_configured().await;
+        self.configure_node_id(0xFF).await?;
+        self.switch_global(LssMode::Waiting).await?;
+        Ok(Some((addr, more?)))
+    }
+
+    /// Switch state selective on `addr`, configure `node_id`, store when
+    /// asked, back to waiting. The node-ID of a slave that had one takes
+    /// effect at its next NMT reset communication.
+    pub async fn configure_selected(
+        &self,
+        addr: &LssAddress,
+        node_id: u8,
+        store: bool,
+    ) -> Result<(), LssError> {
+        self.switch_selective(addr).await?;
+        let r = async {
+            self.configure_node_id(node_id).await?;
+            if store {
+                self.store().await?;
+            }
+            Ok(())
+        }
+        .await;
+        self.switch_global(LssMode::Waiting).await?;
+        r
     }
 
     /// Fastscan, then configure `node_id` on the found slave, optionally
@@ -286,23 +350,14 @@ impl LssMaster {
     }
 }
 
-async fn wait<T>(
-    rx: &mut broadcast::Receiver<Frame>,
-    timeout: Duration,
-    accept: impl Fn(LssResponse) -> Option<T>,
-) -> Result<T, LssError> {
-    let fut = async {
-        loop {
-            match rx.recv().await {
-                Ok(f) => {
-                    if let Some(t) = master::parse_response(&f).and_then(&accept) {
-                        return Ok(t);
-                    }
-                }
-                Err(broadcast::error::RecvError::Lagged(_)) => {}
-                Err(broadcast::error::RecvError::Closed) => return Err(LssError::Transport("closed".into())),
-            }
-        }
-    };
-    tokio::time::timeout(timeout, fut).await.unwrap_or(Err(LssError::Timeout))
+/// Removes an operation whose future went away.
+struct OpGuard<'a> {
+    master: &'a Master,
+    id: u64,
+}
+
+impl Drop for OpGuard<'_> {
+    fn drop(&mut self) {
+        self.master.inner.with_core(|c| c.cancel_op(self.id));
+    }
 }

@@ -1,22 +1,23 @@
-//! The master core: receive task, node table, events, NMT, heartbeat and
-//! guarding monitor, EMCY consumer, SYNC and TIME producers.
+//! The [`Master`] handle: the API over the sans-IO core. Every method
+//! queues work in the core and awaits its completion; the driver (tokio
+//! or simulated time) moves frames and time.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::future::Future;
 use std::io;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use drivebus_can::Frame;
+use drivebus_can::{Frame, Instant};
 use drivebus_nmt::{NmtCommand, RemoteState};
 use drivebus_od::ObjectDictionary;
 use drivebus_sync::TimeOfDay;
-use drivebus_transport::{CanBus, CanRx, CanTx};
-use tokio::sync::{Notify, broadcast, mpsc};
+use drivebus_transport::{CanBus, CanTx, TrySendError};
+use tokio::sync::{Notify, broadcast};
 use tokio::task::AbortHandle;
-use tokio::time::Instant as TokioInstant;
 
-use crate::clock::Clock;
+use crate::core::{Core, PdoSink, Stats};
 
 /// Master-wide settings.
 #[derive(Clone, Debug)]
@@ -74,7 +75,7 @@ pub enum MasterEvent {
         /// CiA 301/402 standard texts.
         text: Option<String>,
     },
-    /// The bus failed; the receive task has ended.
+    /// The bus failed; the driver has stopped.
     BusError {
         /// Why.
         reason: String,
@@ -86,8 +87,9 @@ pub enum MasterEvent {
 pub struct NodeStatus {
     /// Last reported NMT state (heartbeat, guarding or boot-up).
     pub state: Option<RemoteState>,
-    /// When the last heartbeat / guarding answer arrived.
-    pub last_heartbeat: Option<TokioInstant>,
+    /// When the last heartbeat / guarding answer arrived, on the master's
+    /// time axis ([`Master::now`]).
+    pub last_heartbeat: Option<Instant>,
     /// Heartbeat / guarding timeout being monitored.
     pub monitor: Option<Duration>,
     /// The monitored deadline passed without a heartbeat.
@@ -107,12 +109,12 @@ pub struct SyncTick {
     pub counter: Option<u8>,
 }
 
-/// Why waiting for a node failed.
+/// Why waiting failed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum WaitError {
     /// Nothing within the timeout.
     Timeout,
-    /// The master's receive task ended.
+    /// The master's bus is closed.
     Closed,
 }
 
@@ -127,72 +129,152 @@ impl std::fmt::Display for WaitError {
 
 impl std::error::Error for WaitError {}
 
-/// A synchronous PDO consumer (see [`Master::add_pdo_sink`]).
-pub(crate) type PdoSink = Arc<dyn Fn(&Frame) + Send + Sync>;
-
-#[derive(Default)]
-pub(crate) struct State {
-    pub(crate) sdo_routes: HashMap<u16, mpsc::UnboundedSender<Frame>>,
-    pub(crate) sdo_locks: HashMap<u16, Arc<tokio::sync::Mutex<()>>>,
-    pub(crate) pdo: HashMap<u16, broadcast::Sender<Frame>>,
-    /// Synchronous PDO consumers, called in the receive task in frame
-    /// order (so after an SDO response they have seen every earlier PDO).
-    pdo_sinks: HashMap<u16, Vec<(u64, PdoSink)>>,
-    next_sink: u64,
-    pub(crate) nodes: BTreeMap<u8, NodeStatus>,
-    pub(crate) eds: HashMap<u8, Arc<ObjectDictionary>>,
-    pub(crate) emcy_tables: HashMap<u8, Arc<HashMap<u16, String>>>,
-    sync_task: Option<AbortHandle>,
-    guard_tasks: HashMap<u8, AbortHandle>,
+/// How the core is driven.
+pub(crate) enum Driver {
+    /// A tokio task on a transport (`driver::tokio`).
+    Tokio {
+        clock: crate::clock::Clock,
+        tx: CanTx,
+        /// Wakes the driver task: frames queued or an earlier deadline.
+        kick: Arc<Notify>,
+        /// Frames the driver has handed to the transport.
+        sent: AtomicU64,
+        /// Signalled whenever `sent` grows.
+        sent_notify: Notify,
+        /// Held while taking the core's queue and handing it to the
+        /// transport: whoever holds it sends everything queued so far, in
+        /// order (the driver task, or an API call that queued frames).
+        send_lock: tokio::sync::Mutex<()>,
+    },
+    /// The simulated-time loop of `driver::sim` (it polls and sends after
+    /// every step of the caller's future, so nothing needs waking).
+    Sim {
+        /// Simulated nanoseconds, written by the loop.
+        now: AtomicU64,
+    },
 }
 
-pub(crate) struct Inner {
-    pub(crate) tx: CanTx,
-    pub(crate) clock: Clock,
+pub(crate) struct Shared {
+    core: Mutex<Core>,
     pub(crate) config: MasterConfig,
-    pub(crate) events: broadcast::Sender<MasterEvent>,
-    pub(crate) frames: broadcast::Sender<Frame>,
-    pub(crate) lss: broadcast::Sender<Frame>,
+    pub(crate) driver: Driver,
+    /// LSS has one COB-ID pair: one LSS operation at a time.
     pub(crate) lss_lock: tokio::sync::Mutex<()>,
-    pub(crate) sync_ticks: broadcast::Sender<SyncTick>,
-    state: Mutex<State>,
-    monitor: Notify,
+    tasks: Mutex<Vec<AbortHandle>>,
 }
 
-impl Inner {
-    pub(crate) fn state(&self) -> MutexGuard<'_, State> {
-        // A panic while holding the lock leaves plain data; keep going.
-        self.state.lock().unwrap_or_else(|e| e.into_inner())
-    }
-}
-
-/// Background tasks of one master; aborted when the last [`Master`] clone
-/// is dropped.
-struct Tasks(Mutex<Vec<AbortHandle>>);
-
-impl Tasks {
-    fn push(&self, h: AbortHandle) {
-        let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        v.retain(|h| !h.is_finished());
-        v.push(h);
-    }
-}
-
-impl Drop for Tasks {
+impl Drop for Shared {
     fn drop(&mut self) {
-        for h in self.0.lock().unwrap_or_else(|e| e.into_inner()).drain(..) {
+        for h in self.tasks.get_mut().unwrap_or_else(|e| e.into_inner()).drain(..) {
             h.abort();
         }
     }
 }
 
-/// An async CANopen master on one bus. Cheap to clone; the background
-/// tasks (receive, heartbeat monitor, SYNC producer, guarding) stop when
-/// the last clone is dropped.
+impl Shared {
+    pub(crate) fn new(config: MasterConfig, driver: Driver, now: Instant) -> Shared {
+        Shared {
+            core: Mutex::new(Core::new(now, config.channel_capacity)),
+            config,
+            driver,
+            lss_lock: tokio::sync::Mutex::new(()),
+            tasks: Mutex::new(Vec::new()),
+        }
+    }
+
+    pub(crate) fn core(&self) -> MutexGuard<'_, Core> {
+        // A panic while holding the lock leaves plain data; keep going.
+        self.core.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(crate) fn add_task(&self, h: AbortHandle) {
+        self.tasks.lock().unwrap_or_else(|e| e.into_inner()).push(h);
+    }
+
+    /// The driver's now.
+    pub(crate) fn now(&self) -> Instant {
+        match &self.driver {
+            Driver::Tokio { clock, .. } => clock.now(),
+            Driver::Sim { now } => Instant::from_nanos(now.load(Ordering::Acquire)),
+        }
+    }
+
+    /// Runs `f` on the core at the driver's now, then wakes the driver if
+    /// `f` queued frames or armed an earlier deadline.
+    pub(crate) fn with_core<R>(&self, f: impl FnOnce(&mut Core) -> R) -> R {
+        self.with_core_then(true, f)
+    }
+
+    fn with_core_then<R>(&self, kick_for_frames: bool, f: impl FnOnce(&mut Core) -> R) -> R {
+        let now = self.now();
+        let mut c = self.core();
+        c.advance(now);
+        let r = f(&mut c);
+        let wake = (kick_for_frames && c.has_tx()) || c.next_deadline().is_some_and(|t| c.wakes_driver(t));
+        drop(c);
+        if wake && let Driver::Tokio { kick, .. } = &self.driver {
+            kick.notify_one();
+        }
+        r
+    }
+
+    /// [`with_core`](Self::with_core), then sends what `f` queued from the
+    /// calling task when the transport takes it at once (no hop through
+    /// the driver task; the driver sends it otherwise).
+    pub(crate) fn with_core_and_send<R>(&self, f: impl FnOnce(&mut Core) -> R) -> R {
+        let r = self.with_core_then(false, f);
+        self.pump();
+        r
+    }
+
+    /// Hands the core's queue to the transport without waiting. Never
+    /// awaits: the caller's future may be left unpolled (a select, a
+    /// probe polled once), and a lock held across an await there would
+    /// stall the driver task. What the transport cannot take at once, or
+    /// what another sender is busy with, is left to the driver (kicked).
+    fn pump(&self) {
+        let Driver::Tokio { tx, kick, sent, sent_notify, send_lock, .. } = &self.driver else { return };
+        let Ok(_sending) = send_lock.try_lock() else {
+            kick.notify_one();
+            return;
+        };
+        let mut n = 0u64;
+        {
+            let mut c = self.core();
+            let mut out = Vec::new();
+            c.take_tx(&mut out);
+            let mut frames = out.into_iter();
+            while let Some(f) = frames.next() {
+                match tx.try_send(f) {
+                    Ok(()) => n += 1,
+                    Err(TrySendError::Busy(f)) => {
+                        c.requeue_front(std::iter::once(f).chain(frames));
+                        kick.notify_one();
+                        break;
+                    }
+                    Err(TrySendError::Failed(e)) => {
+                        c.bus_error(e.to_string());
+                        break;
+                    }
+                }
+            }
+        }
+        if n > 0 {
+            sent.fetch_add(n, Ordering::AcqRel);
+            sent_notify.notify_waiters();
+        }
+    }
+}
+
+/// An async CANopen master on one bus. Cheap to clone; the driver stops
+/// when the last clone is dropped.
+///
+/// Built with [`Master::new`] on a transport (driven by a tokio task), or
+/// by [`SimBus`](crate::SimBus) on the deterministic virtual bus (driven in
+/// simulated time). Both run the same code.
 #[derive(Clone)]
 pub struct Master {
-    pub(crate) inner: Arc<Inner>,
-    tasks: Arc<Tasks>,
+    pub(crate) inner: Arc<Shared>,
 }
 
 impl std::fmt::Debug for Master {
@@ -202,32 +284,22 @@ impl std::fmt::Debug for Master {
 }
 
 impl Master {
-    /// A master with the default configuration. Must be called inside a
-    /// tokio runtime (it spawns the receive task).
+    /// A master with the default configuration on `bus`, driven by a tokio
+    /// task. Must be called inside a tokio runtime.
     pub fn new(bus: CanBus) -> Master {
         Master::with_config(bus, MasterConfig::default())
     }
 
     /// A master with `config`.
     pub fn with_config(bus: CanBus, config: MasterConfig) -> Master {
-        let (tx, rx) = bus.split();
-        let cap = config.channel_capacity.max(16);
-        let inner = Arc::new(Inner {
-            tx,
-            clock: Clock::new(),
-            events: broadcast::channel(cap).0,
-            frames: broadcast::channel(cap.max(4096)).0,
-            lss: broadcast::channel(256).0,
-            lss_lock: tokio::sync::Mutex::new(()),
-            sync_ticks: broadcast::channel(64).0,
-            config,
-            state: Mutex::new(State::default()),
-            monitor: Notify::new(),
-        });
-        let tasks = Arc::new(Tasks(Mutex::new(Vec::new())));
-        tasks.push(tokio::spawn(rx_loop(inner.clone(), rx)).abort_handle());
-        tasks.push(tokio::spawn(monitor_loop(inner.clone())).abort_handle());
-        Master { inner, tasks }
+        crate::driver::tokio::spawn(bus, config)
+    }
+
+    /// Opens the bus named by `url` (`socketcand://HOST:PORT/CHANNEL`,
+    /// `slcan:///dev/ttyUSB0?bitrate=N`, `socketcan://can0`, `virtual`;
+    /// see `drivebus_transport::BusUrl`) and starts a master on it.
+    pub async fn open(url: &str, config: MasterConfig) -> Result<Master, drivebus_transport::TransportError> {
+        Ok(Master::with_config(drivebus_transport::open(url).await?, config))
     }
 
     /// The configuration.
@@ -235,31 +307,112 @@ impl Master {
         &self.inner.config
     }
 
-    /// Sends a raw frame.
+    /// The master's time: nanoseconds since it started (tokio driver) or
+    /// the simulated bus time (virtual-bus driver).
+    pub fn now(&self) -> Instant {
+        self.inner.now()
+    }
+
+    /// Frame and transfer counters.
+    pub fn stats(&self) -> Stats {
+        let c = self.inner.core();
+        Stats { sdo_transfers: c.sdo.started, ..c.stats }
+    }
+
+    /// Waits `d` on the master's clock.
+    pub async fn sleep(&self, d: Duration) {
+        let rx = self.inner.with_core(|c| {
+            let at = c.now() + d;
+            c.timer(at)
+        });
+        // A closed core (master dropped) ends the wait too.
+        let _ = rx.await;
+    }
+
+    /// Runs `fut` for at most `d` on the master's clock.
+    pub async fn timeout<T>(&self, d: Duration, fut: impl Future<Output = T>) -> Result<T, WaitError> {
+        tokio::select! {
+            biased;
+            v = fut => Ok(v),
+            () = self.sleep(d) => Err(WaitError::Timeout),
+        }
+    }
+
+    /// Sends a raw frame (after everything queued before it).
     pub async fn send(&self, frame: Frame) -> io::Result<()> {
-        self.inner.tx.send(frame).await
+        if frame.is_rtr()
+            && let Driver::Tokio { tx, .. } = &self.inner.driver
+            && !tx.carries_rtr()
+        {
+            return Err(io::Error::new(
+                io::ErrorKind::Unsupported,
+                "this transport cannot carry RTR frames (socketcand)",
+            ));
+        }
+        self.inner.with_core_and_send(|c| match &c.closed {
+            Some(why) => Err(io::Error::new(io::ErrorKind::BrokenPipe, why.clone())),
+            None => {
+                c.send(frame);
+                Ok(())
+            }
+        })
+    }
+
+    /// Waits until every frame queued so far has been written by the
+    /// transport (see `CanTx::flush`): after this, a program may report
+    /// success and exit.
+    pub async fn flush(&self) -> io::Result<()> {
+        match &self.inner.driver {
+            Driver::Sim { .. } => Ok(()),
+            Driver::Tokio { tx, kick, sent, sent_notify, .. } => {
+                let target = self.inner.core().queued();
+                loop {
+                    let notified = sent_notify.notified();
+                    if sent.load(Ordering::Acquire) >= target {
+                        break;
+                    }
+                    if let Some(why) = &self.inner.core().closed {
+                        return Err(io::Error::new(io::ErrorKind::BrokenPipe, why.clone()));
+                    }
+                    kick.notify_one();
+                    notified.await;
+                }
+                tx.flush().await
+            }
+        }
+    }
+
+    /// [`flush`](Self::flush), then closes the transport connection so the
+    /// peer has every frame (TCP FIN after the data; slcan `C`). The master
+    /// is unusable afterwards.
+    pub async fn close(&self) -> io::Result<()> {
+        self.flush().await?;
+        match &self.inner.driver {
+            Driver::Sim { .. } => Ok(()),
+            Driver::Tokio { tx, .. } => tx.close().await,
+        }
     }
 
     /// Every received frame from now on (a bus monitor). Slow readers lose
     /// the oldest frames.
     pub fn subscribe_frames(&self) -> broadcast::Receiver<Frame> {
-        self.inner.frames.subscribe()
+        self.inner.core().frames.subscribe()
     }
 
     /// Events from now on.
     pub fn subscribe_events(&self) -> broadcast::Receiver<MasterEvent> {
-        self.inner.events.subscribe()
+        self.inner.core().events.subscribe()
     }
 
     /// SYNCs sent by this master's producer from now on.
     pub fn subscribe_sync(&self) -> broadcast::Receiver<SyncTick> {
-        self.inner.sync_ticks.subscribe()
+        self.inner.core().sync_ticks.subscribe()
     }
 
     /// Uses `od` (e.g. from an EDS via `drivebus_eds::to_od`) for the data
     /// types of `node`'s objects in [`SdoHandle::read_value`](crate::SdoHandle::read_value).
     pub fn set_eds(&self, node: u8, od: ObjectDictionary) {
-        self.inner.state().eds.insert(node, Arc::new(od));
+        self.inner.core().eds.insert(node, Arc::new(od));
     }
 
     /// Builder form of [`set_eds`](Self::set_eds).
@@ -270,22 +423,22 @@ impl Master {
 
     /// The dictionary registered for `node`.
     pub fn eds(&self, node: u8) -> Option<Arc<ObjectDictionary>> {
-        self.inner.state().eds.get(&node).cloned()
+        self.inner.core().eds.get(&node).cloned()
     }
 
     /// Extra EMCY texts for `node` (personality / manufacturer codes); they
     /// take precedence over the standard texts.
     pub fn add_emcy_texts<S: Into<String>>(&self, node: u8, texts: impl IntoIterator<Item = (u16, S)>) {
-        let mut st = self.inner.state();
+        let mut c = self.inner.core();
         let mut table: HashMap<u16, String> =
-            st.emcy_tables.get(&node).map(|t| (**t).clone()).unwrap_or_default();
-        table.extend(texts.into_iter().map(|(c, s)| (c, s.into())));
-        st.emcy_tables.insert(node, Arc::new(table));
+            c.emcy_tables.get(&node).map(|t| (**t).clone()).unwrap_or_default();
+        table.extend(texts.into_iter().map(|(code, s)| (code, s.into())));
+        c.emcy_tables.insert(node, Arc::new(table));
     }
 
     /// The text for EMCY `code` from `node`.
     pub fn emcy_text(&self, node: u8, code: u16) -> Option<String> {
-        emcy_text(&self.inner.state(), node, code)
+        self.inner.core().emcy_text(node, code)
     }
 
     // ---- NMT ----
@@ -338,7 +491,7 @@ impl Master {
                 }
             }
         };
-        tokio::time::timeout(timeout, fut).await.unwrap_or(Err(WaitError::Timeout))
+        self.timeout(timeout, fut).await.unwrap_or(Err(WaitError::Timeout))
     }
 
     fn expect(
@@ -347,6 +500,7 @@ impl Master {
         pred: impl Fn(&MasterEvent) -> bool + Send + 'static,
     ) -> impl Future<Output = Result<(), WaitError>> + 'static {
         let mut rx = self.subscribe_events();
+        let master = self.clone();
         async move {
             let fut = async move {
                 loop {
@@ -357,36 +511,31 @@ impl Master {
                     }
                 }
             };
-            tokio::time::timeout(timeout, fut).await.unwrap_or(Err(WaitError::Timeout))
+            master.timeout(timeout, fut).await.unwrap_or(Err(WaitError::Timeout))
         }
     }
 
     /// The last state `node` reported.
     pub fn node_state(&self, node: u8) -> Option<RemoteState> {
-        self.inner.state().nodes.get(&node).and_then(|s| s.state)
+        self.inner.core().nodes.get(&node).and_then(|s| s.state)
     }
 
     /// Everything known about `node`.
     pub fn node_status(&self, node: u8) -> Option<NodeStatus> {
-        self.inner.state().nodes.get(&node).cloned()
+        self.inner.core().nodes.get(&node).cloned()
     }
 
     /// Nodes heard so far (boot-up, heartbeat, guarding, SDO response,
     /// EMCY): the passive scan.
     pub fn seen_nodes(&self) -> Vec<u8> {
-        self.inner.state().nodes.iter().filter(|(_, s)| s.frames > 0).map(|(n, _)| *n).collect()
+        self.inner.core().nodes.iter().filter(|(_, s)| s.frames > 0).map(|(n, _)| *n).collect()
     }
 
     /// Monitors `node`'s heartbeat: [`MasterEvent::HeartbeatLost`] when
     /// none arrives within `timeout` (monitoring starts with the next
     /// heartbeat, as a CiA 301 consumer). `None` stops monitoring.
     pub fn monitor_heartbeat(&self, node: u8, timeout: Option<Duration>) {
-        let mut st = self.inner.state();
-        let s = st.nodes.entry(node).or_default();
-        s.monitor = timeout;
-        s.lost = false;
-        drop(st);
-        self.inner.monitor.notify_one();
+        self.inner.with_core(|c| c.monitor(node, timeout));
     }
 
     /// Starts node guarding of `node` (CiA 301 §7.2.8.3.2.1): a remote
@@ -395,34 +544,20 @@ impl Master {
     /// (virtual, SocketCAN, slcan; not socketcand): on others the first
     /// request fails and is returned.
     pub async fn start_guarding(&self, node: u8, period: Duration, life_factor: u8) -> io::Result<()> {
-        let rtr = Frame::remote(0x700 + u16::from(node & 0x7F), 1);
-        self.send(rtr).await?;
-        self.monitor_heartbeat(node, Some(period * u32::from(life_factor.max(1))));
-        let tx = self.inner.tx.clone();
-        let h = tokio::spawn(async move {
-            let mut tick = tokio::time::interval_at(TokioInstant::now() + period, period);
-            tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-            loop {
-                tick.tick().await;
-                if tx.send(rtr).await.is_err() {
-                    return;
-                }
-            }
-        })
-        .abort_handle();
-        self.tasks.push(h.clone());
-        if let Some(old) = self.inner.state().guard_tasks.insert(node, h) {
-            old.abort();
-        }
+        self.send(Frame::remote(0x700 + u16::from(node & 0x7F), 1)).await?;
+        self.inner.with_core(|c| {
+            c.monitor(node, Some(period * u32::from(life_factor.max(1))));
+            c.start_guarding(node, period);
+        });
         Ok(())
     }
 
     /// Stops guarding `node` and its monitoring.
     pub fn stop_guarding(&self, node: u8) {
-        if let Some(h) = self.inner.state().guard_tasks.remove(&node) {
-            h.abort();
-        }
-        self.monitor_heartbeat(node, None);
+        self.inner.with_core(|c| {
+            c.stop_guarding(node);
+            c.monitor(node, None);
+        });
     }
 
     // ---- SYNC / TIME ----
@@ -431,52 +566,17 @@ impl Master {
     /// in 2..=240 the frames carry a counter 1..=overflow (CiA 301 1019h),
     /// otherwise they are empty. Replaces a running producer.
     pub fn start_sync(&self, period: Duration, counter_overflow: u8) {
-        let tx = self.inner.tx.clone();
-        let ticks = self.inner.sync_ticks.clone();
-        let period = period.max(Duration::from_micros(100));
-        let h = tokio::spawn(async move {
-            let mut tick = tokio::time::interval(period);
-            // Late ticks are skipped, not bunched: a burst of SYNCs would
-            // make synchronous drives jump.
-            tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
-            let mut counter = 0u8;
-            let mut seq = 0u64;
-            loop {
-                tick.tick().await;
-                let c = if (2..=240).contains(&counter_overflow) {
-                    counter = if counter >= counter_overflow { 1 } else { counter + 1 };
-                    Some(counter)
-                } else {
-                    None
-                };
-                let frame = match c {
-                    Some(c) => Frame::new(0x080, &[c]),
-                    None => Frame::new(0x080, &[]),
-                };
-                if tx.send(frame).await.is_err() {
-                    return;
-                }
-                seq += 1;
-                let _ = ticks.send(SyncTick { seq, counter: c });
-            }
-        })
-        .abort_handle();
-        self.tasks.push(h.clone());
-        if let Some(old) = self.inner.state().sync_task.replace(h) {
-            old.abort();
-        }
+        self.inner.with_core(|c| c.start_sync(period, counter_overflow));
     }
 
     /// Stops the SYNC producer.
     pub fn stop_sync(&self) {
-        if let Some(h) = self.inner.state().sync_task.take() {
-            h.abort();
-        }
+        self.inner.with_core(|c| c.stop_sync());
     }
 
     /// True while the SYNC producer runs.
     pub fn sync_running(&self) -> bool {
-        self.inner.state().sync_task.as_ref().is_some_and(|h| !h.is_finished())
+        self.inner.core().sync_running()
     }
 
     /// Sends a TIME stamp (100h) for `unix_ms` milliseconds since the Unix
@@ -491,25 +591,23 @@ impl Master {
 
     /// Frames received on `cob_id` (TPDOs of the nodes) from now on.
     pub fn subscribe_pdo(&self, cob_id: u16) -> broadcast::Receiver<Frame> {
-        let cap = self.inner.config.channel_capacity.max(16);
-        self.inner.state().pdo.entry(cob_id).or_insert_with(|| broadcast::channel(cap).0).subscribe()
+        self.inner.core().subscribe_pdo(cob_id)
     }
 
-    /// Registers `f` to be called in the receive task for every frame on
-    /// `cob_id`; it must be quick and must not call back into the master.
+    /// Calls `f` with every frame received on `cob_id` and its time, in
+    /// frame order, inside the driver; it must be quick and must not call
+    /// back into the master. Stops when the returned guard is dropped.
+    pub fn on_pdo(&self, cob_id: u16, f: impl Fn(&Frame, Instant) + Send + Sync + 'static) -> PdoCallback {
+        let id = self.add_pdo_sink(cob_id, Arc::new(f));
+        PdoCallback { master: self.clone(), id }
+    }
+
     pub(crate) fn add_pdo_sink(&self, cob_id: u16, f: PdoSink) -> u64 {
-        let mut st = self.inner.state();
-        st.next_sink += 1;
-        let id = st.next_sink;
-        st.pdo_sinks.entry(cob_id).or_default().push((id, f));
-        id
+        self.inner.core().add_pdo_sink(cob_id, f)
     }
 
-    /// Removes a sink added by [`add_pdo_sink`](Self::add_pdo_sink).
     pub(crate) fn remove_pdo_sink(&self, id: u64) {
-        for v in self.inner.state().pdo_sinks.values_mut() {
-            v.retain(|(i, _)| *i != id);
-        }
+        self.inner.core().remove_pdo_sink(id);
     }
 
     /// Sends a PDO (an RPDO of the nodes) on `cob_id`; at most 8 bytes.
@@ -522,108 +620,20 @@ impl Master {
     }
 }
 
-fn emcy_text(st: &State, node: u8, code: u16) -> Option<String> {
-    st.emcy_tables
-        .get(&node)
-        .and_then(|t| t.get(&code).cloned())
-        .or_else(|| drivebus_emcy::describe(code).map(str::to_owned))
+/// A PDO callback registered with [`Master::on_pdo`]; removed on drop.
+pub struct PdoCallback {
+    master: Master,
+    id: u64,
 }
 
-async fn rx_loop(inner: Arc<Inner>, mut rx: CanRx) {
-    loop {
-        match rx.recv().await {
-            Ok(f) => dispatch(&inner, f),
-            Err(e) => {
-                let _ = inner.events.send(MasterEvent::BusError { reason: e.to_string() });
-                return;
-            }
-        }
+impl std::fmt::Debug for PdoCallback {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PdoCallback").field("id", &self.id).finish()
     }
 }
 
-fn dispatch(inner: &Inner, f: Frame) {
-    if inner.frames.receiver_count() > 0 {
-        let _ = inner.frames.send(f);
-    }
-    let Some(id) = f.std_id() else { return };
-    let mut st = inner.state();
-    if let Some(route) = st.sdo_routes.get(&id) {
-        let _ = route.send(f);
-    }
-    if let Some(p) = st.pdo.get(&id) {
-        let _ = p.send(f);
-    }
-    if let Some(sinks) = st.pdo_sinks.get(&id) {
-        for (_, sink) in sinks {
-            sink(&f);
-        }
-    }
-    let node = (id & 0x7F) as u8;
-    match id & 0x780 {
-        0x080 if node != 0 && !f.is_rtr() => {
-            if let Some(m) = drivebus_emcy::decode(&f) {
-                st.nodes.entry(node).or_default().frames += 1;
-                let text = emcy_text(&st, node, m.code);
-                let _ = inner.events.send(MasterEvent::Emcy {
-                    node,
-                    code: m.code,
-                    register: m.register,
-                    data: m.data,
-                    text,
-                });
-            }
-        }
-        0x580 if node != 0 && !f.is_rtr() => st.nodes.entry(node).or_default().frames += 1,
-        0x700 if node != 0 && !f.is_rtr() && !f.is_empty() => {
-            let state = RemoteState::from_code(f.data()[0]);
-            let s = st.nodes.entry(node).or_default();
-            let was_lost = std::mem::take(&mut s.lost);
-            s.frames += 1;
-            s.state = Some(state);
-            s.last_heartbeat = Some(TokioInstant::now());
-            if state == RemoteState::BootUp {
-                s.bootups += 1;
-                let _ = inner.events.send(MasterEvent::Bootup { node });
-            } else {
-                let _ = inner.events.send(MasterEvent::Heartbeat { node, state });
-            }
-            if was_lost {
-                let _ = inner.events.send(MasterEvent::HeartbeatRecovered { node });
-            }
-            drop(st);
-            inner.monitor.notify_one();
-            return;
-        }
-        _ => {}
-    }
-    drop(st);
-    if id == drivebus_lss::SLAVE_TO_MASTER {
-        let _ = inner.lss.send(f);
-    }
-}
-
-/// Raises `HeartbeatLost` for monitored nodes whose deadline passed.
-async fn monitor_loop(inner: Arc<Inner>) {
-    loop {
-        let now = TokioInstant::now();
-        let mut next: Option<TokioInstant> = None;
-        {
-            let mut st = inner.state();
-            for (node, s) in st.nodes.iter_mut() {
-                let (Some(t), Some(last), false) = (s.monitor, s.last_heartbeat, s.lost) else { continue };
-                let deadline = last + t;
-                if deadline <= now {
-                    s.lost = true;
-                    let _ = inner.events.send(MasterEvent::HeartbeatLost { node: *node });
-                } else {
-                    next = Some(next.map_or(deadline, |n: TokioInstant| n.min(deadline)));
-                }
-            }
-        }
-        let until = next.unwrap_or_else(|| now + Duration::from_secs(3600));
-        tokio::select! {
-            () = tokio::time::sleep_until(until) => {}
-            () = inner.monitor.notified() => {}
-        }
+impl Drop for PdoCallback {
+    fn drop(&mut self) {
+        self.master.remove_pdo_sink(self.id);
     }
 }

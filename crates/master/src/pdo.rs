@@ -154,6 +154,31 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
+/// A PDO write the device refused ([`Master::try_write_pdo`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PdoWriteError {
+    /// The refusal.
+    pub cause: ConfigError,
+    /// The configuration read before writing (`None`: it could not be read,
+    /// nothing was written).
+    pub previous: Option<PdoRecord>,
+    /// Writing `previous` back: `Ok` when it is in force again.
+    pub restored: Result<(), ConfigError>,
+}
+
+impl fmt::Display for PdoWriteError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.cause)?;
+        match (&self.previous, &self.restored) {
+            (None, _) => Ok(()),
+            (Some(_), Ok(())) => f.write_str("; the previous configuration was restored"),
+            (Some(_), Err(e)) => write!(f, "; restoring the previous configuration failed too: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for PdoWriteError {}
+
 fn at(index: u16, sub: u8) -> impl FnOnce(SdoError) -> ConfigError {
     move |error| ConfigError::Sdo { index, sub, error }
 }
@@ -189,12 +214,52 @@ impl Master {
         Ok(PdoRecord { cob_id, transmission_type, inhibit_time, event_timer, sync_start, mapping })
     }
 
+    /// Writes PDO `num` of `node` with the CiA 301 procedure (see
+    /// [`write_pdo_raw`](Self::write_pdo_raw)), reading the PDO first: if
+    /// the device refuses any step, the previous configuration is written
+    /// back (best effort), so a refused mapping does not leave the PDO
+    /// invalid and empty. The error is the refusal; use
+    /// [`try_write_pdo`](Self::try_write_pdo) to learn whether the
+    /// restore worked.
+    pub async fn write_pdo(
+        &self,
+        node: u8,
+        dir: PdoDir,
+        num: u16,
+        rec: &PdoRecord,
+    ) -> Result<(), ConfigError> {
+        self.try_write_pdo(node, dir, num, rec).await.map_err(|e| e.cause)
+    }
+
+    /// [`write_pdo`](Self::write_pdo) with the details of a refusal: the
+    /// configuration in force before, and whether it was restored.
+    pub async fn try_write_pdo(
+        &self,
+        node: u8,
+        dir: PdoDir,
+        num: u16,
+        rec: &PdoRecord,
+    ) -> Result<(), PdoWriteError> {
+        let previous = self.read_pdo(node, dir, num).await.map_err(|e| PdoWriteError {
+            cause: ConfigError::Sdo { index: dir.comm_index(num), sub: 1, error: e },
+            previous: None,
+            restored: Ok(()),
+        })?;
+        match self.write_pdo_raw(node, dir, num, rec).await {
+            Ok(()) => Ok(()),
+            Err(cause) => {
+                let restored = self.write_pdo_raw(node, dir, num, &previous).await;
+                Err(PdoWriteError { cause, previous: Some(previous), restored })
+            }
+        }
+    }
+
     /// Writes PDO `num` of `node` with the CiA 301 procedure: invalidate
     /// (bit 31), parameters, clear mapping (sub 0 = 0), entries, count,
     /// then the COB-ID (first with bit 31 so an ID change is accepted,
     /// then as given). `inhibit_time`/`event_timer`/`sync_start` of `None`
-    /// are left alone.
-    pub async fn write_pdo(
+    /// are left alone. A refusal leaves the PDO as far as it got.
+    pub async fn write_pdo_raw(
         &self,
         node: u8,
         dir: PdoDir,

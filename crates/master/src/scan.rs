@@ -4,7 +4,6 @@
 use std::time::Duration;
 
 use drivebus_node::Identity;
-use tokio::task::JoinSet;
 
 use crate::master::Master;
 
@@ -44,34 +43,49 @@ impl Master {
         self.scan_with(ScanOptions::default()).await
     }
 
-    /// Active scan: uploads 1000h from every node in `opts.nodes` in
-    /// parallel, then 1018h from those that answered. An SDO abort on
-    /// 1000h still proves the node exists (device type reads as 0).
-    /// Sorted by node-ID.
+    /// Active scan: uploads 1000h from every node in `opts.nodes`,
+    /// `opts.parallel` at a time (each to its own SDO server, so they run
+    /// side by side on the bus), then 1018h from those that answered. An
+    /// SDO abort on 1000h still proves the node exists (device type reads
+    /// as 0). Sorted by node-ID.
     pub async fn scan_with(&self, opts: ScanOptions) -> Vec<ScannedNode> {
-        let mut set = JoinSet::new();
+        let nodes: Vec<u8> = opts.nodes.clone().filter(|n| (1..=127).contains(n)).collect();
         let mut found = Vec::new();
-        let mut pending = opts.nodes.clone().filter(|n| (1..=127).contains(n));
-        let parallel = opts.parallel.max(1);
-        loop {
-            while set.len() < parallel {
-                let Some(node) = pending.next() else { break };
-                let sdo = self.sdo(node).timeout(opts.timeout).retries(0);
-                let identity = opts.identity;
-                set.spawn(async move {
-                    let device_type = match sdo.read::<u32>(0x1000, 0).await {
-                        Ok(v) => v,
-                        Err(crate::SdoError::Abort { .. }) => 0,
-                        Err(_) => return None,
-                    };
-                    let identity = if identity { read_identity(&sdo).await } else { None };
-                    Some(ScannedNode { node, device_type, identity })
-                });
+        for chunk in nodes.chunks(opts.parallel.max(1)) {
+            // Start every probe of the chunk before awaiting any.
+            let probes: Vec<_> = chunk
+                .iter()
+                .map(|&node| {
+                    let sdo = self.sdo(node).timeout(opts.timeout).retries(0);
+                    (node, Box::pin(async move { sdo.read::<u32>(0x1000, 0).await }))
+                })
+                .collect();
+            let mut started = Vec::with_capacity(probes.len());
+            for (node, mut fut) in probes {
+                // One poll queues the request in the core.
+                let first = std::future::poll_fn(|cx| match fut.as_mut().poll(cx) {
+                    std::task::Poll::Ready(v) => std::task::Poll::Ready(Some(v)),
+                    std::task::Poll::Pending => std::task::Poll::Ready(None),
+                })
+                .await;
+                started.push((node, first, fut));
             }
-            match set.join_next().await {
-                Some(Ok(Some(n))) => found.push(n),
-                Some(_) => {}
-                None => break,
+            for (node, first, fut) in started {
+                let r = match first {
+                    Some(r) => r,
+                    None => fut.await,
+                };
+                let device_type = match r {
+                    Ok(v) => v,
+                    Err(crate::SdoError::Abort { .. }) => 0,
+                    Err(_) => continue,
+                };
+                found.push(ScannedNode { node, device_type, identity: None });
+            }
+        }
+        if opts.identity {
+            for n in &mut found {
+                n.identity = read_identity(&self.sdo(n.node).timeout(opts.timeout)).await;
             }
         }
         found.sort_by_key(|n| n.node);

@@ -1,23 +1,22 @@
-//! Async SDO client: the sans-IO `drivebus_sdo::client::SdoClient` driven
-//! in the caller's future.
+//! Async SDO access: [`SdoHandle`] queues transfers in the master core,
+//! which runs them with the sans-IO `drivebus_sdo::client::SdoClient`.
 //!
 //! One transfer per server at a time (an SDO server runs one): transfers to
-//! the same node queue on a per-COB-ID lock; transfers to different nodes
-//! run in parallel. The receive task routes frames on the server's
-//! response COB-ID to the running transfer through an unbounded channel
-//! (a block upload delivers up to 127 segments back to back). Dropping the
-//! future cancels the transfer locally (the server times out on its own).
+//! the same node queue in order; transfers to different nodes run in
+//! parallel. Dropping the future aborts the transfer (abort 0800 0000h on
+//! the bus, so the server is free at once).
 
 use std::fmt;
 use std::sync::Arc;
 use std::time::Duration;
 
-use drivebus_can::Frame;
 use drivebus_od::{DataType, SdoAbort, Value};
-use drivebus_sdo::client::{ClientError, Completed, Protocol, SdoClient, SdoClientConfig};
-use tokio::sync::mpsc;
+use drivebus_sdo::client::{ClientError, Completed, Protocol, SdoClientConfig};
+use tokio::sync::oneshot;
 
-use crate::master::{Inner, Master};
+pub use crate::core::sdo::Progress;
+use crate::core::sdo::Request;
+use crate::master::Master;
 
 /// Why an SDO transfer failed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -82,9 +81,6 @@ impl fmt::Display for SdoError {
 }
 
 impl std::error::Error for SdoError {}
-
-/// A progress callback: bytes done, total when known.
-pub type Progress = Arc<dyn Fn(usize, Option<usize>) + Send + Sync>;
 
 /// SDO access to one node; built by [`Master::sdo`], configured with the
 /// builder methods, cheap to clone.
@@ -183,20 +179,26 @@ impl SdoHandle {
         self.download(index, sub, &value.to_sdo()).await
     }
 
-    /// The data type of `index`/`sub` in the dictionary registered with
-    /// [`Master::set_eds`].
+    /// The data type of `index`/`sub`: from the dictionary registered
+    /// with [`Master::set_eds`], else from the CiA 301/402 standard
+    /// objects (`drivebus_objects`).
     pub fn data_type(&self, index: u16, sub: u8) -> Option<DataType> {
-        self.master.eds(self.node).and_then(|od| od.get(index, sub).map(|s| s.data_type))
+        self.master
+            .eds(self.node)
+            .and_then(|od| od.get(index, sub).map(|s| s.data_type))
+            .or_else(|| drivebus_objects::entry(index, sub).map(|e| e.data_type))
     }
 
     fn resolve_type(&self, index: u16, sub: u8, dt: Option<DataType>) -> Result<DataType, SdoError> {
         dt.or_else(|| self.data_type(index, sub)).ok_or_else(|| {
-            SdoError::InvalidRequest(format!("data type of {index:04X}h:{sub} unknown (no EDS entry)"))
+            SdoError::InvalidRequest(format!(
+                "data type of {index:04X}h:{sub} unknown (no EDS entry, not a CiA 301/402 standard object)"
+            ))
         })
     }
 
     /// Reads and decodes `index`/`sub` as `dt`, or as the type the node's
-    /// EDS dictionary gives when `dt` is `None`.
+    /// EDS dictionary or the standard objects give when `dt` is `None`.
     pub async fn read_value(&self, index: u16, sub: u8, dt: Option<DataType>) -> Result<Value, SdoError> {
         let dt = self.resolve_type(index, sub, dt)?;
         let data = self.upload(index, sub).await?;
@@ -218,85 +220,60 @@ impl SdoHandle {
     }
 
     async fn transfer(&self, index: u16, sub: u8, download: Option<&[u8]>) -> Result<Completed, SdoError> {
-        let inner = &self.master.inner;
-        let Some(rx_id) = self.cfg.rx_id.std_id_opt() else {
-            return Err(SdoError::InvalidRequest("extended SDO COB-IDs are not supported".into()));
+        let shared = &self.master.inner;
+        let (done, rx) = oneshot::channel();
+        let req = Request {
+            cfg: self.cfg,
+            index,
+            sub,
+            data: download.map(<[u8]>::to_vec),
+            protocol: self.protocol,
+            progress: self.progress.clone(),
+            done,
         };
-        let lock = inner.state().sdo_locks.entry(rx_id).or_default().clone();
-        let _serial = lock.lock().await;
-        let (tx, mut rx) = mpsc::unbounded_channel();
-        inner.state().sdo_routes.insert(rx_id, tx);
-        let _route = RouteGuard { inner, id: rx_id };
-
-        let clock = inner.clock;
-        let mut client = SdoClient::new(self.cfg);
-        let mut out: Vec<Frame> = Vec::new();
-        let started = match download {
-            Some(d) => client.start_download(index, sub, d, self.protocol, clock.now(), &mut out),
-            None => client.start_upload(index, sub, self.protocol, clock.now(), &mut out),
-        };
-        started.map_err(SdoError::from_client)?;
-        let mut last_progress = None;
-        loop {
-            for f in out.drain(..) {
-                inner.tx.send(f).await.map_err(|e| SdoError::Transport(e.to_string()))?;
+        let id = shared.with_core_and_send(|c| {
+            if let Some(why) = &c.closed {
+                return Err(SdoError::Transport(why.clone()));
             }
-            if let Some(r) = client.take_result() {
-                // A final report at 100 %: the last segment completes the
-                // transfer without another progress step.
-                if let (Some(cb), Ok(done)) = (&self.progress, &r) {
-                    let total = match done {
-                        Completed::Upload(d) => d.len(),
-                        Completed::Download => download.map_or(0, <[u8]>::len),
-                    };
-                    cb(total, Some(total));
-                }
-                return r.map_err(SdoError::from_client);
+            let id = c.id();
+            let now = c.now();
+            let mut out = Vec::new();
+            c.sdo.start(id, req, now, &mut out);
+            for f in out {
+                c.send(f);
             }
-            if let (Some(cb), Some(p)) = (&self.progress, client.progress())
-                && last_progress != Some(p)
-            {
-                last_progress = Some(p);
-                cb(p.0, p.1);
-            }
-            let deadline = client.deadline().map(|d| clock.at(d));
-            tokio::select! {
-                // A response already queued is taken before the timeout
-                // that passed meanwhile (the client accepts it, CiA 301).
-                biased;
-                f = rx.recv() => match f {
-                    Some(f) => client.handle_frame(&f, clock.now(), &mut out),
-                    None => return Err(SdoError::Transport("master receive task ended".into())),
-                },
-                () = tokio::time::sleep_until(deadline.unwrap_or_else(|| tokio::time::Instant::now() + Duration::from_secs(3600))) => {
-                    client.poll(clock.now(), &mut out);
-                }
-            }
+            Ok(id)
+        })?;
+        // Dropping this future aborts the transfer on the bus.
+        let mut guard = CancelGuard { master: &self.master, id: Some(id) };
+        let r = rx.await;
+        guard.id = None;
+        match r {
+            Ok(r) => r.map_err(SdoError::from_client),
+            Err(_) => Err(SdoError::Transport(
+                shared.core().closed.clone().unwrap_or_else(|| "the master's bus is closed".into()),
+            )),
         }
     }
 }
 
-/// Unregisters a transfer's route when it ends or is cancelled.
-struct RouteGuard<'a> {
-    inner: &'a Inner,
-    id: u16,
+/// Aborts a transfer whose future is dropped before it finished.
+struct CancelGuard<'a> {
+    master: &'a Master,
+    id: Option<u64>,
 }
 
-impl Drop for RouteGuard<'_> {
+impl Drop for CancelGuard<'_> {
     fn drop(&mut self) {
-        self.inner.state().sdo_routes.remove(&self.id);
-    }
-}
-
-trait StdIdOpt {
-    fn std_id_opt(self) -> Option<u16>;
-}
-
-impl StdIdOpt for drivebus_can::CanId {
-    fn std_id_opt(self) -> Option<u16> {
-        match self {
-            drivebus_can::CanId::Standard(id) => Some(id),
-            _ => None,
+        if let Some(id) = self.id {
+            self.master.inner.with_core(|c| {
+                let now = c.now();
+                let mut out = Vec::new();
+                c.sdo.cancel(id, now, &mut out);
+                for f in out {
+                    c.send(f);
+                }
+            });
         }
     }
 }

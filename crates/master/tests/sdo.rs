@@ -161,8 +161,10 @@ async fn values_typed_by_eds_dictionary() {
         assert_eq!(sdo.read_value(0x2001, 0, None).await.unwrap(), Value::Str("drivebus".into()));
         sdo.write_value(0x2002, 0, &Value::I32(77), None).await.unwrap();
         assert_eq!(sdo.read_value(0x2002, 0, Some(DataType::Integer32)).await.unwrap(), Value::I32(77));
-        // Without a type, and no EDS entry: a clear error.
-        assert!(matches!(sdo.read_value(0x1000, 0, None).await, Err(SdoError::InvalidRequest(_))));
+        // Standard objects are typed without an EDS (drivebus-objects).
+        assert_eq!(sdo.read_value(0x1000, 0, None).await.unwrap(), Value::U32(0x0002_0192));
+        // Without a type, no EDS entry and not standard: a clear error.
+        assert!(matches!(sdo.read_value(0x2003, 0, None).await, Err(SdoError::InvalidRequest(_))));
         // Out of range for the type: refused locally.
         assert!(matches!(
             sdo.write_value(0x1017, 0, &Value::U32(70_000), Some(DataType::Unsigned16)).await,

@@ -339,7 +339,7 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
                 s.link.dirty |= dirty::ROUTES;
             }
             tag::SYNC => {
-                s.sync.apply_value(index, sub, le_u64(od.bytes(at.r)) as u32);
+                s.sync.apply_value(index, sub, od.word(at.r) as u32);
                 s.link.dirty |= match index {
                     // The window only bounds synchronous PDOs: no deadline moves.
                     0x1007 => 0,

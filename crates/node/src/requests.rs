@@ -98,14 +98,13 @@ impl Node {
         self.app_errors.push((code, bits));
         let reg = self.defined_register();
         self.send_raw_emcy(code, reg, bytes, now);
-        let od = &mut self.od;
-        if let Ok(r) = od.find(0x1001, 0) {
-            od.set_raw(r, &[reg]);
+        if let Ok(r) = self.od.find(0x1001, 0) {
+            self.od.set_raw(r, &[reg]);
         }
-        // 1003h through the node's EMCY producer, so its reads agree (CiA
-        // 301 §7.5.2.5; KC1 §7.2.1.4: the code, with the manufacturer's
-        // first byte as additional information).
-        self.s.emcy.record(&mut self.od, u32::from(code) | (u32::from(bytes[0]) << 16));
+        // 1003h through the EMCY producer, so its reads agree (CiA 301
+        // §7.5.2.5; KC1 §7.2.1.4: the code, with the manufacturer's first
+        // byte as additional information).
+        self.record_emcy_history(u32::from(code) | (u32::from(bytes[0]) << 16));
     }
 
     /// Clears an error raised by [`Self::raise_defined`]; the error-reset

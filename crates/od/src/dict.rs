@@ -178,6 +178,7 @@ impl SubObject {
     }
 
     /// Check `data` against type, length and limits (no access check).
+    #[inline]
     pub fn validate(&self, data: &[u8]) -> Result<(), SdoAbort> {
         check_len(self.data_type, data.len())?;
         if let Some(max) = self.max_len
@@ -500,7 +501,7 @@ impl ObjectDictionary {
     /// Overwrite the stored bytes without checks (the application pushing a
     /// live value, a service updating its own object). The caller owns the
     /// invariant that `data` is a valid encoding for the type.
-    #[inline]
+    #[inline(always)]
     pub fn set_raw(&mut self, r: EntryRef, data: &[u8]) {
         let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
         // The usual numeric sizes: one word compare and store.
@@ -508,6 +509,13 @@ impl ObjectDictionary {
             self.generation = self.generation.wrapping_add(u64::from(changed & s.marked));
             return;
         }
+        self.set_raw_slow(r, data);
+    }
+
+    /// [`set_raw`](Self::set_raw) for heap values and length changes.
+    #[inline(never)]
+    fn set_raw_slow(&mut self, r: EntryRef, data: &[u8]) {
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
         if !same_bytes(&s.value, data) {
             if s.value.len() == data.len() {
                 copy_small(s.value.as_mut_slice(), data);

@@ -74,10 +74,10 @@ use drivebus_pdo::{DEFAULT_DUMMY_TYPES, Granularity, PdoDefaults, PdoKind, set_d
 extern crate alloc;
 
 mod conform;
-mod node;
+mod personality;
 
-pub(crate) use node::BEHAVIOUR;
-pub use node::Personality;
+pub(crate) use personality::BEHAVIOUR;
+pub use personality::Personality;
 
 /// A running personality: the node and its [`Personality`].
 pub type PersonalityDevice = NodeDevice<Personality>;
@@ -448,13 +448,13 @@ fn apply_pdo(
 
 /// Builds the personality `profile` as node `node_id` with parameters in
 /// `storage`, with the profile's own [`Behaviour`]
-/// ([`crate::behaviour::for_profile`]).
+/// ([`Profile::behaviour`]).
 pub fn build(
     profile: Profile,
     node_id: u8,
     storage: Box<dyn Storage + Send>,
 ) -> Result<PersonalityDevice, BuildError> {
-    build_with(profile, node_id, storage, crate::behaviour::for_profile(profile))
+    build_with(profile, node_id, storage, profile.behaviour())
 }
 
 /// [`build`] with an explicit behaviour (tests, a personality variant).
@@ -476,7 +476,7 @@ pub fn build_on_machine(
     storage: Box<dyn Storage + Send>,
     machine: impl FnOnce(&mut DriveConfig),
 ) -> Result<PersonalityDevice, BuildError> {
-    build_custom(profile, node_id, storage, crate::behaviour::for_profile(profile), machine)
+    build_custom(profile, node_id, storage, profile.behaviour(), machine)
 }
 
 /// Options of a build beyond what the personality's manual describes.
@@ -497,7 +497,7 @@ pub fn build_with_options(
     storage: Box<dyn Storage + Send>,
     options: BuildOptions,
 ) -> Result<PersonalityDevice, BuildError> {
-    build_full(profile, node_id, storage, crate::behaviour::for_profile(profile), |_| {}, options)
+    build_full(profile, node_id, storage, profile.behaviour(), |_| {}, options)
 }
 
 /// The general form of [`build`]: explicit behaviour and machine.
@@ -593,7 +593,7 @@ pub fn build_full(
                         // A plain object becomes the behaviour's; one a
                         // service or the drive owns is watched (veto first).
                         if e.owner == Owner::NONE {
-                            e.owner = node::BEHAVIOUR;
+                            e.owner = BEHAVIOUR;
                         } else if !e.owner.is_app() {
                             e.watched = true;
                         }
@@ -614,6 +614,18 @@ pub fn build_full(
 }
 
 impl Profile {
+    /// The personality's own [`Behaviour`], fresh (what [`build`] installs).
+    pub fn behaviour(&self) -> Box<dyn Behaviour> {
+        match self {
+            Profile::Kc1 => Box::new(crate::kc1::kc1()),
+            Profile::Akd => Box::new(crate::akd::Akd::new()),
+            Profile::Generic => Box::new(crate::generic::Generic::new()),
+            Profile::Ssd630 => Box::new(crate::ssd630::Ssd630::new()),
+            Profile::Dds6 => Box::new(crate::dds6::Dds6::new()),
+            Profile::Ipos => Box::new(crate::ipos::Ipos::new()),
+        }
+    }
+
     /// This personality as node `node_id`, parameters in memory: the
     /// one-liner for tests and the CLI (`serve --drive akd:5`).
     pub fn build(&self, node_id: u8) -> Result<PersonalityDevice, BuildError> {

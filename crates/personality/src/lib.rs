@@ -3,10 +3,15 @@
 //! it that an EDS cannot hold (supported modes, homing methods, EMCY codes,
 //! which CiA 301 services exist, quirks).
 //!
-//! [`build`] turns a profile into a running drive on the virtual bus (EDS
-//! dictionary, CiA 402 drive from `drivebus-cia402`, the profile's
-//! [`Behaviour`] from [`behaviour`]); `docs/personalities.md` says what each
-//! personality emulates and what not.
+//! Each personality lives in one module — [`kc1`], [`akd`], [`ipos`],
+//! [`ssd630`], [`dds6`], [`generic`] — holding its facts (`facts.rs`:
+//! [`ProfileInfo`]), its EMCY table (`emcy.rs`), its [`Behaviour`]
+//! (`mod.rs`, submodules where it is large) and its EDS file (included from
+//! `eds/`). The framework is apart: [`build`](mod@build) turns a profile into a
+//! running drive (EDS dictionary, CiA 402 drive from `drivebus-cia402`,
+//! the profile's [`Behaviour`]), [`shared`] holds what several
+//! personalities use. `docs/personalities.md` says what each personality
+//! emulates and what not.
 //!
 //! ```
 //! use drivebus_personality::Profile;
@@ -22,11 +27,16 @@
 //! assert!(p.info().modes.contains(&-3)); // AKD electronic gearing
 //! ```
 
-pub mod behaviour;
 pub mod build;
 pub mod ecat;
-mod emcy_tables;
-mod profiles;
+pub mod shared;
+
+pub mod akd;
+pub mod dds6;
+pub mod generic;
+pub mod ipos;
+pub mod kc1;
+pub mod ssd630;
 
 pub use build::{
     Behaviour, BuildError, BuildOptions, Context, EmcyFrame, FilterOutcome, Personality, PersonalityDevice,
@@ -85,12 +95,12 @@ impl Profile {
     /// The EDS file, as committed under `crates/personality/eds/`.
     pub fn eds_text(&self) -> &'static str {
         match self {
-            Profile::Kc1 => include_str!("../eds/kc1.eds"),
-            Profile::Akd => include_str!("../eds/akd.eds"),
-            Profile::Ipos => include_str!("../eds/ipos.eds"),
-            Profile::Ssd630 => include_str!("../eds/ssd630.eds"),
-            Profile::Dds6 => include_str!("../eds/dds6.eds"),
-            Profile::Generic => include_str!("../eds/generic.eds"),
+            Profile::Kc1 => kc1::EDS,
+            Profile::Akd => akd::EDS,
+            Profile::Ipos => ipos::EDS,
+            Profile::Ssd630 => ssd630::EDS,
+            Profile::Dds6 => dds6::EDS,
+            Profile::Generic => generic::EDS,
         }
     }
 
@@ -106,12 +116,12 @@ impl Profile {
     /// The static facts about this drive.
     pub fn info(&self) -> &'static ProfileInfo {
         match self {
-            Profile::Kc1 => &profiles::kc1::INFO,
-            Profile::Akd => &profiles::akd::INFO,
-            Profile::Ipos => &profiles::ipos::INFO,
-            Profile::Ssd630 => &profiles::ssd630::INFO,
-            Profile::Dds6 => &profiles::dds6::INFO,
-            Profile::Generic => &profiles::generic::INFO,
+            Profile::Kc1 => &kc1::INFO,
+            Profile::Akd => &akd::INFO,
+            Profile::Ipos => &ipos::INFO,
+            Profile::Ssd630 => &ssd630::INFO,
+            Profile::Dds6 => &dds6::INFO,
+            Profile::Generic => &generic::INFO,
         }
     }
 }
@@ -175,7 +185,7 @@ pub struct Quirk {
     pub what: &'static str,
 }
 
-/// Static facts about a personality. The values in `src/profiles/*.rs` cite
+/// Static facts about a personality. The values in `src/<name>/facts.rs` cite
 /// the manual section each comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ProfileInfo {
@@ -250,18 +260,8 @@ impl ProfileInfo {
     /// The 6502h bit of a standard mode (CiA 402: pp 0, vl 1, pv 2, tq 3,
     /// hm 5, ip 6, csp 7, csv 8, cst 9); `None` for manufacturer modes.
     pub fn mode_bit(mode: i8) -> Option<u32> {
-        match mode {
-            1 => Some(0),
-            2 => Some(1),
-            3 => Some(2),
-            4 => Some(3),
-            6 => Some(5),
-            7 => Some(6),
-            8 => Some(7),
-            9 => Some(8),
-            10 => Some(9),
-            _ => None,
-        }
+        let bit = drivebus_cia402::codes::mode::supported_bit(mode);
+        (bit != 0).then(|| bit.trailing_zeros())
     }
 }
 

@@ -256,7 +256,7 @@ fn akd_s13_ip_axis2() {
 /// Section 13's drives: the DC bus is charged before switch on (TPDO1
 /// `31 02` after shutdown, line 6152; §9 shows 0221h — both forms appear).
 fn akd_ip_axis(id: u8) -> Rig {
-    use drivebus_personality::behaviour::akd::Akd;
+    use drivebus_personality::akd::Akd;
     let pn = drivebus_personality::build_with(
         Profile::Akd,
         id,

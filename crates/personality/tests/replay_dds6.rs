@@ -11,7 +11,7 @@ mod dds6_rig;
 
 use dds6_rig::{Outcome, Rig, count, fr, trace};
 use drivebus_can::Duration;
-use drivebus_personality::behaviour::dds6::Dds6;
+use drivebus_personality::dds6::Dds6;
 
 const EX1: &str = include_str!("../traces/dds6_ex1.txt");
 const EX2: &str = include_str!("../traces/dds6_ex2.txt");

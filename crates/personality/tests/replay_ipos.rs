@@ -14,7 +14,7 @@
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
-use drivebus_personality::behaviour::ipos::Ipos;
+use drivebus_personality::ipos::Ipos;
 use drivebus_personality::{PersonalityDevice, Profile, build_with};
 
 struct Rig {

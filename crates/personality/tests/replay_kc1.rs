@@ -350,7 +350,7 @@ fn kc1_ex11_ex12_emcy_frames() {
 /// `31 02` after shutdown, frame 49; example 9 shows 0221h instead — both
 /// forms appear in the manual).
 fn kc1_ip_axis(id: u8) -> Rig {
-    use drivebus_personality::behaviour::kc1::kc1 as kc1_behaviour;
+    use drivebus_personality::kc1::kc1 as kc1_behaviour;
     let pn = drivebus_personality::build_with(
         Profile::Kc1,
         id,

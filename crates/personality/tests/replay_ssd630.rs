@@ -13,7 +13,7 @@ mod shared_trace;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
-use drivebus_personality::behaviour::ssd630::{COUNTS_PER_REV, Ssd630};
+use drivebus_personality::ssd630::{COUNTS_PER_REV, Ssd630};
 use drivebus_personality::{PersonalityDevice, Profile, build_with};
 use shared_trace::fr;
 

@@ -18,7 +18,7 @@
 mod replay_rig;
 
 use drivebus_personality::Profile;
-use drivebus_personality::behaviour::ssd630::Ssd630;
+use drivebus_personality::ssd630::Ssd630;
 use replay_rig::*;
 
 fn statusword(r: &mut Rig) -> u16 {

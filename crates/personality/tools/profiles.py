@@ -66,7 +66,7 @@ KC1_AKD_COMMON = {
     (0x35D9, 0): ov(name="MT.CNTL (as referenced by FBUS.PARAM05 bit 6)", type=U32, access="rw", why="referenced only; the appendix lists MT.CNTL elsewhere (35AFh/35B9h); UNSIGNED32 rw written so the reference resolves", sec="KC1 5.4 / AKD 3.4"),
     (0x6099, 1): ov(default="36000", why="default 'equivalent of 60 rpm': 60 rpm = 1 rev/s = 36000 velocity units (36000 position units per revolution, velocity units = units/s, example 9)", sec="KC1 7.10.2.3 / AKD 6.10.2.3"),
     # Power-on values the tables leave empty: the EDS states what the drive
-    # starts with (behaviour/kc1.rs; DriveConfig::servo on the small servo).
+    # starts with (src/kc1/mod.rs; DriveConfig::servo on the small servo).
     (0x606D, 0): ov(default="20000", why="no default given; drivebus's working value 20000 velocity units (0.56 rev/s) written", sec="KC1 8.1.4 / AKD 7.1.5"),
     (0x606E, 0): ov(default="10", why="no default given; drivebus's working value 10 ms written", sec="KC1 8.1.4 / AKD 7.1.5"),
     (0x6092, 1): ov(default="36000", why="default: table gives 1 (the DS402 generic default) but the manual's own defaults need a sub-revolution unit: 6099h:1 'equivalent of 60 rpm' with :2 '1/8 (AKD: 50 %) of sub 1' and the 65535 speed limit example 9 shows are integers only at 36000 units per revolution (example 9: 8CA0h = one revolution); 36000 (feed per motor revolution) written", sec="KC1 7.5.3.3, 7.10.2.3, example 9 / AKD 6.5.3.3, 6.10.2.3"),
@@ -178,7 +178,7 @@ PROFILES["ssd630"]["overrides"] = {
 }
 # Power-on values the manual does not give (§4 and §12 list the objects
 # without defaults): the EDS states what the drive starts with
-# (behaviour/ssd630.rs adjust_drive_config; velocities in min^-1,
+# (src/ssd630/mod.rs adjust_drive_config; velocities in min^-1,
 # accelerations in min^-1/s, positions in increments, 4096 per revolution).
 for (i, s_), v, what in (
         ((0x6046, 2), "6000", "vl max amount = the motor's maximum speed in min^-1"),

@@ -577,10 +577,10 @@ impl SdoServer {
     /// positions still hold `(index, sub)` — an [`EntryRef`] is those
     /// positions — so inserts, removals and replacements can never make it
     /// return a stale or out-of-range handle.
-    #[inline]
+    #[inline(always)]
     fn resolve(&mut self, od: &ObjectDictionary, index: u16, sub: u8) -> Result<EntryRef, SdoAbort> {
         let key = (u32::from(index) << 8) | u32::from(sub);
-        let slot = &mut self.cache[usize::from(index ^ u16::from(sub)) & (CACHE_SLOTS - 1)];
+        let slot = &self.cache[usize::from(index ^ u16::from(sub)) & (CACHE_SLOTS - 1)];
         if let Some(r) = slot.r
             && slot.key == key
             && let Some(o) = od.objects().get(slot.obj as usize)
@@ -589,6 +589,14 @@ impl SdoServer {
         {
             return Ok(r);
         }
+        self.resolve_miss(od, index, sub)
+    }
+
+    /// [`resolve`](Self::resolve) past the cache: search and remember.
+    #[inline(never)]
+    fn resolve_miss(&mut self, od: &ObjectDictionary, index: u16, sub: u8) -> Result<EntryRef, SdoAbort> {
+        let key = (u32::from(index) << 8) | u32::from(sub);
+        let slot = &mut self.cache[usize::from(index ^ u16::from(sub)) & (CACHE_SLOTS - 1)];
         let r = od
             .find(index, sub)
             .map_err(|e| if e == SdoAbort::NO_OBJECT { self.config.missing_object } else { e })?;

@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use drivebus_can::Frame;
-use tokio::sync::{broadcast, mpsc};
+use tokio::sync::{broadcast, mpsc, oneshot};
 
 use crate::hub::{Hub, HubFrame, ParticipantId};
 
@@ -37,12 +37,34 @@ pub struct CanRx(RxInner);
 #[derive(Clone)]
 enum TxInner {
     Hub { hub: Hub, id: ParticipantId },
-    Chan { tx: mpsc::Sender<Frame>, status: Arc<LinkStatus>, rtr: bool },
+    Chan { tx: mpsc::Sender<Out>, status: Arc<LinkStatus>, rtr: bool },
 }
 
 enum RxInner {
     Hub { rx: broadcast::Receiver<HubFrame>, id: ParticipantId, overruns: u64, _hub: Hub },
     Chan { rx: mpsc::Receiver<Frame>, status: Arc<LinkStatus> },
+}
+
+/// Why [`CanTx::try_send`] did not queue a frame.
+#[derive(Debug)]
+pub enum TrySendError {
+    /// The transport cannot take it without waiting; here it is back.
+    Busy(Frame),
+    /// The transport failed or cannot carry this frame.
+    Failed(io::Error),
+}
+
+/// What a user handle asks of its transport task, in order: a frame
+/// queued after a flush is written after the flush completed.
+pub(crate) enum Out {
+    /// Write this frame.
+    Frame(Frame),
+    /// Answer once every earlier frame has been handed to the OS and the
+    /// device/socket has taken it (`tcdrain` on serial ports).
+    Flush(oneshot::Sender<()>),
+    /// Flush, then end the connection the way the peer expects (TCP: FIN
+    /// after the data and wait for the peer's; slcan: `C`), then answer.
+    Close(oneshot::Sender<()>),
 }
 
 impl CanBus {
@@ -67,6 +89,18 @@ impl CanBus {
     pub fn sender(&self) -> CanTx {
         self.tx.clone()
     }
+    /// Waits until every frame sent before this call has been written
+    /// (see [`CanTx::flush`]).
+    pub async fn flush(&self) -> io::Result<()> {
+        self.tx.flush().await
+    }
+    /// Flushes, then ends the connection so that the peer has received
+    /// every frame: on TCP a FIN after the data and a wait (bounded) for
+    /// the peer's own close, on slcan the `C` command after the frames.
+    /// A process that exits right after this has lost nothing it sent.
+    pub async fn close(self) -> io::Result<()> {
+        self.tx.close().await
+    }
 }
 
 impl CanTx {
@@ -82,7 +116,64 @@ impl CanTx {
                 io::ErrorKind::Unsupported,
                 "this transport cannot carry RTR frames (socketcand)",
             )),
-            TxInner::Chan { tx, status, .. } => tx.send(frame).await.map_err(|_| status.error()),
+            TxInner::Chan { tx, status, .. } => tx.send(Out::Frame(frame)).await.map_err(|_| status.error()),
+        }
+    }
+
+    /// Queues `frame` without waiting. [`TrySendError::Busy`] hands it
+    /// back when the transport cannot take it at once (its queue is full,
+    /// or a paced hub must wait for the frame's slot): call
+    /// [`send`](Self::send) then.
+    pub fn try_send(&self, frame: Frame) -> Result<(), TrySendError> {
+        match &self.0 {
+            TxInner::Hub { hub, .. } if hub.is_paced() => Err(TrySendError::Busy(frame)),
+            TxInner::Hub { hub, id } => {
+                hub.publish_now(*id, frame);
+                Ok(())
+            }
+            TxInner::Chan { rtr: false, .. } if frame.is_rtr() => Err(TrySendError::Failed(io::Error::new(
+                io::ErrorKind::Unsupported,
+                "this transport cannot carry RTR frames (socketcand)",
+            ))),
+            TxInner::Chan { tx, status, .. } => match tx.try_send(Out::Frame(frame)) {
+                Ok(()) => Ok(()),
+                Err(mpsc::error::TrySendError::Full(_)) => Err(TrySendError::Busy(frame)),
+                Err(mpsc::error::TrySendError::Closed(_)) => Err(TrySendError::Failed(status.error())),
+            },
+        }
+    }
+
+    /// False for transports that cannot carry remote (RTR) frames
+    /// (socketcand): sending one fails.
+    pub fn carries_rtr(&self) -> bool {
+        match &self.0 {
+            TxInner::Hub { .. } => true,
+            TxInner::Chan { rtr, .. } => *rtr,
+        }
+    }
+
+    /// Waits until every frame this transport was given before the call
+    /// has been written to the socket or device, so that a program may
+    /// report success and exit without losing it. On the in-process hub
+    /// frames are relayed at once, so this returns at once.
+    pub async fn flush(&self) -> io::Result<()> {
+        self.request(Out::Flush).await
+    }
+
+    /// [`flush`](Self::flush), then closes the connection for every
+    /// handle (see [`CanBus::close`]).
+    pub async fn close(&self) -> io::Result<()> {
+        self.request(Out::Close).await
+    }
+
+    async fn request(&self, make: fn(oneshot::Sender<()>) -> Out) -> io::Result<()> {
+        match &self.0 {
+            TxInner::Hub { .. } => Ok(()),
+            TxInner::Chan { tx, status, .. } => {
+                let (done, wait) = oneshot::channel();
+                tx.send(make(done)).await.map_err(|_| status.error())?;
+                wait.await.map_err(|_| status.error())
+            }
         }
     }
 }
@@ -151,7 +242,7 @@ impl LinkStatus {
 
 /// The transport's side of a handle built by [`link`].
 pub(crate) struct LinkEnd {
-    pub from_user: mpsc::Receiver<Frame>,
+    pub from_user: mpsc::Receiver<Out>,
     pub up: Uplink,
 }
 

@@ -243,6 +243,12 @@ impl Hub {
         self.inner.dropped.load(Ordering::Relaxed)
     }
 
+    /// True when frames are paced to a bitrate ([`publish`](Self::publish)
+    /// may wait).
+    pub fn is_paced(&self) -> bool {
+        self.inner.bitrate.is_some()
+    }
+
     /// Relays `frame` from participant `from` to everybody else; on a paced
     /// hub, first waits for the frame's slot on the bus.
     pub async fn publish(&self, from: ParticipantId, frame: Frame) {

@@ -34,7 +34,7 @@ mod url;
 
 pub use drivebus_can::{CanId, Frame};
 pub use error::{Cause, TransportError};
-pub use handle::{CanBus, CanRx, CanTx};
+pub use handle::{CanBus, CanRx, CanTx, TrySendError};
 pub use hub::{FaultRule, FaultVerdict, Hub, HubConfig};
 pub use url::{BusUrl, SlcanPort};
 

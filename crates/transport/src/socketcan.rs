@@ -7,7 +7,7 @@ use drivebus_can::{CanId, Frame};
 use socketcan::tokio::CanSocket;
 use socketcan::{CanFrame, EmbeddedFrame, ExtendedId, Id, StandardId};
 
-use crate::handle::{CanBus, LinkEnd, link};
+use crate::handle::{CanBus, LinkEnd, Out, link};
 
 /// Opens CAN interface `interface` (e.g. `can0`, `vcan0`) in raw mode.
 /// Must be called inside a tokio runtime. Fails with EAFNOSUPPORT on
@@ -55,13 +55,19 @@ async fn run(sock: CanSocket, mut end: LinkEnd) {
                 Err(e) => return end.fail(format!("SocketCAN read: {e}")),
             },
             _ = end.up.to_user.closed(), if !user_sends => return,
-            f = end.from_user.recv(), if user_sends => match f {
+            m = end.from_user.recv(), if user_sends => match m {
                 None => user_sends = false,
-                Some(f) => {
+                Some(Out::Frame(f)) => {
                     let Some(cf) = to_socketcan(&f) else { continue };
                     if let Err(e) = sock.write_frame(cf).await {
                         return end.fail(format!("SocketCAN write: {e}"));
                     }
+                }
+                // A written frame is in the kernel's queue already.
+                Some(Out::Flush(done)) => { let _ = done.send(()); }
+                Some(Out::Close(done)) => {
+                    let _ = done.send(());
+                    return end.fail("closed by the user");
                 }
             },
         }

@@ -133,3 +133,26 @@ async fn slcan_over_tcp_url_round_trip() {
     drive.send(ext).await.unwrap();
     assert_eq!(recv(&mut host).await, ext);
 }
+
+/// `close` writes the frames before the adapter's `C`: one host after
+/// another, each sending and closing at once, loses nothing.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn close_delivers_everything_sent_before_it() {
+    let hub = Hub::default();
+    let pty = SlcanPty::spawn(hub.attach()).unwrap();
+    let mut spy = hub.attach();
+    let path = pty.path().to_str().unwrap().to_owned();
+    for round in 0..20u8 {
+        let host = open_serial(&path, Some(1_000_000), 115_200).await.unwrap();
+        for k in 0..3u8 {
+            host.send(Frame::new(0x000, &[0x02, round.wrapping_mul(3).wrapping_add(k)])).await.unwrap();
+        }
+        host.close().await.unwrap();
+    }
+    let mut n = 0;
+    while let Ok(Ok(f)) = tokio::time::timeout(Duration::from_millis(300), spy.recv()).await {
+        assert_eq!(f.std_id(), Some(0x000));
+        n += 1;
+    }
+    assert_eq!(n, 20 * 3);
+}

@@ -347,3 +347,26 @@ async fn client_that_stops_reading_is_dropped_after_write_timeout() {
     }
     assert_eq!(srv.client_count(), 0);
 }
+
+/// `close` returns only once the server has every frame: a program that
+/// exits right after it loses nothing (the CLI's `nmt stop` contract).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn close_delivers_everything_sent_before_it() {
+    let (srv, addr) = server().await;
+    let mut spy = srv.attach();
+    for round in 0..20u8 {
+        let bus = timeout(T, connect(addr, "can0")).await.unwrap().unwrap();
+        for k in 0..5u8 {
+            bus.send(Frame::new(0x000, &[0x02, round.wrapping_mul(5).wrapping_add(k)])).await.unwrap();
+        }
+        bus.flush().await.unwrap();
+        bus.send(Frame::new(0x000, &[0x02, 0xFF])).await.unwrap();
+        bus.close().await.unwrap();
+    }
+    let mut n = 0;
+    while let Ok(Ok(f)) = timeout(Duration::from_millis(300), spy.recv()).await {
+        assert_eq!(f.std_id(), Some(0x000));
+        n += 1;
+    }
+    assert_eq!(n, 20 * 6, "every frame sent before close reached the hub");
+}

@@ -4,7 +4,7 @@
 use super::Drive;
 use super::config::DriveConfig;
 use super::mode::op;
-use super::objects::{How, Raw, pair_of, range, record, sub};
+use super::objects::{Arg, How, range, record, sub};
 use crate::state_machine::Options;
 use drivebus_od::{Access, DataType as T, Object, ObjectDictionary, SdoAbort, Value, WriteOutcome};
 
@@ -37,46 +37,37 @@ pub(super) fn set_option(o: &mut Options, index: u16, v: i16) -> Result<(), SdoA
 pub(super) fn option_check(
     d: &mut Drive,
     _: &mut ObjectDictionary,
-    i: u16,
-    _: u8,
-    v: Raw,
+    a: Arg,
 ) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { index: i, v, .. } = a;
     // On a copy: nothing changes before the store.
     let mut o = *d.sm.options();
     set_option(&mut o, i, v.i16()).map(|()| WriteOutcome::Store)
 }
 
-pub(super) fn option_apply(d: &mut Drive, _: &mut ObjectDictionary, i: u16, _: u8, v: Raw, _: How) {
+pub(super) fn option_apply(d: &mut Drive, _: &mut ObjectDictionary, a: Arg) {
+    let Arg { index: i, v, .. } = a;
     // Checked on writes; a stored value passed the check once.
     let _ = set_option(d.sm.options_mut(), i, v.i16());
 }
 
 /// A positive u32 (a zero rate or ratio would never get anywhere).
-pub(super) fn positive(
-    _: &mut Drive,
-    _: &mut ObjectDictionary,
-    _: u16,
-    _: u8,
-    v: Raw,
-) -> Result<WriteOutcome, SdoAbort> {
+pub(super) fn positive(_: &mut Drive, _: &mut ObjectDictionary, a: Arg) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { v, .. } = a;
     range(v.u as i64, 1, i64::from(u32::MAX)).map(|()| WriteOutcome::Store)
 }
 
 /// Ramps 6083h, 6084h, 6085h, 60C5h, 60C6h, 609Ah: positive; drives whose
 /// range includes 0 take it for 6083h/6084h/609Ah and refuse motion instead.
-pub(super) fn ramp_check(
-    d: &mut Drive,
-    _: &mut ObjectDictionary,
-    i: u16,
-    _: u8,
-    v: Raw,
-) -> Result<WriteOutcome, SdoAbort> {
+pub(super) fn ramp_check(d: &mut Drive, _: &mut ObjectDictionary, a: Arg) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { index: i, v, .. } = a;
     let zero_ok =
         d.cfg.zero_ramp != super::config::ZeroRamp::Refused && matches!(i, 0x6083 | 0x6084 | 0x609A);
     range(v.u as i64, if zero_ok { 0 } else { 1 }, i64::from(u32::MAX)).map(|()| WriteOutcome::Store)
 }
 
-pub(super) fn ramp_apply(d: &mut Drive, _: &mut ObjectDictionary, i: u16, _: u8, v: Raw, _: How) {
+pub(super) fn ramp_apply(d: &mut Drive, _: &mut ObjectDictionary, a: Arg) {
+    let Arg { index: i, v, .. } = a;
     let v = d.cfg.zero_ramp.effective(i, v.u32());
     let p = &mut d.params;
     match i {
@@ -93,11 +84,10 @@ pub(super) fn ramp_apply(d: &mut Drive, _: &mut ObjectDictionary, i: u16, _: u8,
 /// 402-2 §6.6: 0609 0036).
 pub(super) fn min_max_check(
     d: &mut Drive,
-    od: &mut ObjectDictionary,
-    i: u16,
-    s: u8,
-    v: Raw,
+    _: &mut ObjectDictionary,
+    a: Arg,
 ) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { index: i, sub: s, v, .. } = a;
     let (mut lo, mut hi) = match i {
         0x607B => (i64::from(d.params.position_range.0), i64::from(d.params.position_range.1)),
         0x607D => (i64::from(d.params.software_limits.0), i64::from(d.params.software_limits.1)),
@@ -109,18 +99,28 @@ pub(super) fn min_max_check(
     } else {
         hi = x;
     }
-    let _ = od;
     if lo > hi { Err(SdoAbort::MAX_LESS_THAN_MIN) } else { Ok(WriteOutcome::Store) }
 }
 
-pub(super) fn min_max_apply(d: &mut Drive, od: &mut ObjectDictionary, i: u16, s: u8, v: Raw, how: How) {
-    let get = |od: &ObjectDictionary, s: u8| od.get_i64(i, s).unwrap_or(0);
-    // A reload takes both stored values; a write the one written.
-    let (lo, hi) = match how {
-        How::Reload => (get(od, 1), get(od, 2)),
-        How::Write if s == 1 => (if i == 0x6046 { v.u as i64 } else { v.s }, get(od, 2)),
-        How::Write => (get(od, 1), if i == 0x6046 { v.u as i64 } else { v.s }),
+pub(super) fn min_max_apply(d: &mut Drive, od: &mut ObjectDictionary, a: Arg) {
+    let Arg { index: i, sub: s, v, how, .. } = a;
+    let x = if i == 0x6046 { v.u as i64 } else { v.s };
+    // A write keeps the other bound as the dictionary holds it; a reload
+    // takes the stored bounds one sub-index after the other.
+    let (mut lo, mut hi) = match i {
+        0x607B => (i64::from(d.params.position_range.0), i64::from(d.params.position_range.1)),
+        0x607D => (i64::from(d.params.software_limits.0), i64::from(d.params.software_limits.1)),
+        _ => (i64::from(d.extra.vl_min), i64::from(d.extra.vl_max)),
     };
+    if how == How::Write {
+        let get = |s: u8| od.get_i64(i, s).unwrap_or(0);
+        (lo, hi) = (get(1), get(2));
+    }
+    if s == 1 {
+        lo = x;
+    } else {
+        hi = x;
+    }
     match i {
         0x607B => d.params.position_range = (lo as i32, hi as i32),
         0x607D => d.params.software_limits = (lo as i32, hi as i32),
@@ -145,10 +145,9 @@ pub(super) fn factor_slot(f: &mut super::FactorGroup, i: u16) -> &mut (u32, u32)
 pub(super) fn factor_check(
     d: &mut Drive,
     _: &mut ObjectDictionary,
-    i: u16,
-    s: u8,
-    v: Raw,
+    a: Arg,
 ) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { index: i, sub: s, v, .. } = a;
     range(v.u as i64, 1, i64::from(u32::MAX))?;
     if !d.cfg.fixed_factor_group {
         let mut f = d.factor;
@@ -163,23 +162,21 @@ pub(super) fn factor_check(
     Ok(WriteOutcome::Store)
 }
 
-pub(super) fn factor_apply(d: &mut Drive, od: &mut ObjectDictionary, i: u16, s: u8, v: Raw, how: How) {
+pub(super) fn factor_apply(d: &mut Drive, _: &mut ObjectDictionary, a: Arg) {
+    let Arg { index: i, sub: s, v, how, .. } = a;
     if d.cfg.fixed_factor_group {
         // Stored set-up parameters: the units in force stay.
         return;
     }
-    match how {
-        // The units are derived once, after every factor is reloaded.
-        How::Reload => *factor_slot(&mut d.factor, i) = pair_of(od, i),
-        How::Write => {
-            let slot = factor_slot(&mut d.factor, i);
-            if s == 1 {
-                slot.0 = v.u32();
-            } else {
-                slot.1 = v.u32();
-            }
-            d.retune_units();
-        }
+    let slot = factor_slot(&mut d.factor, i);
+    if s == 1 {
+        slot.0 = v.u32();
+    } else {
+        slot.1 = v.u32();
+    }
+    // On a reload the units are derived once, after every factor.
+    if how == How::Write {
+        d.retune_units();
     }
 }
 
@@ -188,10 +185,9 @@ pub(super) fn factor_apply(d: &mut Drive, od: &mut ObjectDictionary, i: u16, s: 
 pub(super) fn handler_check(
     d: &mut Drive,
     _: &mut ObjectDictionary,
-    i: u16,
-    s: u8,
-    v: Raw,
+    a: Arg,
 ) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { index: i, sub: s, v, .. } = a;
     let units = d.units;
     let data = v.bytes();
     for h in d.handlers.iter_mut() {
@@ -221,17 +217,17 @@ pub(super) fn vl_ramp(index: u16, name: &'static str, c: &DriveConfig) -> Object
 pub(super) fn vl_ramp_check(
     _: &mut Drive,
     _: &mut ObjectDictionary,
-    _: u16,
-    s: u8,
-    v: Raw,
+    a: Arg,
 ) -> Result<WriteOutcome, SdoAbort> {
+    let Arg { sub: s, v, .. } = a;
     if s == 2 {
         range(v.u as i64, 1, 65535)?;
     }
     Ok(WriteOutcome::Store)
 }
 
-pub(super) fn vl_ramp_apply(d: &mut Drive, _: &mut ObjectDictionary, i: u16, s: u8, v: Raw, _: How) {
+pub(super) fn vl_ramp_apply(d: &mut Drive, _: &mut ObjectDictionary, a: Arg) {
+    let Arg { index: i, sub: s, v, .. } = a;
     let r = if i == 0x6048 { &mut d.extra.vl_acc } else { &mut d.extra.vl_dec };
     match s {
         1 => r.0 = v.u32(),

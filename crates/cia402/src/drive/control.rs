@@ -771,6 +771,8 @@ impl Drive {
             if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
         };
         let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
+        // 6061h shows a manufacturer mode while its stand-in runs.
+        let shown = self.mode_shown();
         // Objects the device lacks are not published (`withdraw_object`).
         let put = |od: &mut ObjectDictionary, r: Option<drivebus_od::EntryRef>, b: &[u8]| {
             if let Some(r) = r {
@@ -779,7 +781,6 @@ impl Drive {
         };
         put(od, r.statusword, &sw.to_le_bytes());
         put(od, r.error_code, &self.sm.fault_code().to_le_bytes());
-        let shown = self.mode_shown();
         put(od, r.mode_display, &shown.to_le_bytes());
         put(od, r.pos_demand, &i32s(self.dem.pos).to_le_bytes());
         put(od, r.pos_internal, &(inc as i32).to_le_bytes());

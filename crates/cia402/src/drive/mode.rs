@@ -51,37 +51,9 @@ use crate::model::{StepEvents, Switches};
 use alloc::vec::Vec;
 use drivebus_od::SdoAbort;
 
-/// Modes of operation codes (6060h / 6061h, CiA 402-2 §6.3.2).
-pub mod op {
-    /// Profile position.
-    pub const PP: i8 = 1;
-    /// Velocity (frequency converter).
-    pub const VL: i8 = 2;
-    /// Profile velocity.
-    pub const PV: i8 = 3;
-    /// Profile torque.
-    pub const TQ: i8 = 4;
-    /// Homing.
-    pub const HM: i8 = 6;
-    /// Interpolated position.
-    pub const IP: i8 = 7;
-    /// Cyclic synchronous position.
-    pub const CSP: i8 = 8;
-    /// Cyclic synchronous velocity.
-    pub const CSV: i8 = 9;
-    /// Cyclic synchronous torque.
-    pub const CST: i8 = 10;
-
-    /// The 6502h "supported drive modes" bit of a mode (0 for codes without
-    /// one: 0 "no mode", 5 reserved, negative manufacturer modes).
-    pub const fn supported_bit(mode: i8) -> u32 {
-        match mode {
-            1..=4 => 1 << (mode - 1),
-            6..=10 => 1 << (mode - 1),
-            _ => 0,
-        }
-    }
-}
+/// Modes of operation codes (6060h / 6061h, CiA 402-2 §6.3.2): the table
+/// of [`crate::codes::mode`].
+pub use crate::codes::mode as op;
 
 /// Object-dictionary parameters a mode handler may need, in their raw
 /// CiA 402 units, refreshed by the drive whenever one of them is written.

@@ -21,6 +21,16 @@ pub(crate) enum How {
     Reload,
 }
 
+/// What an entry's check or apply is handed: which sub-object, its value,
+/// and why the apply runs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Arg {
+    pub index: u16,
+    pub sub: u8,
+    pub v: Raw,
+    pub how: How,
+}
+
 /// A written or stored value, little-endian, up to 8 bytes.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Raw {
@@ -131,7 +141,7 @@ fn param_at(index: u16) -> Option<&'static super::table::Param> {
 pub(crate) fn objects(cfg: &DriveConfig, modes: u32) -> Vec<Object> {
     let mut v = Vec::with_capacity(PARAMS.len());
     for (k, p) in PARAMS.iter().enumerate() {
-        let Some(mut o) = (p.def)(cfg, modes) else { continue };
+        let Some(mut o) = p.object(cfg, modes) else { continue };
         if p.owned() {
             let tag = Owner::app(k as u8);
             for s in o.subs_mut() {
@@ -160,7 +170,9 @@ impl Drive {
     ) -> Result<WriteOutcome, SdoAbort> {
         match param_of(at.owner) {
             Some((_, p)) if p.index == at.index => match p.check {
-                Some(check) => check(self, od, at.index, at.sub, Raw::of(data)),
+                Some(check) => {
+                    check(self, od, Arg { index: at.index, sub: at.sub, v: Raw::of(data), how: How::Write })
+                }
                 None => Ok(WriteOutcome::Store),
             },
             _ => Ok(WriteOutcome::Store),
@@ -174,7 +186,7 @@ impl Drive {
             && let Some(apply) = p.apply
         {
             let v = Raw::of(od.bytes(at.r));
-            apply(self, od, at.index, at.sub, v, How::Write);
+            apply(self, od, Arg { index: at.index, sub: at.sub, v, how: How::Write });
         }
     }
 
@@ -195,38 +207,18 @@ impl Drive {
         data: &[u8],
     ) -> Result<WriteOutcome, SdoAbort> {
         let Some(p) = param_at(index) else { return Ok(WriteOutcome::Store) };
-        if self.withdrawn.object(index).is_some() {
-            // A withdrawn object's value lives in the drive
-            // (`withdraw_object`): its entry sees that copy, stored first
-            // as the write path would have.
-            let mut w = core::mem::take(&mut self.withdrawn);
-            let r = self.write_entry(p, &mut w, index, sub, data, true);
-            self.withdrawn = w;
-            return r;
-        }
-        self.write_entry(p, od, index, sub, data, false)
-    }
-
-    fn write_entry(
-        &mut self,
-        p: &super::table::Param,
-        od: &mut ObjectDictionary,
-        index: u16,
-        sub: u8,
-        data: &[u8],
-        store: bool,
-    ) -> Result<WriteOutcome, SdoAbort> {
-        let v = Raw::of(data);
+        let a = Arg { index, sub, v: Raw::of(data), how: How::Write };
         let outcome = match p.check {
-            Some(check) => check(self, od, index, sub, v)?,
+            Some(check) => check(self, od, a)?,
             None => WriteOutcome::Store,
         };
         if outcome == WriteOutcome::Store {
-            if store && let Ok(e) = od.find(index, sub) {
-                od.set_le(e, data);
-            }
             if let Some(apply) = p.apply {
-                apply(self, od, index, sub, v, How::Write);
+                apply(self, od, a);
+            }
+            // A withdrawn object's value lives with the drive.
+            if let Ok(e) = self.withdrawn.find(index, sub) {
+                self.withdrawn.set_le(e, data);
             }
         }
         Ok(outcome)
@@ -239,14 +231,12 @@ impl Drive {
 
     /// Takes every stored parameter (after install, and after the node
     /// restored or loaded values behind the write path), entry by entry in
-    /// table order, then derives the units and re-resolves the handles.
+    /// table order, then derives the units and re-resolves the handles. A
+    /// withdrawn object's values are the drive's own (`withdraw_object`).
     pub(crate) fn reload(&mut self, od: &mut ObjectDictionary) {
-        // A withdrawn parameter reloads from the drive's own copy (the
-        // device may hold another object at that index).
-        let mut w = core::mem::take(&mut self.withdrawn);
         for p in PARAMS {
             let Some(apply) = p.apply else { continue };
-            let src: &mut ObjectDictionary = if w.object(p.index).is_some() { &mut w } else { &mut *od };
+            let src = if self.withdrawn.object(p.index).is_some() { &self.withdrawn } else { &*od };
             let Some(o) = src.object(p.index) else { continue };
             let vals: Vec<(u8, Raw)> = o
                 .subs()
@@ -255,10 +245,9 @@ impl Drive {
                 .map(|s| (s.sub, Raw::of(s.bytes())))
                 .collect();
             for (s, v) in vals {
-                apply(self, src, p.index, s, v, How::Reload);
+                apply(self, od, Arg { index: p.index, sub: s, v, how: How::Reload });
             }
         }
-        self.withdrawn = w;
         // Configuration, not an object.
         self.params.homing_return_to_home = self.cfg.homing_return_to_home;
         if let Some(units) = Units::new(&self.factor) {

@@ -121,6 +121,10 @@ pub struct Units {
     inc_per_rad: f64,
     pos_per_inc: f64,
     inc_per_pos: f64,
+    /// `vel` and `acc` as floats: converting the exact ratios costs two
+    /// 128-bit conversions a call, and the control step converts often.
+    vel_f: f64,
+    acc_f: f64,
 }
 
 impl Default for Units {
@@ -153,6 +157,8 @@ impl Units {
             inc_per_rad,
             pos_per_inc: pos.inv().to_f64(),
             inc_per_pos: pos.to_f64(),
+            vel_f: vel.to_f64(),
+            acc_f: acc.to_f64(),
         })
     }
 
@@ -194,7 +200,9 @@ impl Units {
 
     /// `frac / den` of an increment (see [`Units::pos_to_inc_exact`]) as a float.
     pub fn frac_to_inc_f(&self, frac: i128) -> f64 {
-        frac as f64 / self.pos.den as f64
+        // The usual reference has no fraction: no 128-bit conversions then
+        // (the control step asks every period).
+        if frac == 0 { 0.0 } else { frac as f64 / self.pos.den as f64 }
     }
 
     /// Position \[units\] → increments as a float (set-points, derivatives).
@@ -209,39 +217,39 @@ impl Units {
 
     /// Velocity units → position units/s (magnitude, no polarity).
     pub fn vel_to_pos(&self, v: f64) -> f64 {
-        v * self.vel.to_f64()
+        v * self.vel_f
     }
 
     /// Position units/s → velocity units (magnitude, no polarity).
     pub fn pos_to_vel(&self, v: f64) -> f64 {
-        v / self.vel.to_f64()
+        v / self.vel_f
     }
 
     /// Acceleration units → position units/s² (magnitude).
     pub fn acc_to_pos(&self, a: f64) -> f64 {
-        a * self.acc.to_f64()
+        a * self.acc_f
     }
 
     /// A signed velocity-mode value \[velocity units\] → increments/s,
     /// applying the velocity polarity (607Eh bit 6).
     pub fn vel_units_to_inc_s(&self, v: f64) -> f64 {
-        v * self.vel.to_f64() * self.inc_per_pos * self.vel_sign
+        v * self.vel_f * self.inc_per_pos * self.vel_sign
     }
 
     /// Increments/s → velocity units, with the velocity polarity.
     pub fn inc_s_to_vel_units(&self, w: f64) -> f64 {
-        w * self.pos_per_inc / self.vel.to_f64() * self.vel_sign
+        w * self.pos_per_inc / self.vel_f * self.vel_sign
     }
 
     /// A velocity-unit value (60FFh, 606Ch) → position units/s in the
     /// position frame (velocity factor 6096h, polarities 607Eh bits 6 and 7).
     pub fn velocity_to_frame(&self, v: f64) -> f64 {
-        v * self.vel.to_f64() * self.vel_sign * self.pos_sign
+        v * self.vel_f * self.vel_sign * self.pos_sign
     }
 
     /// Position units/s (position frame) → velocity units (606Bh, 606Ch).
     pub fn frame_to_velocity(&self, v: f64) -> f64 {
-        v / self.vel.to_f64() * self.vel_sign * self.pos_sign
+        v / self.vel_f * self.vel_sign * self.pos_sign
     }
 
     /// Increments → motor angle \[rad\].

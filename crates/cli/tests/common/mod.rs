@@ -10,9 +10,13 @@ use std::time::Duration;
 
 use drivebus_transport::{CanBus, Frame};
 
-/// Path of the binary under test.
+/// Path of the binary under test; `DRIVEBUS_TEST_BIN` runs the tests on
+/// another build (e.g. an older one, to see a test fail before a fix).
 pub fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_drivebus")
+    match std::env::var("DRIVEBUS_TEST_BIN") {
+        Ok(b) => Box::leak(b.into_boxed_str()),
+        Err(_) => env!("CARGO_BIN_EXE_drivebus"),
+    }
 }
 
 /// A free TCP port on 127.0.0.1 (bound once, then released).

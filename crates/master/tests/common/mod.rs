@@ -59,3 +59,4 @@ pub fn master(hub: &Hub) -> Master {
     let cfg = drivebus_master::MasterConfig { sdo_timeout: Duration::from_millis(300), ..Default::default() };
     Master::with_config(hub.attach(), cfg)
 }
+pub mod dual;

@@ -14,7 +14,7 @@
 //! * where the EDS has a single value and the drive a structure (or the
 //!   reverse: SSD 630 6080h is an ARRAY of two, §12), the EDS's object
 //!   replaces the drive's, whose parameter is withdrawn; the behaviour
-//!   translates (`behaviour/ssd630.rs`);
+//!   translates (`src/ssd630/`);
 //! * every other sub-object takes the EDS's name, data type, access, PDO
 //!   mapping and limits; object code and name likewise.
 //!
@@ -50,9 +50,7 @@ fn without_subs(o: &Object, keep: impl Fn(u8) -> bool) -> Object {
         let mut fresh =
             SubObject::from_bytes(0, s0.name.clone(), s0.data_type, s0.access, s0.default.clone());
         fresh.persist = s0.persist;
-        fresh.owner = s0.owner;
-        fresh.live = s0.live;
-        fresh.watched = s0.watched;
+        keep_owner(&mut fresh, s0);
         *s0 = fresh;
     }
     let mut n =
@@ -64,14 +62,22 @@ fn without_subs(o: &Object, keep: impl Fn(u8) -> bool) -> Object {
     n
 }
 
+/// `s` keeps `from`'s owner (its writes' path): owner, live, watched, marked.
+fn keep_owner(s: &mut SubObject, from: &SubObject) {
+    s.owner = from.owner;
+    s.live = from.live;
+    s.watched = from.watched;
+    s.marked = from.marked;
+}
+
 /// Takes the EDS's description of one sub-object (see the module docs).
 fn describe(s: &mut SubObject, e: &SubObject) {
     if s.data_type.fixed_size() != e.data_type.fixed_size() {
         // Another size: the EDS's value too (the drive reads through the
         // behaviour, which knows the manual's type).
-        let (owner, live, watched) = (s.owner, s.live, s.watched);
+        let was = s.clone();
         *s = e.clone();
-        (s.owner, s.live, s.watched) = (owner, live, watched);
+        keep_owner(s, &was);
         return;
     }
     s.name = e.name.clone();

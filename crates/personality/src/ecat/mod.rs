@@ -98,7 +98,7 @@ pub static GENERIC: EcatFacts = EcatFacts {
 /// The EtherCAT facts of `profile`, `None` for a CAN-only drive.
 pub fn facts(profile: Profile) -> Option<&'static EcatFacts> {
     match profile {
-        Profile::Ipos => Some(&crate::behaviour::ipos::ecat::FACTS),
+        Profile::Ipos => Some(&crate::ipos::ecat::FACTS),
         Profile::Generic => Some(&GENERIC),
         _ => None,
     }
@@ -120,7 +120,7 @@ pub fn pdo_config(profile: Profile) -> PdoConfig {
 pub fn build(profile: Profile, storage: Box<dyn Storage + Send>) -> Result<PersonalityDevice, BuildError> {
     let facts = facts(profile)
         .ok_or_else(|| BuildError::Eds(alloc::format!("{profile} has no EtherCAT (CoE) dictionary")))?;
-    let inner = crate::behaviour::for_profile(profile);
+    let inner = profile.behaviour();
     let wrapper = EcatBehaviour::new(inner, facts, pdo_config(profile));
     let mut dev = build_full(profile, 1, storage, Box::new(wrapper), |_| {}, BuildOptions::default())?;
     let od = dev.node.od_mut();
@@ -190,11 +190,11 @@ impl DriveFiles for NoDriveFiles {
 /// The FoE policy of `profile` (iPOS §17.4: [`IposFiles`]; the generic
 /// servo has no FoE). Setup files go to `dir` when given.
 ///
-/// [`IposFiles`]: crate::behaviour::ipos::foe::IposFiles
+/// [`IposFiles`]: crate::ipos::foe::IposFiles
 pub fn files(profile: Profile, dir: Option<std::path::PathBuf>) -> Box<dyn DriveFiles> {
     match profile {
         Profile::Ipos => {
-            let f = crate::behaviour::ipos::foe::IposFiles::new();
+            let f = crate::ipos::foe::IposFiles::new();
             Box::new(match dir {
                 Some(d) => f.with_dir(d),
                 None => f,

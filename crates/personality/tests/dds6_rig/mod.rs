@@ -22,7 +22,7 @@ mod shared_trace;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Duration, Frame};
 use drivebus_node::MemoryStorage;
-use drivebus_personality::behaviour::dds6::Dds6;
+use drivebus_personality::dds6::Dds6;
 use drivebus_personality::{PersonalityDevice, Profile, build_with};
 
 /// The frame lines of a trace file, comments dropped; checks the count.

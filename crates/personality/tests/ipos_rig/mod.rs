@@ -7,7 +7,7 @@ pub use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 pub use drivebus_can::{Duration, Frame};
 pub use drivebus_cia402::drive::DriveConfig;
 use drivebus_node::MemoryStorage;
-pub use drivebus_personality::behaviour::ipos::Ipos;
+pub use drivebus_personality::ipos::Ipos;
 pub use drivebus_personality::{PersonalityDevice, Profile, build_custom};
 
 /// Encoder counts per motor revolution: a 500-line quadrature encoder

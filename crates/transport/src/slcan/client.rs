@@ -13,7 +13,7 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpStream, ToSocketAddrs};
 
 use super::codec::{self, LineSplitter, Token};
-use crate::handle::{CanBus, Uplink, link};
+use crate::handle::{CanBus, Out, Uplink, link};
 
 /// Reader poll period: how soon a dropped handle releases the device.
 const POLL: Duration = Duration::from_millis(50);
@@ -49,17 +49,22 @@ fn on_token(tok: Token<'_>, up: &Uplink) {
     }
 }
 
-fn encode_batch(
-    first: drivebus_can::Frame,
-    rx: &mut tokio::sync::mpsc::Receiver<drivebus_can::Frame>,
-    out: &mut Vec<u8>,
-) {
+/// Encodes `first` and the frames already queued behind it into `out`;
+/// returns the flush/close request that ended the batch, if any.
+fn encode_batch(first: Out, rx: &mut tokio::sync::mpsc::Receiver<Out>, out: &mut Vec<u8>) -> Option<Out> {
     out.clear();
-    codec::encode(&first, out);
-    while out.len() < 1024 {
+    let mut m = first;
+    loop {
+        match m {
+            Out::Frame(f) => codec::encode(&f, out),
+            control => return Some(control),
+        }
+        if out.len() >= 1024 {
+            return None;
+        }
         match rx.try_recv() {
-            Ok(f) => codec::encode(&f, out),
-            Err(_) => break,
+            Ok(next) => m = next,
+            Err(_) => return None,
         }
     }
 }
@@ -81,10 +86,19 @@ pub async fn open_serial(path: &str, bitrate: Option<u32>, baud: u32) -> io::Res
     let (bus, end) = link(true);
     let up = end.up.clone();
     let mut from_user = end.from_user;
+    // Set by `close`; the reader then releases the port (serialport holds
+    // an exclusive lock on it) and says so by dropping `released`.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let (released, rx_gone) = std::sync::mpsc::channel::<()>();
+    let stop_rx = stop.clone();
     std::thread::Builder::new().name("slcan-rx".into()).spawn(move || {
+        let _released = released;
         let mut split = LineSplitter::new();
         let mut buf = [0u8; 1024];
         loop {
+            if stop_rx.load(std::sync::atomic::Ordering::Acquire) {
+                return;
+            }
             if up.to_user.is_closed() {
                 // The user is gone: close the CAN channel, release the port.
                 let _ = port.write_all(b"C\r");
@@ -105,10 +119,31 @@ pub async fn open_serial(path: &str, bitrate: Option<u32>, baud: u32) -> io::Res
     let up = end.up;
     std::thread::Builder::new().name("slcan-tx".into()).spawn(move || {
         let mut out = Vec::with_capacity(1100);
-        while let Some(f) = from_user.blocking_recv() {
-            encode_batch(f, &mut from_user, &mut out);
+        while let Some(m) = from_user.blocking_recv() {
+            let control = encode_batch(m, &mut from_user, &mut out);
             if let Err(e) = wport.write_all(&out) {
                 return up.fail(format!("slcan write: {e}"));
+            }
+            match control {
+                None | Some(Out::Frame(_)) => {}
+                // `flush` waits until the device has taken the bytes (tcdrain).
+                Some(Out::Flush(done)) => {
+                    let _ = wport.flush();
+                    let _ = done.send(());
+                }
+                Some(Out::Close(done)) => {
+                    // The frames first, then close the CAN channel: an adapter
+                    // drops what arrives after `C`.
+                    let _ = wport.flush();
+                    let _ = wport.write_all(b"C\r");
+                    let _ = wport.flush();
+                    stop.store(true, std::sync::atomic::Ordering::Release);
+                    drop(wport);
+                    // The reader notices within one poll period.
+                    let _ = rx_gone.recv_timeout(POLL * 10);
+                    let _ = done.send(());
+                    return up.fail("closed by the user");
+                }
             }
         }
     })?;
@@ -139,12 +174,25 @@ pub async fn connect_tcp(addr: impl ToSocketAddrs, bitrate: Option<u32>) -> io::
                     let _ = stream.write_all(b"C\r").await;
                     return;
                 }
-                f = end.from_user.recv(), if user_sends => match f {
+                m = end.from_user.recv(), if user_sends => match m {
                     None => user_sends = false,
-                    Some(f) => {
-                        encode_batch(f, &mut end.from_user, &mut out);
+                    Some(m) => {
+                        let control = encode_batch(m, &mut end.from_user, &mut out);
                         if let Err(e) = stream.write_all(&out).await {
                             return end.fail(format!("slcan write: {e}"));
+                        }
+                        match control {
+                            None | Some(Out::Frame(_)) => {}
+                            Some(Out::Flush(done)) => {
+                                let _ = stream.flush().await;
+                                let _ = done.send(());
+                            }
+                            Some(Out::Close(done)) => {
+                                let _ = stream.write_all(b"C\r").await;
+                                let _ = stream.shutdown().await;
+                                let _ = done.send(());
+                                return end.fail("closed by the user");
+                            }
                         }
                     }
                 },

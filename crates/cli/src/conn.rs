@@ -1,0 +1,99 @@
+//! One connection per command: the bus named by `--bus` (with the `--sim`
+//! drives hosted on the virtual bus first) and the master on it. Every
+//! command talks to the bus through this master, and closes it before it
+//! reports: a frame the command sent has been written by the transport
+//! when the command says it was sent.
+
+use std::time::Duration;
+
+use anyhow::{Context, anyhow};
+use drivebus_master::{Master, MasterConfig};
+
+use crate::args::Global;
+use crate::dict::Dict;
+use crate::vdrive::{DriveSpec, spawn_on_hub};
+
+/// Virtual drives hosted by this process for `--sim`; stopped on drop.
+pub struct Hosted(Vec<tokio::task::JoinHandle<()>>);
+
+impl Drop for Hosted {
+    fn drop(&mut self) {
+        for d in &self.0 {
+            d.abort();
+        }
+    }
+}
+
+/// The master of one command, with what it needs to explain itself.
+pub struct Conn {
+    /// The master on the bus.
+    pub master: Master,
+    /// The SDO/response timeout in force.
+    pub timeout: Duration,
+    /// Object names and types (`--eds`, then CiA 301/402).
+    pub dict: Dict,
+    _hosted: Hosted,
+}
+
+/// The `--node` option, required by this command.
+pub fn need_node(g: &Global) -> anyhow::Result<u8> {
+    g.node.ok_or_else(|| crate::error::coded("usage", anyhow!("this command needs --node N (1..127)")))
+}
+
+impl Conn {
+    /// Opens `g.bus` (on a virtual bus, first starts the `--sim` drives)
+    /// and starts the master on it.
+    pub async fn open(g: &Global) -> anyhow::Result<Conn> {
+        let dict = Dict { eds: crate::eds_cmd::load_global_eds(g)? };
+        Conn::open_with(g, dict).await
+    }
+
+    /// [`open`](Self::open) with the dictionary loaded already.
+    pub async fn open_with(g: &Global, dict: Dict) -> anyhow::Result<Conn> {
+        let specs = DriveSpec::parse_all(&g.sim)?;
+        // The transport's message already names the URL and the cause.
+        let parsed =
+            drivebus_transport::BusUrl::parse(&g.bus).map_err(|e| crate::error::coded("bus", e.into()))?;
+        let mut drives = Vec::new();
+        if !specs.is_empty() {
+            let drivebus_transport::BusUrl::Virtual { name } = &parsed else {
+                return Err(crate::error::coded(
+                    "usage",
+                    anyhow!("--sim hosts drives only on the `virtual` bus, not on `{}`", g.bus),
+                ));
+            };
+            let hub = drivebus_transport::hub::virtual_hub(name);
+            drives = spawn_on_hub(&specs, &hub, None, Default::default())?;
+        }
+        let hosted = Hosted(drives);
+        let bus =
+            tokio::time::timeout(Duration::from_secs(10), drivebus_transport::open_parsed(&g.bus, &parsed))
+                .await
+                .map_err(|_| {
+                    crate::error::coded("bus", anyhow!("cannot open `{}`: timed out after 10 s", g.bus))
+                })?
+                .map_err(|e| crate::error::coded("bus", e.into()))?;
+        if !specs.is_empty() {
+            // Let the hosted drives boot before the first request.
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+        let timeout = Duration::from_millis(g.timeout.max(1));
+        let master = Master::with_config(
+            bus,
+            MasterConfig { sdo_timeout: timeout, sdo_retries: g.retries, ..MasterConfig::default() },
+        );
+        if let Some(eds) = &dict.eds
+            && let Some(node) = g.node
+            && let Ok(od) = drivebus_eds::to_od(eds, node)
+        {
+            master.set_eds(node, od);
+        }
+        Ok(Conn { master, timeout, dict, _hosted: hosted })
+    }
+
+    /// Closes the bus after every frame sent was written (see
+    /// `Master::close`).
+    pub async fn close(self) -> anyhow::Result<()> {
+        self.master.close().await.context("closing the bus")
+    }
+}

@@ -1,0 +1,173 @@
+//! Errors with a machine-readable code (`--json` prints them as
+//! `{"error":{"code":...,"message":...}}`), and the explanations of SDO
+//! and drive failures.
+
+use std::fmt;
+use std::time::Duration;
+
+use drivebus_master::{DriveError, LssError, SdoAbort, SdoError};
+
+/// An error with a code for `--json`.
+#[derive(Debug)]
+pub struct Coded {
+    /// Short code: usage, bus, sdo_abort, sdo_timeout, drive_timeout, ...
+    pub code: &'static str,
+    /// The error.
+    pub error: anyhow::Error,
+}
+
+impl fmt::Display for Coded {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:#}", self.error)
+    }
+}
+
+impl std::error::Error for Coded {}
+
+/// Tags `e` with `code`.
+pub fn coded(code: &'static str, e: anyhow::Error) -> anyhow::Error {
+    anyhow::Error::new(Coded { code, error: e })
+}
+
+/// A duration option in seconds (`--seconds`, `--wait`), at most a year:
+/// NaN, negative or absurd values are usage errors, never a panic.
+pub fn seconds(option: &str, secs: f64) -> anyhow::Result<Duration> {
+    if !(0.0..=365.0 * 86_400.0).contains(&secs) {
+        return Err(coded("usage", anyhow::anyhow!("{option}: give a number of seconds from 0 to a year")));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
+/// An SDO transfer that failed, with everything needed to explain it.
+#[derive(Debug)]
+pub struct SdoFailure {
+    /// Node-ID.
+    pub node: u8,
+    /// Object.
+    pub index: u16,
+    /// Sub-index.
+    pub sub: u8,
+    /// Read or write.
+    pub write: bool,
+    /// The failure.
+    pub error: SdoError,
+    /// The timeout in force.
+    pub timeout: Duration,
+}
+
+impl SdoFailure {
+    /// The abort code, if the server sent one.
+    pub fn abort(&self) -> Option<SdoAbort> {
+        self.error.abort_code()
+    }
+}
+
+impl fmt::Display for SdoFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = if self.write { "write" } else { "read" };
+        write!(f, "node {}: SDO {what} {:04X}h:{:02X} ", self.node, self.index, self.sub)?;
+        match &self.error {
+            SdoError::Abort { code, text } => write!(
+                f,
+                "aborted by the device with code 0x{:08X}: {}",
+                code.0,
+                text.unwrap_or("unknown abort code")
+            ),
+            SdoError::Timeout => write!(
+                f,
+                "timed out: no response within {} ms (is node {} on the bus and in pre-operational or operational?)",
+                self.timeout.as_millis(),
+                self.node
+            ),
+            e => write!(f, "failed: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for SdoFailure {}
+
+/// Wraps an SDO error of `node` at `index`/`sub`.
+pub fn sdo(
+    node: u8,
+    index: u16,
+    sub: u8,
+    write: bool,
+    timeout: Duration,
+) -> impl FnOnce(SdoError) -> anyhow::Error {
+    move |error| anyhow::Error::new(SdoFailure { node, index, sub, write, error, timeout })
+}
+
+/// The `--json` code and extra fields of an error.
+pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
+    let mut extra = serde_json::json!({});
+    for cause in e.chain() {
+        if let Some(c) = cause.downcast_ref::<Coded>() {
+            return (c.code, extra);
+        }
+        if let Some(f) = cause.downcast_ref::<SdoFailure>() {
+            extra = serde_json::json!({"node": f.node, "index": format!("{:04X}", f.index), "sub": f.sub});
+            return match f.abort() {
+                Some(a) => {
+                    extra["abort_code"] = format!("0x{:08X}", a.0).into();
+                    ("sdo_abort", extra)
+                }
+                None if f.error == SdoError::Timeout => ("sdo_timeout", extra),
+                None => ("sdo_error", extra),
+            };
+        }
+        if let Some(d) = cause.downcast_ref::<DriveError>() {
+            return match d {
+                DriveError::Timeout { .. } => ("drive_timeout", extra),
+                DriveError::Fault { .. } => ("drive_fault", extra),
+                DriveError::HomingError { .. } => ("homing_error", extra),
+                DriveError::Sdo(SdoError::Timeout) => ("sdo_timeout", extra),
+                DriveError::Sdo(_) => ("sdo_abort", extra),
+                _ => ("drive_error", extra),
+            };
+        }
+        if cause.downcast_ref::<LssError>().is_some() {
+            return ("lss_error", extra);
+        }
+        if cause.downcast_ref::<drivebus_transport::TransportError>().is_some() {
+            return ("bus", extra);
+        }
+        if cause.downcast_ref::<std::io::Error>().is_some() {
+            return ("io", extra);
+        }
+    }
+    ("error", extra)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sdo_failures_explain_themselves() {
+        let f = SdoFailure {
+            node: 3,
+            index: 0x6041,
+            sub: 0,
+            write: false,
+            error: SdoError::Abort { code: SdoAbort::NO_OBJECT, text: SdoAbort::NO_OBJECT.description() },
+            timeout: Duration::from_millis(500),
+        };
+        assert_eq!(
+            f.to_string(),
+            "node 3: SDO read 6041h:00 aborted by the device with code 0x06020000: Object does not exist in the object dictionary"
+        );
+        let e = anyhow::Error::new(f);
+        assert_eq!(describe(&e).0, "sdo_abort");
+        assert_eq!(describe(&e).1["abort_code"], "0x06020000");
+        let t = SdoFailure {
+            node: 3,
+            index: 0x6041,
+            sub: 0,
+            write: true,
+            error: SdoError::Timeout,
+            timeout: Duration::from_millis(500),
+        };
+        assert!(t.to_string().starts_with("node 3: SDO write 6041h:00 timed out: no response within 500 ms"));
+        assert_eq!(describe(&coded("usage", anyhow::anyhow!("x"))).0, "usage");
+    }
+}

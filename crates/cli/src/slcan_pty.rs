@@ -1,0 +1,49 @@
+//! `drivebus slcan-pty`: virtual drives behind an slcan adapter emulated
+//! on a pseudo-terminal (hosting; moved here unchanged from `misc.rs`).
+
+use std::time::Duration;
+
+use anyhow::{Context, bail};
+
+use crate::args::{Global, SlcanPtyArgs};
+use crate::vdrive::{DriveSpec, spawn_on_hub};
+
+/// `drivebus slcan-pty`.
+pub async fn run(g: &Global, a: &SlcanPtyArgs) -> anyhow::Result<()> {
+    #[cfg(unix)]
+    {
+        use std::io::Write;
+        let specs = DriveSpec::parse_all(&a.drives)?;
+        let hub = match drivebus_transport::BusUrl::parse(&g.bus)? {
+            drivebus_transport::BusUrl::Virtual { name } => drivebus_transport::hub::virtual_hub(&name),
+            _ => bail!("slcan-pty runs on the in-process virtual bus: use --bus virtual (not `{}`)", g.bus),
+        };
+        crate::fault::install(&hub, &a.faults)?;
+        let _drives = spawn_on_hub(&specs, &hub, None, Default::default())?;
+        let pty = drivebus_transport::slcan::SlcanPty::spawn(hub.attach())
+            .context("cannot open a pseudo-terminal")?;
+        {
+            let mut out = std::io::stdout().lock();
+            writeln!(out, "slcan-pty {}", pty.path().display())?;
+            out.flush()?;
+        }
+        match a.seconds {
+            Some(s) => {
+                tokio::select! {
+                    () = tokio::time::sleep(Duration::from_secs_f64(s.max(0.0))) => {}
+                    r = crate::serve::wait_for_signal() => r?,
+                }
+            }
+            None => crate::serve::wait_for_signal().await?,
+        }
+        for d in _drives {
+            d.abort();
+        }
+        Ok(())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (g, a);
+        bail!("slcan-pty needs a Unix pseudo-terminal")
+    }
+}
