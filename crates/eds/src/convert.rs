@@ -3,9 +3,11 @@
 use crate::model::{DeviceInfo, Diagnostic, Eds, EdsError, EdsObject, EdsVar};
 use crate::value::{eval, format, is_node_relative};
 use drivebus_od::{DataType, Object, ObjectCode, ObjectDictionary, SubObject};
+use std::borrow::Cow;
 
 fn var_to_sub(
     v: &EdsVar,
+    name: Cow<'static, str>,
     sub: u8,
     index: u16,
     node_id: u8,
@@ -25,14 +27,14 @@ fn var_to_sub(
         Some(n) => vec![0; n],
         None => Vec::new(),
     });
-    let mut s = SubObject::from_bytes(sub, v.name.clone(), dt, v.access, default.clone());
+    let mut s = SubObject::from_bytes(sub, name.clone(), dt, v.access, default.clone());
     s.pdo_mappable = v.pdo_mapping;
     s.low_limit = text(&v.low_limit)?;
     s.high_limit = text(&v.high_limit)?;
     s.node_id_relative = v.default.as_deref().is_some_and(is_node_relative);
     if use_parameter_value && let Some(pv) = text(&v.parameter_value)? {
         // A DCF's ParameterValue is the configured value; the default stays.
-        let mut with_value = SubObject::from_bytes(sub, v.name.clone(), dt, v.access, pv);
+        let mut with_value = SubObject::from_bytes(sub, name, dt, v.access, pv);
         with_value.default = default;
         with_value.pdo_mappable = s.pdo_mappable;
         with_value.low_limit = s.low_limit.take();
@@ -48,20 +50,35 @@ fn var_to_sub(
 /// (DEFTYPE/DEFSTRUCT, e.g. the dummy-mapping entries 0002h..0007h) are
 /// kept: CiA 301 lets a device expose them.
 pub fn to_od(eds: &Eds, node_id: u8) -> Result<ObjectDictionary, EdsError> {
+    convert(eds, node_id, |n| Cow::Owned(n.to_owned()))
+}
+
+/// [`to_od`] of a file that lives as long as the program (one read once
+/// and kept): the dictionary borrows its names instead of copying them,
+/// so it and its clones allocate no name. Same dictionary otherwise.
+pub fn to_od_static(eds: &'static Eds, node_id: u8) -> Result<ObjectDictionary, EdsError> {
+    convert(eds, node_id, Cow::Borrowed)
+}
+
+fn convert<'e>(
+    eds: &'e Eds,
+    node_id: u8,
+    name: impl Fn(&'e str) -> Cow<'static, str>,
+) -> Result<ObjectDictionary, EdsError> {
     let mut od = ObjectDictionary::new();
     let mut errors = Vec::new();
     for o in eds.objects.values() {
         if o.object_type == ObjectCode::Null {
             continue;
         }
-        let mut obj = Object::with_code(o.index, o.object_type, o.name.clone());
+        let mut obj = Object::with_code(o.index, o.object_type, name(&o.name));
         obj.flags = o.obj_flags;
         let subs: Vec<(u8, &EdsVar)> = match &o.var {
             Some(v) if o.compact_sub_obj.is_none() => vec![(0, v)],
             _ => o.subs.iter().map(|(k, v)| (*k, v)).collect(),
         };
         for (sub, v) in subs {
-            match var_to_sub(v, sub, o.index, node_id, true) {
+            match var_to_sub(v, name(&v.name), sub, o.index, node_id, true) {
                 Ok(s) => obj = obj.with_sub(s),
                 Err(d) => errors.push(d),
             }

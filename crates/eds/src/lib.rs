@@ -18,7 +18,7 @@ mod value;
 mod write;
 
 pub use check::{Finding, Severity, check};
-pub use convert::{from_od, to_od};
+pub use convert::{from_od, to_od, to_od_static};
 pub use dcf::{dcf, dcf_from_od};
 pub use model::{Commissioning, DeviceInfo, Diagnostic, Eds, EdsError, EdsObject, EdsVar};
 pub use read::{Parsed, parse};

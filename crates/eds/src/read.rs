@@ -30,27 +30,37 @@ enum Kind {
 }
 
 fn classify(name: &str) -> Kind {
-    let lower = name.to_ascii_lowercase();
+    // Case-insensitive without a lower-cased copy: called for every section.
     let hex4 = |s: &str| if s.len() == 4 { u16::from_str_radix(s, 16).ok() } else { None };
-    if let Some(i) = hex4(&lower) {
+    if let Some(i) = hex4(name) {
         return Kind::Object(i);
     }
-    if lower.len() > 4 && lower.is_char_boundary(4) {
-        let (head, tail) = lower.split_at(4);
+    if name.len() > 4 && name.is_char_boundary(4) {
+        let (head, tail) = name.split_at(4);
         if let Some(i) = hex4(head) {
-            if let Some(s) = tail.strip_prefix("sub") {
+            if let Some(s) = tail.get(..3).filter(|p| p.eq_ignore_ascii_case("sub")).map(|_| &tail[3..]) {
                 // CiA 306 writes the sub-index in hex ("[1600sub1A]").
                 if let Ok(sub) = u8::from_str_radix(s, 16) {
                     return Kind::Sub(i, sub);
                 }
-            } else if tail == "name" {
+            } else if tail.eq_ignore_ascii_case("name") {
                 return Kind::Names(i);
-            } else if tail == "value" {
+            } else if tail.eq_ignore_ascii_case("value") {
                 return Kind::Values(i);
             }
         }
     }
     Kind::Other
+}
+
+/// `[name]suffix`, written only into a message.
+#[derive(Clone, Copy)]
+struct Displayed<'a>(&'a str, &'a str);
+
+impl std::fmt::Display for Displayed<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[{}]{}", self.0, self.1)
+    }
 }
 
 struct Reader {
@@ -71,7 +81,7 @@ impl Reader {
         if e.value.is_empty() {
             return None;
         }
-        match parse_int(&e.value).and_then(|v| T::try_from(v).ok()) {
+        match parse_int(e.value).and_then(|v| T::try_from(v).ok()) {
             Some(v) => Some(v),
             None => {
                 self.err(e.line, format!("[{}] {}={:?} is not a valid number", sec.name, e.key, e.value));
@@ -85,15 +95,17 @@ impl Reader {
     }
 
     fn text(sec: &Section, key: &str) -> String {
-        sec.get(key).map(|e| e.value.clone()).unwrap_or_default()
+        sec.get(key).map(|e| e.value.to_string()).unwrap_or_default()
     }
 
     fn opt_text(sec: &Section, key: &str) -> Option<String> {
-        sec.get(key).map(|e| e.value.clone())
+        sec.get(key).map(|e| e.value.to_string())
     }
 
     /// A value description from a section's keys (VAR object or sub-object).
-    fn var(&mut self, sec: &Section, what: &str) -> Option<EdsVar> {
+    /// `suffix` follows the section name in messages (formatted only for one).
+    fn var(&mut self, sec: &Section, suffix: &str) -> Option<EdsVar> {
+        let what = Displayed(sec.name, suffix);
         let dt_entry = sec.get("DataType");
         let data_type = match dt_entry {
             None => {
@@ -107,7 +119,7 @@ impl Reader {
                 self.warn(sec.line, format!("{what}: AccessType missing, assuming ro"));
                 Access::Ro
             }
-            Some(e) => match Access::from_name(&e.value) {
+            Some(e) => match Access::from_name(e.value) {
                 Some(a) => a,
                 None => {
                     self.err(
@@ -133,7 +145,7 @@ impl Reader {
             for key in ["DefaultValue", "ParameterValue", "LowLimit", "HighLimit"] {
                 if let Some(e) = sec.get(key)
                     && !e.value.is_empty()
-                    && let Err(m) = eval(&e.value, dt, 1)
+                    && let Err(m) = eval(e.value, dt, 1)
                 {
                     self.err(e.line, format!("{what}: {key}: {m}"));
                 }
@@ -153,7 +165,7 @@ impl Reader {
         let mut out = Vec::new();
         for i in 1..=n {
             match sec.get(&i.to_string()) {
-                Some(e) => match parse_int(&e.value).and_then(|v| u16::try_from(v).ok()) {
+                Some(e) => match parse_int(e.value).and_then(|v| u16::try_from(v).ok()) {
                     Some(v) => out.push(v),
                     None => self.err(e.line, format!("[{name}] {i}={:?} is not an index", e.value)),
                 },
@@ -177,7 +189,7 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
     let mut eds = Eds::default();
 
     if let Some(s) = ini.section("FileInfo") {
-        eds.file_info = s.entries.iter().map(|e| (e.key.clone(), e.value.clone())).collect();
+        eds.file_info = s.entries.iter().map(|e| (e.key.to_string(), e.value.to_string())).collect();
     } else {
         r.warn(0, "[FileInfo] missing".into());
     }
@@ -193,7 +205,7 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
                 .filter(|(p, t)| p.eq_ignore_ascii_case("dummy") && t.len() == 4)
                 .filter(|(_, t)| t.chars().all(|c| c.is_ascii_hexdigit()))
                 .and_then(|(_, t)| u16::from_str_radix(t, 16).ok());
-            match (index, parse_int(&e.value)) {
+            match (index, parse_int(e.value)) {
                 (Some(i), Some(v)) => {
                     eds.dummy_usage.insert(i, v != 0);
                 }
@@ -236,7 +248,7 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
                 .entries
                 .iter()
                 .filter(|e| !COMMISSIONING_KEYS.contains(&e.key.to_ascii_lowercase().as_str()))
-                .map(|e| (e.key.clone(), e.value.clone()))
+                .map(|e| (e.key.to_string(), e.value.to_string()))
                 .collect(),
         });
     }
@@ -254,24 +266,24 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
         "devicecommissioning",
     ];
     for sec in &ini.sections {
-        if let Kind::Object(index) = classify(&sec.name) {
+        if let Kind::Object(index) = classify(sec.name) {
             if let Some(o) = object(&mut r, sec, index) {
                 eds.objects.insert(index, o);
             }
-        } else if matches!(classify(&sec.name), Kind::Other)
+        } else if matches!(classify(sec.name), Kind::Other)
             && !known.contains(&sec.name.to_ascii_lowercase().as_str())
         {
             r.warn(sec.line, format!("section [{}] not interpreted; kept as is", sec.name));
             eds.other_sections.push((
-                sec.name.clone(),
-                sec.entries.iter().map(|e| (e.key.clone(), e.value.clone())).collect(),
+                sec.name.to_string(),
+                sec.entries.iter().map(|e| (e.key.to_string(), e.value.to_string())).collect(),
             ));
         }
     }
     for sec in &ini.sections {
-        match classify(&sec.name) {
+        match classify(sec.name) {
             Kind::Sub(index, sub) => {
-                let Some(v) = r.var(sec, &format!("[{}]", sec.name)) else { continue };
+                let Some(v) = r.var(sec, "") else { continue };
                 match eds.objects.get_mut(&index) {
                     Some(o) if o.compact_sub_obj.is_some() => r.warn(
                         sec.line,
@@ -284,16 +296,16 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
                 }
             }
             Kind::Names(index) | Kind::Values(index) => {
-                let names = matches!(classify(&sec.name), Kind::Names(_));
+                let names = matches!(classify(sec.name), Kind::Names(_));
                 let n: usize = r.num(sec, "NrOfEntries").unwrap_or(0);
                 let mut map = BTreeMap::new();
                 for e in &sec.entries {
                     if e.key.eq_ignore_ascii_case("NrOfEntries") {
                         continue;
                     }
-                    match parse_int(&e.key).and_then(|v| u8::try_from(v).ok()) {
+                    match parse_int(e.key).and_then(|v| u8::try_from(v).ok()) {
                         Some(sub) => {
-                            map.insert(sub, e.value.clone());
+                            map.insert(sub, e.value.to_string());
                         }
                         None => r.err(e.line, format!("[{}] key {:?} is not a sub-index", sec.name, e.key)),
                     }
@@ -368,7 +380,7 @@ fn device_info(r: &mut Reader, s: &Section) -> DeviceInfo {
     for e in &s.entries {
         let k = e.key.to_ascii_lowercase();
         if !KNOWN.contains(&k.as_str()) && !k.starts_with("baudrate_") {
-            d.other.push((e.key.clone(), e.value.clone()));
+            d.other.push((e.key.to_string(), e.value.to_string()));
         }
     }
     d
@@ -404,11 +416,11 @@ fn object(r: &mut Reader, sec: &Section, index: u16) -> Option<EdsObject> {
     let has_value_keys = sec.get("DataType").is_some();
     match code {
         ObjectCode::Var | ObjectCode::Domain | ObjectCode::DefType => {
-            o.var = r.var(sec, &format!("[{}]", sec.name));
+            o.var = r.var(sec, "");
             o.var.as_ref()?;
         }
         _ if o.compact_sub_obj.is_some() => {
-            o.var = r.var(sec, &format!("[{}] (CompactSubObj)", sec.name));
+            o.var = r.var(sec, " (CompactSubObj)");
             o.var.as_ref()?;
         }
         _ if has_value_keys => {

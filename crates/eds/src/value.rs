@@ -5,7 +5,8 @@ use drivebus_od::{DataType, Value, parse_int};
 
 /// True if the text refers to the node-ID.
 pub fn is_node_relative(text: &str) -> bool {
-    text.to_ascii_uppercase().contains("$NODEID")
+    // Without an upper-cased copy: every value of every file goes through here.
+    text.as_bytes().windows(7).any(|w| w.eq_ignore_ascii_case(b"$NODEID"))
 }
 
 /// Evaluate a value text for `dt` with `node_id` substituted, returning the
@@ -35,8 +36,9 @@ fn eval_int(t: &str, node_id: u8) -> Result<i128, String> {
     }
     let mut total: i128 = 0;
     let mut sign = 1i128;
-    let mut term = String::new();
-    let flush = |term: &mut String, sign: i128, total: &mut i128| -> Result<(), String> {
+    // Terms are slices of `t` between the operators (no copy per character).
+    let mut start = 0;
+    let flush = |term: &str, sign: i128, total: &mut i128| -> Result<(), String> {
         let s = term.trim();
         if s.is_empty() {
             return Err(format!("{t:?}: missing term"));
@@ -47,19 +49,17 @@ fn eval_int(t: &str, node_id: u8) -> Result<i128, String> {
             parse_int(s).ok_or_else(|| format!("{t:?} is not a number"))?
         };
         *total = total.checked_add(sign * v).ok_or_else(|| format!("{t:?} overflows"))?;
-        term.clear();
         Ok(())
     };
     for (i, c) in t.char_indices() {
         // A leading '-' belongs to the first number.
         if (c == '+' || c == '-') && !(i == 0 && c == '-') {
-            flush(&mut term, sign, &mut total)?;
+            flush(&t[start..i], sign, &mut total)?;
             sign = if c == '-' { -1 } else { 1 };
-        } else {
-            term.push(c);
+            start = i + 1;
         }
     }
-    flush(&mut term, sign, &mut total)?;
+    flush(&t[start..], sign, &mut total)?;
     Ok(total)
 }
 

@@ -178,7 +178,12 @@ pub fn mark_node_relative(
     // more build for a neighbouring node-ID shows which defaults move with it.
     let id = if (1..=127).contains(&generated_id) { generated_id } else { 1 };
     let other = if id == 127 { 126 } else { id + 1 };
-    let b = build_dictionary(cfg, other);
+    // The mapping entries (up to 64 per PDO) have no node-ID in their
+    // defaults (they hold object indices): the neighbour is built without
+    // them, which halves its cost. Their sub 0 is still compared.
+    let mut neighbour = cfg.clone();
+    neighbour.pdo.max_entries = 0;
+    let b = build_dictionary(&neighbour, other);
     let step = u64::from(other).wrapping_sub(u64::from(id));
     for o in generated.objects() {
         for sa in o.subs() {

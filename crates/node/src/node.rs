@@ -179,7 +179,16 @@ impl Node {
     /// Add (or replace) an object: its `hooked()` entries get their owner,
     /// and every service re-resolves its handles.
     pub fn insert_object(&mut self, obj: drivebus_od::Object) {
-        self.od.insert(obj);
+        self.insert_objects([obj]);
+    }
+
+    /// Add (or replace) several objects: [`Node::insert_object`] for each,
+    /// with the services re-resolved once, after the last (installing an
+    /// application's hundred objects one by one re-resolves a hundred times).
+    pub fn insert_objects(&mut self, objs: impl IntoIterator<Item = drivebus_od::Object>) {
+        for obj in objs {
+            self.od.insert(obj);
+        }
         resolve(&mut self.od);
         self.s.pdo.reload(&self.od);
         self.s.link.dirty |= dirty::ALL | dirty::ROUTES | dirty::PDO_MAP;

@@ -87,20 +87,18 @@ fn service_tag(index: u16) -> Owner {
 /// its service in the communication area (live only where the service
 /// refreshes reads: 1003h, 1021h), the application elsewhere.
 pub(crate) fn resolve(od: &mut ObjectDictionary) {
-    let hooked: Vec<(u16, u8)> = od
-        .objects()
-        .iter()
-        .flat_map(|o| o.subs().iter().filter(|s| s.owner == Owner::HOOKED).map(move |s| (o.index, s.sub)))
-        .collect();
-    for (index, sub) in hooked {
-        let Some(s) = od.get_mut(index, sub) else { continue };
+    // One pass in place: a build resolves after every batch of inserts.
+    od.for_each_sub_mut(|index, s| {
+        if s.owner != Owner::HOOKED {
+            return;
+        }
         if (0x1000..=0x1FFF).contains(&index) {
             s.owner = service_tag(index);
             s.live = matches!(index, 0x1003 | 0x1021);
         } else {
             s.owner = Owner::APP;
         }
-    }
+    });
 }
 
 /// The services whose objects live in the communication area, and what

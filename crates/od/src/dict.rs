@@ -441,6 +441,18 @@ impl ObjectDictionary {
         self.objects[r.obj as usize].subs[r.sub as usize].marked = on;
     }
 
+    /// Visits every sub-object mutably, with its object's index, in index
+    /// order: a pass over the whole dictionary without collecting keys
+    /// first (e.g. resolving owners after a batch of inserts).
+    pub fn for_each_sub_mut(&mut self, mut f: impl FnMut(u16, &mut SubObject)) {
+        for o in &mut self.objects {
+            let index = o.index;
+            for s in &mut o.subs {
+                f(index, s);
+            }
+        }
+    }
+
     /// Marks or unmarks every entry.
     pub fn mark_all(&mut self, on: bool) {
         for o in &mut self.objects {

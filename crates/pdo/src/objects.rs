@@ -127,6 +127,75 @@ fn comm_record(cfg: &PdoConfig, kind: PdoKind, n: u16) -> Object {
     o
 }
 
+/// "Mapped object 1" … "Mapped object 64": static, so building a node
+/// does not format (and allocate) a name for each of up to 64 × 1024 entries.
+const MAPPED_NAMES: [&str; crate::MAX_MAPPED_ENTRIES as usize] = [
+    "Mapped object 1",
+    "Mapped object 2",
+    "Mapped object 3",
+    "Mapped object 4",
+    "Mapped object 5",
+    "Mapped object 6",
+    "Mapped object 7",
+    "Mapped object 8",
+    "Mapped object 9",
+    "Mapped object 10",
+    "Mapped object 11",
+    "Mapped object 12",
+    "Mapped object 13",
+    "Mapped object 14",
+    "Mapped object 15",
+    "Mapped object 16",
+    "Mapped object 17",
+    "Mapped object 18",
+    "Mapped object 19",
+    "Mapped object 20",
+    "Mapped object 21",
+    "Mapped object 22",
+    "Mapped object 23",
+    "Mapped object 24",
+    "Mapped object 25",
+    "Mapped object 26",
+    "Mapped object 27",
+    "Mapped object 28",
+    "Mapped object 29",
+    "Mapped object 30",
+    "Mapped object 31",
+    "Mapped object 32",
+    "Mapped object 33",
+    "Mapped object 34",
+    "Mapped object 35",
+    "Mapped object 36",
+    "Mapped object 37",
+    "Mapped object 38",
+    "Mapped object 39",
+    "Mapped object 40",
+    "Mapped object 41",
+    "Mapped object 42",
+    "Mapped object 43",
+    "Mapped object 44",
+    "Mapped object 45",
+    "Mapped object 46",
+    "Mapped object 47",
+    "Mapped object 48",
+    "Mapped object 49",
+    "Mapped object 50",
+    "Mapped object 51",
+    "Mapped object 52",
+    "Mapped object 53",
+    "Mapped object 54",
+    "Mapped object 55",
+    "Mapped object 56",
+    "Mapped object 57",
+    "Mapped object 58",
+    "Mapped object 59",
+    "Mapped object 60",
+    "Mapped object 61",
+    "Mapped object 62",
+    "Mapped object 63",
+    "Mapped object 64",
+];
+
 fn map_record(cfg: &PdoConfig, kind: PdoKind, n: u16) -> Object {
     let name = match kind {
         PdoKind::Rpdo => "RPDO mapping parameter",
@@ -140,8 +209,14 @@ fn map_record(cfg: &PdoConfig, kind: PdoKind, n: u16) -> Object {
         );
     for i in 1..=cfg.max_entries {
         o = o.with_sub(
-            SubObject::new(i, format!("Mapped object {i}"), DataType::Unsigned32, Access::Rw, Value::U32(0))
-                .hooked(),
+            SubObject::new(
+                i,
+                MAPPED_NAMES[usize::from(i - 1)],
+                DataType::Unsigned32,
+                Access::Rw,
+                Value::U32(0),
+            )
+            .hooked(),
         );
     }
     o

@@ -74,6 +74,7 @@ use drivebus_pdo::{DEFAULT_DUMMY_TYPES, Granularity, PdoDefaults, PdoKind, set_d
 extern crate alloc;
 
 mod conform;
+mod eds_od;
 mod personality;
 
 pub(crate) use personality::BEHAVIOUR;
@@ -527,11 +528,12 @@ pub fn build_full(
     if !(1..=127).contains(&node_id) {
         return Err(BuildError::NodeId(node_id));
     }
-    let parsed = profile.parse_eds();
-    let od =
-        drivebus_eds::to_od(&parsed.eds, node_id).map_err(|e| BuildError::Eds(alloc::format!("{e:?}")))?;
-    // What the drive must answer with, after the build (`conform`).
-    let described = od.clone();
+    let parsed = profile.eds();
+    // The EDS read and converted once per process (`eds_od`). What the
+    // drive must answer with, after the build (`conform`): the EDS
+    // dictionary, of which the node starts with a copy.
+    let eds_od::EdsDictionary { od, described } =
+        eds_od::eds_dictionary(profile, node_id).map_err(|e| BuildError::Eds(alloc::format!("{e:?}")))?;
     let mut nc = node_config(info, node_id);
     // The EDS served at 1021h says what the shipped one says.
     nc.eds_device_info = Some(parsed.eds.device_info.clone());

@@ -211,9 +211,7 @@ impl Drive {
                 | op::supported_bit(op::PV)
                 | op::supported_bit(op::TQ));
         let modes = handlers.iter().fold(own, |m, h| m | h.supported_modes());
-        for o in objects::objects(&cfg, modes) {
-            node.insert_object(o);
-        }
+        node.insert_objects(objects::objects(&cfg, modes));
         let dt = 1.0 / cfg.control_rate_hz;
         let period = Duration::from_nanos((1e9 / cfg.control_rate_hz) as u64);
         let mut d = Drive {

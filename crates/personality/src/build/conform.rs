@@ -22,6 +22,7 @@
 //! compares them with the EDS, so a wrong default is fixed on the side
 //! the manual supports, not copied over.
 
+use super::eds_od::Described;
 use alloc::vec::Vec;
 use drivebus_cia402::drive::Drive;
 use drivebus_od::{Object, ObjectCode, ObjectDictionary, SubObject};
@@ -89,11 +90,11 @@ fn describe(s: &mut SubObject, e: &SubObject) {
 }
 
 /// Brings `od` (the node's dictionary, with `drive` installed) to the
-/// objects and descriptions of `eds` (the EDS converted for the same
+/// objects and descriptions of `eds` (the EDS as converted for the same
 /// node-ID), except the objects of `keep` (1021h/1022h, which
 /// `BuildOptions::eds_object` adds to what the manual lists). The caller
 /// re-resolves the node's services afterwards.
-pub(super) fn conform(od: &mut ObjectDictionary, drive: &mut Drive, eds: &ObjectDictionary, keep: &[u16]) {
+pub(super) fn conform(od: &mut ObjectDictionary, drive: &mut Drive, eds: &Described, keep: &[u16]) {
     let indices: Vec<u16> = od.objects().iter().map(|o| o.index).filter(|i| !keep.contains(i)).collect();
     for index in indices {
         let Some(e) = eds.object(index) else {
@@ -104,12 +105,25 @@ pub(super) fn conform(od: &mut ObjectDictionary, drive: &mut Drive, eds: &Object
             }
             continue;
         };
+        let e = &*e;
         let Some(o) = od.object(index) else { continue };
         if single(o.code) != single(e.code) {
             if drive_object(index) {
                 drive.withdraw_object(od, index);
             }
             od.insert(e.clone());
+            continue;
+        }
+        let same_subs = o.subs().len() == e.subs().len() && o.subs().iter().all(|s| e.get(s.sub).is_some());
+        if same_subs {
+            // The usual case: describe in place, no copy of the object.
+            if let Some(o) = od.object_mut(index) {
+                o.code = e.code;
+                o.name = e.name.clone();
+                for (s, es) in o.subs_mut().iter_mut().zip(e.subs()) {
+                    describe(s, es);
+                }
+            }
             continue;
         }
         let mut o = if o.subs().iter().any(|s| e.get(s.sub).is_none()) {
