@@ -1,6 +1,7 @@
 //! Building the communication area of a node's dictionary.
 
 use crate::config::NodeConfig;
+use alloc::vec::Vec;
 use drivebus_emcy::{Emcy, EmcyConsumer};
 use drivebus_od::{Access, DataType, Object, ObjectDictionary, SubObject, Value, le_u64};
 use drivebus_sync::{SyncService, TimeService};
@@ -174,6 +175,16 @@ pub fn mark_node_relative(
     generated_id: u8,
     od: &mut ObjectDictionary,
 ) {
+    for (index, sub) in node_relative(cfg, generated, generated_id) {
+        if let Some(s) = od.get_mut(index, sub) {
+            s.node_id_relative = true;
+        }
+    }
+}
+
+/// The entries of `generated` (built from `cfg` for `generated_id`) whose
+/// defaults follow the node-ID (see [`mark_node_relative`]).
+pub fn node_relative(cfg: &NodeConfig, generated: &ObjectDictionary, generated_id: u8) -> Vec<(u16, u8)> {
     // `generated` was built for `generated_id` (1 when unconfigured); one
     // more build for a neighbouring node-ID shows which defaults move with it.
     let id = if (1..=127).contains(&generated_id) { generated_id } else { 1 };
@@ -185,17 +196,18 @@ pub fn mark_node_relative(
     neighbour.pdo.max_entries = 0;
     let b = build_dictionary(&neighbour, other);
     let step = u64::from(other).wrapping_sub(u64::from(id));
+    let mut out = Vec::new();
     for o in generated.objects() {
         for sa in o.subs() {
             let Some(sb) = b.get(o.index, sa.sub) else { continue };
             if sa.data_type.num_kind().is_some()
                 && le_u64(&sb.default).wrapping_sub(le_u64(&sa.default)) == step
-                && let Some(s) = od.get_mut(o.index, sa.sub)
             {
-                s.node_id_relative = true;
+                out.push((o.index, sa.sub));
             }
         }
     }
+    out
 }
 
 /// Move node-relative defaults from node-ID `from` to `to` (LSS changed

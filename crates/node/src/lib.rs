@@ -37,7 +37,7 @@ pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
 pub use config::{Identity, NodeConfig};
 pub use device::NodeDevice;
 pub use dictionary::build_dictionary;
-pub use node::Node;
+pub use node::{Node, NodeTemplate};
 pub use owners::{LOAD_SIGNATURE, SAVE_SIGNATURE};
 #[cfg(feature = "std")]
 pub use storage::FileStorage;

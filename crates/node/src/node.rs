@@ -2,7 +2,7 @@
 
 use crate::app::{Application, FrameFilter, NodeEvent};
 use crate::config::NodeConfig;
-use crate::dictionary::{build_dictionary, mark_node_relative};
+use crate::dictionary::{build_dictionary, mark_node_relative, node_relative};
 use crate::owners::{Dispatch, Link, Services, dirty, resolve};
 use crate::storage::{MemoryStorage, Storage};
 use alloc::boxed::Box;
@@ -52,6 +52,85 @@ pub struct Node {
     pub(crate) app_errors: Vec<(u16, u8)>,
 }
 
+/// A node's configuration and its finished dictionary (the services'
+/// objects merged in, node-relative defaults marked, owners resolved):
+/// everything [`Node::with_dictionary`] computes before it sets up the
+/// services. Building one costs two dictionary builds; making a node of
+/// it ([`NodeTemplate::node`]) costs a copy of the dictionary, so many
+/// nodes of one configuration (a fuzz target's input, a simulation) are
+/// built once.
+#[derive(Clone, Debug)]
+pub struct NodeTemplate {
+    cfg: NodeConfig,
+    od: ObjectDictionary,
+}
+
+impl NodeTemplate {
+    /// The template of `Node::new(cfg)`: the dictionary `cfg` describes.
+    pub fn new(cfg: NodeConfig) -> NodeTemplate {
+        let cfg = normalized(cfg);
+        let mut od = build_dictionary(&cfg, cfg.node_id);
+        // The dictionary is the services' own: nothing to merge (merging
+        // it with itself changes nothing), only the node-relative marks.
+        for (index, sub) in node_relative(&cfg, &od, cfg.node_id) {
+            if let Some(s) = od.get_mut(index, sub) {
+                s.node_id_relative = true;
+            }
+        }
+        resolve(&mut od);
+        NodeTemplate { cfg, od }
+    }
+
+    /// The template of `Node::with_dictionary(cfg, od, _)`.
+    pub fn with_dictionary(cfg: NodeConfig, mut od: ObjectDictionary) -> NodeTemplate {
+        let cfg = normalized(cfg);
+        let generated = build_dictionary(&cfg, cfg.node_id);
+        crate::dictionary::merge_services(&mut od, &generated);
+        mark_node_relative(&cfg, &generated, cfg.node_id, &mut od);
+        resolve(&mut od);
+        NodeTemplate { cfg, od }
+    }
+
+    /// The configuration (node-ID normalised: FFh when outside 1..=127).
+    pub fn config(&self) -> &NodeConfig {
+        &self.cfg
+    }
+
+    /// The dictionary a node of this template starts with.
+    pub fn od(&self) -> &ObjectDictionary {
+        &self.od
+    }
+
+    /// A node of this template with parameters in `storage`: the same as
+    /// the `Node` constructor the template stands for.
+    pub fn node(&self, storage: Box<dyn Storage + Send>) -> Node {
+        Node::assemble(self.cfg.clone(), self.od.clone(), storage)
+    }
+
+    /// Makes `node` a fresh node of this template, as [`NodeTemplate::node`]
+    /// would, reusing the buffers of its dictionary: where the old node's
+    /// dictionary has the template's structure (any node of this template
+    /// does), the copy allocates nothing.
+    pub fn renew(&self, node: &mut Node, storage: Box<dyn Storage + Send>) {
+        let mut od = core::mem::take(&mut node.od);
+        od.clone_from(&self.od);
+        *node = Node::assemble(self.cfg.clone(), od, storage);
+    }
+
+    /// [`NodeTemplate::node`], consuming the template.
+    pub fn into_node(self, storage: Box<dyn Storage + Send>) -> Node {
+        Node::assemble(self.cfg, self.od, storage)
+    }
+}
+
+/// `cfg` with its node-ID in 1..=127 or FFh (unconfigured), also for NMT.
+fn normalized(mut cfg: NodeConfig) -> NodeConfig {
+    let node_id = if (1..=127).contains(&cfg.node_id) || cfg.node_id == 0xFF { cfg.node_id } else { 0xFF };
+    cfg.node_id = node_id;
+    cfg.nmt.node_id = node_id;
+    cfg
+}
+
 /// Route codes in [`Node::routes`].
 pub(crate) mod route {
     pub const NONE: u8 = 0;
@@ -76,26 +155,20 @@ impl Node {
 
     /// A device whose 1010h/1011h parameters live in `storage`.
     pub fn with_storage(cfg: NodeConfig, storage: Box<dyn Storage + Send>) -> Node {
-        let od = build_dictionary(&cfg, cfg.node_id);
-        Node::with_dictionary(cfg, od, storage)
+        NodeTemplate::new(cfg).into_node(storage)
     }
 
     /// A device around an existing dictionary (e.g. built from an EDS):
     /// communication objects it lacks are added, those it has keep their
     /// descriptions but are owned by the services.
-    pub fn with_dictionary(
-        mut cfg: NodeConfig,
-        mut od: ObjectDictionary,
-        storage: Box<dyn Storage + Send>,
-    ) -> Node {
-        let node_id =
-            if (1..=127).contains(&cfg.node_id) || cfg.node_id == 0xFF { cfg.node_id } else { 0xFF };
-        cfg.node_id = node_id;
-        cfg.nmt.node_id = node_id;
-        let generated = build_dictionary(&cfg, node_id);
-        crate::dictionary::merge_services(&mut od, &generated);
-        mark_node_relative(&cfg, &generated, node_id, &mut od);
-        resolve(&mut od);
+    pub fn with_dictionary(cfg: NodeConfig, od: ObjectDictionary, storage: Box<dyn Storage + Send>) -> Node {
+        NodeTemplate::with_dictionary(cfg, od).into_node(storage)
+    }
+
+    /// The node of a finished configuration and dictionary (see
+    /// [`NodeTemplate`]): the services are set up from them.
+    fn assemble(mut cfg: NodeConfig, od: ObjectDictionary, storage: Box<dyn Storage + Send>) -> Node {
+        let node_id = cfg.node_id;
         // CiA 305 §3.2: the LSS address is 1018h:01h–04h. A dictionary
         // from elsewhere (an EDS) keeps its own 1018h, so the identity is
         // read back from it: one source for SDO and LSS.

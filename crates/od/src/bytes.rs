@@ -6,10 +6,27 @@ use core::ops::Deref;
 /// The bytes of one value. Every numeric CiA 301 type fits in 8 bytes, so
 /// PDO and SDO hot paths read and write values without chasing a heap
 /// pointer; strings and domains spill to a `Vec`.
-#[derive(Clone, PartialEq, Eq)]
+#[derive(PartialEq, Eq)]
 pub(crate) enum ValueBytes {
     Inline { len: u8, buf: [u8; 8] },
     Heap(Vec<u8>),
+}
+
+impl Clone for ValueBytes {
+    fn clone(&self) -> Self {
+        match self {
+            ValueBytes::Inline { len, buf } => ValueBytes::Inline { len: *len, buf: *buf },
+            ValueBytes::Heap(v) => ValueBytes::Heap(v.clone()),
+        }
+    }
+
+    /// The same variant as `source`; a heap buffer is reused.
+    fn clone_from(&mut self, source: &Self) {
+        match (&mut *self, source) {
+            (ValueBytes::Heap(v), ValueBytes::Heap(s)) => v.clone_from(s),
+            _ => *self = source.clone(),
+        }
+    }
 }
 
 impl ValueBytes {

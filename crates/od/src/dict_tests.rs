@@ -160,3 +160,34 @@ fn restore_defaults_by_group() {
     od.restore_defaults(|_, s| s.persist == PersistGroup::Manufacturer);
     assert_eq!(od.get_i64(0x2000, 0), Some(0));
 }
+
+#[test]
+fn clone_from_is_clone() {
+    let mut a = ObjectDictionary::new();
+    a.insert(Object::var(
+        0x1008,
+        "Name",
+        DataType::VisibleString,
+        Access::Const,
+        Value::Str("a long device name".into()),
+    ));
+    a.insert(Object::array(0x2000, "Array", DataType::Unsigned16, Access::Rw, 3, Value::U16(7)));
+    let mut b = ObjectDictionary::new();
+    b.insert(Object::var(0x1008, "Other", DataType::Unsigned8, Access::Rw, Value::U8(1)));
+    b.insert(Object::array(
+        0x2000,
+        alloc::format!("Owned {}", 1),
+        DataType::Unsigned16,
+        Access::Rw,
+        5,
+        Value::U16(9),
+    ));
+    b.insert(Object::var(0x3000, "Extra", DataType::Unsigned32, Access::Rw, Value::U32(3)));
+    let mut c = b.clone();
+    c.clone_from(&a);
+    assert!(c == a);
+    let mut d = a.clone();
+    d.clone_from(&b);
+    assert!(d == b);
+    assert_eq!(d.get(0x2000, 5).map(|s| s.bytes().to_vec()), Some(alloc::vec![9, 0]));
+}
