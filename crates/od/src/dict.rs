@@ -283,9 +283,14 @@ impl Object {
         if s.persist == PersistGroup::Volatile && s.access.writable() {
             s.persist = PersistGroup::for_index(self.index);
         }
-        match self.subs.binary_search_by_key(&s.sub, |x| x.sub) {
-            Ok(i) => self.subs[i] = s,
-            Err(i) => self.subs.insert(i, s),
+        // Builders add sub-objects in order: appending needs no search.
+        if self.subs.last().is_none_or(|x| x.sub < s.sub) {
+            self.subs.push(s);
+        } else {
+            match self.subs.binary_search_by_key(&s.sub, |x| x.sub) {
+                Ok(i) => self.subs[i] = s,
+                Err(i) => self.subs.insert(i, s),
+            }
         }
         let highest = self.subs.last().map_or(0, |x| x.sub);
         if self.code != ObjectCode::Var

@@ -284,6 +284,12 @@ fn set_both(od: &mut ObjectDictionary, index: u16, sub: u8, v: Value) -> Result<
     let r = od.find(index, sub)?;
     let dt = od.entry(r).data_type;
     let bytes = v.encode(dt)?;
+    // Factory defaults mostly re-set the 0 an unused mapping entry holds
+    // (up to 64 per PDO at every build): then there is nothing to store.
+    let e = od.entry(r);
+    if e.default == bytes && e.bytes() == bytes.as_slice() {
+        return Ok(());
+    }
     if let Some(s) = od.get_mut(index, sub) {
         s.default.clone_from(&bytes);
     }
@@ -316,8 +322,15 @@ pub fn set_defaults(
     for (i, &e) in d.entries.iter().enumerate() {
         set_both(od, mi, i as u8 + 1, Value::U32(e))?;
     }
+    // The unused entries: most already hold 0 as value and default, which
+    // `set_both` would find, encode and compare one lookup at a time.
+    let zero =
+        |s: &SubObject| s.data_type == DataType::Unsigned32 && s.default == [0; 4] && s.bytes() == [0; 4];
     for i in d.entries.len() + 1..=usize::from(cfg.max_entries) {
-        set_both(od, mi, i as u8, Value::U32(0))?;
+        let done = od.object(mi).and_then(|o| o.get(i as u8)).is_some_and(zero);
+        if !done {
+            set_both(od, mi, i as u8, Value::U32(0))?;
+        }
     }
     set_both(od, mi, 0, Value::U8(d.entries.len() as u8))?;
     set_both(od, ci, SUB_TRANSMISSION_TYPE, Value::U8(d.transmission_type))?;
