@@ -61,7 +61,7 @@ fn uses(cmd: &Command) -> &'static [Opt] {
     use Opt::*;
     const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim];
     match cmd {
-        Command::Serve(_) => &[],
+        Command::Serve(_) => &[Bus],
         Command::Demo(_) => &[Json],
         Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim],
         Command::Sdo(_) | Command::Pdo(_) => NODE_SDO,
@@ -100,9 +100,7 @@ fn check_options(cmd: &Command, m: &clap::ArgMatches) -> Result<(), String> {
         let given = [m, leaf].iter().any(|mm| mm.value_source(id) == Some(ValueSource::CommandLine));
         if given && !used.contains(&opt) {
             let why = match opt {
-                Opt::Bus | Opt::Sim if names[0] == "serve" => {
-                    " (serve hosts its own bus: use --listen, --drive)"
-                }
+                Opt::Sim if names[0] == "serve" => " (serve hosts the drives itself: use --drive)",
                 Opt::Bus | Opt::Sim if names[0] == "demo" => " (the demo runs on its own simulated bus)",
                 _ => "",
             };
@@ -125,10 +123,15 @@ fn main() {
         }
         Err(e) => e.exit(),
     };
-    let cli = match Cli::from_arg_matches(&matches) {
+    let mut cli = match Cli::from_arg_matches(&matches) {
         Ok(c) => c,
         Err(e) => e.exit(),
     };
+    // DRIVEBUS_BUS names the bus clients talk to (often the one `serve`
+    // provides): `serve` puts its drives elsewhere only when told so.
+    if matches!(cli.cmd, Command::Serve(_)) && matches.value_source("bus") != Some(ValueSource::CommandLine) {
+        cli.global.bus = "virtual".to_owned();
+    }
     if let Err(msg) = check_options(&cli.cmd, &matches) {
         if cli.global.json {
             output::json_error("usage", &msg, serde_json::json!({}));
@@ -204,8 +207,9 @@ mod tests {
         assert!(check(&["drivebus", "sdo", "read", "1000", "--node", "1"]).is_ok());
         let e = check(&["drivebus", "--node", "3", "serve", "--drive", "akd:1"]).unwrap_err();
         assert_eq!(e, "--node does not apply to `drivebus serve`");
-        let e = check(&["drivebus", "serve", "--drive", "akd:1", "--bus", "virtual"]).unwrap_err();
-        assert!(e.contains("serve hosts its own bus"), "{e}");
+        assert!(check(&["drivebus", "serve", "--drive", "akd:1", "--bus", "virtual"]).is_ok());
+        let e = check(&["drivebus", "serve", "--drive", "akd:1", "--sim", "akd:1"]).unwrap_err();
+        assert!(e.contains("serve hosts the drives itself"), "{e}");
         let e = check(&["drivebus", "--eds", "x.eds", "nmt", "start", "--all"]).unwrap_err();
         assert_eq!(e, "--eds does not apply to `drivebus nmt`");
         let e = check(&["drivebus", "demo", "--timeout", "5"]).unwrap_err();
