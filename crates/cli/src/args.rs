@@ -123,6 +123,9 @@ pub enum Command {
     /// Emulate an slcan adapter on a pseudo-terminal, with virtual drives behind it.
     #[command(name = "slcan-pty", after_help = SLCAN_EXAMPLES)]
     SlcanPty(SlcanPtyArgs),
+    /// EtherCAT: serve drive twins as software EtherCAT slaves.
+    #[command(subcommand)]
+    Ethercat(crate::ethercat::EthercatCmd),
 }
 
 const SERVE_EXAMPLES: &str = "\

@@ -16,6 +16,7 @@ mod drive_cmd;
 mod dump;
 mod eds_cmd;
 mod error;
+mod ethercat;
 mod fault;
 mod gateway;
 mod lss_cmd;
@@ -78,6 +79,8 @@ fn uses(cmd: &Command) -> &'static [Opt] {
         Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim],
         Command::Lss(_) => &[Bus, Json, Timeout, Sim],
         Command::SlcanPty(_) => &[Bus],
+        // EtherCAT commands take their interface and options after the subcommand.
+        Command::Ethercat(_) => &[],
     }
 }
 
@@ -188,6 +191,7 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
         Command::SlcanPty(a) => slcan_pty::run(g, a).await.map(|()| 0),
+        Command::Ethercat(c) => ethercat::run(c).await,
     }
 }
 

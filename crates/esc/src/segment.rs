@@ -38,6 +38,12 @@ pub trait Device {
     fn poll(&mut self, now: Instant) -> Option<Instant> {
         self.esc_mut().poll(now)
     }
+    /// The device as [`Any`](core::any::Any), so a host of boxed devices
+    /// reaches its concrete type (a slave's application); `None` when it
+    /// does not expose itself.
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        None
+    }
 }
 
 impl Device for Esc {
@@ -58,6 +64,9 @@ impl<D: Device + ?Sized> Device for Box<D> {
     }
     fn poll(&mut self, now: Instant) -> Option<Instant> {
         (**self).poll(now)
+    }
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        (**self).as_any_mut()
     }
 }
 

@@ -92,6 +92,7 @@ mod model;
 mod pdo;
 mod read;
 mod revision;
+pub mod sii;
 pub mod types;
 mod validate;
 mod write;

@@ -10,12 +10,15 @@
 //!   (Linux, root), so masters on a wire or a veth pair see the segment.
 //! * [`dio`]: a digital I/O test slave (no mailbox, SII-described PDOs).
 //!
-//! The CoE mailbox server and the CiA 402 drives plug in as
-//! [`drivebus_esc::slave::SlaveApp`]s on the same hosts.
+//! * [`drive`]: the CiA 402 drive personalities (`ipos`, `generic`) as
+//!   CoE slaves, and [`drive::DriveLine`], the builder of a line of them.
 
 pub mod capture;
 pub mod clock;
 pub mod dio;
+pub mod drive;
+#[cfg(feature = "ethercrab")]
+pub mod drive_probe;
 pub mod host;
 #[cfg(feature = "ethercrab")]
 pub mod link;

@@ -26,6 +26,7 @@ mod device;
 mod dictionary;
 #[cfg(feature = "std")]
 mod eds_object;
+mod foreign;
 mod node;
 pub mod owners;
 mod poll;

@@ -28,6 +28,7 @@
 //! ```
 
 pub mod build;
+pub mod ecat;
 pub mod shared;
 
 pub mod akd;

@@ -89,11 +89,13 @@ fn akd() {
 #[test]
 fn ipos() {
     let od = od(Profile::Ipos);
-    // §4.8.1 device type 60192h; §4.8.6 vendor 1A3h, revision "0100";
-    // §1.5.4.6 product code of the iPOS360x VX-CAT; §4.8.2 6502h 001C03E5h.
+    // §4.8.1 device type 60192h; §4.8.6 vendor 1A3h; §1.5.4.6 product code
+    // of the iPOS360x VX-CAT and revision = firmware ID "A00G" (not the
+    // §4.8.6 table's "0100": the SII and ESI revision is the firmware ID);
+    // §4.8.2 6502h 001C03E5h.
     assert_eq!(
         identity(&od),
-        [Some(0x0006_0192), Some(0x1A3), Some(28_002_021), Some(0x3031_3030), Some(0x001C_03E5)]
+        [Some(0x0006_0192), Some(0x1A3), Some(28_002_021), Some(0x4130_3047), Some(0x001C_03E5)]
     );
     // §4.8.3: device name "iPOS".
     assert_eq!(od.get(0x1008, 0).unwrap().bytes(), b"iPOS");

@@ -98,15 +98,17 @@ fn e12_e14_outputs_and_step_loss() {
 /// E15 (§4.8.5/§4.8.6): identity. The manual decodes an iPOS4808 MY-CAT-STO
 /// (product 27 214 121, serial "LE1158"); the personality is the iPOS360x
 /// VX-CAT of §1.5.4.6 (product 28 002 021), so 1018h:2 is that one's and
-/// the serial (per device) is not compared. Vendor 1A3h, revision "0100",
-/// device type 0006_0192h as printed.
+/// the serial (per device) is not compared. Vendor 1A3h and device type
+/// 0006_0192h as printed; the revision is the firmware ID "A00G" (§1.5.4.6,
+/// the twin's FA00G firmware) where the example prints "0100": the SII and
+/// ESI revision are the firmware ID, and the twin's 1018h:03 agrees with them.
 #[test]
 fn e15_identity() {
     let mut r = Rig::new();
     assert_eq!(r.upload(0x1018, 1), Frame::new(0x581, &[0x43, 0x18, 0x10, 0x01, 0xA3, 0x01, 0, 0]));
     let p = 28_002_021u32.to_le_bytes();
     assert_eq!(r.upload(0x1018, 2), Frame::new(0x581, &[0x43, 0x18, 0x10, 0x02, p[0], p[1], p[2], p[3]]));
-    assert_eq!(r.upload(0x1018, 3), Frame::new(0x581, &[0x43, 0x18, 0x10, 0x03, 0x30, 0x30, 0x31, 0x30]));
+    assert_eq!(r.upload(0x1018, 3), Frame::new(0x581, &[0x43, 0x18, 0x10, 0x03, 0x47, 0x30, 0x30, 0x41]));
     assert_eq!(r.upload(0x1000, 0), Frame::new(0x581, &[0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x06, 0x00]));
     // §4.8.2: 6502h = 001C03E5h (no tq, ECAM, EGEAR bits although they work).
     assert_eq!(r.dn().node.od().get_u32(0x6502, 0), Some(0x001C_03E5));

@@ -27,6 +27,7 @@
 mod checks;
 mod config;
 mod control;
+mod fieldbus;
 mod generic;
 pub mod mode;
 mod objects;

@@ -141,6 +141,14 @@ pub trait SlaveApp {
         let _ = (data, now);
     }
 
+    /// The master wrote a complete outputs buffer (SAFE-OP and OP, every
+    /// mode): in DC mode the outputs wait for the next SYNC0, so this is
+    /// where an application counts frames per cycle (ETG.1020 "SM event
+    /// missed", "cycle time too small").
+    fn outputs_received(&mut self, now: Instant) {
+        let _ = now;
+    }
+
     /// Fill in the inputs (SAFE-OP and OP).
     fn inputs(&mut self, data: &mut [u8], now: Instant) {
         let _ = (data, now);
@@ -161,6 +169,14 @@ pub trait SlaveApp {
     /// error: put the outputs in their safe state.
     fn watchdog_expired(&mut self, now: Instant) {
         let _ = now;
+    }
+
+    /// The AL status error indication changed (ETG.1000.6 §6.4.1.4):
+    /// `Some(code)` when a requested transition was refused or the slave
+    /// fell back on an error, `None` when the master acknowledged it (AL
+    /// control bit 4, or a request for INIT).
+    fn al_error(&mut self, code: Option<AlStatusCode>, now: Instant) {
+        let _ = (code, now);
     }
 
     /// Application timers and unsolicited mailbox messages (CoE

@@ -227,7 +227,9 @@ impl<A: SlaveApp> Slave<A> {
     fn handle(&mut self, ev: EscEvent, now: Instant) {
         match ev {
             EscEvent::EscReset => {
-                self.error = None;
+                if self.error.take().is_some() {
+                    self.app.al_error(None, now);
+                }
                 self.op_pending = None;
                 self.enter(AlState::Init, now);
             }
@@ -293,6 +295,7 @@ impl<A: SlaveApp> Slave<A> {
             return;
         }
         self.outputs_valid = true;
+        self.app.outputs_received(now);
         if self.state == AlState::Op && !self.is_dc() {
             self.app.outputs(&self.out_buf, now);
         }
@@ -329,10 +332,11 @@ impl<A: SlaveApp> Slave<A> {
                 return;
             }
             self.error = None;
+            self.app.al_error(None, now);
         }
         self.op_pending = None;
         let Some(to) = requested else {
-            return self.set_error(AlStatusCode::UNKNOWN_STATE);
+            return self.set_error(AlStatusCode::UNKNOWN_STATE, now);
         };
         if to == self.state {
             return self.write_status();
@@ -343,7 +347,7 @@ impl<A: SlaveApp> Slave<A> {
             } else {
                 AlStatusCode::INVALID_STATE_CHANGE
             };
-            return self.set_error(code);
+            return self.set_error(code, now);
         }
         if self.state.is_down_to(to) {
             return self.enter(to, now);
@@ -355,7 +359,7 @@ impl<A: SlaveApp> Slave<A> {
                 self.check_pending_op(now);
             }
             Ok(()) => self.enter(to, now),
-            Err(code) => self.set_error(code),
+            Err(code) => self.set_error(code, now),
         }
     }
 
@@ -480,10 +484,10 @@ impl<A: SlaveApp> Slave<A> {
             self.enter(AlState::Op, now);
         } else if need_outputs && self.cfg.op_needs_outputs.is_some_and(|d| now >= since + d) {
             self.op_pending = None;
-            self.set_error(AlStatusCode::SM_WATCHDOG);
+            self.set_error(AlStatusCode::SM_WATCHDOG, now);
         } else if need_sync && now >= since + self.cfg.sync_timeout {
             self.op_pending = None;
-            self.set_error(AlStatusCode::NO_SYNC_ERROR);
+            self.set_error(AlStatusCode::NO_SYNC_ERROR, now);
         }
     }
 
@@ -508,7 +512,7 @@ impl<A: SlaveApp> Slave<A> {
         if self.state.is_down_to(to) {
             self.enter(to, now);
         }
-        self.set_error(code);
+        self.set_error(code, now);
     }
 
     fn enter(&mut self, to: AlState, now: Instant) {
@@ -529,7 +533,8 @@ impl<A: SlaveApp> Slave<A> {
         }
     }
 
-    fn set_error(&mut self, code: AlStatusCode) {
+    fn set_error(&mut self, code: AlStatusCode, now: Instant) {
+        self.app.al_error(Some(code), now);
         self.error = Some(code);
         self.write_status();
     }
@@ -542,7 +547,7 @@ impl<A: SlaveApp> Slave<A> {
     }
 }
 
-impl<A: SlaveApp> Device for Slave<A> {
+impl<A: SlaveApp + 'static> Device for Slave<A> {
     fn esc(&self) -> &Esc {
         &self.esc
     }
@@ -551,6 +556,9 @@ impl<A: SlaveApp> Device for Slave<A> {
     }
     fn poll(&mut self, now: Instant) -> Option<Instant> {
         Slave::poll(self, now)
+    }
+    fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
+        Some(self)
     }
 }
 

@@ -42,6 +42,22 @@ pub struct Wire {
 impl Wire {
     /// Sets everything up, or says why it cannot.
     pub fn new(tag: &str) -> Result<Wire, String> {
+        let devices: Vec<BoxDevice> = (0..4usize)
+            .map(|i| {
+                let cfg = DioConfig {
+                    channels: if i % 2 == 0 { 8 } else { 16 },
+                    mask: 0x5A5A_5A5A ^ (i as u32 * 0x0101_0101),
+                    serial: 100 + i as u32,
+                    ..DioConfig::default()
+                };
+                Box::new(dio::slave(&cfg)) as BoxDevice
+            })
+            .collect();
+        Wire::with_devices(tag, devices)
+    }
+
+    /// The same with other devices on the served end (drives).
+    pub fn with_devices(tag: &str, devices: Vec<BoxDevice>) -> Result<Wire, String> {
         let id = std::process::id() % 100_000;
         let ns = format!("db{tag}{id}");
         let (outer, inner) = (format!("db{tag}{id}a"), format!("db{tag}{id}b"));
@@ -55,17 +71,6 @@ impl Wire {
         ] {
             ok(&step)?;
         }
-        let devices: Vec<BoxDevice> = (0..4usize)
-            .map(|i| {
-                let cfg = DioConfig {
-                    channels: if i % 2 == 0 { 8 } else { 16 },
-                    mask: 0x5A5A_5A5A ^ (i as u32 * 0x0101_0101),
-                    serial: 100 + i as u32,
-                    ..DioConfig::default()
-                };
-                Box::new(dio::slave(&cfg)) as BoxDevice
-            })
-            .collect();
         let host = Host::line(devices, Clock::real());
         // Bind before any master starts, so its first frame is not lost.
         let sock = server::RawSocket::open(&w.outer).map_err(|e| format!("AF_PACKET socket: {e}"))?;

@@ -38,7 +38,7 @@ fn single(code: ObjectCode) -> bool {
 }
 
 /// `o` with only the sub-indices `keep` allows, every kept sub-object as it
-/// was (value, persistence group, hook). A sub 0 that held the highest
+/// was (value, persistence group, owner). A sub 0 that held the highest
 /// sub-index (CiA 301 §7.4.3) holds the new highest one.
 fn without_subs(o: &Object, keep: impl Fn(u8) -> bool) -> Object {
     let highest = |subs: &[SubObject]| subs.last().map_or(0, |s| s.sub);

@@ -9,8 +9,11 @@ pub static INFO: ProfileInfo = ProfileInfo {
     vendor_id: Some(0x1A3), // §4.8.6
     product_name: "iPOS360x VX-CAT",
     product_code: Some(28_002_021), // §1.5.4.6: decimal label code of the iPOS360x VX-CAT
-    revision: Some(0x3031_3030),    // §4.8.6: ASCII "0100"
-    device_type: 0x0006_0192,       // §4.8.1
+    // §1.5.4.6: the firmware ID in ASCII, "A00G" (FA00G), as the SII and
+    // the ESI say; the §4.8.6 table default "0100" is overridden so the
+    // three images agree (docs/personalities.md).
+    revision: Some(0x4130_3047),
+    device_type: 0x0006_0192, // §4.8.1
     transport: Transport::EtherCatCoe,
     // EtherCAT has none; served on CAN, the bit rates of Technosoft's CAN
     // drives (the CoE manual gives none; docs/personalities.md).

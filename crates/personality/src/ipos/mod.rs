@@ -43,6 +43,8 @@ use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::{IpMode, IpMonitor};
 use drivebus_cia402::state_machine::State;
 
+pub mod ecat;
+pub mod foe;
 mod gearing;
 mod homing;
 mod interp;

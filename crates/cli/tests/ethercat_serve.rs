@@ -1,0 +1,111 @@
+//! `drivebus ethercat serve`: the contract other tools rely on. On one end
+//! of a veth pair the command prints a line containing `ready on IFACE`,
+//! the line of drives answers frames from the other end (a broadcast read
+//! counts the slaves), `--state-dir` gets one directory per slave,
+//! `--pcap` records the exchange, and SIGTERM ends it with status 0.
+//!
+//! Needs root (veth, AF_PACKET); prints why it was skipped otherwise.
+
+use drivebus_ethercat::server::RawSocket;
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn ip(args: &[&str]) -> Result<(), String> {
+    match Command::new("ip").args(args).output() {
+        Ok(o) if o.status.success() => Ok(()),
+        Ok(o) => Err(format!("`ip {}`: {}", args.join(" "), String::from_utf8_lossy(&o.stderr).trim())),
+        Err(e) => Err(format!("cannot run `ip`: {e}")),
+    }
+}
+
+struct Veth(String);
+
+impl Drop for Veth {
+    fn drop(&mut self) {
+        let _ = ip(&["link", "del", &self.0]);
+    }
+}
+
+/// A BRD of register 0x0000 (2 bytes): every slave adds 1 to the WKC.
+fn count_frame() -> Vec<u8> {
+    let mut f = vec![0xFF; 6];
+    f.extend_from_slice(&[0x10; 6]);
+    f.extend_from_slice(&[0x88, 0xA4]);
+    f.extend_from_slice(&(14u16 | 1 << 12).to_le_bytes());
+    f.extend_from_slice(&[0x07, 0x42, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0, 0]);
+    f
+}
+
+#[test]
+fn serves_a_line_of_drives_on_an_interface_and_stops_on_sigterm() {
+    let tag = std::process::id() % 100_000;
+    let (a, b) = (format!("dbcli{tag}a"), format!("dbcli{tag}b"));
+    if let Err(why) = ip(&["link", "add", &a, "type", "veth", "peer", "name", &b]) {
+        println!("SKIPPED serves_a_line_of_drives_on_an_interface_and_stops_on_sigterm: {why}");
+        return;
+    }
+    let _veth = Veth(a.clone());
+    ip(&["link", "set", &a, "up"]).unwrap();
+    ip(&["link", "set", &b, "up"]).unwrap();
+    let dir = std::env::temp_dir().join(format!("drivebus-ecat-serve-{tag}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let pcap = dir.join("line.pcapng");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drivebus"))
+        .args([
+            "ethercat", "serve", "--iface", &a, "--drive", "ipos", "--drive", "generic", "--drive", "ipos",
+        ])
+        .arg("--state-dir")
+        .arg(dir.join("state"))
+        .arg("--pcap")
+        .arg(&pcap)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn drivebus");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    assert!(line.contains(&format!("ready on {a}")), "{line}");
+    // The segment answers: three slaves add to the working counter.
+    let sock = RawSocket::open(&b).expect("socket on the other end");
+    let mut buf = vec![0u8; 1514];
+    let start = Instant::now();
+    let mut wkc = None;
+    while wkc.is_none() && start.elapsed() < Duration::from_secs(10) {
+        sock.send(&count_frame()).unwrap();
+        let until = Instant::now() + Duration::from_millis(500);
+        while Instant::now() < until {
+            if let Ok(Some(n)) = sock.recv(&mut buf, drivebus_can::Duration::from_millis(100))
+                && n >= 30
+                && buf[12..14] == [0x88, 0xA4]
+                && buf[6] & 0x02 != 0
+            {
+                wkc = Some(u16::from_le_bytes([buf[28], buf[29]]));
+                break;
+            }
+        }
+    }
+    assert_eq!(wkc, Some(3), "three drives answer the broadcast read");
+    for d in ["ecat-1-ipos", "ecat-2-generic", "ecat-3-ipos"] {
+        assert!(dir.join("state").join(d).is_dir(), "{d}");
+    }
+    // SIGTERM: exit 0.
+    let st = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(st.success());
+    let status = child.wait().unwrap();
+    assert!(status.success(), "exit status {status:?}");
+    assert!(std::fs::metadata(&pcap).unwrap().len() > 100, "the capture has the frames");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn refuses_a_drive_that_is_not_an_ethercat_drive() {
+    let out = Command::new(env!("CARGO_BIN_EXE_drivebus"))
+        .args(["ethercat", "serve", "--iface", "lo", "--drive", "akd"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("akd: not an EtherCAT drive"), "{err}");
+}
