@@ -1,5 +1,5 @@
 //! `drivebus slcan-pty`: virtual drives behind an slcan adapter emulated
-//! on a pseudo-terminal (hosting; moved here unchanged from `misc.rs`).
+//! on a pseudo-terminal (hosting through `drivebus_transport::host`).
 
 use std::time::Duration;
 
