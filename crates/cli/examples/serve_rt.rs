@@ -12,16 +12,18 @@
 //! each synchronous (1800h:02 = 1, so it goes out on every SYNC), sets the
 //! heartbeat to 100 ms (1017h), starts the nodes, then sends SYNC from its
 //! own thread at the given rate (absolute deadlines, so the rate does not
-//! drift) and timestamps every frame it receives. A TPDO belongs to the
-//! last SYNC sent before it arrived; a drive missed a cycle when no TPDO of
-//! it arrived before the next SYNC. The client, the server and the drives
+//! drift) and timestamps every frame it receives. A drive answers every
+//! SYNC with one TPDO, in order, so a drive's k-th TPDO answers the oldest
+//! SYNC it has not answered yet; a SYNC still unanswered after
+//! `MISSED_AFTER` counts as a missed cycle (its TPDO never came). Matching
+//! by order, not by "the last SYNC sent", keeps a late SYNC thread (two
+//! SYNCs close together) from being counted against the drives. The client, the server and the drives
 //! share the machine: what is measured includes both ends of the TCP
 //! connection, as a PLC on a socketcand link would see it.
 
 #![allow(missing_docs)]
 
 use std::process::{Child, Command, Stdio};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -92,12 +94,33 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[i.min(sorted.len() - 1)]
 }
 
+/// A SYNC unanswered this long is a missed cycle.
+const MISSED_AFTER: Duration = Duration::from_millis(20);
+
 #[derive(Default)]
 struct Log {
-    /// (node, cycle, latency µs)
-    tpdo: Vec<(u8, usize, f64)>,
+    /// (node, arrival)
+    tpdo: Vec<(u8, Instant)>,
     /// (node, arrival)
     heartbeat: Vec<(u8, Instant)>,
+}
+
+/// Latencies (µs) of one drive's TPDOs against the SYNCs, and the SYNCs it
+/// missed.
+fn match_drive(syncs: &[Instant], tpdos: &[Instant]) -> (Vec<f64>, usize) {
+    let (mut lat, mut missed, mut k) = (Vec::new(), 0, 0);
+    for &t in tpdos {
+        // Skip SYNCs that went unanswered for too long before this TPDO.
+        while k < syncs.len() && t.duration_since(syncs[k]) > MISSED_AFTER {
+            missed += 1;
+            k += 1;
+        }
+        if k < syncs.len() && syncs[k] <= t {
+            lat.push(t.duration_since(syncs[k]).as_secs_f64() * 1e6);
+            k += 1;
+        }
+    }
+    (lat, missed + syncs.len() - k)
 }
 
 fn main() -> anyhow::Result<()> {
@@ -124,13 +147,11 @@ fn main() -> anyhow::Result<()> {
     let bus = rt.block_on(drivebus_transport::open(&url))?;
     let (tx, mut rx) = bus.split();
     let start = Instant::now();
-    let cycle = Arc::new(AtomicUsize::new(usize::MAX));
-    let sync_times = Arc::new(Mutex::new(Vec::<Instant>::new()));
     let log = Arc::new(Mutex::new(Log::default()));
 
     // Receiver: timestamps on arrival, in the runtime.
     let recv = {
-        let (cycle, sync_times, log) = (cycle.clone(), sync_times.clone(), log.clone());
+        let log = log.clone();
         let drives = a.drives;
         rt.spawn(async move {
             while let Ok(f) = rx.recv().await {
@@ -141,15 +162,7 @@ fn main() -> anyhow::Result<()> {
                     continue;
                 }
                 match id & 0x780 {
-                    0x180 => {
-                        let k = cycle.load(Ordering::Acquire);
-                        if k == usize::MAX {
-                            continue;
-                        }
-                        let sent = sync_times.lock().unwrap()[k];
-                        let us = t.duration_since(sent).as_secs_f64() * 1e6;
-                        log.lock().unwrap().tpdo.push((node, k, us));
-                    }
+                    0x180 => log.lock().unwrap().tpdo.push((node, t)),
                     0x700 => log.lock().unwrap().heartbeat.push((node, t)),
                     _ => {}
                 }
@@ -162,7 +175,10 @@ fn main() -> anyhow::Result<()> {
     let cycles = (a.seconds * u64::from(a.hz)) as usize;
     let sync = Frame::new(0x080, &[]);
     let mut late_sends = 0usize;
+    let mut syncs = Vec::with_capacity(cycles);
     let t0 = Instant::now() + Duration::from_millis(200);
+    // TPDOs before the first SYNC answered nothing we sent.
+    let first_sync = t0;
     for k in 0..cycles {
         let due = t0 + period * k as u32;
         let now = Instant::now();
@@ -171,28 +187,27 @@ fn main() -> anyhow::Result<()> {
         } else if now - due > period {
             late_sends += 1;
         }
-        sync_times.lock().unwrap().push(Instant::now());
-        cycle.store(k, Ordering::Release);
+        syncs.push(Instant::now());
         // The tokio channel takes the frame without a runtime.
         if tx.try_send(sync).is_err() {
             rt.block_on(tx.send(sync))?;
         }
     }
-    std::thread::sleep(period * 2 + Duration::from_millis(20));
+    std::thread::sleep(MISSED_AFTER + Duration::from_millis(20));
     recv.abort();
     let elapsed = start.elapsed();
 
     let log = log.lock().unwrap();
-    let mut lat: Vec<f64> = log.tpdo.iter().map(|t| t.2).collect();
-    lat.sort_by(f64::total_cmp);
-    // Missed: a (node, cycle) with no TPDO in that cycle.
-    let mut seen = vec![false; cycles * usize::from(a.drives)];
-    for &(n, k, _) in &log.tpdo {
-        if k < cycles {
-            seen[k * usize::from(a.drives) + usize::from(n - 1)] = true;
-        }
+    let (mut lat, mut missed) = (Vec::new(), 0);
+    for n in 1..=a.drives {
+        let tpdos: Vec<Instant> =
+            log.tpdo.iter().filter(|x| x.0 == n && x.1 >= first_sync).map(|x| x.1).collect();
+        let (l, m) = match_drive(&syncs, &tpdos);
+        lat.extend(l);
+        missed += m;
     }
-    let missed = seen.iter().filter(|s| !**s).count();
+    lat.sort_by(f64::total_cmp);
+    let drive_cycles = cycles * usize::from(a.drives);
     let mut hb_err: Vec<f64> = Vec::new();
     for n in 1..=a.drives {
         let times: Vec<Instant> = log.heartbeat.iter().filter(|h| h.0 == n).map(|h| h.1).collect();
@@ -220,8 +235,8 @@ fn main() -> anyhow::Result<()> {
     println!(
         "missed cycles: {} of {} drive-cycles ({:.3} %); SYNCs sent more than a period late: {}",
         missed,
-        seen.len(),
-        100.0 * missed as f64 / seen.len() as f64,
+        drive_cycles,
+        100.0 * missed as f64 / drive_cycles as f64,
         late_sends
     );
     println!(
