@@ -65,6 +65,11 @@ pub struct Global {
     /// process (repeatable), e.g. --sim akd:1.
     #[arg(long = "sim", global = true, value_name = "PROFILE:NODE")]
     pub sim: Vec<String>,
+    /// The machine around the virtual drives of --sim, serve, slcan-pty and demo: a TOML file
+    /// with a [[node]] table per node that differs from its profile's default machine (limit,
+    /// home switch, hard stops, index, load, gear, faults at run time; docs/machine.md).
+    #[arg(long, global = true, value_name = "FILE")]
+    pub machine: Option<PathBuf>,
 }
 
 /// A node-ID as people write it: `5`, `0x05`, `05h`.

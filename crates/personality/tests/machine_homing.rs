@@ -1,7 +1,7 @@
 //! Every homing method a profile lists in 60E3h completes on the profile's
 //! default machine (`machine::Machine::default_for`) from every start:
 //! on the negative limit switch, left of the home switch, on it, right of
-//! it, on the positive limit switch. Issue 11 §1: a master that starts
+//! it, on the positive limit switch ([`Start`]). Issue 11 §1: a master that starts
 //! method 17 on a served drive must not wait while the axis runs away.
 //!
 //! Each run is a fresh drive on the machine, enabled in homing mode
@@ -33,10 +33,37 @@ const LIMIT_S: f64 = 60.0;
 /// Home offset 607Ch for every run (position units; small enough for the
 /// iPOS −3/−4 travel away from the stop to stay inside the switches).
 const OFFSET: i32 = 1234;
-/// Start positions in motor revolutions of the default layout: on the
-/// negative limit switch (≤ −3.5), left of the home switch (0.5…1.5), on
-/// it, right of it, on the positive limit switch (≥ 3.5).
-const STARTS_REV: [f64; 5] = [-3.7, -2.2, 0.9, 2.3, 3.7];
+/// Where a run starts, from the machine's layout.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Start {
+    /// 0.2 revolutions into the negative limit switch.
+    OnNegativeLimit,
+    /// Half-way between the negative limit switch and the home switch.
+    LeftOfHome,
+    /// On the home switch, 40 % of its width from its lower edge.
+    OnHome,
+    /// Half-way between the home switch and the positive limit switch.
+    RightOfHome,
+    /// 0.2 revolutions into the positive limit switch.
+    OnPositiveLimit,
+}
+
+const STARTS: [Start; 5] =
+    [Start::OnNegativeLimit, Start::LeftOfHome, Start::OnHome, Start::RightOfHome, Start::OnPositiveLimit];
+
+impl Start {
+    /// The start position in machine units.
+    fn position(self, m: &Machine) -> f64 {
+        let (l, h, r) = (m.limits.unwrap(), m.home_switch.unwrap(), m.units_per_motor_rev());
+        match self {
+            Start::OnNegativeLimit => l.negative - 0.2 * r,
+            Start::LeftOfHome => (l.negative + h.from) / 2.0,
+            Start::OnHome => h.from + 0.4 * (h.to - h.from),
+            Start::RightOfHome => (h.to + l.positive) / 2.0,
+            Start::OnPositiveLimit => l.positive + 0.2 * r,
+        }
+    }
+}
 
 struct Run {
     dev: PersonalityDevice,
@@ -128,9 +155,9 @@ struct Outcome {
 }
 
 /// Homes; `Err(statusword)` on a homing error (bit 13).
-fn home(profile: Profile, code: i8, start_rev: f64) -> Result<Outcome, u16> {
+fn home(profile: Profile, code: i8, from: Start) -> Result<Outcome, u16> {
     let mut m = Machine::default_for(profile);
-    m.start = start_rev * m.units_per_motor_rev();
+    m.start = from.position(&m);
     let mut r = Run::new(profile, &m);
     r.run_ms(10);
     r.write(0x6060, 0, &[6]);
@@ -145,7 +172,7 @@ fn home(profile: Profile, code: i8, start_rev: f64) -> Result<Outcome, u16> {
         }
         r.run_ms(10);
     }
-    assert_eq!(r.statusword() & 0x6F, 0x27, "{profile} from {start_rev} rev: operation enabled");
+    assert_eq!(r.statusword() & 0x6F, 0x27, "{profile} from {from:?}: operation enabled");
     r.write(0x607C, 0, &OFFSET.to_le_bytes());
     r.write(0x6098, 0, &[code as u8]);
     let start = r.dev.app.drive.model().position();
@@ -159,11 +186,7 @@ fn home(profile: Profile, code: i8, start_rev: f64) -> Result<Outcome, u16> {
         if sw & 0x2000 != 0 {
             return Err(sw);
         }
-        assert_ne!(
-            sw & 0x4F,
-            0x08,
-            "{profile} method {code} from {start_rev} rev: fault, statusword {sw:04X}h"
-        );
+        assert_ne!(sw & 0x4F, 0x08, "{profile} method {code} from {from:?}: fault, statusword {sw:04X}h");
         if sw & 0x1400 == 0x1400 {
             break;
         }
@@ -171,7 +194,7 @@ fn home(profile: Profile, code: i8, start_rev: f64) -> Result<Outcome, u16> {
     assert_eq!(
         sw & 0x3400,
         0x1400,
-        "{profile} method {code} from {start_rev} rev: not completed in {LIMIT_S} s (statusword {sw:04X}h)"
+        "{profile} method {code} from {from:?}: not completed in {LIMIT_S} s (statusword {sw:04X}h)"
     );
     let seconds = r.now.saturating_duration_since(t0).as_secs_f64();
     let pos = i64::from(r.read_i32(0x6064));
@@ -236,20 +259,23 @@ fn check(p: Profile) -> (usize, usize) {
         for &code in methods {
             let c = class(p, code);
             let mut outcomes = Vec::new();
-            for s in STARTS_REV {
+            for s in STARTS {
                 // An index search into the limit switch the axis stands on
                 // would drive it further into overtravel: the drive
                 // refuses with a homing error (bit 13), without moving.
-                let into_limit =
-                    matches!(c, Class::Index(positive) if positive == (s > 0.0)) && s.abs() > 3.5;
+                let into_limit = match c {
+                    Class::Index(true) => s == Start::OnPositiveLimit,
+                    Class::Index(false) => s == Start::OnNegativeLimit,
+                    _ => false,
+                };
                 match home(p, code, s) {
                     Err(sw) if into_limit => {
-                        assert_eq!(sw & 0x3400, 0x2400, "{p} method {code} from {s} rev: error at rest");
+                        assert_eq!(sw & 0x3400, 0x2400, "{p} method {code} from {s:?}: error at rest");
                         refused += 1;
                     }
-                    Err(sw) => panic!("{p} method {code} from {s} rev: homing error, statusword {sw:04X}h"),
+                    Err(sw) => panic!("{p} method {code} from {s:?}: homing error, statusword {sw:04X}h"),
                     Ok(_) if into_limit => {
-                        panic!("{p} method {code} from {s} rev: homed into the limit switch")
+                        panic!("{p} method {code} from {s:?}: homed into the limit switch")
                     }
                     Ok(o) => outcomes.push((s, o)),
                 }
@@ -258,7 +284,7 @@ fn check(p: Profile) -> (usize, usize) {
             for (s, o) in &outcomes {
                 runs += 1;
                 longest = longest.max(o.seconds);
-                let at = format!("{p} method {code} ({c:?}) from {s} rev");
+                let at = format!("{p} method {code} ({c:?}) from {s:?}");
                 match c {
                     Class::Current => {
                         assert!(
@@ -286,7 +312,7 @@ fn check(p: Profile) -> (usize, usize) {
                     Class::Fixed => {
                         assert!(
                             (o.reference - first).abs() < tol,
-                            "{at}: reference {} differs from the one from {} rev ({first})",
+                            "{at}: reference {} differs from the one from {:?} ({first})",
                             o.reference,
                             outcomes[0].0
                         );

@@ -66,7 +66,8 @@ pub struct Fault {
 
 impl Fault {
     pub(super) fn check(&self) -> Result<(), MachineError> {
-        let bad = |key: &str, reason: &str| MachineError { key: key.into(), reason: reason.into() };
+        let bad =
+            |key: &str, reason: &str| MachineError { key: key.into(), reason: reason.into(), other: None };
         if !(self.at.is_finite() && (0.0..=1e9).contains(&self.at)) {
             return Err(bad("at", "must be a time in seconds, 0 or more"));
         }

@@ -254,8 +254,11 @@ impl MachineFile {
         let mut sp = Spans::default();
         let p = n.get_ref();
         let place = |sp: &Spans, e: MachineError| {
-            // The key's own place; a whole-table error at the node's id.
-            let at = sp.0.get(&e.key).map_or(p.id.span().start, |r| r.start);
+            // The key's own place, else its partner's; else the node's id.
+            let at =
+                sp.0.get(&e.key)
+                    .or_else(|| e.other.as_ref().and_then(|o| sp.0.get(o)))
+                    .map_or(p.id.span().start, |r| r.start);
             let (line, column) = line_col(&self.text, at);
             MachineFileError { line, column, message: format!("node {node}: {e}") }
         };
@@ -281,7 +284,11 @@ impl MachineFile {
                     v.or(b).ok_or_else(|| {
                         place(
                             &sp,
-                            MachineError { key: key.into(), reason: "missing (no default to keep)".into() },
+                            MachineError {
+                                key: key.into(),
+                                reason: "missing (no default to keep)".into(),
+                                other: None,
+                            },
                         )
                     })
                 };
@@ -304,7 +311,11 @@ impl MachineFile {
                     v.or(b).ok_or_else(|| {
                         place(
                             &sp,
-                            MachineError { key: key.into(), reason: "missing (no default to keep)".into() },
+                            MachineError {
+                                key: key.into(),
+                                reason: "missing (no default to keep)".into(),
+                                other: None,
+                            },
                         )
                     })
                 };
@@ -327,7 +338,11 @@ impl MachineFile {
                     v.or(b).ok_or_else(|| {
                         place(
                             &sp,
-                            MachineError { key: key.into(), reason: "missing (no default to keep)".into() },
+                            MachineError {
+                                key: key.into(),
+                                reason: "missing (no default to keep)".into(),
+                                other: None,
+                            },
                         )
                     })
                 };

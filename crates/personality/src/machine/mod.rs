@@ -126,6 +126,9 @@ pub struct MachineError {
     pub key: String,
     /// What is wrong.
     pub reason: String,
+    /// The other key of a pair in the wrong order (where a file that
+    /// names only that one places the error).
+    pub other: Option<String>,
 }
 
 impl core::fmt::Display for MachineError {
@@ -137,7 +140,11 @@ impl core::fmt::Display for MachineError {
 impl std::error::Error for MachineError {}
 
 fn err(key: &str, reason: impl Into<String>) -> MachineError {
-    MachineError { key: key.into(), reason: reason.into() }
+    MachineError { key: key.into(), reason: reason.into(), other: None }
+}
+
+fn err2(key: &str, other: &str, reason: impl Into<String>) -> MachineError {
+    MachineError { other: Some(other.into()), ..err(key, reason) }
 }
 
 /// Largest position, feed or ratio taken: far inside what the model
@@ -162,24 +169,25 @@ fn not_negative(key: &str, v: f64) -> Result<(), MachineError> {
     if v >= 0.0 { Ok(()) } else { Err(err(key, format!("{v} must not be negative"))) }
 }
 
-/// One profile's machine, in motor revolutions `r` of its axis: limit
-/// switches at ±3.5 r, the home switch over 0.5…1.5 r (its edges half a
+/// One profile's machine, in motor revolutions `r` of its axis: the
+/// negative limit switch `neg` r below the power-on position, the positive
+/// one `pos` r above, the home switch over 0.5…1.5 r (its edges half a
 /// revolution from the index pulses at whole revolutions, so no edge and
 /// pulse coincide), hard stops 1.5 r beyond the limit switches.
-fn layout(feed: f64, gear_ratio: f64, inertia: f64, coulomb: f64) -> Machine {
+fn layout(feed: f64, gear_ratio: f64, (neg, pos): (f64, f64), inertia: f64, coulomb: f64) -> Machine {
     let r = feed / gear_ratio;
     Machine {
         feed,
         gear_ratio,
         start: 0.0,
         limits: Some(Limits {
-            negative: -3.5 * r,
-            positive: 3.5 * r,
+            negative: -neg * r,
+            positive: pos * r,
             polarity: Polarity::NormallyClosed,
             hysteresis: 0.01 * r,
         }),
         home_switch: Some(HomeSwitch { from: 0.5 * r, to: 1.5 * r, polarity: Polarity::NormallyOpen }),
-        hard_stops: Some(HardStops { negative: -5.0 * r, positive: 5.0 * r }),
+        hard_stops: Some(HardStops { negative: -(neg + 1.5) * r, positive: (pos + 1.5) * r }),
         index_offset: 0.0,
         load: Load { inertia, viscous_friction: 0.0, coulomb_friction: coulomb, torque: 0.0 },
         faults: Vec::new(),
@@ -198,20 +206,24 @@ impl Machine {
     /// * `dds6`: the stepper on a linear stage, 5 mm lead screw (mm);
     /// * `generic`: a servo turning a disc directly (degrees).
     ///
-    /// Each has the limit switches 3.5 motor revolutions either side of
-    /// the power-on position, a home switch between them, hard stops
-    /// beyond them and the index pulse once per motor revolution.
+    /// Each has the limit switches some motor revolutions either side of
+    /// the power-on position, a home switch between them (0.5…1.5
+    /// revolutions), hard stops 1.5 revolutions beyond the switches and
+    /// the index pulse once per motor revolution.
     pub fn default_for(profile: Profile) -> Machine {
         match profile {
             // 6 kg · (0.01 m / 2π)² ≈ 1.5e-5 kg·m²: matched to the rotor.
-            Profile::Kc1 | Profile::Akd => layout(10.0, 1.0, 1.5e-5, 0.02),
-            // 4e-4 kg·m² / 5² = 1.6e-5 at the motor.
-            Profile::Ipos => layout(360.0, 5.0, 4.0e-4, 0.05),
-            // 1.4e-4 kg·m² / 3² ≈ 1.6e-5 at the motor.
-            Profile::Ssd630 => layout(360.0, 3.0, 1.4e-4, 0.03),
-            // Screw and carriage as one inertia, the stepper's own figure.
-            Profile::Dds6 => layout(5.0, 1.0, 3.0e-5, 0.01),
-            Profile::Generic => layout(360.0, 1.0, 1.6e-5, 0.0),
+            // −45…+165 mm: room for the demo's ten-turn move and sine.
+            Profile::Kc1 | Profile::Akd => layout(10.0, 1.0, (4.5, 16.5), 1.5e-5, 0.02),
+            // 4e-4 kg·m² / 5² = 1.6e-5 at the motor; ±252° of the output.
+            Profile::Ipos => layout(360.0, 5.0, (3.5, 3.5), 4.0e-4, 0.05),
+            // 1.4e-4 kg·m² / 3² ≈ 1.6e-5 at the motor; ±420° of the table.
+            Profile::Ssd630 => layout(360.0, 3.0, (3.5, 3.5), 1.4e-4, 0.03),
+            // Screw and carriage as one inertia, the stepper's own figure;
+            // −22.5…+42.5 mm.
+            Profile::Dds6 => layout(5.0, 1.0, (4.5, 8.5), 3.0e-5, 0.01),
+            // ±3.5 turns of the disc.
+            Profile::Generic => layout(360.0, 1.0, (3.5, 3.5), 1.6e-5, 0.0),
         }
     }
 
@@ -235,8 +247,9 @@ impl Machine {
             finite("limits.positive", l.positive)?;
             not_negative("limits.hysteresis", l.hysteresis)?;
             if l.negative >= l.positive {
-                return Err(err(
+                return Err(err2(
                     "limits.negative",
+                    "limits.positive",
                     format!("{} must be below limits.positive ({})", l.negative, l.positive),
                 ));
             }
@@ -261,21 +274,32 @@ impl Machine {
             finite("hard_stops.negative", s.negative)?;
             finite("hard_stops.positive", s.positive)?;
             if s.negative >= s.positive {
-                return Err(err(
+                return Err(err2(
                     "hard_stops.negative",
+                    "hard_stops.positive",
                     format!("{} must be below hard_stops.positive ({})", s.negative, s.positive),
                 ));
             }
             if !(s.negative..=s.positive).contains(&self.start) {
-                return Err(err("start", format!("{} is beyond a hard stop", self.start)));
+                let stop =
+                    if self.start < s.negative { "hard_stops.negative" } else { "hard_stops.positive" };
+                return Err(err2("start", stop, format!("{} is beyond a hard stop", self.start)));
             }
             if let Some(l) = &self.limits {
                 // A switch behind its stop could never be reached.
                 if l.negative <= s.negative {
-                    return Err(err("limits.negative", "must be inside hard_stops.negative"));
+                    return Err(err2(
+                        "limits.negative",
+                        "hard_stops.negative",
+                        "must be inside hard_stops.negative",
+                    ));
                 }
                 if l.positive >= s.positive {
-                    return Err(err("limits.positive", "must be inside hard_stops.positive"));
+                    return Err(err2(
+                        "limits.positive",
+                        "hard_stops.positive",
+                        "must be inside hard_stops.positive",
+                    ));
                 }
             }
         }
