@@ -353,3 +353,20 @@ fn an_encoder_fault_faults_the_drive() {
     assert_eq!(r.read_u32(0x603F) & 0xFFFF, 0x7305);
     assert!(r.emcy(0x7305), "{:02X?}", r.frames);
 }
+
+#[test]
+fn the_documented_example_file_parses_and_builds() {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/examples/machine.toml"))
+            .expect("docs/examples/machine.toml");
+    let f = MachineFile::parse(&text).unwrap();
+    f.check_nodes(&[1, 2, 5]).unwrap();
+    for (p, id) in [(Profile::Generic, 5u8), (Profile::Akd, 1), (Profile::Dds6, 2)] {
+        let m = f.machine_for(p, id).unwrap();
+        p.build_on(id, &m).unwrap();
+    }
+    let m = f.machine_for(Profile::Generic, 5).unwrap();
+    assert_eq!(m.index_offset, 45.0);
+    assert_eq!(m.faults.len(), 2);
+    assert_eq!(f.machine_for(Profile::Dds6, 2).unwrap().home_switch, None);
+}
