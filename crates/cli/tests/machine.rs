@@ -8,6 +8,7 @@ mod common;
 use assert_cmd::Command;
 use common::Serve;
 use predicates::prelude::*;
+use predicates::str::contains;
 
 fn db() -> Command {
     let mut c = Command::new(common::bin());
@@ -61,28 +62,48 @@ fn limit_switch_homing_on_a_served_drive_and_a_fault_at_run_time() {
     // switch reads tripped although the axis is far from it.
     std::thread::sleep(std::time::Duration::from_millis(1600));
     assert!(run(&["--node", "5", "sdo", "read", "60FD"]).contains("Digital inputs = 2 (0x00000002)"));
-    // Statusword bit 11 (internal limit active).
-    let sw = run(&["--node", "5", "sdo", "read", "6041"]);
-    let v: u32 = sw.split("= ").nth(1).unwrap().split_whitespace().next().unwrap().parse().unwrap();
-    assert_eq!(v & 0x0800, 0x0800, "{sw}");
+    // Out of homing (where the switches are the method's signals), it is a
+    // limit: statusword bit 11 (internal limit active), and a velocity
+    // towards it is held at 0.
+    run(&["--node", "5", "drive", "velocity", "36000"]);
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let value = |out: String| -> i64 {
+        out.split("= ").nth(1).unwrap().split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let sw = value(run(&["--node", "5", "sdo", "read", "6041"]));
+    assert_eq!(sw & 0x0800, 0x0800, "statusword {sw:04X}h");
+    let v = value(run(&["--node", "5", "sdo", "read", "606C"]));
+    assert!(v.abs() <= 100, "velocity {v} towards the tripped switch");
     drop(srv);
 }
 
 #[test]
 fn sim_drives_take_the_machine_file() {
     let dir = tempfile::tempdir().unwrap();
-    let m = file(&dir, "m.toml", "[[node]]\nid = 2\nstart = 2000.0\n");
-    // dds6 node 2 at +2000 mm: beyond its positive limit switch (+42.5 mm).
-    let m2 = file(&dir, "m2.toml", "[[node]]\nid = 2\nstart = 44.0\n");
-    db().args(["--bus", "virtual", "--sim", "dds6:2", "--machine", &m, "--node", "2", "sdo", "read", "60FD"])
-        .assert()
-        .failure()
-        .stderr(contains("m.toml: line 3, column 9: node 2: start: 2000 is beyond a hard stop"));
+    let m = file(&dir, "m.toml", "[[node]]\nid = 2\nstart = 99999.0\n");
+    // generic node 2 at +1300°: on its positive limit switch (+1260°).
+    let m2 = file(&dir, "m2.toml", "[[node]]\nid = 2\nstart = 1300.0\n");
     db().args([
         "--bus",
         "virtual",
         "--sim",
-        "dds6:2",
+        "generic:2",
+        "--machine",
+        &m,
+        "--node",
+        "2",
+        "sdo",
+        "read",
+        "60FD",
+    ])
+    .assert()
+    .failure()
+    .stderr(contains("m.toml: line 3, column 9: node 2: start: 99999 is beyond a hard stop"));
+    db().args([
+        "--bus",
+        "virtual",
+        "--sim",
+        "generic:2",
         "--machine",
         &m2,
         "--node",
@@ -95,7 +116,7 @@ fn sim_drives_take_the_machine_file() {
     .success()
     .stdout(contains("Digital inputs = 2 (0x00000002)"));
     // Without the file: its default machine, off the switches.
-    db().args(["--bus", "virtual", "--sim", "dds6:2", "--node", "2", "sdo", "read", "60FD"])
+    db().args(["--bus", "virtual", "--sim", "generic:2", "--node", "2", "sdo", "read", "60FD"])
         .assert()
         .success()
         .stdout(contains("Digital inputs = 0 (0x00000000)"));
