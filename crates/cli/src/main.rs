@@ -64,7 +64,7 @@ fn uses(cmd: &Command) -> &'static [Opt] {
     use Opt::*;
     const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine];
     match cmd {
-        Command::Serve(_) => &[Machine],
+        Command::Serve(_) => &[Bus, Machine],
         Command::Demo(_) => &[Json, Machine],
         Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim, Machine],
         Command::Sdo(_) | Command::Pdo(_) => NODE_SDO,
