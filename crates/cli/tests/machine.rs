@@ -177,3 +177,36 @@ fn a_bad_machine_file_is_refused_with_its_place() {
         .failure()
         .stderr(contains("--machine does not apply to `drivebus eds check`"));
 }
+
+/// `slcan-pty` hosts its drives on their machines too.
+#[cfg(unix)]
+#[test]
+fn slcan_pty_drives_take_the_machine_file() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    // generic node 5 on its negative limit switch (−1260°).
+    let m = file(&dir, "m.toml", "[[node]]\nid = 5\nstart = -1300.0\n");
+    let mut child = std::process::Command::new(common::bin())
+        .args(["slcan-pty", "--drive", "generic:5", "--machine", &m, "--seconds", "20"])
+        .env_remove("DRIVEBUS_BUS")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut first).unwrap();
+    let path = first.trim().strip_prefix("slcan-pty ").map(str::to_owned);
+    let out = path.map(|p| {
+        db().args(["--bus", &format!("slcan://{p}?bitrate=1000000"), "--node", "5", "sdo", "read", "60FD"])
+            .output()
+            .unwrap()
+    });
+    let _ = child.kill();
+    let _ = child.wait();
+    let out = out.expect("slcan-pty PATH line");
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("Digital inputs = 1 (0x00000001)"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
