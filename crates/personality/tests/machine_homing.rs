@@ -214,29 +214,43 @@ fn home(profile: Profile, code: i8, from: Start) -> Result<Outcome, u16> {
     })
 }
 
-/// The places (motor rad) a fixed reference may be at.
-fn on_feature(profile: Profile, rad: f64, tol: f64) -> bool {
-    let m = Machine::default_for(profile);
-    let k = 2.0 * PI / m.units_per_motor_rev();
-    let index = (m.index_offset * PI / 180.0).rem_euclid(2.0 * PI);
-    let phase = (rad - index).rem_euclid(2.0 * PI);
-    if phase < tol || 2.0 * PI - phase < tol {
-        return true;
+/// The places (motor rad) of a profile's default machine a reference may
+/// be at: the index pulses, the switch edges, the hard stops ± |607Ch|.
+struct Features {
+    /// Angle of the index pulse in a revolution.
+    index: f64,
+    /// Switch edges and the iPOS −3/−4 points.
+    places: Vec<f64>,
+}
+
+impl Features {
+    fn of(profile: Profile) -> Features {
+        let m = Machine::default_for(profile);
+        let k = 2.0 * PI / m.units_per_motor_rev();
+        let mut edges = Vec::new();
+        if let Some(l) = m.limits {
+            edges.extend([l.negative, l.negative + l.hysteresis, l.positive, l.positive - l.hysteresis]);
+        }
+        if let Some(h) = m.home_switch {
+            edges.extend([h.from, h.to]);
+        }
+        let mut places = edges.iter().map(|e| e * k).collect::<Vec<_>>();
+        if let Some(s) = m.hard_stops {
+            // iPOS −3/−4: |607Ch| position units away from the stop.
+            let d = profile.build(1).unwrap().app.drive.units().pos_to_rad(f64::from(OFFSET)).abs();
+            places.extend([s.negative * k + d, s.positive * k - d]);
+        }
+        Features { index: (m.index_offset * PI / 180.0).rem_euclid(2.0 * PI), places }
     }
-    let mut edges = Vec::new();
-    if let Some(l) = m.limits {
-        edges.extend([l.negative, l.negative + l.hysteresis, l.positive, l.positive - l.hysteresis]);
+
+    fn on_index(&self, rad: f64, tol: f64) -> bool {
+        let phase = (rad - self.index).rem_euclid(2.0 * PI);
+        phase < tol || 2.0 * PI - phase < tol
     }
-    if let Some(h) = m.home_switch {
-        edges.extend([h.from, h.to]);
+
+    fn on_any(&self, rad: f64, tol: f64) -> bool {
+        self.on_index(rad, tol) || self.places.iter().any(|x| (x - rad).abs() < tol)
     }
-    let mut at = edges.iter().map(|e| e * k).collect::<Vec<_>>();
-    if let Some(s) = m.hard_stops {
-        // iPOS −3/−4: |607Ch| position units away from the stop.
-        let d = profile.build(1).unwrap().app.drive.units().pos_to_rad(f64::from(OFFSET)).abs();
-        at.extend([s.negative * k + d, s.positive * k - d]);
-    }
-    at.iter().any(|x| (x - rad).abs() < tol)
 }
 
 /// Every method of `p` from every start; returns (runs, refused).
@@ -256,6 +270,7 @@ fn check(p: Profile) -> (usize, usize) {
         let cpr = f64::from(d.app.drive.config().params.encoder.counts_per_rev);
         let unit = d.app.drive.units().pos_to_rad(1.0).abs();
         let tol = (4.0 * 2.0 * PI / cpr).max(2.0 * unit).max(0.05_f64.to_radians());
+        let features = Features::of(p);
         for &code in methods {
             let c = class(p, code);
             let mut outcomes = Vec::new();
@@ -304,7 +319,7 @@ fn check(p: Profile) -> (usize, usize) {
                         };
                         assert!(ok, "{at}: reference {} is not the next index from {}", o.reference, o.start);
                         assert!(
-                            on_feature(p, o.reference, tol),
+                            features.on_index(o.reference, tol),
                             "{at}: reference {} on no index",
                             o.reference
                         );
@@ -317,7 +332,7 @@ fn check(p: Profile) -> (usize, usize) {
                             outcomes[0].0
                         );
                         assert!(
-                            on_feature(p, o.reference, tol),
+                            features.on_any(o.reference, tol),
                             "{at}: reference {} is on no switch, index or stop",
                             o.reference
                         );
