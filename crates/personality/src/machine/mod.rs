@@ -16,7 +16,7 @@
 //! drive's: the drive still counts in its own position units (6064h).
 //!
 //! This module is the one place of the format: the types, the per-profile
-//! defaults, the TOML file ([`file`]) and the run-time fault schedule
+//! defaults, the TOML file ([`mod@file`]) and the run-time fault schedule
 //! ([`faults`]).
 
 pub mod faults;
