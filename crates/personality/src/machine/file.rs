@@ -179,6 +179,11 @@ impl Spans {
     }
 }
 
+/// A position a table must name because the default machine has none.
+fn missing(key: &str) -> MachineError {
+    MachineError { key: key.into(), reason: "missing (no default to keep)".into(), other: None }
+}
+
 /// A parsed machine file: the `[[node]]` tables by node-ID, still to be
 /// laid over each node's default machine ([`MachineFile::machine_for`]).
 #[derive(Debug)]
@@ -281,16 +286,7 @@ impl MachineFile {
             } else {
                 let base = m.limits;
                 let need = |v: Option<f64>, b: Option<f64>, key: &str| {
-                    v.or(b).ok_or_else(|| {
-                        place(
-                            &sp,
-                            MachineError {
-                                key: key.into(),
-                                reason: "missing (no default to keep)".into(),
-                                other: None,
-                            },
-                        )
-                    })
+                    v.or(b).ok_or_else(|| place(&sp, missing(key)))
                 };
                 m.limits = Some(Limits {
                     negative: need(neg, base.map(|b| b.negative), "limits.negative")?,
@@ -308,16 +304,7 @@ impl MachineFile {
             } else {
                 let base = m.home_switch;
                 let need = |v: Option<f64>, b: Option<f64>, key: &str| {
-                    v.or(b).ok_or_else(|| {
-                        place(
-                            &sp,
-                            MachineError {
-                                key: key.into(),
-                                reason: "missing (no default to keep)".into(),
-                                other: None,
-                            },
-                        )
-                    })
+                    v.or(b).ok_or_else(|| place(&sp, missing(key)))
                 };
                 m.home_switch = Some(HomeSwitch {
                     from: need(from, base.map(|b| b.from), "home_switch.from")?,
@@ -335,16 +322,7 @@ impl MachineFile {
             } else {
                 let base = m.hard_stops;
                 let need = |v: Option<f64>, b: Option<f64>, key: &str| {
-                    v.or(b).ok_or_else(|| {
-                        place(
-                            &sp,
-                            MachineError {
-                                key: key.into(),
-                                reason: "missing (no default to keep)".into(),
-                                other: None,
-                            },
-                        )
-                    })
+                    v.or(b).ok_or_else(|| place(&sp, missing(key)))
                 };
                 m.hard_stops = Some(HardStops {
                     negative: need(neg, base.map(|b| b.negative), "hard_stops.negative")?,
