@@ -65,6 +65,11 @@ pub struct Global {
     /// process (repeatable), e.g. --sim akd:1.
     #[arg(long = "sim", global = true, value_name = "PROFILE:NODE")]
     pub sim: Vec<String>,
+    /// The machine around the virtual drives of --sim, serve, slcan-pty and demo: a TOML file
+    /// with a [[node]] table per node that differs from its profile's default machine (limit,
+    /// home switch, hard stops, index, load, gear, faults at run time; docs/machine.md).
+    #[arg(long, global = true, value_name = "FILE")]
+    pub machine: Option<PathBuf>,
 }
 
 /// A node-ID as people write it: `5`, `0x05`, `05h`.
@@ -135,6 +140,7 @@ Examples:
   drivebus serve --drive generic:5 --bitrate 1000000
   drivebus serve --drive generic:5 --fault drop:0x185,every=10   (lose every 10th TPDO1)
   drivebus serve --drive akd:1 --eds-object   (then: drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 eds export)
+  drivebus serve --drive generic:5 --machine machine.toml   (its switches, stops, load, faults: docs/machine.md)
   drivebus serve --bus socketcan://can0 --drive akd:1            (virtual drive on a real bus)
   drivebus serve --bus 'slcan:///dev/ttyACM0?bitrate=500000' --drive kc1:3
   drivebus serve --bus socketcand://192.0.2.10:29536/can0 --drive dds6:2 --listen 127.0.0.1:29536
@@ -143,6 +149,8 @@ Without --bus (or with --bus virtual) the drives sit on an in-process bus served
 --listen (default 127.0.0.1:29536). With --bus URL they sit on that bus, keeping their own timing
 (heartbeats, SYNC-driven PDOs, EMCY inhibit times); the socketcand listener is then off unless
 --listen is given (it shares the drives and the bus traffic).
+Every drive moves its profile's default machine (limit and home switches, hard stops, index, load),
+changed per node by --machine FILE.
 Prints one line when ready: `listening on HOST:PORT (channel NAME)` when listening, `serving on URL`
 otherwise; stops on SIGINT/SIGTERM (exit 0).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";

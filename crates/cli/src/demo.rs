@@ -6,6 +6,7 @@
 //! value arrived in a TPDO.
 
 use std::f64::consts::PI;
+use std::path::Path;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -69,7 +70,8 @@ pub async fn run(g: &Global, a: &DemoArgs) -> anyhow::Result<()> {
     }
     let show = !a.no_progress && !g.json;
     let (sine, realtime) = (a.sine_seconds, a.realtime);
-    let report = tokio::task::spawn_blocking(move || simulate(show, sine, realtime))
+    let machine = g.machine.clone();
+    let report = tokio::task::spawn_blocking(move || simulate(show, sine, realtime, machine.as_deref()))
         .await
         .map_err(|e| anyhow!("demo task failed: {e}"))??;
     plot(&a.out, &report.samples, &report.phases)
@@ -94,11 +96,12 @@ fn secs(m: &Master, since: Instant) -> f64 {
     m.now().saturating_duration_since(since).as_nanos() as f64 / 1e9
 }
 
-fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Report> {
+fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path>) -> anyhow::Result<Report> {
     let mut bus = virtual_bus();
-    for spec in [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }]
-    {
-        bus.attach(vdrive::build(spec, None, Default::default())?);
+    let specs = [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }];
+    let machines = vdrive::Machines::load(machine, &specs)?;
+    for spec in specs {
+        bus.attach(vdrive::build(spec, None, Default::default(), &machines.machine_for(spec)?)?);
     }
     let mut sim =
         SimBus::with_config(bus, MasterConfig { sdo_timeout: Duration::from_secs(1), ..Default::default() });

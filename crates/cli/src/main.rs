@@ -46,9 +46,10 @@ enum Opt {
     Timeout,
     Retries,
     Sim,
+    Machine,
 }
 
-const ALL_OPTS: [(Opt, &str); 7] = [
+const ALL_OPTS: [(Opt, &str); 8] = [
     (Opt::Bus, "bus"),
     (Opt::Node, "node"),
     (Opt::Eds, "eds"),
@@ -56,29 +57,30 @@ const ALL_OPTS: [(Opt, &str); 7] = [
     (Opt::Timeout, "timeout"),
     (Opt::Retries, "retries"),
     (Opt::Sim, "sim"),
+    (Opt::Machine, "machine"),
 ];
 
 fn uses(cmd: &Command) -> &'static [Opt] {
     use Opt::*;
-    const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim];
+    const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine];
     match cmd {
-        Command::Serve(_) => &[Bus],
-        Command::Demo(_) => &[Json],
-        Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim],
+        Command::Serve(_) => &[Bus, Machine],
+        Command::Demo(_) => &[Json, Machine],
+        Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim, Machine],
         Command::Sdo(_) | Command::Pdo(_) => NODE_SDO,
-        Command::Nmt(_) => &[Bus, Node, Json, Timeout, Retries, Sim],
-        Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim],
-        Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim],
+        Command::Nmt(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
         Command::Monitor(_) => NODE_SDO,
-        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim],
-        Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim],
+        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim, Machine],
+        Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim, Machine],
         Command::Eds(EdsCmd::Check(_)) => &[Json],
         Command::Eds(EdsCmd::Show(_)) => &[Eds, Json],
-        Command::Eds(EdsCmd::Export(_)) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim],
+        Command::Eds(EdsCmd::Export(_)) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
         Command::Eds(EdsCmd::Dcf(_)) => NODE_SDO,
-        Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim],
-        Command::Lss(_) => &[Bus, Json, Timeout, Sim],
-        Command::SlcanPty(_) => &[Bus],
+        Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        Command::Lss(_) => &[Bus, Json, Timeout, Sim, Machine],
+        Command::SlcanPty(_) => &[Bus, Machine],
         // EtherCAT commands take their interface and options after the subcommand.
         Command::Ethercat(_) => &[],
     }
