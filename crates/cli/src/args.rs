@@ -123,7 +123,7 @@ pub enum Command {
     /// Emulate an slcan adapter on a pseudo-terminal, with virtual drives behind it.
     #[command(name = "slcan-pty", after_help = SLCAN_EXAMPLES)]
     SlcanPty(SlcanPtyArgs),
-    /// EtherCAT: serve drive twins as software EtherCAT slaves.
+    /// EtherCAT: serve drive twins as software slaves; scan, SDO, AL state, PDOs and drives as a master.
     #[command(subcommand)]
     Ethercat(crate::ethercat::EthercatCmd),
 }
@@ -183,16 +183,24 @@ Examples:
   drivebus demo
   drivebus demo --out /tmp/demo.svg --no-progress
   drivebus demo --realtime          (watch it run at 1 kHz SYNC in wall-clock time)
+  drivebus demo --ethercat          (ethercrab master + emulated iPOS, DC SYNC0 at 1 ms)
 
 The demo runs the master library (the same code as `drivebus --bus URL drive ...`)
-against an AKD (node 1) and a DDS6 (node 2) on the virtual bus in simulated time.";
+against an AKD (node 1) and a DDS6 (node 2) on the virtual bus in simulated time.
+With --ethercat it runs the EtherCAT master of `drivebus ethercat drive` against an emulated iPOS
+over the in-process link.";
 
 /// `drivebus demo`.
 #[derive(Args, Debug)]
 pub struct DemoArgs {
-    /// Where to write the SVG plot.
-    #[arg(long, default_value = "drivebus-demo.svg")]
-    pub out: PathBuf,
+    /// Where to write the SVG plot [default: drivebus-demo.svg; drivebus-demo-ethercat.svg with
+    /// --ethercat].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// The EtherCAT demo: an ethercrab master and an emulated iPOS in one process (in-process
+    /// link, no root): OP with DC SYNC0 at 1 ms, homing, a move, a CSP sine.
+    #[arg(long)]
+    pub ethercat: bool,
     /// No progress bar.
     #[arg(long)]
     pub no_progress: bool,

@@ -79,7 +79,9 @@ fn uses(cmd: &Command) -> &'static [Opt] {
         Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim],
         Command::Lss(_) => &[Bus, Json, Timeout, Sim],
         Command::SlcanPty(_) => &[Bus],
-        // EtherCAT commands take their interface and options after the subcommand.
+        // EtherCAT commands take their interface (--iface) after the subcommand;
+        // the master commands print JSON and use --timeout for a frame's return.
+        Command::Ethercat(c) if crate::ethercat::is_master(c) => &[Json, Timeout],
         Command::Ethercat(_) => &[],
     }
 }
@@ -188,7 +190,7 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
         Command::SlcanPty(a) => slcan_pty::run(g, a).await.map(|()| 0),
-        Command::Ethercat(c) => ethercat::run(c).await,
+        Command::Ethercat(c) => ethercat::run(g, c).await,
     }
 }
 

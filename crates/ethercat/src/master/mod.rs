@@ -12,6 +12,12 @@
 
 pub mod drive;
 
+/// Runs a master future to completion on this thread (ethercrab's timers
+/// are async-io's).
+pub use async_io::block_on;
+/// The CiA 402 tables the drive commands use.
+pub use drivebus_cia402::codes;
+
 use crate::host::Host;
 use drivebus_can::Duration;
 use ethercrab::error::{Error, MailboxError};
@@ -447,6 +453,11 @@ impl Master {
     /// Every slave: identity (SII and 1018h), addresses, the AL state found
     /// before, mailbox protocols. Leaves the line in PRE-OP.
     pub async fn scan(&self) -> Result<Vec<SlaveInfo>, MasterError> {
+        self.scan_group().await.map(|(found, _)| found)
+    }
+
+    /// [`Master::scan`], keeping the line's group for what comes next.
+    pub async fn scan_group(&self) -> Result<(Vec<SlaveInfo>, PreOpGroup), MasterError> {
         let n = self.count().await?;
         if n == 0 {
             return Err(MasterError::NoLine(self.what.clone()));
@@ -493,7 +504,7 @@ impl Master {
                 dc: sd.dc_support().any(),
             });
         }
-        Ok(out)
+        Ok((out, group))
     }
 
     /// The slave at `position` (1-based) of `group`.
