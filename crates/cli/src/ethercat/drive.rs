@@ -70,7 +70,13 @@ impl Progress {
 
 /// Runs the command.
 pub async fn run(g: &Global, a: &EcatDriveArgs) -> anyhow::Result<()> {
-    let pos = a.slave;
+    let (Some(iface), Some(pos)) = (a.iface.clone(), a.slave) else {
+        return Err(coded(
+            "usage",
+            anyhow!("give --iface IFACE and --slave N (the drive's line position from 1)"),
+        ));
+    };
+    let line = super::EcatLine { iface };
     let cycle = Duration::from_micros(a.cycle_us);
     let wait = match &a.action {
         EcatDriveAction::Home { wait, .. } | EcatDriveAction::Move { wait, .. } => {
@@ -107,8 +113,8 @@ pub async fn run(g: &Global, a: &EcatDriveArgs) -> anyhow::Result<()> {
         }
     });
     let progress = !g.json && std::io::stderr().is_terminal();
-    let r = with_master(g, &a.line, async move |m: &Master| act(m, pos, cycle, action, wait, progress).await)
-        .await;
+    let r =
+        with_master(g, &line, async move |m: &Master| act(m, pos, cycle, action, wait, progress).await).await;
     watcher.abort();
     let done = r?;
     report(g, pos, a.cycle_us, &done);

@@ -157,7 +157,7 @@ pub struct EcatSdoWrite {
     #[arg(long, value_parser = position)]
     slave: usize,
     /// OBJECT [SUB] VALUE.
-    #[arg(num_args = 2..=3, required = true, value_name = "OBJECT [SUB] VALUE", allow_hyphen_values = true)]
+    #[arg(num_args = 2..=3, required = true, value_name = "OBJECT [SUB] VALUE", allow_negative_numbers = true)]
     args: Vec<String>,
     /// Data type (u8, u16, u32, i32, ... or a CiA name) when not a standard object.
     #[arg(long = "type", value_name = "T")]
@@ -199,13 +199,14 @@ pub struct EcatPdoShow {
 /// `drivebus ethercat drive`.
 #[derive(Args, Debug)]
 pub struct EcatDriveArgs {
-    #[command(flatten)]
-    line: EcatLine,
-    /// The drive (line position from 1).
-    #[arg(long, value_parser = position)]
-    slave: usize,
+    /// Network interface with the EtherCAT line (required; before or after the action).
+    #[arg(long, value_name = "IFACE", global = true)]
+    iface: Option<String>,
+    /// The drive (line position from 1; required).
+    #[arg(long, value_parser = position, global = true)]
+    slave: Option<usize>,
     /// Process-data cycle (and SYNC0 period) in µs.
-    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(250..=100_000))]
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(250..=100_000), global = true)]
     cycle_us: u64,
     /// What to do.
     #[command(subcommand)]
@@ -224,7 +225,7 @@ pub enum EcatDriveAction {
     /// Homing (mode 6) with a method (6098h).
     Home {
         /// Homing method (6098h), e.g. 35 = on the current position.
-        #[arg(long, default_value_t = 35, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 35, allow_negative_numbers = true)]
         method: i8,
         /// Give up (and halt) after this many seconds.
         #[arg(long, default_value_t = 30.0)]
@@ -233,7 +234,7 @@ pub enum EcatDriveAction {
     /// Profile-position move (mode 1) to TARGET.
     Move {
         /// Target position (607Ah) in the drive's position units.
-        #[arg(allow_hyphen_values = true)]
+        #[arg(allow_negative_numbers = true)]
         target: i32,
         /// Profile velocity (6081h) to set first.
         #[arg(long)]
