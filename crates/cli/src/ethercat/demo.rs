@@ -60,6 +60,7 @@ struct Report {
     cycles: u64,
     bad_wkc: u64,
     sim_seconds: f64,
+    realtime: bool,
     samples: Vec<Sample>,
     phases: Vec<Phase>,
 }
@@ -183,6 +184,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         Ok::<(), anyhow::Error>(())
     })?;
     pb.finish_and_clear();
+    r.realtime = realtime;
     r.sim_seconds = clock.now().saturating_duration_since(start).as_nanos() as f64 / 1e9;
     r.samples = trace.samples;
     Ok(r)
@@ -213,8 +215,9 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
         return;
     }
     let sync = if r.dc { "DC SYNC0 at 1 ms" } else { "free run at 1 ms" };
+    let time = if r.realtime { "real time" } else { "simulated time" };
     outln!(
-        "drivebus demo --ethercat — ethercrab master, emulated iPOS on the in-process link, {sync}, simulated time"
+        "drivebus demo --ethercat — ethercrab master, emulated iPOS on the in-process link, {sync}, {time}"
     );
     for s in &r.found {
         let id = s.identity;
@@ -249,7 +252,7 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
         r.bad_wkc,
         r.expected_wkc
     );
-    outln!("  {:<44} {:.3} s", "simulated time", r.sim_seconds);
+    outln!("  {:<44} {:.3} s", time, r.sim_seconds);
     outln!();
     outln!("plot: {} ({} samples from the process data)", out.display(), r.samples.len());
 }

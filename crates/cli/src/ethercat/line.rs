@@ -15,7 +15,7 @@ use crate::sdo_cmd::{Row, hex, parse_type, row_json, row_text};
 /// A master error with its `--json` code.
 pub fn master_err(e: MasterError) -> anyhow::Error {
     let code = match &e {
-        MasterError::Open(..) | MasterError::NoLine(_) => "bus",
+        MasterError::Open(..) | MasterError::NoLine(_) | MasterError::Empty(_) => "bus",
         MasterError::NoSlave { .. } => "no_slave",
         MasterError::Abort { .. } => "sdo_abort",
         MasterError::Refused { .. } => "al_refused",
@@ -250,7 +250,7 @@ pub async fn state(g: &Global, a: &EcatStateArgs) -> anyhow::Result<()> {
     let states = with_master(g, &a.line, async move |m: &Master| {
         let count = m.count().await.map_err(master_err)?;
         if count == 0 {
-            return Err(master_err(MasterError::NoLine(String::new())));
+            return Err(master_err(MasterError::Empty(m.line_name().to_owned())));
         }
         if let Some(p) = only {
             m.check_position(p).await.map_err(master_err)?;

@@ -588,7 +588,7 @@ impl<'m> DriveLine<'m> {
         self.controlword = cw::ENABLE_OPERATION | cw::NEW_SET_POINT;
         let limit = (timeout.as_nanos() / self.cycle.as_nanos().max(1)).max(1) as u64;
         let mut started = false;
-        for _ in 0..limit {
+        for k in 0..limit {
             self.cycle().await?;
             progress(&self.fb);
             let s = self.fb.statusword;
@@ -603,9 +603,10 @@ impl<'m> DriveLine<'m> {
                 let stopped = Some(self.halt().await);
                 return Err(DriveError::Homing { statusword: s, stopped });
             }
-            // Homing attained and target reached; not the state before the start.
+            // Homing attained and target reached, seen after the bits left
+            // that state or (a homing done within a cycle) three cycles on.
             started |= s & sw::MODE_12 == 0 || s & sw::TARGET_REACHED == 0;
-            if s & sw::MODE_12 != 0 && s & sw::TARGET_REACHED != 0 && (started || self.cycles > 2) {
+            if s & sw::MODE_12 != 0 && s & sw::TARGET_REACHED != 0 && (started || k >= 3) {
                 self.controlword = cw::ENABLE_OPERATION;
                 self.cycle().await?;
                 return Ok(self.fb.position);

@@ -55,6 +55,8 @@ pub enum MasterError {
     InUse,
     /// No frame came back.
     NoLine(String),
+    /// Frames come back but no slave answers.
+    Empty(String),
     /// No slave at this 1-based position.
     NoSlave {
         /// The position asked for.
@@ -103,6 +105,10 @@ impl fmt::Display for MasterError {
             MasterError::NoLine(i) => write!(
                 f,
                 "no EtherCAT frame came back on {i}: is a slave (or `drivebus ethercat serve`) connected and the link up?"
+            ),
+            MasterError::Empty(i) => write!(
+                f,
+                "frames come back on {i} but no slave answers: the line is empty (or the slaves are unpowered)"
             ),
             MasterError::NoSlave { position, count } => {
                 write!(f, "there is no slave {position}: the line has {count} (give --slave 1..{count})")
@@ -374,6 +380,11 @@ impl Master {
         }
     }
 
+    /// The line this master is on (an interface name).
+    pub fn line_name(&self) -> &str {
+        &self.what
+    }
+
     /// Slaves on the line (a broadcast read: each adds 1 to the working
     /// counter); does not change any slave.
     pub async fn count(&self) -> Result<usize, MasterError> {
@@ -388,7 +399,7 @@ impl Master {
     pub async fn check_position(&self, position: usize) -> Result<usize, MasterError> {
         let count = self.count().await?;
         if count == 0 {
-            return Err(MasterError::NoLine(self.what.clone()));
+            return Err(MasterError::Empty(self.what.clone()));
         }
         if position == 0 || position > count {
             return Err(MasterError::NoSlave { position, count });
@@ -442,7 +453,7 @@ impl Master {
     /// its SII is read, mailboxes are set up and the line goes to PRE-OP.
     pub async fn init(&self) -> Result<PreOpGroup, MasterError> {
         if self.count().await? == 0 {
-            return Err(MasterError::NoLine(self.what.clone()));
+            return Err(MasterError::Empty(self.what.clone()));
         }
         self.md
             .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(self.now_fn())
@@ -460,7 +471,7 @@ impl Master {
     pub async fn scan_group(&self) -> Result<(Vec<SlaveInfo>, PreOpGroup), MasterError> {
         let n = self.count().await?;
         if n == 0 {
-            return Err(MasterError::NoLine(self.what.clone()));
+            return Err(MasterError::Empty(self.what.clone()));
         }
         let mut found = Vec::new();
         for p in 1..=n.min(MAX_SUBDEVICES) {
