@@ -245,6 +245,29 @@ fn master_commands_against_served_drives_over_veth() {
     let e: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(e["error"]["code"], "drive_timeout", "{e}");
     assert!(e["error"]["message"].as_str().unwrap().contains("halted"), "{e}");
+    // A csp sine, one target per 1 ms DC cycle.
+    let c = line.json(&["drive", "--slave", "1", "csp-sine", "--amplitude", "500", "--seconds", "0.5"]);
+    assert_eq!((c["cycles"].as_u64(), c["bad_wkc"].as_u64()), (Some(500), Some(0)), "{c}");
+    assert!(c["max_following"].as_i64().unwrap() < 2000, "within the 6065h window: {c}");
+    // Ctrl-C during a move: halted, and said so.
+    let child = Command::new("ip")
+        .args(["netns", "exec", &line.ns, bin(), "ethercat", "drive", "--iface", &line.inner, "--slave", "1"])
+        .args(["move", "900000", "--velocity", "1000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(2500));
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "move to 900000: interrupted; the motion was halted (controlword bit 8) and the drive is at rest"
+        ),
+        "{err}"
+    );
     // The generic servo (its own mapping: 1602h/1A02h) moves too.
     let m = line.json(&["drive", "--slave", "2", "move", "-3000", "--velocity", "100000"]);
     assert!((m["position"].as_i64().unwrap() + 3000).abs() <= 10, "{m}");
