@@ -13,11 +13,13 @@ pub const DEFAULT_LISTEN: &str = "127.0.0.1:29536";
 const TOP_EXAMPLES: &str = "\
 Examples:
   drivebus demo                                   the main job, on an in-process virtual bus
+  drivebus demo --ethercat                        the same on EtherCAT: ethercrab master + emulated iPOS
   drivebus serve --drive akd:1 --drive dds6:2     virtual drives for python-can (socketcand)
   drivebus --bus socketcand://127.0.0.1:29536/can0 scan
   drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 sdo read 1000
   drivebus --bus virtual --sim akd:1 --node 1 drive status
   drivebus --bus slcan:///dev/ttyUSB0?bitrate=1000000 dump --candump
+  drivebus ethercat scan --iface eth1             EtherCAT master (root): scan, sdo, state, pdo, drive
 
 Object indices and sub-indices are hexadecimal (6041, 0x6041, 6041h, 6041:00);
 CiA 301/402 objects also go by name (statusword, identity/vendor-id).
