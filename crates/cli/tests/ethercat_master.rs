@@ -268,8 +268,8 @@ fn master_commands_against_served_drives_over_veth() {
         ),
         "{err}"
     );
-    // The generic servo (its own mapping: 1602h/1A02h) moves too.
-    let m = line.json(&["drive", "--slave", "2", "move", "-3000", "--velocity", "100000"]);
+    // The generic servo (its own mapping: 1602h/1A02h) moves too, in free run.
+    let m = line.json(&["drive", "--slave", "2", "move", "-3000", "--velocity", "100000", "--free-run"]);
     assert!((m["position"].as_i64().unwrap() + 3000).abs() <= 10, "{m}");
 }
 

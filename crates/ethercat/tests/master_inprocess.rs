@@ -75,7 +75,7 @@ fn drive_enable_home_move_and_csp_with_dc() {
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), None).await.unwrap();
+        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         assert!(d.dc());
         assert_eq!(d.expected_wkc(), 6);
         d.enable(Duration::from_secs(2)).await.unwrap();
@@ -99,6 +99,24 @@ fn drive_enable_home_move_and_csp_with_dc() {
             .unwrap();
         assert_eq!(n, 2000);
         assert!(worst < 2000, "followed: {worst}");
+        assert_eq!(d.bad_wkc, 0);
+        d.stop().await.unwrap();
+    });
+}
+
+#[test]
+fn drive_in_free_run_on_the_generic_servo() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), false, None).await.unwrap();
+        assert!(!d.dc());
+        let pos = d.move_to(-3000, false, Some(100_000), Duration::from_secs(20), |_| {}).await.unwrap();
+        assert!((pos + 3000).abs() <= 10, "{pos}");
+        let pos = d.move_to(500, true, None, Duration::from_secs(20), |_| {}).await.unwrap();
+        let window = d.read(0x6067, 0).await.unwrap();
+        assert!((i64::from(pos) + 2500).abs() <= window, "relative: {pos}, window {window}");
         assert_eq!(d.bad_wkc, 0);
         d.stop().await.unwrap();
     });

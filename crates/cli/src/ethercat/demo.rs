@@ -132,7 +132,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         let (found, group) = m.scan_group().await?;
         r.found = found;
         pb.set_message("INIT -> OP with DC SYNC0 at 1 ms");
-        let mut d = DriveLine::start(&m, group, 1, CYCLE, None).await?;
+        let mut d = DriveLine::start(&m, group, 1, CYCLE, true, None).await?;
         r.dc = d.dc();
         r.expected_wkc = d.expected_wkc();
         pb.set_message("enable");

@@ -113,8 +113,10 @@ pub async fn run(g: &Global, a: &EcatDriveArgs) -> anyhow::Result<()> {
         }
     });
     let progress = !g.json && std::io::stderr().is_terminal();
+    let dc = !a.free_run;
     let r =
-        with_master(g, &line, async move |m: &Master| act(m, pos, cycle, action, wait, progress).await).await;
+        with_master(g, &line, async move |m: &Master| act(m, pos, cycle, dc, action, wait, progress).await)
+            .await;
     watcher.abort();
     let done = r?;
     report(g, pos, a.cycle_us, &done);
@@ -141,6 +143,7 @@ async fn act(
     m: &Master,
     pos: usize,
     cycle: Duration,
+    dc: bool,
     action: Action,
     wait: std::time::Duration,
     progress: bool,
@@ -170,7 +173,7 @@ async fn act(
             });
         }
     };
-    let mut d = DriveLine::start(m, group, pos, cycle, Some(&STOP)).await.map_err(drive_err)?;
+    let mut d = DriveLine::start(m, group, pos, cycle, dc, Some(&STOP)).await.map_err(drive_err)?;
     let dc = d.dc();
     let mut p = Progress { on: progress, n: 0 };
     let r = match action {

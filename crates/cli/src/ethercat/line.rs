@@ -266,7 +266,7 @@ pub async fn state(g: &Global, a: &EcatStateArgs) -> anyhow::Result<()> {
                     m.request_state(p, t).await.map_err(master_err)?;
                 }
             }
-            Some(t) => bring_up(m, t, &which).await?,
+            Some(t) => bring_up(m, t, &(1..=count.min(master::MAX_SUBDEVICES)).collect::<Vec<_>>()).await?,
         }
         let mut out = Vec::new();
         for &p in &which {
@@ -302,6 +302,8 @@ async fn bring_up(m: &Master, target: AlState, which: &[usize]) -> anyhow::Resul
         if target == AlState::PreOp {
             return Ok(());
         }
+        // Free run: no DC SYNC an earlier master may have left on.
+        m.sync_off(&group).await?;
         let e = |what: &'static str| move |e| MasterError::Ethercrab(what.into(), e);
         let group = group.into_pre_op_pdi(md).await.map_err(e("mapping the process data"))?;
         let group = group.into_safe_op(md).await.map_err(e("PRE-OP -> SAFE-OP"))?;
@@ -311,23 +313,11 @@ async fn bring_up(m: &Master, target: AlState, which: &[usize]) -> anyhow::Resul
         Ok(())
     }
     .await;
-    if let Err(e) = result {
+    match result {
         // Name the slave that refused, with its code, rather than ethercrab's summary.
-        for &p in which {
-            if let Ok(s) = m.al_status(p).await
-                && s.error
-            {
-                return Err(master_err(MasterError::Refused {
-                    position: p,
-                    requested: target,
-                    state: s.state,
-                    code: s.code,
-                }));
-            }
-        }
-        return Err(master_err(e));
+        Err(e) => Err(master_err(m.refusal(target, which, e).await)),
+        Ok(()) => Ok(()),
     }
-    Ok(())
 }
 
 /// `drivebus ethercat pdo show`.

@@ -94,7 +94,7 @@ Examples:
   drivebus ethercat drive --iface ecat1 --slave 1 csp-sine --amplitude 1000 --seconds 2
 
 Every command but status brings the line to OP (DC SYNC0 at --cycle-us when every slave supports
-it, else free run) and drives through the process data (6040h, 607Ah, 6041h, 6064h, 60F4h where
+it and --free-run is not given, else free run) and drives through the process data (6040h, 607Ah, 6041h, 6064h, 60F4h where
 mapped; the rest over CoE), then returns the line to SAFE-OP: the drive reacts to that as its
 6007h says. A motion it started is halted, or quick-stopped, on timeout, error or Ctrl-C, and it
 says so. status reads over CoE in PRE-OP.";
@@ -208,6 +208,9 @@ pub struct EcatDriveArgs {
     /// Process-data cycle (and SYNC0 period) in µs.
     #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(250..=100_000), global = true)]
     cycle_us: u64,
+    /// Free run (SM-synchronous) even where the slaves support DC.
+    #[arg(long, global = true)]
+    free_run: bool,
     /// What to do.
     #[command(subcommand)]
     action: EcatDriveAction,

@@ -8,11 +8,13 @@
 //! bit 8), and quick-stopped if it does not come to rest; the error says
 //! which was done.
 
+use super::{
+    AlState, Master, MasterError, PdoMapping, PreOpGroup, offset, pdo_assignment, sdo_read, sdo_write,
+};
 use super::{MAX_PDI, MAX_SUBDEVICES};
-use super::{Master, MasterError, PdoMapping, PreOpGroup, offset, pdo_assignment, sdo_read, sdo_write};
 use drivebus_can::Duration;
 use drivebus_cia402::codes::{State, cw, mode, sw};
-use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op};
+use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op, PreOpPdi};
 use ethercrab::{DcSync, DefaultLock, RegisterAddress, SubDeviceGroup};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -230,13 +232,15 @@ fn le(d: &[u8]) -> i64 {
 
 impl<'m> DriveLine<'m> {
     /// Reads the drive's mapping, brings the line to OP (DC SYNC0 at
-    /// `cycle` when every slave supports it) and exchanges a first cycle.
-    /// The drive must map 6040h and 6041h (the iPOS default does).
+    /// `cycle` when `dc` is asked for and every slave supports it, else
+    /// free run) and exchanges a first cycle. The drive must map 6040h and
+    /// 6041h (the iPOS default does).
     pub async fn start(
         m: &'m Master,
         mut group: PreOpGroup,
         position: usize,
         cycle: Duration,
+        dc: bool,
         stop: Option<&'m AtomicBool>,
     ) -> Result<DriveLine<'m>, DriveError> {
         let md = m.main_device();
@@ -253,7 +257,11 @@ impl<'m> DriveLine<'m> {
             ))
             .into());
         }
-        let dc = group.iter(md).all(|sd| sd.dc_support().enhanced());
+        let dc = dc && group.iter(md).all(|sd| sd.dc_support().enhanced());
+        if !dc {
+            m.sync_off(&group).await?;
+        }
+        let count = group.len();
         for mut sd in group.iter_mut(md) {
             if dc {
                 sd.set_dc_sync(DcSync::Sync0);
@@ -271,35 +279,14 @@ impl<'m> DriveLine<'m> {
             let io = sd.io_raw();
             expected_wkc += if io.outputs().is_empty() { 0 } else { 2 } + u16::from(!io.inputs().is_empty());
         }
-        let group = if dc {
-            let cfg = DcConfiguration {
-                start_delay: Duration::from_millis(100),
-                sync0_period: cycle,
-                sync0_shift: cycle / 2,
-            };
-            let g = group.configure_dc_sync(md, cfg).await.map_err(e("configuring DC SYNC0"))?;
-            let g = g.into_safe_op(md).await.map_err(e("PRE-OP -> SAFE-OP"))?;
-            let g = g.request_into_op(md).await.map_err(e("SAFE-OP -> OP"))?;
-            // Cycles until every slave reports OP (SYNC0 must run first).
-            let mut n = 0u32;
-            loop {
-                let r = g.tx_rx_dc(md).await.map_err(e("process data"))?;
-                if r.all_op() {
-                    break;
-                }
-                n += 1;
-                if n > 5_000 {
-                    return Err(MasterError::Unsupported(format!(
-                        "the line did not reach OP within {n} DC cycles"
-                    ))
-                    .into());
-                }
-                m.pace().sleep(r.extra.next_cycle_wait).await;
+        let group = Self::to_op(m, group, dc, cycle).await;
+        let group = match group {
+            Ok(g) => g,
+            Err(e) => {
+                let all: Vec<usize> = (1..=count).collect();
+                let to = if e.1 { AlState::Op } else { AlState::SafeOp };
+                return Err(m.refusal(to, &all, e.0).await.into());
             }
-            Group::Dc(g)
-        } else {
-            let g = group.into_safe_op(md).await.map_err(e("PRE-OP -> SAFE-OP"))?;
-            Group::Free(g.into_op(md).await.map_err(e("SAFE-OP -> OP"))?)
         };
         let mut d = DriveLine {
             m,
@@ -322,6 +309,46 @@ impl<'m> DriveLine<'m> {
         d.cycle().await?;
         d.target = d.fb.position;
         Ok(d)
+    }
+
+    /// PRE-OP with PDI -> OP, DC or free run; on error, whether OP (not
+    /// SAFE-OP) was being requested.
+    async fn to_op(
+        m: &Master,
+        group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOpPdi>,
+        dc: bool,
+        cycle: Duration,
+    ) -> Result<Group, (MasterError, bool)> {
+        let md = m.main_device();
+        let e = |what: &'static str, op: bool| move |e| (MasterError::Ethercrab(what.into(), e), op);
+        if dc {
+            let cfg = DcConfiguration {
+                start_delay: Duration::from_millis(100),
+                sync0_period: cycle,
+                sync0_shift: cycle / 2,
+            };
+            let g = group.configure_dc_sync(md, cfg).await.map_err(e("configuring DC SYNC0", false))?;
+            let g = g.into_safe_op(md).await.map_err(e("PRE-OP -> SAFE-OP", false))?;
+            let g = g.request_into_op(md).await.map_err(e("SAFE-OP -> OP", true))?;
+            // Cycles until every slave reports OP (SYNC0 must run first).
+            let mut n = 0u32;
+            loop {
+                let r = g.tx_rx_dc(md).await.map_err(e("process data", true))?;
+                if r.all_op() {
+                    break;
+                }
+                n += 1;
+                if n > 5_000 {
+                    let why = format!("the line did not reach OP within {n} DC cycles");
+                    return Err((MasterError::Unsupported(why), true));
+                }
+                m.pace().sleep(r.extra.next_cycle_wait).await;
+            }
+            Ok(Group::Dc(g))
+        } else {
+            let g = group.into_safe_op(md).await.map_err(e("PRE-OP -> SAFE-OP", false))?;
+            Ok(Group::Free(g.into_op(md).await.map_err(e("SAFE-OP -> OP", true))?))
+        }
     }
 
     /// True when the line runs with DC SYNC0.
@@ -668,7 +695,10 @@ impl<'m> DriveLine<'m> {
                 }
                 continue;
             }
-            let close = window >= i64::from(u32::MAX)
+            // A relative target counts from the drive's own reference (60F2h):
+            // only its target-reached bit says where that is.
+            let close = relative
+                || window >= i64::from(u32::MAX)
                 || (i64::from(self.fb.position) - i64::from(goal)).abs() <= window.max(0);
             if s & sw::MODE_12 == 0 && s & sw::TARGET_REACHED != 0 && close {
                 return Ok(self.fb.position);

@@ -518,6 +518,42 @@ impl Master {
         Ok((out, group))
     }
 
+    /// Free run: turns DC SYNC generation off (0x0981 = 0) and, where the
+    /// slave has it, asks for SM-synchronous operation in 1C32h:01 (ETG.6010
+    /// sync type 1), so the DC set-up an earlier master left does not make
+    /// a slave refuse SAFE-OP (0x0030).
+    pub async fn sync_off(&self, group: &PreOpGroup) -> Result<(), MasterError> {
+        for (i, sd) in group.iter(&self.md).enumerate() {
+            sd.register_write(0x0981u16, 0u8)
+                .await
+                .map_err(|e| MasterError::Ethercrab("switching DC SYNC off (0981h)".into(), e))?;
+            match sdo_write(&sd, i + 1, 0x1C32, 1, &1u16.to_le_bytes()).await {
+                // No mailbox, no 1C32h, or a fixed one: nothing to ask.
+                Ok(())
+                | Err(MasterError::Abort { .. })
+                | Err(MasterError::Ethercrab(
+                    _,
+                    Error::Mailbox(MailboxError::NoWriteMailbox | MailboxError::NoReadMailbox),
+                )) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+
+    /// After a failed transition: the first slave (of `which`, 1-based)
+    /// showing an AL error, as [`MasterError::Refused`], else `e`.
+    pub async fn refusal(&self, requested: AlState, which: &[usize], e: MasterError) -> MasterError {
+        for &p in which {
+            if let Ok(s) = self.al_status(p).await
+                && s.error
+            {
+                return MasterError::Refused { position: p, requested, state: s.state, code: s.code };
+            }
+        }
+        e
+    }
+
     /// The slave at `position` (1-based) of `group`.
     pub fn slave<'g>(
         &'g self,
