@@ -65,6 +65,15 @@ pub struct Report {
 
 /// Runs the demo and prints the summary.
 pub async fn run(g: &Global, a: &DemoArgs) -> anyhow::Result<()> {
+    if a.ethercat {
+        if g.machine.is_some() {
+            anyhow::bail!(
+                "--machine does not apply to `drivebus demo --ethercat` (the EtherCAT twin has no machine file yet)"
+            );
+        }
+        return crate::ethercat::demo::run(g, a).await;
+    }
+    let out = a.out.clone().unwrap_or_else(|| std::path::PathBuf::from("drivebus-demo.svg"));
     if !(0.1..=60.0).contains(&a.sine_seconds) {
         bail!(crate::error::coded("usage", anyhow!("--sine-seconds {} is outside 0.1..60", a.sine_seconds)));
     }
@@ -74,9 +83,9 @@ pub async fn run(g: &Global, a: &DemoArgs) -> anyhow::Result<()> {
     let report = tokio::task::spawn_blocking(move || simulate(show, sine, realtime, machine.as_deref()))
         .await
         .map_err(|e| anyhow!("demo task failed: {e}"))??;
-    plot(&a.out, &report.samples, &report.phases)
-        .with_context(|| format!("cannot write the plot {}", a.out.display()))?;
-    print_summary(g, &report, &a.out);
+    plot(&out, &report.samples, &report.phases)
+        .with_context(|| format!("cannot write the plot {}", out.display()))?;
+    print_summary(g, &report, &out);
     Ok(())
 }
 

@@ -81,7 +81,9 @@ fn uses(cmd: &Command) -> &'static [Opt] {
         Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
         Command::Lss(_) => &[Bus, Json, Timeout, Sim, Machine],
         Command::SlcanPty(_) => &[Bus, Machine],
-        // EtherCAT commands take their interface and options after the subcommand.
+        // EtherCAT commands take their interface (--iface) after the subcommand;
+        // the master commands print JSON and use --timeout for a frame's return.
+        Command::Ethercat(c) if crate::ethercat::is_master(c) => &[Json, Timeout],
         Command::Ethercat(_) => &[],
     }
 }
@@ -146,7 +148,7 @@ fn main() {
         std::process::exit(2);
     }
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,ethercrab=off"));
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
     let rt = match tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build() {
         Ok(rt) => rt,
@@ -193,7 +195,7 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
         Command::SlcanPty(a) => slcan_pty::run(g, a).await.map(|()| 0),
-        Command::Ethercat(c) => ethercat::run(c).await,
+        Command::Ethercat(c) => ethercat::run(g, c).await,
     }
 }
 
