@@ -19,7 +19,7 @@ pub struct Identity {
 }
 
 /// Everything fixed when a device is built.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct NodeConfig {
     /// Node-ID 1..=127, or 0xFF for an unconfigured LSS node.
     pub node_id: u8,

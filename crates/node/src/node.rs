@@ -117,6 +117,50 @@ impl NodeTemplate {
         *node = Node::assemble(self.cfg.clone(), od, storage);
     }
 
+    /// This template for node-ID `node_id`: the configuration's node-IDs
+    /// (its own, NMT's, and the PDO one where it was in step) set to
+    /// `node_id`, and every node-relative entry (default and value) moved
+    /// by the difference, in its width. A copy of the dictionary instead of
+    /// the two dictionary builds of [`NodeTemplate::with_dictionary`]. It
+    /// is that template for `node_id` only where every node-relative entry
+    /// is the node-ID plus a constant: a caller that cannot know checks it
+    /// once against [`NodeTemplate::with_dictionary`] (equal configuration
+    /// and dictionary). `None` when either node-ID is outside 1..=127.
+    pub fn moved_to(&self, node_id: u8) -> Option<NodeTemplate> {
+        let from = self.cfg.node_id;
+        if !(1..=127).contains(&from) || !(1..=127).contains(&node_id) {
+            return None;
+        }
+        let mut cfg = self.cfg.clone();
+        cfg.node_id = node_id;
+        cfg.nmt.node_id = node_id;
+        if cfg.pdo.node_id == from {
+            cfg.pdo.node_id = node_id;
+        }
+        let mut od = self.od.clone();
+        if node_id != from {
+            let d = u64::from(node_id).wrapping_sub(u64::from(from));
+            let shift = |b: &[u8]| {
+                let n = b.len().min(8);
+                drivebus_od::le_u64(b).wrapping_add(d).to_le_bytes()[..n].to_vec()
+            };
+            let relative: Vec<(u16, u8)> = od
+                .objects()
+                .iter()
+                .flat_map(|o| o.subs().iter().filter(|s| s.node_id_relative).map(move |s| (o.index, s.sub)))
+                .collect();
+            for (index, sub) in relative {
+                let Ok(r) = od.find(index, sub) else { continue };
+                let value = shift(od.bytes(r));
+                od.set_raw(r, &value);
+                if let Some(s) = od.get_mut(index, sub) {
+                    s.default = shift(&s.default);
+                }
+            }
+        }
+        Some(NodeTemplate { cfg, od })
+    }
+
     /// [`NodeTemplate::node`], consuming the template.
     pub fn into_node(self, storage: Box<dyn Storage + Send>) -> Node {
         Node::assemble(self.cfg, self.od, storage)

@@ -105,3 +105,24 @@ fn renewed_node_is_a_fresh_node() {
     assert_eq!(node.nmt_state(), fresh.nmt_state());
     assert_eq!(answers(&mut node), answers(&mut fresh));
 }
+
+/// A template moved to another node-ID is the template built for it: the
+/// services' node-relative defaults are the node-ID plus a constant.
+#[test]
+fn moved_template_is_the_template_of_the_other_node_id() {
+    for from in [1u8, 5, 127] {
+        for to in [1u8, 2, 64, 127] {
+            let mut od = ObjectDictionary::new();
+            od.insert(Object::var(0x2000, "Manufacturer", DataType::Unsigned16, Access::Rw, Value::U16(7)));
+            let a = NodeTemplate::with_dictionary(NodeConfig::new(from), od.clone()).moved_to(to).unwrap();
+            let b = NodeTemplate::with_dictionary(NodeConfig::new(to), od);
+            assert!(a.od() == b.od(), "{from} -> {to}");
+            assert!(a.config() == b.config(), "{from} -> {to}");
+            let mut na = a.node(Box::new(MemoryStorage::new()));
+            let mut nb = b.node(Box::new(MemoryStorage::new()));
+            assert_eq!(answers(&mut na), answers(&mut nb), "{from} -> {to}");
+        }
+    }
+    assert!(NodeTemplate::new(NodeConfig::new(0xFF)).moved_to(5).is_none());
+    assert!(NodeTemplate::new(NodeConfig::new(5)).moved_to(0).is_none());
+}

@@ -75,6 +75,7 @@ extern crate alloc;
 
 mod conform;
 mod eds_od;
+mod node_od;
 mod personality;
 
 pub(crate) use personality::BEHAVIOUR;
@@ -350,6 +351,23 @@ pub fn node_config(info: &ProfileInfo, node_id: u8) -> NodeConfig {
     c
 }
 
+/// The node configuration of a build: [`node_config`], the EDS's device
+/// info for 1021h, the behaviour's adjustments, the options.
+fn full_node_config(
+    profile: Profile,
+    node_id: u8,
+    behaviour: &dyn Behaviour,
+    options: BuildOptions,
+) -> NodeConfig {
+    let mut nc = node_config(profile.info(), node_id);
+    // The EDS served at 1021h says what the shipped one says.
+    nc.eds_device_info = Some(profile.eds().eds.device_info.clone());
+    behaviour.adjust_node_config(&mut nc);
+    // An option adds to the personality; it never takes 1021h away.
+    nc.eds_object |= options.eds_object;
+    nc
+}
+
 /// The CiA 402 drive configuration a profile's facts call for (before
 /// [`Behaviour::adjust_drive_config`]): the small servo model, the profile's
 /// own modes among pp, vl, pv, tq, its first listed standard mode as the
@@ -550,20 +568,23 @@ pub fn build_full(
     if !(1..=127).contains(&node_id) {
         return Err(BuildError::NodeId(node_id));
     }
-    let parsed = profile.eds();
-    // The EDS read and converted once per process (`eds_od`). What the
-    // drive must answer with, after the build (`conform`): the EDS
-    // dictionary, of which the node starts with a copy.
-    let eds_od::EdsDictionary { od, described } =
-        eds_od::eds_dictionary(profile, node_id).map_err(|e| BuildError::Eds(alloc::format!("{e:?}")))?;
-    let mut nc = node_config(info, node_id);
-    // The EDS served at 1021h says what the shipped one says.
-    nc.eds_device_info = Some(parsed.eds.device_info.clone());
-    behaviour.adjust_node_config(&mut nc);
-    // An option adds to the personality; it never takes 1021h away.
-    nc.eds_object |= options.eds_object;
+    let nc = full_node_config(profile, node_id, &*behaviour, options);
     let pdo_cfg = nc.pdo;
-    let mut node = Node::with_dictionary(nc, od, storage);
+    // The EDS read and converted once per process (`eds_od`), the
+    // services merged in once per process (`node_od`) for the profile's
+    // usual configuration. What the drive must answer with, after the
+    // build (`conform`): the EDS dictionary.
+    let usual = || full_node_config(profile, node_id, &*profile.behaviour(), BuildOptions::default());
+    let fast = node_od::node_template(profile, &nc, usual)
+        .and_then(|t| Some((t, eds_od::described(profile, node_id)?)));
+    let (mut node, described) = match fast {
+        Some((t, described)) => (t.into_node(storage), described),
+        None => {
+            let eds_od::EdsDictionary { od, described } = eds_od::eds_dictionary(profile, node_id)
+                .map_err(|e| BuildError::Eds(alloc::format!("{e:?}")))?;
+            (Node::with_dictionary(nc, od, storage), described)
+        }
+    };
 
     let mut dc = drive_config(info);
     behaviour.adjust_drive_config(&mut dc);

@@ -123,6 +123,13 @@ pub(super) fn eds_dictionary(profile: Profile, node_id: u8) -> Result<EdsDiction
     Ok(EdsDictionary { od, described: Described::Template(t, d) })
 }
 
+/// What `conform` compares a build for `node_id` with, without a copy of
+/// the dictionary: `None` for a profile without a template.
+pub(super) fn described(profile: Profile, node_id: u8) -> Option<Described> {
+    let t = template(profile).filter(|_| (LOW..=HIGH).contains(&node_id))?;
+    Some(Described::Template(t, u64::from(node_id - LOW)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
