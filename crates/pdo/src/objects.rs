@@ -326,11 +326,15 @@ pub fn set_defaults(
     // `set_both` would find, encode and compare one lookup at a time.
     let zero =
         |s: &SubObject| s.data_type == DataType::Unsigned32 && s.default == [0; 4] && s.bytes() == [0; 4];
-    for i in d.entries.len() + 1..=usize::from(cfg.max_entries) {
-        let done = od.object(mi).and_then(|o| o.get(i as u8)).is_some_and(zero);
-        if !done {
-            set_both(od, mi, i as u8, Value::U32(0))?;
-        }
+    let unused = d.entries.len() + 1..=usize::from(cfg.max_entries);
+    // One look-up of the object for all of them; only those not at zero
+    // go through `set_both`.
+    let pending: alloc::vec::Vec<u8> = match od.object(mi) {
+        Some(o) => unused.filter(|&i| !o.get(i as u8).is_some_and(zero)).map(|i| i as u8).collect(),
+        None => unused.map(|i| i as u8).collect(),
+    };
+    for i in pending {
+        set_both(od, mi, i, Value::U32(0))?;
     }
     set_both(od, mi, 0, Value::U8(d.entries.len() as u8))?;
     set_both(od, ci, SUB_TRANSMISSION_TYPE, Value::U8(d.transmission_type))?;

@@ -81,12 +81,13 @@ fn describe(s: &mut SubObject, e: &SubObject) {
         keep_owner(s, &was);
         return;
     }
-    s.name = e.name.clone();
+    // `clone_from`: a limit the sub-object already has keeps its buffer.
+    s.name.clone_from(&e.name);
     s.data_type = e.data_type;
     s.access = e.access;
     s.pdo_mappable = e.pdo_mappable;
-    s.low_limit = e.low_limit.clone();
-    s.high_limit = e.high_limit.clone();
+    s.low_limit.clone_from(&e.low_limit);
+    s.high_limit.clone_from(&e.high_limit);
 }
 
 /// Brings `od` (the node's dictionary, with `drive` installed) to the
@@ -114,7 +115,10 @@ pub(super) fn conform(od: &mut ObjectDictionary, drive: &mut Drive, eds: &Descri
             od.insert(e.clone());
             continue;
         }
-        let same_subs = o.subs().len() == e.subs().len() && o.subs().iter().all(|s| e.get(s.sub).is_some());
+        // Sub-indices are kept sorted and unique: the same set is the
+        // same sequence.
+        let same_subs =
+            o.subs().len() == e.subs().len() && o.subs().iter().zip(e.subs()).all(|(s, es)| s.sub == es.sub);
         if same_subs {
             // The usual case: describe in place, no copy of the object.
             if let Some(o) = od.object_mut(index) {
