@@ -1,0 +1,54 @@
+//! A line of emulated iPOS drives in OP (ethercrab brings it there over
+//! the in-process link, DC SYNC0 at 1 ms, every drive enabled), then
+//! `CYCLES` replays of ethercrab's cycle frames on simulated time: the loop
+//! of the `drive_line` bench without criterion, for instruction counts.
+//!
+//! ```sh
+//! cargo build --release -p drivebus-ethercat --example drive_line_loop
+//! valgrind --tool=callgrind target/release/examples/drive_line_loop 64 1000
+//! valgrind --tool=callgrind target/release/examples/drive_line_loop 64 3000
+//! ```
+//!
+//! The difference of the two runs' instruction counts divided by 2000 is
+//! one cycle of the line (set-up cancels out); or count only the cycles
+//! with `--collect-atstart=no --toggle-collect='*run_cycles*'`. Prints the
+//! host's counters.
+
+#[path = "../benches/support/ipos_line.rs"]
+mod ipos_line;
+#[path = "../benches/support/replay.rs"]
+#[allow(dead_code)] // the bench uses the mailbox poll frame
+mod replay;
+
+use ethercrab::PduStorage;
+
+static STORAGE: replay::Storage = PduStorage::new();
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let n: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(64);
+    let cycles: u32 = args.next().and_then(|a| a.parse().ok()).unwrap_or(1000);
+    assert!((1..=ipos_line::MAX_SLAVES).contains(&n), "1..=64 drives");
+    let (host, frames) = replay::line_in_op(n, &STORAGE);
+    let before = host.stats();
+    let bad = run_cycles(&host, &frames, n, cycles);
+    let after = host.stats();
+    println!(
+        "drives={n} cycles={cycles} frames_per_cycle={} bad_wkc={bad} deadline_polls_per_cycle={:.1}",
+        frames.len(),
+        (after.deadline_polls - before.deadline_polls) as f64 / f64::from(cycles)
+    );
+}
+
+/// The measured loop (not inlined, so callgrind can collect it alone).
+#[inline(never)]
+fn run_cycles(host: &drivebus_ethercat::Host, frames: &[Vec<u8>], n: usize, cycles: u32) -> u32 {
+    let mut buf = vec![0u8; 1600];
+    let mut bad = 0;
+    for _ in 0..cycles {
+        if replay::cycle(host, frames, &mut buf) != 3 * n as u16 {
+            bad += 1;
+        }
+    }
+    bad
+}
