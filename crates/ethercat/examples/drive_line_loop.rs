@@ -31,8 +31,21 @@ fn main() {
     assert!((1..=ipos_line::MAX_SLAVES).contains(&n), "1..=64 drives");
     let (host, frames) = replay::line_in_op(n, &STORAGE);
     let before = host.stats();
+    let steps = |h: &drivebus_ethercat::Host| {
+        drivebus_ethercat::drive::with_drive(h, 0, |d| d.app().device().app.drive.steps()).expect("a drive")
+    };
+    let k0 = steps(&host);
+    let s0 = drivebus_ethercat::drive::with_drive(&host, 0, |d| d.app().stats()).expect("a drive");
     let bad = run_cycles(&host, &frames, n, cycles);
     let after = host.stats();
+    let s1 = drivebus_ethercat::drive::with_drive(&host, 0, |d| d.app().stats()).expect("a drive");
+    println!(
+        "drive 0 per cycle: control periods {:.2}, outputs applied {:.2}, inputs sampled {:.2}, SYNC0 pulses {:.2}",
+        (steps(&host) - k0) as f64 / f64::from(cycles),
+        (s1.outputs_applied - s0.outputs_applied) as f64 / f64::from(cycles),
+        (s1.inputs_sampled - s0.inputs_sampled) as f64 / f64::from(cycles),
+        (s1.sync0_pulses - s0.sync0_pulses) as f64 / f64::from(cycles),
+    );
     println!(
         "drives={n} cycles={cycles} frames_per_cycle={} bad_wkc={bad} deadline_polls_per_cycle={:.1}",
         frames.len(),
