@@ -75,7 +75,7 @@ pub struct ClockConfig {
 }
 
 /// The local clock with its control-loop corrections.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct LocalClock {
     anchor_t: u64,
     anchor_local: u64,
