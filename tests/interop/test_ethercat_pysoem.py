@@ -1,11 +1,11 @@
 """SOEM (through pysoem, pinned in requirements.txt) against
 `drivebus ethercat serve --drive ipos --drive generic` over a veth pair.
 
-Each test creates nothing on the host's own network: a network namespace
-holds one end of a veth pair, `drivebus ethercat serve` runs inside it on
-that end, and pysoem opens the other end in the test process. Needs root
-(network namespaces, AF_PACKET); without it every test is skipped with the
-reason, never passed.
+The module creates a network namespace and a veth pair (removed at the
+end): `drivebus ethercat serve` runs inside the namespace on one end, and
+pysoem opens the other end, in the root namespace, from the test process.
+Needs root (network namespaces, AF_PACKET); without it every test is
+skipped with the reason (`-rs` prints it), never passed.
 
 What SOEM checks (issue 9, "Evidence required"):
 
