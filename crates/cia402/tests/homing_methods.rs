@@ -145,3 +145,39 @@ fn expected_values_of_the_table() {
     assert_eq!(expected(25, 0.0), HI);
     assert!((expected(33, 300.0) - INDEX_DEG).abs() < 1e-9);
 }
+
+/// Methods 3–6 / 19–22 on a cam home switch (active over [LO, HI] only,
+/// as on a machine that also serves 7–14): from right of the cam the
+/// switch reads inactive, so 3/4 start positive, meet the positive limit
+/// switch, reverse once and take the lower edge (the one with the active
+/// side positive); 5/6 mirror that on the upper edge. The reference is the
+/// same as from the other starts.
+#[test]
+fn single_edge_methods_on_a_cam_switch_from_every_side() {
+    let mut rows = 0;
+    for m in (3..=6).chain(19..=22) {
+        let (edge, positive) = match m {
+            3 | 19 => (LO, false),
+            4 | 20 => (LO, true),
+            5 | 21 => (HI, true),
+            _ => (HI, false),
+        };
+        let want = match (m <= 14, positive) {
+            (false, _) => edge,
+            (true, true) => index_right_of(edge),
+            (true, false) => index_left_of(edge),
+        };
+        for start in [-1050.0, -300.0, 300.0, 700.0, 1050.0] {
+            let mut rig = Rig::new(params(Geometry::Momentary, start), config(m));
+            let status = rig.run(20.0);
+            assert_eq!(status, 0x1400, "method {m} from {start}: {:?}", rig.homing.state());
+            let got = rig.reference_raw();
+            assert!(
+                (got - want).abs() <= COUNT_DEG,
+                "method {m} from {start}: reference {got}, expected {want}"
+            );
+            rows += 1;
+        }
+    }
+    assert_eq!(rows, 8 * 5);
+}

@@ -13,11 +13,13 @@ pub const DEFAULT_LISTEN: &str = "127.0.0.1:29536";
 const TOP_EXAMPLES: &str = "\
 Examples:
   drivebus demo                                   the main job, on an in-process virtual bus
+  drivebus demo --ethercat                        the same on EtherCAT: ethercrab master + emulated iPOS
   drivebus serve --drive akd:1 --drive dds6:2     virtual drives for python-can (socketcand)
   drivebus --bus socketcand://127.0.0.1:29536/can0 scan
   drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 sdo read 1000
   drivebus --bus virtual --sim akd:1 --node 1 drive status
   drivebus --bus slcan:///dev/ttyUSB0?bitrate=1000000 dump --candump
+  drivebus ethercat scan --iface eth1             EtherCAT master (root): scan, sdo, state, pdo, drive
 
 Object indices and sub-indices are hexadecimal (6041, 0x6041, 6041h, 6041:00);
 CiA 301/402 objects also go by name (statusword, identity/vendor-id).
@@ -65,6 +67,11 @@ pub struct Global {
     /// process (repeatable), e.g. --sim akd:1.
     #[arg(long = "sim", global = true, value_name = "PROFILE:NODE")]
     pub sim: Vec<String>,
+    /// The machine around the virtual drives of --sim, serve, slcan-pty and demo: a TOML file
+    /// with a [[node]] table per node that differs from its profile's default machine (limit,
+    /// home switch, hard stops, index, load, gear, faults at run time; docs/machine.md).
+    #[arg(long, global = true, value_name = "FILE")]
+    pub machine: Option<PathBuf>,
 }
 
 /// A node-ID as people write it: `5`, `0x05`, `05h`.
@@ -123,7 +130,7 @@ pub enum Command {
     /// Emulate an slcan adapter on a pseudo-terminal, with virtual drives behind it.
     #[command(name = "slcan-pty", after_help = SLCAN_EXAMPLES)]
     SlcanPty(SlcanPtyArgs),
-    /// EtherCAT: serve drive twins as software EtherCAT slaves.
+    /// EtherCAT: serve drive twins as software slaves; scan, SDO, AL state, PDOs and drives as a master.
     #[command(subcommand)]
     Ethercat(crate::ethercat::EthercatCmd),
 }
@@ -135,6 +142,7 @@ Examples:
   drivebus serve --drive generic:5 --bitrate 1000000
   drivebus serve --drive generic:5 --fault drop:0x185,every=10   (lose every 10th TPDO1)
   drivebus serve --drive akd:1 --eds-object   (then: drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 eds export)
+  drivebus serve --drive generic:5 --machine machine.toml   (its switches, stops, load, faults: docs/machine.md)
   drivebus serve --bus socketcan://can0 --drive akd:1            (virtual drive on a real bus)
   drivebus serve --bus 'slcan:///dev/ttyACM0?bitrate=500000' --drive kc1:3
   drivebus serve --bus socketcand://192.0.2.10:29536/can0 --drive dds6:2 --listen 127.0.0.1:29536
@@ -143,6 +151,8 @@ Without --bus (or with --bus virtual) the drives sit on an in-process bus served
 --listen (default 127.0.0.1:29536). With --bus URL they sit on that bus, keeping their own timing
 (heartbeats, SYNC-driven PDOs, EMCY inhibit times); the socketcand listener is then off unless
 --listen is given (it shares the drives and the bus traffic).
+Every drive moves its profile's default machine (limit and home switches, hard stops, index, load),
+changed per node by --machine FILE.
 Prints one line when ready: `listening on HOST:PORT (channel NAME)` when listening, `serving on URL`
 otherwise; stops on SIGINT/SIGTERM (exit 0).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
@@ -183,16 +193,24 @@ Examples:
   drivebus demo
   drivebus demo --out /tmp/demo.svg --no-progress
   drivebus demo --realtime          (watch it run at 1 kHz SYNC in wall-clock time)
+  drivebus demo --ethercat          (ethercrab master + emulated iPOS, DC SYNC0 at 1 ms)
 
 The demo runs the master library (the same code as `drivebus --bus URL drive ...`)
-against an AKD (node 1) and a DDS6 (node 2) on the virtual bus in simulated time.";
+against an AKD (node 1) and a DDS6 (node 2) on the virtual bus in simulated time.
+With --ethercat it runs the EtherCAT master of `drivebus ethercat drive` against an emulated iPOS
+over the in-process link.";
 
 /// `drivebus demo`.
 #[derive(Args, Debug)]
 pub struct DemoArgs {
-    /// Where to write the SVG plot.
-    #[arg(long, default_value = "drivebus-demo.svg")]
-    pub out: PathBuf,
+    /// Where to write the SVG plot [default: drivebus-demo.svg; drivebus-demo-ethercat.svg with
+    /// --ethercat].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// The EtherCAT demo: an ethercrab master and an emulated iPOS in one process (in-process
+    /// link, no root): OP with DC SYNC0 at 1 ms, homing, a move, a CSP sine.
+    #[arg(long)]
+    pub ethercat: bool,
     /// No progress bar.
     #[arg(long)]
     pub no_progress: bool,

@@ -55,6 +55,12 @@ impl Conn {
         let parsed =
             drivebus_transport::BusUrl::parse(&g.bus).map_err(|e| crate::error::coded("bus", e.into()))?;
         let mut drives = Vec::new();
+        if specs.is_empty() && g.machine.is_some() {
+            return Err(crate::error::coded(
+                "usage",
+                anyhow!("--machine is the machine around --sim drives: give them with --sim PROFILE:NODE"),
+            ));
+        }
         if !specs.is_empty() {
             let drivebus_transport::BusUrl::Virtual { name } = &parsed else {
                 return Err(crate::error::coded(
@@ -63,7 +69,7 @@ impl Conn {
                 ));
             };
             let hub = drivebus_transport::hub::virtual_hub(name);
-            drives = spawn_on_hub(&specs, &hub, None, Default::default())?;
+            drives = spawn_on_hub(&specs, &hub, None, Default::default(), g.machine.as_deref())?;
         }
         let hosted = Hosted(drives);
         let bus =

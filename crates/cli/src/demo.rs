@@ -6,6 +6,7 @@
 //! value arrived in a TPDO.
 
 use std::f64::consts::PI;
+use std::path::Path;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -64,17 +65,27 @@ pub struct Report {
 
 /// Runs the demo and prints the summary.
 pub async fn run(g: &Global, a: &DemoArgs) -> anyhow::Result<()> {
+    if a.ethercat {
+        if g.machine.is_some() {
+            anyhow::bail!(
+                "--machine does not apply to `drivebus demo --ethercat` (the EtherCAT twin has no machine file yet)"
+            );
+        }
+        return crate::ethercat::demo::run(g, a).await;
+    }
+    let out = a.out.clone().unwrap_or_else(|| std::path::PathBuf::from("drivebus-demo.svg"));
     if !(0.1..=60.0).contains(&a.sine_seconds) {
         bail!(crate::error::coded("usage", anyhow!("--sine-seconds {} is outside 0.1..60", a.sine_seconds)));
     }
     let show = !a.no_progress && !g.json;
     let (sine, realtime) = (a.sine_seconds, a.realtime);
-    let report = tokio::task::spawn_blocking(move || simulate(show, sine, realtime))
+    let machine = g.machine.clone();
+    let report = tokio::task::spawn_blocking(move || simulate(show, sine, realtime, machine.as_deref()))
         .await
         .map_err(|e| anyhow!("demo task failed: {e}"))??;
-    plot(&a.out, &report.samples, &report.phases)
-        .with_context(|| format!("cannot write the plot {}", a.out.display()))?;
-    print_summary(g, &report, &a.out);
+    plot(&out, &report.samples, &report.phases)
+        .with_context(|| format!("cannot write the plot {}", out.display()))?;
+    print_summary(g, &report, &out);
     Ok(())
 }
 
@@ -94,11 +105,12 @@ fn secs(m: &Master, since: Instant) -> f64 {
     m.now().saturating_duration_since(since).as_nanos() as f64 / 1e9
 }
 
-fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Report> {
+fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path>) -> anyhow::Result<Report> {
     let mut bus = virtual_bus();
-    for spec in [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }]
-    {
-        bus.attach(vdrive::build(spec, None, Default::default())?);
+    let specs = [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }];
+    let machines = vdrive::Machines::load(machine, &specs)?;
+    for spec in specs {
+        bus.attach(vdrive::build(spec, None, Default::default(), &machines.machine_for(spec)?)?);
     }
     let mut sim =
         SimBus::with_config(bus, MasterConfig { sdo_timeout: Duration::from_secs(1), ..Default::default() });

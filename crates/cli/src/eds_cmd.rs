@@ -167,6 +167,12 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
                     report.read,
                     report.refused.len()
                 );
+                for (index, sub, len) in &report.mismatched {
+                    eprintln!(
+                        "node {node}: {index:04X}h:{sub:02X} answered {len} bytes, not its data type's size: \
+                         value left out (the node's object differs; give its EDS with --eds)"
+                    );
+                }
             }
             Ok(0)
         }

@@ -46,9 +46,10 @@ enum Opt {
     Timeout,
     Retries,
     Sim,
+    Machine,
 }
 
-const ALL_OPTS: [(Opt, &str); 7] = [
+const ALL_OPTS: [(Opt, &str); 8] = [
     (Opt::Bus, "bus"),
     (Opt::Node, "node"),
     (Opt::Eds, "eds"),
@@ -56,30 +57,33 @@ const ALL_OPTS: [(Opt, &str); 7] = [
     (Opt::Timeout, "timeout"),
     (Opt::Retries, "retries"),
     (Opt::Sim, "sim"),
+    (Opt::Machine, "machine"),
 ];
 
 fn uses(cmd: &Command) -> &'static [Opt] {
     use Opt::*;
-    const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim];
+    const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine];
     match cmd {
-        Command::Serve(_) => &[],
-        Command::Demo(_) => &[Json],
-        Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim],
+        Command::Serve(_) => &[Bus, Machine],
+        Command::Demo(_) => &[Json, Machine],
+        Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim, Machine],
         Command::Sdo(_) | Command::Pdo(_) => NODE_SDO,
-        Command::Nmt(_) => &[Bus, Node, Json, Timeout, Retries, Sim],
-        Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim],
-        Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim],
+        Command::Nmt(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
         Command::Monitor(_) => NODE_SDO,
-        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim],
-        Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim],
+        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim, Machine],
+        Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim, Machine],
         Command::Eds(EdsCmd::Check(_)) => &[Json],
         Command::Eds(EdsCmd::Show(_)) => &[Eds, Json],
-        Command::Eds(EdsCmd::Export(_)) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim],
+        Command::Eds(EdsCmd::Export(_)) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
         Command::Eds(EdsCmd::Dcf(_)) => NODE_SDO,
-        Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim],
-        Command::Lss(_) => &[Bus, Json, Timeout, Sim],
-        Command::SlcanPty(_) => &[Bus],
-        // EtherCAT commands take their interface and options after the subcommand.
+        Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        Command::Lss(_) => &[Bus, Json, Timeout, Sim, Machine],
+        Command::SlcanPty(_) => &[Bus, Machine],
+        // EtherCAT commands take their interface (--iface) after the subcommand;
+        // the master commands print JSON and use --timeout for a frame's return.
+        Command::Ethercat(c) if crate::ethercat::is_master(c) => &[Json, Timeout],
         Command::Ethercat(_) => &[],
     }
 }
@@ -103,9 +107,7 @@ fn check_options(cmd: &Command, m: &clap::ArgMatches) -> Result<(), String> {
         let given = [m, leaf].iter().any(|mm| mm.value_source(id) == Some(ValueSource::CommandLine));
         if given && !used.contains(&opt) {
             let why = match opt {
-                Opt::Bus | Opt::Sim if names[0] == "serve" => {
-                    " (serve hosts its own bus: use --listen, --drive)"
-                }
+                Opt::Sim if names[0] == "serve" => " (serve hosts the drives itself: use --drive)",
                 Opt::Bus | Opt::Sim if names[0] == "demo" => " (the demo runs on its own simulated bus)",
                 _ => "",
             };
@@ -128,10 +130,15 @@ fn main() {
         }
         Err(e) => e.exit(),
     };
-    let cli = match Cli::from_arg_matches(&matches) {
+    let mut cli = match Cli::from_arg_matches(&matches) {
         Ok(c) => c,
         Err(e) => e.exit(),
     };
+    // DRIVEBUS_BUS names the bus clients talk to (often the one `serve`
+    // provides): `serve` puts its drives elsewhere only when told so.
+    if matches!(cli.cmd, Command::Serve(_)) && matches.value_source("bus") != Some(ValueSource::CommandLine) {
+        cli.global.bus = "virtual".to_owned();
+    }
     if let Err(msg) = check_options(&cli.cmd, &matches) {
         if cli.global.json {
             output::json_error("usage", &msg, serde_json::json!({}));
@@ -141,7 +148,7 @@ fn main() {
         std::process::exit(2);
     }
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,ethercrab=off"));
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
     let rt = match tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build() {
         Ok(rt) => rt,
@@ -188,7 +195,7 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
         Command::SlcanPty(a) => slcan_pty::run(g, a).await.map(|()| 0),
-        Command::Ethercat(c) => ethercat::run(c).await,
+        Command::Ethercat(c) => ethercat::run(g, c).await,
     }
 }
 
@@ -208,8 +215,9 @@ mod tests {
         assert!(check(&["drivebus", "sdo", "read", "1000", "--node", "1"]).is_ok());
         let e = check(&["drivebus", "--node", "3", "serve", "--drive", "akd:1"]).unwrap_err();
         assert_eq!(e, "--node does not apply to `drivebus serve`");
-        let e = check(&["drivebus", "serve", "--drive", "akd:1", "--bus", "virtual"]).unwrap_err();
-        assert!(e.contains("serve hosts its own bus"), "{e}");
+        assert!(check(&["drivebus", "serve", "--drive", "akd:1", "--bus", "virtual"]).is_ok());
+        let e = check(&["drivebus", "serve", "--drive", "akd:1", "--sim", "akd:1"]).unwrap_err();
+        assert!(e.contains("serve hosts the drives itself"), "{e}");
         let e = check(&["drivebus", "--eds", "x.eds", "nmt", "start", "--all"]).unwrap_err();
         assert_eq!(e, "--eds does not apply to `drivebus nmt`");
         let e = check(&["drivebus", "demo", "--timeout", "5"]).unwrap_err();

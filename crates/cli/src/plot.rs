@@ -34,10 +34,13 @@ pub struct Phase {
     pub end: f64,
 }
 
-/// One value of a sample to draw.
-type Series = (&'static str, RGBColor, fn(&Sample) -> f64);
+/// One value of a sample to draw: legend, colour, value.
+pub type Series = (&'static str, RGBColor, fn(&Sample) -> f64);
 
-const PANELS: [(&str, &str, &[Series]); 4] = [
+/// One panel: title, unit of the y axis, the values drawn.
+pub type Panel = (&'static str, &'static str, &'static [Series]);
+
+const PANELS: [Panel; 4] = [
     (
         "Node 1 (AKD) position",
         "degrees",
@@ -58,15 +61,25 @@ fn err(e: impl std::fmt::Display) -> anyhow::Error {
     anyhow!("{e}")
 }
 
-/// Writes the SVG to `path`.
+/// Writes the CAN demo's SVG to `path`.
 pub fn plot(path: &std::path::Path, s: &[Sample], phases: &[Phase]) -> anyhow::Result<()> {
+    plot_panels(path, s, phases, &PANELS)
+}
+
+/// Writes an SVG of `panels`, one above the other, to `path`.
+pub fn plot_panels(
+    path: &std::path::Path,
+    s: &[Sample],
+    phases: &[Phase],
+    panels: &[Panel],
+) -> anyhow::Result<()> {
     if s.is_empty() {
         bail!("no samples to plot");
     }
-    let root = SVGBackend::new(path, (1100, 1100)).into_drawing_area();
+    let root = SVGBackend::new(path, (1100, 275 * panels.len().max(1) as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let t_end = s.last().map_or(1.0, |x| x.t).max(0.001);
-    for (area, (title, unit, series)) in root.split_evenly((4, 1)).iter().zip(PANELS) {
+    for (area, &(title, unit, series)) in root.split_evenly((panels.len(), 1)).iter().zip(panels) {
         // The legend column on the right: never over the data.
         let (chart_area, legend_area) = area.split_horizontally(900);
         let (lo, hi) = series.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (_, _, f)| {

@@ -236,7 +236,8 @@ pub fn value_json(v: &Value) -> serde_json::Value {
     }
 }
 
-type Row = (u8, Option<String>, Option<DataType>, Vec<u8>);
+/// One entry read: sub-index, name, data type, bytes.
+pub(crate) type Row = (u8, Option<String>, Option<DataType>, Vec<u8>);
 
 fn print_values(g: &Global, node: u8, index: u16, rows: &[Row]) {
     if g.json {
@@ -252,7 +253,7 @@ fn print_values(g: &Global, node: u8, index: u16, rows: &[Row]) {
     }
 }
 
-fn row_json(node: u8, index: u16, (sub, name, dt, data): &Row) -> serde_json::Value {
+pub(crate) fn row_json(node: u8, index: u16, (sub, name, dt, data): &Row) -> serde_json::Value {
     let mut j = serde_json::json!({"node": node, "index": index, "sub": sub, "raw": hex(data)});
     if let Some(n) = name {
         j["name"] = n.clone().into();
@@ -268,7 +269,7 @@ fn row_json(node: u8, index: u16, (sub, name, dt, data): &Row) -> serde_json::Va
     j
 }
 
-fn row_text(index: u16, (sub, name, dt, data): &Row) -> String {
+pub(crate) fn row_text(index: u16, (sub, name, dt, data): &Row) -> String {
     let label = name.as_ref().map(|n| format!(" {n}")).unwrap_or_default();
     let decoded = dt.and_then(|t| Value::decode(t, data).ok());
     match (dt, decoded) {

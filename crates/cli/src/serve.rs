@@ -73,7 +73,7 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         tokio::time::sleep(std::time::Duration::from_millis(100)).await;
     }
     let options = BuildOptions { eds_object: a.eds_object };
-    let drives = spawn_on_hub(&specs, &hub, a.state_dir.as_deref(), options)?;
+    let drives = spawn_on_hub(&specs, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
     let list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
     let pace = a.bitrate.map_or_else(|| "unpaced".to_owned(), |b| format!("{b} bit/s"));
     // Handlers first: a SIGTERM right after the ready line must end in a

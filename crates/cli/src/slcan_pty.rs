@@ -1,5 +1,5 @@
 //! `drivebus slcan-pty`: virtual drives behind an slcan adapter emulated
-//! on a pseudo-terminal (hosting; moved here unchanged from `misc.rs`).
+//! on a pseudo-terminal (hosting through `drivebus_transport::host`).
 
 use std::time::Duration;
 
@@ -19,7 +19,7 @@ pub async fn run(g: &Global, a: &SlcanPtyArgs) -> anyhow::Result<()> {
             _ => bail!("slcan-pty runs on the in-process virtual bus: use --bus virtual (not `{}`)", g.bus),
         };
         crate::fault::install(&hub, &a.faults)?;
-        let _drives = spawn_on_hub(&specs, &hub, None, Default::default())?;
+        let _drives = spawn_on_hub(&specs, &hub, None, Default::default(), g.machine.as_deref())?;
         let pty = drivebus_transport::slcan::SlcanPty::spawn(hub.attach())
             .context("cannot open a pseudo-terminal")?;
         {

@@ -8,6 +8,7 @@ use std::path::Path;
 use anyhow::{Context, anyhow, bail};
 use drivebus_node::{MemoryStorage, Storage};
 use drivebus_personality::build::BuildOptions;
+use drivebus_personality::machine::{Machine, MachineFile};
 use drivebus_personality::{PersonalityDevice, Profile};
 use tokio::task::JoinHandle;
 
@@ -62,13 +63,48 @@ impl std::fmt::Display for DriveSpec {
     }
 }
 
-/// Builds the drive `spec` with `options` (e.g. the EDS at 1021h);
-/// parameters stored with 1010h go to `state_dir/<profile>-<node>/` when
-/// given, else to memory.
+/// The machines around the hosted drives: each profile's default machine
+/// ([`Machine::default_for`]), changed per node by `--machine FILE`.
+pub struct Machines {
+    file: Option<(MachineFile, std::path::PathBuf)>,
+}
+
+impl Machines {
+    /// Reads `path` (when given) for the drives `specs`: a malformed file,
+    /// a table for a node that is not hosted, or a machine that does not
+    /// make sense is an error naming the file, line and column.
+    pub fn load(path: Option<&Path>, specs: &[DriveSpec]) -> anyhow::Result<Machines> {
+        let Some(path) = path else {
+            return Ok(Machines { file: None });
+        };
+        let at = |e: drivebus_personality::machine::MachineFileError| anyhow!("{}: {e}", path.display());
+        let file = MachineFile::read(path).map_err(at)?;
+        file.check_nodes(&specs.iter().map(|s| s.node).collect::<Vec<_>>()).map_err(at)?;
+        for s in specs {
+            file.machine_for(s.profile, s.node).map_err(at)?;
+        }
+        Ok(Machines { file: Some((file, path.to_owned())) })
+    }
+
+    /// The machine of `spec`.
+    pub fn machine_for(&self, spec: DriveSpec) -> anyhow::Result<Machine> {
+        match &self.file {
+            None => Ok(Machine::default_for(spec.profile)),
+            Some((f, path)) => {
+                f.machine_for(spec.profile, spec.node).map_err(|e| anyhow!("{}: {e}", path.display()))
+            }
+        }
+    }
+}
+
+/// Builds the drive `spec` on `machine` with `options` (e.g. the EDS at
+/// 1021h); parameters stored with 1010h go to
+/// `state_dir/<profile>-<node>/` when given, else to memory.
 pub fn build(
     spec: DriveSpec,
     state_dir: Option<&Path>,
     options: BuildOptions,
+    machine: &Machine,
 ) -> anyhow::Result<PersonalityDevice> {
     let storage: Box<dyn Storage + Send> = match state_dir {
         Some(dir) => {
@@ -80,21 +116,23 @@ pub fn build(
         }
         None => Box::new(MemoryStorage::new()),
     };
-    spec.profile
-        .build_with_options(spec.node, storage, options)
+    drivebus_personality::build_on(spec.profile, spec.node, storage, options, machine)
         .map_err(|e| anyhow!("cannot build {spec}: {e}"))
 }
 
-/// Builds and starts `specs` on `hub`, each as its own participant.
+/// Builds and starts `specs` on `hub`, each as its own participant, each
+/// on its machine (`--machine FILE` or the profile's default).
 pub fn spawn_on_hub(
     specs: &[DriveSpec],
     hub: &drivebus_transport::Hub,
     state_dir: Option<&Path>,
     options: BuildOptions,
+    machine_file: Option<&Path>,
 ) -> anyhow::Result<Vec<JoinHandle<()>>> {
+    let machines = Machines::load(machine_file, specs)?;
     let mut drives = Vec::new();
     for s in specs {
-        drives.push(build(*s, state_dir, options)?);
+        drives.push(build(*s, state_dir, options, &machines.machine_for(*s)?)?);
     }
     Ok(drivebus_transport::host::spawn_on_hub(drives, hub)
         .into_iter()

@@ -29,6 +29,18 @@ fn json(url: &str, args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out)))
 }
 
+/// A machine file putting `node` on an axis without limit switches or
+/// hard stops (every served drive has both by default since issue 11):
+/// method 17 then searches for ever, the motion these tests stop.
+fn endless_axis(dir: &tempfile::TempDir, node: u8) -> String {
+    let p = dir.path().join("endless.toml");
+    let text = format!(
+        "[[node]]\nid = {node}\nlimits = {{ enabled = false }}\nhard_stops = {{ enabled = false }}\n"
+    );
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_owned()
+}
+
 fn velocity(url: &str, node: &str) -> i64 {
     json(url, &["--node", node, "drive", "status"])["velocity"].as_i64().unwrap()
 }
@@ -38,7 +50,8 @@ fn velocity(url: &str, node: &str) -> i64 {
 /// (method 17 on `generic`: no limit switch) and said nothing.
 #[test]
 fn homing_waits_for_a_fresh_attained_and_a_timeout_halts_the_axis() {
-    let srv = Serve::start(&["--drive", "generic:5"], None);
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Serve::start(&["--drive", "generic:5", "--machine", &endless_axis(&dir, 5)], None);
     let u = srv.url();
     db(&u, &["--node", "5", "drive", "enable"]).success();
     db(&u, &["--node", "5", "drive", "home", "--method", "35"]).success().stdout(contains("homing attained"));
@@ -57,7 +70,8 @@ fn homing_waits_for_a_fresh_attained_and_a_timeout_halts_the_axis() {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_halts_the_motion_and_says_so() {
-    let srv = Serve::start(&["--drive", "generic:6"], None);
+    let dir = tempfile::tempdir().unwrap();
+    let srv = Serve::start(&["--drive", "generic:6", "--machine", &endless_axis(&dir, 6)], None);
     let u = srv.url();
     db(&u, &["--node", "6", "drive", "enable"]).success();
     let child = std::process::Command::new(common::bin())

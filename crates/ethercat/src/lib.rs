@@ -8,6 +8,9 @@
 //!   `ethercrab`, on by default).
 //! * [`server`]: an AF_PACKET raw-socket server on a named interface
 //!   (Linux, root), so masters on a wire or a veth pair see the segment.
+//! * [`master`]: an ethercrab master for tools (scan, AL state, CoE,
+//!   PDO mapping, a CiA 402 drive over process data), what `drivebus
+//!   ethercat scan|sdo|state|pdo|drive` and `drivebus demo --ethercat` run.
 //! * [`dio`]: a digital I/O test slave (no mailbox, SII-described PDOs).
 //!
 //! * [`drive`]: the CiA 402 drive personalities (`ipos`, `generic`) as
@@ -22,6 +25,8 @@ pub mod drive_probe;
 pub mod host;
 #[cfg(feature = "ethercrab")]
 pub mod link;
+#[cfg(feature = "ethercrab")]
+pub mod master;
 #[cfg(feature = "ethercrab")]
 pub mod probe;
 #[cfg(target_os = "linux")]

@@ -23,7 +23,16 @@ async fn scenario(storage: &'static Storage, line: DriveLine, s: DriveScenario) 
     tokio::spawn(link::run(host.clone(), tx, rx));
     let md = MainDevice::new(
         pdu_loop,
-        Timeouts::default(),
+        // The slaves run on simulated time, ethercrab's timers on real time:
+        // on a loaded host the link task may wait long for a core, which
+        // says nothing about the slaves.
+        Timeouts {
+            pdu: Duration::from_secs(2),
+            eeprom: Duration::from_secs(2),
+            state_transition: Duration::from_secs(30),
+            mailbox_response: Duration::from_secs(10),
+            ..Timeouts::default()
+        },
         MainDeviceConfig { dc_static_sync_iterations: 2_000, ..MainDeviceConfig::default() },
     );
     let clk: &'static Clock = Box::leak(Box::new(clock));

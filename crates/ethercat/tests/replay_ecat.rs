@@ -12,9 +12,7 @@ use drivebus_can::Duration;
 use drivebus_esc::frame::{Command, station_address};
 use drivebus_ethercat::drive::DriveSlaveExt;
 use drivebus_personality::Profile;
-use drivebus_personality::ipos::foe::{
-    F515X_PASSWORD, FA0XX_PASSWORD, FileKind, IposFiles, SwImage,
-};
+use drivebus_personality::ipos::foe::{F515X_PASSWORD, FA0XX_PASSWORD, FileKind, IposFiles, SwImage};
 
 fn ipos() -> Rig {
     Rig::new(Profile::Ipos)

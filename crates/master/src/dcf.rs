@@ -20,6 +20,10 @@ pub struct DumpReport {
     pub read: usize,
     /// Entries the node refused to read (write-only, aborted): index, sub, abort.
     pub refused: Vec<(u16, u8, SdoAbort)>,
+    /// Entries whose value has another size than their data type (the
+    /// node's object differs from the template): index, sub, bytes read.
+    /// No value is written for them.
+    pub mismatched: Vec<(u16, u8, usize)>,
 }
 
 fn missing(e: &SdoError) -> bool {
@@ -45,8 +49,13 @@ async fn fill(
     }
     match sdo.upload(index, sub).await {
         Ok(data) => {
-            values.insert((index, sub), data);
-            report.read += 1;
+            let size = DataType::from_index(var.data_type).and_then(DataType::fixed_size);
+            if size.is_some_and(|n| n != data.len()) {
+                report.mismatched.push((index, sub, data.len()));
+            } else {
+                values.insert((index, sub), data);
+                report.read += 1;
+            }
             Ok(true)
         }
         Err(e) if missing(&e) => Ok(false),
@@ -187,6 +196,11 @@ async fn probe_object(
         }
         let v = var_of(&zero);
         if !fill(sdo, index, 0, &v, values, report).await? {
+            return Ok(None);
+        }
+        // Not the standard's VAR (an array on this node): without the
+        // node's EDS nothing describes it.
+        if report.mismatched.last().is_some_and(|m| (m.0, m.1) == (index, 0)) {
             return Ok(None);
         }
         // A write-only VAR cannot prove it exists: keep it only when read.

@@ -13,8 +13,8 @@ use std::time::Duration;
 use common::{bounded, node};
 use drivebus_master::Master;
 use drivebus_node::NodeDevice;
-use drivebus_transport::host::spawn_on_hub;
 use drivebus_od::NoHooks;
+use drivebus_transport::host::spawn_on_hub;
 use drivebus_transport::socketcand::SocketcandServer;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

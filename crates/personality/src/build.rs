@@ -98,6 +98,8 @@ pub enum BuildError {
     /// A default PDO of the profile could not be applied (RPDO/TPDO, 0-based
     /// number, abort).
     Pdo(PdoKind, u16, SdoAbort),
+    /// The machine around the drive does not make sense.
+    Machine(crate::machine::MachineError),
 }
 
 impl core::fmt::Display for BuildError {
@@ -107,6 +109,7 @@ impl core::fmt::Display for BuildError {
             BuildError::Eds(e) => write!(f, "EDS: {e}"),
             BuildError::Drive(e) => write!(f, "drive: {e:?}"),
             BuildError::Pdo(k, n, a) => write!(f, "default {k:?} {}: abort {:08X}", n + 1, a.0),
+            BuildError::Machine(e) => write!(f, "machine: {e}"),
         }
     }
 }
@@ -511,6 +514,25 @@ pub fn build_custom(
     build_full(profile, node_id, storage, behaviour, machine, BuildOptions::default())
 }
 
+/// [`build`] with [`BuildOptions`] on `machine`: the drive gets the
+/// machine's axis, switches, stops, index and load
+/// ([`Machine::apply`](crate::machine::Machine::apply)) and applies its
+/// faults as time passes. What `drivebus serve` and the other CLI hosts
+/// build, with [`Machine::default_for`](crate::machine::Machine::default_for)
+/// the profile unless a machine file says otherwise.
+pub fn build_on(
+    profile: Profile,
+    node_id: u8,
+    storage: Box<dyn Storage + Send>,
+    options: BuildOptions,
+    machine: &crate::machine::Machine,
+) -> Result<PersonalityDevice, BuildError> {
+    machine.check().map_err(BuildError::Machine)?;
+    let mut dev = build_full(profile, node_id, storage, profile.behaviour(), |c| machine.apply(c), options)?;
+    dev.app.set_fault_schedule(machine.fault_schedule());
+    Ok(dev)
+}
+
 /// [`build_custom`] with [`BuildOptions`]: every argument explicit.
 pub fn build_full(
     profile: Profile,
@@ -640,6 +662,23 @@ impl Profile {
         storage: Box<dyn Storage + Send>,
     ) -> Result<PersonalityDevice, BuildError> {
         build(*self, node_id, storage)
+    }
+
+    /// This personality as node `node_id` on its default machine
+    /// ([`Machine::default_for`](crate::machine::Machine::default_for)),
+    /// parameters in memory: the drive as `drivebus serve` hosts it.
+    pub fn build_on_default_machine(&self, node_id: u8) -> Result<PersonalityDevice, BuildError> {
+        let m = crate::machine::Machine::default_for(*self);
+        build_on(*self, node_id, Box::new(MemoryStorage::new()), BuildOptions::default(), &m)
+    }
+
+    /// This personality on `machine`, parameters in memory.
+    pub fn build_on(
+        &self,
+        node_id: u8,
+        machine: &crate::machine::Machine,
+    ) -> Result<PersonalityDevice, BuildError> {
+        build_on(*self, node_id, Box::new(MemoryStorage::new()), BuildOptions::default(), machine)
     }
 
     /// This personality with parameters in `storage` and [`BuildOptions`]

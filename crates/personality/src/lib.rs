@@ -29,6 +29,7 @@
 
 pub mod build;
 pub mod ecat;
+pub mod machine;
 pub mod shared;
 
 pub mod akd;
@@ -40,7 +41,7 @@ pub mod ssd630;
 
 pub use build::{
     Behaviour, BuildError, BuildOptions, Context, EmcyFrame, FilterOutcome, Personality, PersonalityDevice,
-    Plain, Verdict, build, build_custom, build_on_machine, build_with, parse_drive_spec,
+    Plain, Verdict, build, build_custom, build_on, build_on_machine, build_with, parse_drive_spec,
 };
 
 pub use drivebus_eds::Parsed;

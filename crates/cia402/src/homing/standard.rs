@@ -9,7 +9,10 @@
 //! side: reverse. Methods 7–14 / 23–30 also reverse once at the limit switch
 //! ahead ("if the initial direction of movement leads away from the home
 //! switch, the drive shall reverse on encountering the relevant limit
-//! switch"); any other limit switch, a hard stop or a stall is an error.
+//! switch"); so do 3–6 / 19–22, which then also home on a home switch
+//! that is active over part of the travel only (a cam: the reference is
+//! the edge with the active side where the method expects it). Any other
+//! limit switch, a hard stop or a stall is an error.
 
 use super::method::{HomingContext, HomingError, HomingEvent, HomingMethod, MethodStep};
 use crate::model::EventKind;
@@ -141,7 +144,12 @@ impl StandardMethod {
         match self.spec.target {
             Target::NegativeLimit => e.kind == EventKind::NegativeLimit,
             Target::PositiveLimit => e.kind == EventKind::PositiveLimit,
-            Target::StepHome { .. } => e.kind == EventKind::Home,
+            // The edge with the switch's active side where the method
+            // expects it: the only edge of a step switch; on a cam switch
+            // (active over part of the travel) the far edge is not it.
+            Target::StepHome { active_positive } => {
+                e.kind == EventKind::Home && (e.active == e.positive_direction) == active_positive
+            }
             // Becoming active moving up, or inactive moving down, is the
             // lower edge.
             Target::Momentary { upper, .. } => {
@@ -152,7 +160,10 @@ impl StandardMethod {
     }
 
     fn reverses_at_limit(&self) -> bool {
-        matches!(self.spec.target, Target::Momentary { .. })
+        // 3–6 / 19–22 too: CiA 402-2 says nothing of limit switches for
+        // them; reversing once lets them home on a cam switch from its
+        // inactive far side, where a step switch never leaves the axis.
+        matches!(self.spec.target, Target::Momentary { .. } | Target::StepHome { .. })
     }
 
     /// Processes one event; `Some` ends the period's processing.

@@ -40,6 +40,38 @@ impl DriveModel {
         s
     }
 
+    /// `s` with the forced levels in place of the axis' ones.
+    pub(super) fn with_forced(&self, s: Switches) -> Switches {
+        let [n, p, h] = self.forced;
+        Switches {
+            negative_limit: n.unwrap_or(s.negative_limit),
+            positive_limit: p.unwrap_or(s.positive_limit),
+            home: h.unwrap_or(s.home),
+        }
+    }
+
+    /// After [`Self::detect`]: a level that changed because a switch was
+    /// forced or released (not by motion) is an edge at the present
+    /// position, so the drive and homing see a tripped switch as a switch.
+    pub(super) fn forced_edges(&mut self) {
+        let now = self.with_forced(self.natural);
+        let was = self.switches;
+        let th = self.theta;
+        for (i, kind, a, b) in [
+            (0, EventKind::NegativeLimit, was.negative_limit, now.negative_limit),
+            (1, EventKind::PositiveLimit, was.positive_limit, now.positive_limit),
+            (2, EventKind::Home, was.home, now.home),
+        ] {
+            let touched = self.forced[i].is_some() || self.prev_forced[i].is_some();
+            if touched && a != b {
+                let e = self.event_at(kind, b, th, 1.0);
+                self.events.push(e);
+            }
+        }
+        self.switches = now;
+        self.prev_forced = self.forced;
+    }
+
     fn edge(&mut self, kind: EventKind, active: bool, th0: f64, th1: f64, at: f64) {
         let mut e = self.event_at(kind, active, at, frac(th0, th1, at));
         e.positive_direction = th1 > th0;
@@ -52,18 +84,23 @@ impl DriveModel {
             return;
         }
         let up = th1 > th0;
-        let old = self.switches;
+        let old = self.natural;
         let new = self.switch_levels_from(old, th1);
+        // A switch forced now or in the last step changes level by the
+        // fault, not by motion: `forced_edges` reports it.
+        let touched = |i: usize| self.forced[i].is_some() || self.prev_forced[i].is_some();
+        let (fneg, fpos, fhome) = (touched(0), touched(1), touched(2));
         let h = self.d.limit_hysteresis;
-        if let Some(b) = self.d.neg_limit.filter(|_| old.negative_limit != new.negative_limit) {
+        // A forced switch shows no edge of the axis: its level is the fault's.
+        if let Some(b) = self.d.neg_limit.filter(|_| !fneg && old.negative_limit != new.negative_limit) {
             let at = if new.negative_limit { b } else { b + h };
             self.edge(EventKind::NegativeLimit, new.negative_limit, th0, th1, at);
         }
-        if let Some(b) = self.d.pos_limit.filter(|_| old.positive_limit != new.positive_limit) {
+        if let Some(b) = self.d.pos_limit.filter(|_| !fpos && old.positive_limit != new.positive_limit) {
             let at = if new.positive_limit { b } else { b - h };
             self.edge(EventKind::PositiveLimit, new.positive_limit, th0, th1, at);
         }
-        if let Some((lo, hi)) = self.d.home {
+        if let Some((lo, hi)) = self.d.home.filter(|_| !fhome) {
             // Each boundary on its own, so passing the whole switch inside
             // one step still yields both edges.
             if (th0 < lo) != (th1 < lo) {
@@ -73,7 +110,7 @@ impl DriveModel {
                 self.edge(EventKind::Home, !up, th0, th1, hi);
             }
         }
-        self.switches = new;
+        self.natural = new;
         if !self.encoder_failed {
             self.index_edges(th0, th1);
         }

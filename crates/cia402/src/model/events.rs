@@ -123,6 +123,17 @@ impl StepEvents {
     }
 }
 
+/// One of the three switch inputs (60FDh bits 0–2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SwitchInput {
+    /// Negative limit switch (bit 0).
+    NegativeLimit = 0,
+    /// Positive limit switch (bit 1).
+    PositiveLimit = 1,
+    /// Home switch (bit 2).
+    Home = 2,
+}
+
 /// Switch levels after a step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub struct Switches {
@@ -197,6 +208,12 @@ pub enum Injection {
     BusVoltage(Option<f64>),
     /// The encoder stops counting (7305h); the reading freezes.
     EncoderFailure,
+    /// Force a switch input to a level (`Some`: a limit switch tripped by
+    /// an obstacle, a broken wire of a normally-closed switch reading
+    /// active, one of a normally-open switch reading inactive) or give it
+    /// back to the axis position (`None`). A level change shows as an edge
+    /// at the present position in the next step.
+    ForceSwitch(SwitchInput, Option<bool>),
     /// Add a load torque step \[Nm\] (replaces any earlier step; ignored
     /// beyond ±[`super::params::MAX_TORQUE`]).
     LoadTorqueStep(f64),

@@ -30,7 +30,7 @@ pub mod events;
 pub mod params;
 mod physics;
 
-pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, Switches};
+pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, SwitchInput, Switches};
 pub use params::{
     AxisKind, AxisParams, BusParams, ControlParams, DriveParams, EncoderParams, LoadTorque, MotorKind,
     MotorParams, ParamError, StepperParams,
@@ -154,7 +154,15 @@ pub struct DriveModel {
     contact: i8,
     stall_timer: f64,
     stalled: bool,
+    /// Reported switch levels (60FDh): the axis' levels unless forced.
     switches: Switches,
+    /// Switch levels from the axis position alone.
+    natural: Switches,
+    /// Forced levels (negative limit, positive limit, home): a tripped or
+    /// broken switch, set by [`Injection::ForceSwitch`].
+    forced: [Option<bool>; 3],
+    /// `forced` as of the last step (a release is an edge too).
+    prev_forced: [Option<bool>; 3],
     faults: Faults,
     force_oc: bool,
     force_ot: bool,
@@ -238,6 +246,9 @@ impl DriveModel {
             stall_timer: 0.0,
             stalled: false,
             switches: Switches::default(),
+            natural: Switches::default(),
+            forced: [None; 3],
+            prev_forced: [None; 3],
             faults: Faults::default(),
             force_oc: false,
             force_ot: false,
@@ -248,7 +259,8 @@ impl DriveModel {
         };
         m.counts = m.read_counts(theta);
         m.prev_counts = m.counts;
-        m.switches = m.switch_levels(theta);
+        m.natural = m.switch_levels(theta);
+        m.switches = m.natural;
         Ok(m)
     }
 
@@ -311,7 +323,8 @@ impl DriveModel {
             }
             self.prev_counts = self.counts;
             self.vel_meas = velocity;
-            self.switches = self.switch_levels_from(self.switches, position);
+            self.natural = self.switch_levels_from(self.natural, position);
+            self.switches = self.with_forced(self.natural);
         }
         ok
     }
@@ -336,6 +349,7 @@ impl DriveModel {
         self.thermal_step();
         self.bus_step(dt);
         self.detect(theta0);
+        self.forced_edges();
         self.supervise();
         &self.events
     }
@@ -359,6 +373,7 @@ impl DriveModel {
                 }
             }
             Injection::EncoderFailure => self.encoder_failed = true,
+            Injection::ForceSwitch(which, level) => self.forced[which as usize] = level,
             Injection::LoadTorqueStep(t) => {
                 if t.is_finite() && t.abs() <= params::MAX_TORQUE {
                     self.load_step = t;
@@ -373,6 +388,7 @@ impl DriveModel {
                 }
                 self.encoder_failed = false;
                 self.load_step = 0.0;
+                self.forced = [None; 3];
             }
         }
         if let Some(v) = self.force_bus {

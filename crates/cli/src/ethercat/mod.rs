@@ -1,11 +1,19 @@
 //! `drivebus ethercat …`: the EtherCAT side of the tool. `serve` puts
 //! CiA 402 drive twins on a network interface as software EtherCAT
-//! slaves (`drivebus_ethercat::drive`).
+//! slaves (`drivebus_ethercat::drive`); `scan`, `sdo`, `state`, `pdo` and
+//! `drive` are an EtherCAT master on an interface
+//! (`drivebus_ethercat::master`, on ethercrab), and `demo.rs` is
+//! `drivebus demo --ethercat`.
 
+pub mod demo;
+mod drive;
+mod line;
 mod serve;
 
 use clap::{Args, Subcommand};
 use std::path::PathBuf;
+
+use crate::args::Global;
 
 /// `drivebus ethercat` subcommands.
 #[derive(Subcommand, Debug)]
@@ -13,6 +21,21 @@ pub enum EthercatCmd {
     /// Serve drives as EtherCAT slaves on a network interface (AF_PACKET; root or CAP_NET_RAW).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(EcatServeArgs),
+    /// List the slaves on the line: position, addresses, identity (SII and 1018h), AL state, mailbox.
+    #[command(after_help = SCAN_EXAMPLES)]
+    Scan(EcatScanArgs),
+    /// Read or write a slave's objects over CoE (SDO).
+    #[command(subcommand, after_help = SDO_EXAMPLES)]
+    Sdo(EcatSdoCmd),
+    /// Show the AL state of the slaves, or request one (init, preop, safeop, op, boot).
+    #[command(after_help = STATE_EXAMPLES)]
+    State(EcatStateArgs),
+    /// Show a slave's PDO assignment (1C12h/1C13h) and mapping (16xxh/1Axxh), read over CoE.
+    #[command(subcommand, after_help = PDO_EXAMPLES)]
+    Pdo(EcatPdoCmd),
+    /// Control a CiA 402 drive over the process data in OP (DC SYNC0 where supported).
+    #[command(after_help = DRIVE_EXAMPLES)]
+    Drive(EcatDriveArgs),
 }
 
 const SERVE_EXAMPLES: &str = "\
@@ -23,6 +46,222 @@ Examples:
 The slaves sit on the line in the order given. Prints one line containing `ready on IFACE` once
 the segment answers frames; stops on SIGINT/SIGTERM (exit 0). Any EtherCAT master on the wire
 (ethercrab, SOEM/pysoem, TwinCAT) sees them; --pcap records every frame for Wireshark.";
+
+const SCAN_EXAMPLES: &str = "\
+Examples:
+  drivebus ethercat scan --iface ecat1
+  drivebus ethercat scan --iface ecat1 --json
+
+The state shown is the one each slave was in; the scan then initialises the line (ethercrab:
+station addresses, SII, mailboxes) and leaves it in PRE-OP. Slaves are numbered by position from 1.
+The master commands use ethercrab's raw socket: root or CAP_NET_RAW.";
+
+const SDO_EXAMPLES: &str = "\
+Examples:
+  drivebus ethercat sdo read --iface ecat1 --slave 1 1018 1
+  drivebus ethercat sdo read --iface ecat1 --slave 1 statusword --json
+  drivebus ethercat sdo read --iface ecat1 --slave 2 1C13          (the whole array)
+  drivebus ethercat sdo write --iface ecat1 --slave 1 6060 0 8
+  drivebus ethercat sdo write --iface ecat1 --slave 1 0x6081 200000 --type u32
+
+Indices and sub-indices are hex (6041, 0x6041, 6041h, 6041:00); CiA 301/402 objects go by name and
+type. An abort is reported with its code and meaning (exit 1). ethercrab 0.7.1 writes 1 to 4
+bytes (expedited download); reads of any length work.";
+
+const STATE_EXAMPLES: &str = "\
+Examples:
+  drivebus ethercat state --iface ecat1                 (every slave's AL state and status code)
+  drivebus ethercat state --iface ecat1 op              (the line through PRE-OP and SAFE-OP to OP)
+  drivebus ethercat state --iface ecat1 --slave 1 init
+  drivebus ethercat state --iface ecat1 --slave 2 --direct boot
+
+init and --direct write AL control (0120h) of the slave(s) and wait; preop, safeop and op bring
+the whole line up as ethercrab does (mailboxes, process data, SM watchdog). A refused request is
+reported with its AL status code and text (exit 1) and acknowledged. With no master cycling the
+process data, a slave in OP returns to SAFE-OP when its process-data watchdog expires.";
+
+const PDO_EXAMPLES: &str = "\
+Examples:
+  drivebus ethercat pdo show --iface ecat1 --slave 1
+  drivebus ethercat pdo show --iface ecat1 --slave 2 --json";
+
+const DRIVE_EXAMPLES: &str = "\
+Examples:
+  drivebus ethercat drive --iface ecat1 --slave 1 status
+  drivebus ethercat drive --iface ecat1 --slave 1 enable
+  drivebus ethercat drive --iface ecat1 --slave 1 home --method 35
+  drivebus ethercat drive --iface ecat1 --slave 1 move 5000 --velocity 200000
+  drivebus ethercat drive --iface ecat1 --slave 1 csp-sine --amplitude 1000 --seconds 2
+
+Every command but status brings the line to OP (DC SYNC0 at --cycle-us when every slave supports
+it and --free-run is not given, else free run) and drives through the process data (6040h, 607Ah, 6041h, 6064h, 60F4h where
+mapped; the rest over CoE), then returns the line to SAFE-OP: the drive reacts to that as its
+6007h says. A motion it started is halted, or quick-stopped, on timeout, error or Ctrl-C, and it
+says so. status reads over CoE in PRE-OP.";
+
+/// The line a master command works on.
+#[derive(Args, Debug, Clone)]
+pub struct EcatLine {
+    /// Network interface with the EtherCAT line (raw socket: root or CAP_NET_RAW).
+    #[arg(long, value_name = "IFACE")]
+    pub iface: String,
+}
+
+/// A slave by its line position.
+fn position(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n @ 1..=65535) => Ok(n),
+        _ => Err(format!("`{s}` is not a slave position: 1 for the first slave on the line")),
+    }
+}
+
+/// `drivebus ethercat scan`.
+#[derive(Args, Debug)]
+pub struct EcatScanArgs {
+    #[command(flatten)]
+    line: EcatLine,
+}
+
+/// `drivebus ethercat sdo`.
+#[derive(Subcommand, Debug)]
+pub enum EcatSdoCmd {
+    /// Read an object (a whole record or array without SUB).
+    Read(EcatSdoRead),
+    /// Write an object (1 to 4 bytes).
+    Write(EcatSdoWrite),
+}
+
+/// `drivebus ethercat sdo read`.
+#[derive(Args, Debug)]
+pub struct EcatSdoRead {
+    #[command(flatten)]
+    line: EcatLine,
+    /// The slave (line position from 1).
+    #[arg(long, value_parser = position)]
+    slave: usize,
+    /// Object: hex index (6041, 0x6041, 6041h, 6041:00) or a CiA 301/402 name.
+    object: String,
+    /// Sub-index in hex.
+    sub: Option<String>,
+    /// Data type (u8, u16, u32, i32, str, ... or a CiA name) when not a standard object.
+    #[arg(long = "type", value_name = "T")]
+    ty: Option<String>,
+}
+
+/// `drivebus ethercat sdo write`.
+#[derive(Args, Debug)]
+pub struct EcatSdoWrite {
+    #[command(flatten)]
+    line: EcatLine,
+    /// The slave (line position from 1).
+    #[arg(long, value_parser = position)]
+    slave: usize,
+    /// OBJECT [SUB] VALUE.
+    #[arg(num_args = 2..=3, required = true, value_name = "OBJECT [SUB] VALUE", allow_negative_numbers = true)]
+    args: Vec<String>,
+    /// Data type (u8, u16, u32, i32, ... or a CiA name) when not a standard object.
+    #[arg(long = "type", value_name = "T")]
+    ty: Option<String>,
+}
+
+/// `drivebus ethercat state`.
+#[derive(Args, Debug)]
+pub struct EcatStateArgs {
+    #[command(flatten)]
+    line: EcatLine,
+    /// Only this slave (line position from 1); default every slave.
+    #[arg(long, value_parser = position)]
+    slave: Option<usize>,
+    /// Only write AL control (0120h) with the state and report what the slave does.
+    #[arg(long, requires = "target")]
+    direct: bool,
+    /// The state to request: init, preop, safeop, op (boot with --direct); none: show.
+    target: Option<String>,
+}
+
+/// `drivebus ethercat pdo`.
+#[derive(Subcommand, Debug)]
+pub enum EcatPdoCmd {
+    /// Show the assignment and mapping.
+    Show(EcatPdoShow),
+}
+
+/// `drivebus ethercat pdo show`.
+#[derive(Args, Debug)]
+pub struct EcatPdoShow {
+    #[command(flatten)]
+    line: EcatLine,
+    /// The slave (line position from 1).
+    #[arg(long, value_parser = position)]
+    slave: usize,
+}
+
+/// `drivebus ethercat drive`.
+#[derive(Args, Debug)]
+pub struct EcatDriveArgs {
+    /// Network interface with the EtherCAT line (required; before or after the action).
+    #[arg(long, value_name = "IFACE", global = true)]
+    iface: Option<String>,
+    /// The drive (line position from 1; required).
+    #[arg(long, value_parser = position, global = true)]
+    slave: Option<usize>,
+    /// Process-data cycle (and SYNC0 period) in µs.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(250..=100_000), global = true)]
+    cycle_us: u64,
+    /// Free run (SM-synchronous) even where the slaves support DC.
+    #[arg(long, global = true)]
+    free_run: bool,
+    /// What to do.
+    #[command(subcommand)]
+    action: EcatDriveAction,
+}
+
+/// Drive actions.
+#[derive(Subcommand, Debug)]
+pub enum EcatDriveAction {
+    /// Statusword, state, mode, position, error code (over CoE).
+    Status,
+    /// Operation enabled (a fault is reset first).
+    Enable,
+    /// Switch on disabled.
+    Disable,
+    /// Homing (mode 6) with a method (6098h).
+    Home {
+        /// Homing method (6098h), e.g. 35 = on the current position.
+        #[arg(long, default_value_t = 35, allow_negative_numbers = true)]
+        method: i8,
+        /// Give up (and halt) after this many seconds.
+        #[arg(long, default_value_t = 30.0)]
+        wait: f64,
+    },
+    /// Profile-position move (mode 1) to TARGET.
+    Move {
+        /// Target position (607Ah) in the drive's position units.
+        #[arg(allow_negative_numbers = true)]
+        target: i32,
+        /// Profile velocity (6081h) to set first.
+        #[arg(long)]
+        velocity: Option<u32>,
+        /// TARGET is relative to the present position.
+        #[arg(long)]
+        relative: bool,
+        /// Give up (and halt) after this many seconds.
+        #[arg(long, default_value_t = 30.0)]
+        wait: f64,
+    },
+    /// Cyclic synchronous position (mode 8): a sine around the present position, one target per cycle.
+    CspSine {
+        /// Amplitude in position units.
+        #[arg(long, default_value_t = 1000)]
+        amplitude: u32,
+        /// Frequency in Hz.
+        #[arg(long, default_value_t = 1.0)]
+        frequency: f64,
+        /// Duration in seconds.
+        #[arg(long, default_value_t = 2.0)]
+        seconds: f64,
+    },
+}
 
 /// `drivebus ethercat serve`.
 #[derive(Args, Debug)]
@@ -42,9 +281,20 @@ pub struct EcatServeArgs {
     pub pcap: Option<PathBuf>,
 }
 
+/// True for the master commands (they take --json and --timeout).
+pub fn is_master(cmd: &EthercatCmd) -> bool {
+    !matches!(cmd, EthercatCmd::Serve(_))
+}
+
 /// Runs a `drivebus ethercat` command.
-pub async fn run(cmd: &EthercatCmd) -> anyhow::Result<i32> {
+pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
     match cmd {
         EthercatCmd::Serve(a) => serve::run(a).await.map(|()| 0),
+        EthercatCmd::Scan(a) => line::scan(g, &a.line).await.map(|()| 0),
+        EthercatCmd::Sdo(EcatSdoCmd::Read(a)) => line::sdo_read(g, a).await.map(|()| 0),
+        EthercatCmd::Sdo(EcatSdoCmd::Write(a)) => line::sdo_write(g, a).await.map(|()| 0),
+        EthercatCmd::State(a) => line::state(g, a).await.map(|()| 0),
+        EthercatCmd::Pdo(EcatPdoCmd::Show(a)) => line::pdo_show(g, a).await.map(|()| 0),
+        EthercatCmd::Drive(a) => drive::run(g, a).await.map(|()| 0),
     }
 }

@@ -27,6 +27,8 @@ pub struct Personality {
     /// The drive-owned entry whose write the behaviour took with
     /// [`Verdict::Store`]: stored as written, not applied by the drive.
     stored_by_behaviour: Option<(u16, u8)>,
+    /// The machine's faults, applied as time passes (`machine`).
+    faults: Option<crate::machine::FaultSchedule>,
 }
 
 impl core::fmt::Debug for Personality {
@@ -41,7 +43,7 @@ impl core::fmt::Debug for Personality {
 impl Personality {
     /// Pairs a drive with a behaviour.
     pub(crate) fn new(drive: Drive, behaviour: Box<dyn Behaviour>, profile: Profile) -> Self {
-        Personality { drive, behaviour, profile, stored_by_behaviour: None }
+        Personality { drive, behaviour, profile, stored_by_behaviour: None, faults: None }
     }
 
     /// The personality.
@@ -58,6 +60,12 @@ impl Personality {
     /// control period; EMCY frames follow the personality's mapping).
     pub fn inject(&mut self, what: Injection) {
         self.drive.inject(what);
+    }
+
+    /// Applies `schedule` from now on, its times counted from the drive's
+    /// boot (replaces an earlier schedule; an empty one removes it).
+    pub fn set_fault_schedule(&mut self, schedule: crate::machine::FaultSchedule) {
+        self.faults = (!schedule.is_empty()).then_some(schedule);
     }
 
     /// The behaviour as its concrete type `T` (e.g.
@@ -145,6 +153,9 @@ impl Application for Personality {
     }
 
     fn on_start(&mut self, cx: &mut AppContext<'_>) {
+        if let Some(f) = &mut self.faults {
+            f.start(cx.now);
+        }
         let (now, node_id) = (cx.now, cx.node_id());
         let (od, requests) = cx.parts();
         let mut c = Context { drive: &mut self.drive, requests, node_id, now };
@@ -170,9 +181,11 @@ impl Application for Personality {
     }
 
     fn poll(&mut self, cx: &mut AppContext<'_>) -> Option<Instant> {
+        // Before the step, so the step sees what became due.
+        let fault_due = self.faults.as_mut().and_then(|f| f.run(cx.now, &mut self.drive));
         let next = self.drive.step_to(cx.od, cx.now);
         self.after_step(cx);
         self.flush(cx);
-        Some(next)
+        Some(fault_due.map_or(next, |d| d.min(next)))
     }
 }

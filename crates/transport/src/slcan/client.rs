@@ -139,8 +139,11 @@ pub async fn open_serial(path: &str, bitrate: Option<u32>, baud: u32) -> io::Res
                     let _ = wport.flush();
                     stop.store(true, std::sync::atomic::Ordering::Release);
                     drop(wport);
-                    // The reader notices within one poll period.
-                    let _ = rx_gone.recv_timeout(POLL * 10);
+                    // The reader notices within one poll period when it is
+                    // scheduled; on a loaded host that can take much longer,
+                    // and the port stays locked until it lets go (a command
+                    // run right after this one could not open it).
+                    let _ = rx_gone.recv_timeout(Duration::from_secs(10));
                     let _ = done.send(());
                     return up.fail("closed by the user");
                 }

@@ -1,0 +1,123 @@
+//! The tool master (`drivebus_ethercat::master`) against a line of an
+//! iPOS and a generic servo over the in-process link on simulated time:
+//! count, AL status, scan (SII and 1018h), CoE read, abort, a refused AL
+//! state with its code, the PDO assignment, and the drive over process
+//! data with DC: enable, homing, a profile-position move checked against
+//! the position, a csp sine followed within the following error window.
+
+use drivebus_can::{Duration, Instant};
+use drivebus_ethercat::drive::DriveLine as Line;
+use drivebus_ethercat::master::drive::DriveLine;
+use drivebus_ethercat::master::{self, AlState, Master, MasterError, Storage};
+use drivebus_ethercat::{Clock, Host};
+use drivebus_personality::Profile;
+
+fn line() -> Host {
+    Line::new()
+        .drive(Profile::Ipos)
+        .drive(Profile::Generic)
+        .host(Clock::simulated(Instant::from_millis(1)))
+        .unwrap()
+}
+
+#[test]
+fn scan_coe_state_and_pdos() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        assert_eq!(m.count().await.unwrap(), 2);
+        let s = m.al_status(1).await.unwrap();
+        assert_eq!((s.state, s.error), (AlState::Init, false));
+        // INIT -> SAFE-OP is not a transition (ETG.1000.6 Table 9): refused with 0x0011.
+        match m.request_state(1, AlState::SafeOp).await {
+            Err(MasterError::Refused {
+                position: 1,
+                requested: AlState::SafeOp,
+                state: AlState::Init,
+                code,
+            }) => {
+                assert_eq!(code, 0x0011)
+            }
+            other => panic!("{other:?}"),
+        }
+        // The error was acknowledged: the slave accepts PRE-OP afterwards... once ethercrab set it up.
+        let found = m.scan().await.unwrap();
+        assert_eq!(found.len(), 2);
+        assert_eq!(found[0].identity[0], 0x1A3, "Technosoft");
+        assert_eq!(found[0].coe_identity, Some(found[0].identity));
+        assert_eq!(found[0].found.state, AlState::Init);
+        assert_eq!(found[1].position, 2);
+        assert_eq!(found[1].address, 0x1001);
+        assert!(master::mailbox_protocols(found[0].mailbox).contains(&"CoE"));
+        assert_eq!(m.al_status(2).await.unwrap().state, AlState::PreOp);
+        let g = m.init().await.unwrap();
+        let sd = m.slave(&g, 1).unwrap();
+        let v = master::sdo_read(&sd, 1, 0x1018, 1).await.unwrap();
+        assert_eq!(v, 0x1A3u32.to_le_bytes());
+        match master::sdo_read(&sd, 1, 0x5FFF, 0).await {
+            Err(MasterError::Abort { code: 0x0602_0000, .. }) => {}
+            other => panic!("{other:?}"),
+        }
+        let e = master::sdo_read(&sd, 1, 0x5FFF, 0).await.unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "slave 1: SDO read 5FFFh:00 aborted by the device with code 0x06020000: Object does not exist in the object dictionary"
+        );
+        let tx = master::pdo_assignment(&sd, 1, 0x1C13).await.unwrap();
+        assert_eq!(tx[0], (0x1A00, vec![0x6041_0010, 0x6064_0020, 0x6077_0010]));
+        assert!(matches!(m.slave(&g, 3), Err(MasterError::NoSlave { position: 3, count: 2 })));
+    });
+}
+
+#[test]
+fn drive_enable_home_move_and_csp_with_dc() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        assert!(d.dc());
+        assert_eq!(d.expected_wkc(), 6);
+        d.enable(Duration::from_secs(2)).await.unwrap();
+        assert_eq!(d.fb.state(), Some(drivebus_cia402::codes::State::OperationEnabled));
+        let at = d.home(35, Duration::from_secs(10), |_| {}).await.unwrap();
+        assert_eq!(at, 0, "method 35: the current position is 0");
+        let pos = d.move_to(5000, false, Some(200_000), Duration::from_secs(20), |_| {}).await.unwrap();
+        assert!((pos - 5000).abs() <= 10, "{pos}");
+        let read = d.read(0x6064, 0).await.unwrap();
+        assert!((read - 5000).abs() <= 10, "6064h over CoE: {read}");
+        let base = d.fb.position;
+        let mut worst = 0i64;
+        let n = d
+            .csp(
+                (0..2000).map(|k| base + (2000.0 * (k as f64 / 1000.0 * std::f64::consts::TAU).sin()) as i32),
+                |t, fb| {
+                    worst = worst.max((i64::from(t) - i64::from(fb.position)).abs());
+                },
+            )
+            .await
+            .unwrap();
+        assert_eq!(n, 2000);
+        assert!(worst < 2000, "followed: {worst}");
+        assert_eq!(d.bad_wkc, 0);
+        d.stop().await.unwrap();
+    });
+}
+
+#[test]
+fn drive_in_free_run_on_the_generic_servo() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), false, None).await.unwrap();
+        assert!(!d.dc());
+        let pos = d.move_to(-3000, false, Some(100_000), Duration::from_secs(20), |_| {}).await.unwrap();
+        assert!((pos + 3000).abs() <= 10, "{pos}");
+        let pos = d.move_to(500, true, None, Duration::from_secs(20), |_| {}).await.unwrap();
+        let window = d.read(0x6067, 0).await.unwrap();
+        assert!((i64::from(pos) + 2500).abs() <= window, "relative: {pos}, window {window}");
+        assert_eq!(d.bad_wkc, 0);
+        d.stop().await.unwrap();
+    });
+}

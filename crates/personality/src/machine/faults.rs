@@ -1,0 +1,185 @@
+//! Faults of the machine applied at run time: a limit switch that trips,
+//! a broken switch wire, an encoder or motor fault, each at a time after
+//! the drive started and, optionally, for a while.
+//!
+//! The schedule runs inside the drive's own poll ([`FaultSchedule::run`]),
+//! so it works the same under `serve`, `slcan-pty`, `--sim`, the demo and
+//! on the deterministic virtual bus of a test.
+
+use super::{MachineError, Polarity};
+use drivebus_can::Instant;
+use drivebus_cia402::drive::{Drive, Injection};
+use drivebus_cia402::model::{Injection as ModelInjection, SwitchInput};
+
+/// One of the three switches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Switch {
+    /// Negative limit switch (60FDh bit 0).
+    NegativeLimit,
+    /// Positive limit switch (60FDh bit 1).
+    PositiveLimit,
+    /// Home switch (60FDh bit 2).
+    Home,
+}
+
+impl Switch {
+    fn input(self) -> SwitchInput {
+        match self {
+            Switch::NegativeLimit => SwitchInput::NegativeLimit,
+            Switch::PositiveLimit => SwitchInput::PositiveLimit,
+            Switch::Home => SwitchInput::Home,
+        }
+    }
+}
+
+/// What goes wrong.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultKind {
+    /// The switch reads actuated wherever the axis is (an obstacle, a
+    /// carriage overrunning a cam).
+    Trip(Switch),
+    /// The switch's wire breaks: it reads actuated if normally closed,
+    /// never again if normally open (the axis can then overrun it).
+    WireBreak(Switch),
+    /// The encoder stops counting (CiA 402 7305h).
+    Encoder,
+    /// Motor over-current (2310h).
+    OverCurrent,
+    /// Motor winding over-temperature (4310h).
+    OverTemperature,
+    /// DC link over-voltage (3210h).
+    OverVoltage,
+    /// DC link under-voltage (3220h).
+    UnderVoltage,
+}
+
+/// A fault at a time after the drive started.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fault {
+    /// Seconds after the drive started (booted).
+    pub at: f64,
+    /// What happens.
+    pub kind: FaultKind,
+    /// How long it lasts \[s\]; `None`: until the drive is rebuilt.
+    pub duration: Option<f64>,
+}
+
+impl Fault {
+    pub(super) fn check(&self) -> Result<(), MachineError> {
+        let bad =
+            |key: &str, reason: &str| MachineError { key: key.into(), reason: reason.into(), other: None };
+        if !(self.at.is_finite() && (0.0..=1e9).contains(&self.at)) {
+            return Err(bad("at", "must be a time in seconds, 0 or more"));
+        }
+        if let Some(d) = self.duration
+            && !(d.is_finite() && d > 0.0 && d <= 1e9)
+        {
+            return Err(bad("duration", "must be a time in seconds above 0"));
+        }
+        Ok(())
+    }
+
+    fn start_ns(&self) -> u64 {
+        (self.at * 1e9) as u64
+    }
+
+    fn end_ns(&self) -> Option<u64> {
+        self.duration.map(|d| ((self.at + d) * 1e9) as u64)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Pending,
+    Active,
+    Over,
+}
+
+/// The faults of one machine, applied to its drive as time passes.
+#[derive(Debug, Clone)]
+pub struct FaultSchedule {
+    faults: Vec<(Fault, Phase)>,
+    limits: Polarity,
+    home: Polarity,
+    /// When the drive started; the schedule's time origin.
+    t0: Option<Instant>,
+}
+
+impl FaultSchedule {
+    /// `faults` for a machine whose limit switches and home switch are
+    /// wired with the given polarities.
+    pub fn new(faults: Vec<Fault>, limits: Polarity, home: Polarity) -> Self {
+        FaultSchedule {
+            faults: faults.into_iter().map(|f| (f, Phase::Pending)).collect(),
+            limits,
+            home,
+            t0: None,
+        }
+    }
+
+    /// Whether there is nothing to apply.
+    pub fn is_empty(&self) -> bool {
+        self.faults.is_empty()
+    }
+
+    /// Sets the time origin (the drive's boot) unless already set.
+    pub fn start(&mut self, now: Instant) {
+        self.t0.get_or_insert(now);
+    }
+
+    fn polarity(&self, s: Switch) -> Polarity {
+        if s == Switch::Home { self.home } else { self.limits }
+    }
+
+    fn injection(&self, kind: FaultKind) -> Injection {
+        use ModelInjection as M;
+        Injection::Model(match kind {
+            FaultKind::Trip(s) => M::ForceSwitch(s.input(), Some(true)),
+            FaultKind::WireBreak(s) => {
+                M::ForceSwitch(s.input(), Some(self.polarity(s) == Polarity::NormallyClosed))
+            }
+            FaultKind::Encoder => M::EncoderFailure,
+            FaultKind::OverCurrent => M::OverCurrent,
+            FaultKind::OverTemperature => M::OverTemperature,
+            FaultKind::OverVoltage => M::BusOverVoltage,
+            FaultKind::UnderVoltage => M::BusUnderVoltage,
+        })
+    }
+
+    /// Applies what is due at `now` to `drive` (it shows at the drive's
+    /// next control period) and returns when the next change is due.
+    pub fn run(&mut self, now: Instant, drive: &mut Drive) -> Option<Instant> {
+        let t0 = *self.t0.get_or_insert(now);
+        let t = now.as_nanos().saturating_sub(t0.as_nanos());
+        let mut ended = false;
+        for i in 0..self.faults.len() {
+            let (f, phase) = self.faults[i];
+            if phase == Phase::Pending && t >= f.start_ns() {
+                self.faults[i].1 = Phase::Active;
+                drive.inject(self.injection(f.kind));
+            }
+            if self.faults[i].1 == Phase::Active && f.end_ns().is_some_and(|e| t >= e) {
+                self.faults[i].1 = Phase::Over;
+                ended = true;
+            }
+        }
+        if ended {
+            // The model clears its forced conditions all at once; the
+            // faults still on are put back.
+            drive.inject(Injection::Model(ModelInjection::Clear));
+            for (f, _) in self.faults.iter().filter(|(_, p)| *p == Phase::Active) {
+                drive.inject(self.injection(f.kind));
+            }
+        }
+        let next = self
+            .faults
+            .iter()
+            .filter_map(|(f, p)| match p {
+                Phase::Pending => Some(f.start_ns()),
+                Phase::Active => f.end_ns(),
+                Phase::Over => None,
+            })
+            .min()?;
+        Some(Instant::from_nanos(t0.as_nanos().saturating_add(next)))
+    }
+}

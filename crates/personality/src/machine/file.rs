@@ -1,0 +1,402 @@
+//! The machine file: TOML, one `[[node]]` table per node whose machine
+//! differs from its profile's default (`docs/machine.md` lists every key).
+//!
+//! ```toml
+//! [[node]]
+//! id = 5
+//! limits = { negative = -1260.0, positive = 1260.0 }
+//!
+//! [[node.faults]]
+//! at = 2.0
+//! kind = "trip"
+//! switch = "positive_limit"
+//! ```
+//!
+//! A node's table changes only the keys it names; the rest stays as in
+//! [`Machine::default_for`] its profile. Every error names the line and
+//! column (1-based) it was found at: TOML syntax, an unknown key, a wrong
+//! type, a value out of range or in the wrong order.
+
+use super::{Fault, FaultKind, HardStops, HomeSwitch, Limits, Machine, MachineError, Polarity, Switch};
+use crate::Profile;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use toml::Spanned;
+
+/// A machine file that could not be read or does not fit the drives.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MachineFileError {
+    /// Line of the offending text, from 1 (0: not tied to a place).
+    pub line: usize,
+    /// Column, from 1 (characters).
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl core::fmt::Display for MachineFileError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.line == 0 {
+            write!(f, "{}", self.message)
+        } else {
+            write!(f, "line {}, column {}: {}", self.line, self.column, self.message)
+        }
+    }
+}
+
+impl std::error::Error for MachineFileError {}
+
+/// 1-based line and column of byte offset `at` in `text`.
+fn line_col(text: &str, at: usize) -> (usize, usize) {
+    let at = at.min(text.len());
+    let before = text.get(..at).unwrap_or(text);
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+fn pol(p: Option<PolarityName>) -> Option<Polarity> {
+    p.map(|p| match p {
+        PolarityName::No => Polarity::NormallyOpen,
+        PolarityName::Nc => Polarity::NormallyClosed,
+    })
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum PolarityName {
+    No,
+    Nc,
+}
+
+type S<T> = Option<Spanned<T>>;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Doc {
+    #[serde(default)]
+    node: Vec<Spanned<NodePatch>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NodePatch {
+    id: Spanned<u8>,
+    feed: S<f64>,
+    gear_ratio: S<f64>,
+    start: S<f64>,
+    limits: Option<LimitsPatch>,
+    home_switch: Option<HomePatch>,
+    hard_stops: Option<StopsPatch>,
+    index: Option<IndexPatch>,
+    load: Option<LoadPatch>,
+    #[serde(default)]
+    faults: Vec<Spanned<FaultSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LimitsPatch {
+    enabled: S<bool>,
+    negative: S<f64>,
+    positive: S<f64>,
+    polarity: Option<PolarityName>,
+    hysteresis: S<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HomePatch {
+    enabled: S<bool>,
+    from: S<f64>,
+    to: S<f64>,
+    polarity: Option<PolarityName>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StopsPatch {
+    enabled: S<bool>,
+    negative: S<f64>,
+    positive: S<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IndexPatch {
+    offset: S<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LoadPatch {
+    inertia: S<f64>,
+    viscous_friction: S<f64>,
+    coulomb_friction: S<f64>,
+    torque: S<f64>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum KindName {
+    Trip,
+    WireBreak,
+    Encoder,
+    OverCurrent,
+    OverTemperature,
+    OverVoltage,
+    UnderVoltage,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum SwitchName {
+    NegativeLimit,
+    PositiveLimit,
+    HomeSwitch,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FaultSpec {
+    at: Spanned<f64>,
+    kind: Spanned<KindName>,
+    switch: Option<Spanned<SwitchName>>,
+    duration: S<f64>,
+}
+
+/// Where each key of a node's table is, to place an error on it.
+#[derive(Debug, Default)]
+struct Spans(BTreeMap<String, Range<usize>>);
+
+impl Spans {
+    fn take<T: Copy>(&mut self, key: &str, v: &S<T>) -> Option<T> {
+        v.as_ref().map(|s| {
+            self.0.insert(key.to_owned(), s.span());
+            *s.get_ref()
+        })
+    }
+}
+
+/// A position a table must name because the default machine has none.
+fn missing(key: &str) -> MachineError {
+    MachineError { key: key.into(), reason: "missing (no default to keep)".into(), other: None }
+}
+
+/// A parsed machine file: the `[[node]]` tables by node-ID, still to be
+/// laid over each node's default machine ([`MachineFile::machine_for`]).
+#[derive(Debug)]
+pub struct MachineFile {
+    text: String,
+    nodes: BTreeMap<u8, Spanned<NodePatch>>,
+}
+
+impl MachineFile {
+    /// Parses `text` (TOML). Syntax, unknown keys, wrong types, a node-ID
+    /// outside 1..=127 or given twice are errors with their place.
+    pub fn parse(text: &str) -> Result<MachineFile, MachineFileError> {
+        let doc: Doc = toml::from_str(text).map_err(|e| {
+            let (line, column) = e.span().map_or((0, 0), |s| line_col(text, s.start));
+            MachineFileError { line, column, message: e.message().trim_end().to_owned() }
+        })?;
+        let mut nodes = BTreeMap::new();
+        for n in doc.node {
+            let id = *n.get_ref().id.get_ref();
+            let at = |message: String| {
+                let (line, column) = line_col(text, n.get_ref().id.span().start);
+                MachineFileError { line, column, message }
+            };
+            if !(1..=127).contains(&id) {
+                return Err(at(format!("node id {id} is not in 1..127")));
+            }
+            if nodes.contains_key(&id) {
+                return Err(at(format!("node {id} is given twice")));
+            }
+            nodes.insert(id, n);
+        }
+        Ok(MachineFile { text: text.to_owned(), nodes })
+    }
+
+    /// Reads and parses a file; an I/O error has no line.
+    pub fn read(path: &std::path::Path) -> Result<MachineFile, MachineFileError> {
+        let text = std::fs::read_to_string(path).map_err(|e| MachineFileError {
+            line: 0,
+            column: 0,
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::parse(&text)
+    }
+
+    /// The node-IDs the file has a table for.
+    pub fn nodes(&self) -> impl Iterator<Item = u8> + '_ {
+        self.nodes.keys().copied()
+    }
+
+    /// Refuses a table for a node that is not among `present` (a typo
+    /// would otherwise leave the intended node on its default machine).
+    pub fn check_nodes(&self, present: &[u8]) -> Result<(), MachineFileError> {
+        for (id, n) in &self.nodes {
+            if !present.contains(id) {
+                let (line, column) = line_col(&self.text, n.get_ref().id.span().start);
+                return Err(MachineFileError {
+                    line,
+                    column,
+                    message: format!("node {id} has a machine but no drive"),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The machine of node `node` running `profile`: its default machine
+    /// with the file's keys laid over it, checked.
+    pub fn machine_for(&self, profile: Profile, node: u8) -> Result<Machine, MachineFileError> {
+        let mut m = Machine::default_for(profile);
+        let Some(n) = self.nodes.get(&node) else {
+            return Ok(m);
+        };
+        let mut sp = Spans::default();
+        let p = n.get_ref();
+        let place = |sp: &Spans, e: MachineError| {
+            // The key's own place, else its partner's; else the node's id.
+            let at =
+                sp.0.get(&e.key)
+                    .or_else(|| e.other.as_ref().and_then(|o| sp.0.get(o)))
+                    .map_or(p.id.span().start, |r| r.start);
+            let (line, column) = line_col(&self.text, at);
+            MachineFileError { line, column, message: format!("node {node}: {e}") }
+        };
+        if let Some(v) = sp.take("feed", &p.feed) {
+            m.feed = v;
+        }
+        if let Some(v) = sp.take("gear_ratio", &p.gear_ratio) {
+            m.gear_ratio = v;
+        }
+        if let Some(v) = sp.take("start", &p.start) {
+            m.start = v;
+        }
+        if let Some(l) = &p.limits {
+            let enabled = sp.take("limits.enabled", &l.enabled);
+            let (neg, posv) =
+                (sp.take("limits.negative", &l.negative), sp.take("limits.positive", &l.positive));
+            let hyst = sp.take("limits.hysteresis", &l.hysteresis);
+            if enabled == Some(false) {
+                m.limits = None;
+            } else {
+                let base = m.limits;
+                let need = |v: Option<f64>, b: Option<f64>, key: &str| {
+                    v.or(b).ok_or_else(|| place(&sp, missing(key)))
+                };
+                m.limits = Some(Limits {
+                    negative: need(neg, base.map(|b| b.negative), "limits.negative")?,
+                    positive: need(posv, base.map(|b| b.positive), "limits.positive")?,
+                    polarity: pol(l.polarity).or(base.map(|b| b.polarity)).unwrap_or_default(),
+                    hysteresis: hyst.or(base.map(|b| b.hysteresis)).unwrap_or(0.0),
+                });
+            }
+        }
+        if let Some(h) = &p.home_switch {
+            let enabled = sp.take("home_switch.enabled", &h.enabled);
+            let (from, to) = (sp.take("home_switch.from", &h.from), sp.take("home_switch.to", &h.to));
+            if enabled == Some(false) {
+                m.home_switch = None;
+            } else {
+                let base = m.home_switch;
+                let need = |v: Option<f64>, b: Option<f64>, key: &str| {
+                    v.or(b).ok_or_else(|| place(&sp, missing(key)))
+                };
+                m.home_switch = Some(HomeSwitch {
+                    from: need(from, base.map(|b| b.from), "home_switch.from")?,
+                    to: need(to, base.map(|b| b.to), "home_switch.to")?,
+                    polarity: pol(h.polarity).or(base.map(|b| b.polarity)).unwrap_or(Polarity::NormallyOpen),
+                });
+            }
+        }
+        if let Some(s) = &p.hard_stops {
+            let enabled = sp.take("hard_stops.enabled", &s.enabled);
+            let (neg, posv) =
+                (sp.take("hard_stops.negative", &s.negative), sp.take("hard_stops.positive", &s.positive));
+            if enabled == Some(false) {
+                m.hard_stops = None;
+            } else {
+                let base = m.hard_stops;
+                let need = |v: Option<f64>, b: Option<f64>, key: &str| {
+                    v.or(b).ok_or_else(|| place(&sp, missing(key)))
+                };
+                m.hard_stops = Some(HardStops {
+                    negative: need(neg, base.map(|b| b.negative), "hard_stops.negative")?,
+                    positive: need(posv, base.map(|b| b.positive), "hard_stops.positive")?,
+                });
+            }
+        }
+        if let Some(i) = &p.index
+            && let Some(v) = sp.take("index.offset", &i.offset)
+        {
+            m.index_offset = v;
+        }
+        if let Some(l) = &p.load {
+            if let Some(v) = sp.take("load.inertia", &l.inertia) {
+                m.load.inertia = v;
+            }
+            if let Some(v) = sp.take("load.viscous_friction", &l.viscous_friction) {
+                m.load.viscous_friction = v;
+            }
+            if let Some(v) = sp.take("load.coulomb_friction", &l.coulomb_friction) {
+                m.load.coulomb_friction = v;
+            }
+            if let Some(v) = sp.take("load.torque", &l.torque) {
+                m.load.torque = v;
+            }
+        }
+        for (i, f) in p.faults.iter().enumerate() {
+            let f_span = f.span();
+            let f = f.get_ref();
+            let key = |k: &str| format!("faults[{i}].{k}");
+            sp.0.insert(key("at"), f.at.span());
+            sp.0.insert(key("kind"), f.kind.span());
+            if let Some(d) = &f.duration {
+                sp.0.insert(key("duration"), d.span());
+            }
+            let switch = f.switch.as_ref().map(|s| {
+                sp.0.insert(key("switch"), s.span());
+                match *s.get_ref() {
+                    SwitchName::NegativeLimit => Switch::NegativeLimit,
+                    SwitchName::PositiveLimit => Switch::PositiveLimit,
+                    SwitchName::HomeSwitch => Switch::Home,
+                }
+            });
+            let needs_switch = matches!(f.kind.get_ref(), KindName::Trip | KindName::WireBreak);
+            let kind = match (*f.kind.get_ref(), switch) {
+                (KindName::Trip, Some(s)) => FaultKind::Trip(s),
+                (KindName::WireBreak, Some(s)) => FaultKind::WireBreak(s),
+                (KindName::Encoder, None) => FaultKind::Encoder,
+                (KindName::OverCurrent, None) => FaultKind::OverCurrent,
+                (KindName::OverTemperature, None) => FaultKind::OverTemperature,
+                (KindName::OverVoltage, None) => FaultKind::OverVoltage,
+                (KindName::UnderVoltage, None) => FaultKind::UnderVoltage,
+                _ => {
+                    let (k, why) = if needs_switch {
+                        (key("kind"), "needs `switch` (negative_limit, positive_limit or home_switch)")
+                    } else {
+                        (key("switch"), "only `trip` and `wire_break` take a switch")
+                    };
+                    let at = sp.0.get(&k).map_or(f_span.start, |r| r.start);
+                    let (line, column) = line_col(&self.text, at);
+                    return Err(MachineFileError {
+                        line,
+                        column,
+                        message: format!("node {node}: {k}: {why}"),
+                    });
+                }
+            };
+            m.faults.push(Fault {
+                at: *f.at.get_ref(),
+                kind,
+                duration: f.duration.as_ref().map(|d| *d.get_ref()),
+            });
+        }
+        m.check().map_err(|e| place(&sp, e))?;
+        Ok(m)
+    }
+}
