@@ -244,7 +244,10 @@ fn master_commands_against_served_drives_over_veth() {
     ]);
     let e: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(e["error"]["code"], "drive_timeout", "{e}");
-    assert!(e["error"]["message"].as_str().unwrap().contains("halted"), "{e}");
+    // Halted, or (a cycle lost on a loaded host ends the halt's wait)
+    // quick-stopped: either way stopped, and said so.
+    let msg = e["error"]["message"].as_str().unwrap();
+    assert!(msg.contains("halted") || msg.contains("quick stop sent"), "{e}");
     // A csp sine, one target per 1 ms DC cycle.
     let c = line.json(&["drive", "--slave", "1", "csp-sine", "--amplitude", "500", "--seconds", "0.5"]);
     assert_eq!((c["cycles"].as_u64(), c["bad_wkc"].as_u64()), (Some(500), Some(0)), "{c}");
@@ -265,7 +268,7 @@ fn master_commands_against_served_drives_over_veth() {
     assert!(
         err.contains(
             "move to 900000: interrupted; the motion was halted (controlword bit 8) and the drive is at rest"
-        ),
+        ) || err.contains("move to 900000: interrupted; halt did not stop it: quick stop sent"),
         "{err}"
     );
     // The generic servo (its own mapping: 1602h/1A02h) moves too, in free run.

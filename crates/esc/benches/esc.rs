@@ -9,6 +9,12 @@
 //!   in one frame — then a poll of the line, on bare ESCs.
 //! * `cycle_64_line_firmware`: the same with slave firmware on every ESC
 //!   (state machine in OP, outputs applied and inputs produced per cycle).
+//! * `fprd_64_line_firmware`, `lrw_64_line_firmware`: one datagram through
+//!   the line of ESCs with firmware, the firmware polled after the frame
+//!   as a host does (`Segment::process_frame`).
+//! * `fprd_x64_64_line`: one frame of 64 FPRDs (one per slave, as a master
+//!   checks AL status) through the bare line: divide by 64 for one
+//!   datagram in a full frame.
 //!
 //! Run: `cargo bench -p drivebus-esc --bench esc`.
 
@@ -108,6 +114,16 @@ fn cycle_frame(n: usize) -> ([u8; 1600], usize) {
     (buf, len)
 }
 
+fn fprd_per_slave(n: usize) -> ([u8; 1600], usize) {
+    let mut buf = [0u8; 1600];
+    let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
+    for i in 0..n as u16 {
+        b.push(Command::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
+    }
+    let len = b.finish();
+    (buf, len)
+}
+
 fn line(n: usize) -> Segment<Esc> {
     let escs = (0..n).map(|_| Esc::new(EscConfig::with_sii(sii()))).collect();
     let mut s = Segment::with_devices(SegmentConfig::default(), escs);
@@ -152,6 +168,18 @@ fn benches(c: &mut Criterion) {
     let mut fw = Segment::with_devices(SegmentConfig::default(), slaves);
     configure(&mut fw);
     assert!(fw.devices().iter().all(|s| s.esc().al_status() == 0x08), "all in OP");
+    let (mut f, n) = fprd_per_slave(64);
+    c.bench_function("fprd_x64_64_line", |b| {
+        b.iter(|| black_box(l64.process_frame(black_box(&mut f[..n]), Instant::ZERO)))
+    });
+    let (mut f, n) = one_frame(Command::Fprd, station_address(0x1000 + 63, 0x0130), &[0; 2]);
+    c.bench_function("fprd_64_line_firmware", |b| {
+        b.iter(|| black_box(fw.process_frame(black_box(&mut f[..n]), t)))
+    });
+    let (mut f, n) = one_frame(Command::Lrw, 0, &[0; 4 * 64]);
+    c.bench_function("lrw_64_line_firmware", |b| {
+        b.iter(|| black_box(fw.process_frame(black_box(&mut f[..n]), t)))
+    });
     let (mut f, n) = cycle_frame(64);
     c.bench_function("cycle_64_line_firmware", |b| {
         b.iter(|| {

@@ -43,6 +43,18 @@ use drivebus_can::Instant;
 
 const PPB: i128 = 1_000_000_000;
 
+/// `n / d` for `d > 0`, rounding toward zero: in 64 bits when both fit,
+/// which is every call of a running line (deadlines a few ms ahead); a
+/// 128-bit division is a library call ten times slower, and these run on
+/// every poll of every slave (`Esc::next_deadline`).
+#[inline]
+fn div(n: i128, d: i128) -> i128 {
+    match (i64::try_from(n), i64::try_from(d)) {
+        (Ok(n), Ok(d)) if d > 0 => i128::from(n / d),
+        _ => n / d,
+    }
+}
+
 /// Largest frequency correction the loop applies (500 ppm).
 pub const MAX_FREQ_PPB: i64 = 500_000;
 /// Largest phase slew rate (1000 ppm).
@@ -63,7 +75,7 @@ pub struct ClockConfig {
 }
 
 /// The local clock with its control-loop corrections.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct LocalClock {
     anchor_t: u64,
     anchor_local: u64,
@@ -91,14 +103,14 @@ impl LocalClock {
     }
 
     fn slewed(&self, dt: u64) -> i64 {
-        let max = (i128::from(dt) * i128::from(self.slew) / PPB).min(i128::from(i64::MAX)) as i64;
+        let max = div(i128::from(dt) * i128::from(self.slew), PPB).min(i128::from(i64::MAX)) as i64;
         self.pending.signum() * self.pending.saturating_abs().min(max)
     }
 
     /// Local time at caller time `t` (t before the last anchor is clamped).
     pub fn local(&self, t: Instant) -> u64 {
         let dt = t.as_nanos().saturating_sub(self.anchor_t);
-        let base = (i128::from(dt) * self.rate() / PPB) as i64;
+        let base = div(i128::from(dt) * self.rate(), PPB) as i64;
         self.anchor_local.wrapping_add(base.wrapping_add(self.slewed(dt)) as u64)
     }
 
@@ -122,15 +134,15 @@ impl LocalClock {
         let sign = i128::from(self.pending.signum());
         let slope1 = rate + sign * i128::from(self.slew);
         let t_end = if self.slew > 0 {
-            i128::from(self.pending.unsigned_abs()) * PPB / i128::from(self.slew)
+            div(i128::from(self.pending.unsigned_abs()) * PPB, i128::from(self.slew))
         } else {
             0
         };
-        let gain1 = t_end * slope1 / PPB;
+        let gain1 = div(t_end * slope1, PPB);
         let dt = if delta <= gain1 && slope1 > 0 {
-            (delta * PPB + slope1 - 1) / slope1
+            div(delta * PPB + slope1 - 1, slope1)
         } else {
-            t_end + ((delta - gain1) * PPB + rate - 1) / rate
+            t_end + div((delta - gain1) * PPB + rate - 1, rate)
         };
         let mut t = self.anchor_t.saturating_add(dt.clamp(0, i128::from(u64::MAX / 2)) as u64);
         // Integer rounding: step forward until the local time has arrived.
@@ -293,6 +305,19 @@ pub(crate) fn diff_register(mean: i64) -> u32 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn division_fast_path_equals_the_128_bit_one() {
+        use proptest::prelude::*;
+        proptest!(|(n in any::<i64>(), d in 1..=i64::MAX, wide in any::<i128>(), wd in 1..=i128::MAX)| {
+            let (n, d) = (i128::from(n), i128::from(d));
+            prop_assert_eq!(super::div(n, d), n / d);
+            prop_assert_eq!(super::div(wide, wd), wide / wd);
+            prop_assert_eq!(super::div(wide, d), wide / d);
+            prop_assert_eq!(super::div(n, wd), n / wd);
+            prop_assert_eq!(super::div(-n.abs(), d), -n.abs() / d);
+        });
+    }
+
     use super::*;
 
     #[test]

@@ -143,6 +143,11 @@ pub struct Esc {
     pub(crate) reset_stage: (u8, u64),
     /// Scratch for read-write datagrams (allocated once, never on the frame path).
     pub(crate) scratch: Vec<u8>,
+    /// The last SYNC pulse instant `next_deadline` computed, with what it
+    /// depends on (local target time, clock state): a firmware polls many
+    /// times between two clock corrections, and the conversion through
+    /// the local clock is most of a poll's cost.
+    pub(crate) sync_instant: core::cell::Cell<Option<(u64, LocalClock, Instant)>>,
 }
 
 impl Esc {
@@ -173,6 +178,7 @@ impl Esc {
             wd: Watchdogs::default(),
             events: EventQueue::default(),
             now: Instant::ZERO,
+            sync_instant: core::cell::Cell::new(None),
             timing: FrameTiming::at(Instant::ZERO),
             al_control_full: false,
             al_event_misc: 0,
@@ -288,7 +294,15 @@ impl Esc {
         d = earliest(d, self.wd.pdi_deadline);
         if let Some(sys) = self.sync.next_due() {
             let local = sys.wrapping_sub(self.system_time_offset());
-            d = earliest(d, Some(self.clock.instant_of(local).max(self.now)));
+            let at = match self.sync_instant.get() {
+                Some((l, c, at)) if l == local && c == self.clock => at,
+                _ => {
+                    let at = self.clock.instant_of(local);
+                    self.sync_instant.set(Some((local, self.clock, at)));
+                    at
+                }
+            };
+            d = earliest(d, Some(at.max(self.now)));
         }
         d
     }
