@@ -194,7 +194,7 @@ impl Units {
     pub fn inc_frac_to_pos(&self, inc: i64, frac: i128) -> i64 {
         let (num, den) = (self.pos.num as i128, self.pos.den as i128);
         let p = i128::from(inc).saturating_mul(den).saturating_add(frac);
-        let q = if p >= 0 { (p + num / 2) / num } else { -((-p + num / 2) / num) };
+        let q = div_round(p, num);
         (q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64).saturating_mul(self.pos_sign_i)
     }
 
@@ -298,9 +298,29 @@ impl Carry {
     }
 }
 
+/// `p / num` rounded half away from zero (`num` > 0). In 64 bits when the
+/// operands fit (the usual case): a 128-bit division is a library call, and
+/// the drive asks for its position every control period.
+#[inline]
+fn div_round(p: i128, num: i128) -> i128 {
+    if let (Ok(p), Ok(n)) = (i64::try_from(p), i64::try_from(num))
+        && n > 0
+        && p > i64::MIN + n
+        && p < i64::MAX - n
+    {
+        return i128::from(if p >= 0 { (p + n / 2) / n } else { -((-p + n / 2) / n) });
+    }
+    div_round_wide(p, num)
+}
+
+fn div_round_wide(p: i128, num: i128) -> i128 {
+    if p >= 0 { (p + num / 2) / num } else { -((-p + num / 2) / num) }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::strategy::Strategy;
 
     #[test]
     fn milli_degree_ratio() {
@@ -329,6 +349,24 @@ mod tests {
     }
 
     proptest::proptest! {
+        #[test]
+        fn div_round_matches_the_128_bit_division(
+            p in proptest::prop_oneof![
+                // The wide formula's own range (`p ± num / 2` fits).
+                (-(i128::MAX / 2)..i128::MAX / 2),
+                proptest::num::i64::ANY.prop_map(i128::from),
+                (-1_000_000i128..1_000_000),
+            ],
+            num in proptest::prop_oneof![
+                1i128..=1_000_000,
+                1i128..=i128::from(i64::MAX),
+                (i128::from(i64::MAX) - 3)..=(i128::from(i64::MAX) + 3),
+                1i128..=i128::MAX / 2,
+            ],
+        ) {
+            proptest::prop_assert_eq!(div_round(p, num), div_round_wide(p, num));
+        }
+
         /// A reference taken at `p` reads back `p` exactly, from any
         /// encoder position, whichever of unit and increment is finer.
         #[test]

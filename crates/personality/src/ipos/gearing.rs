@@ -70,9 +70,9 @@ impl Ipos {
     /// Per step in mode −1: entry holds the position; the 0 → 1 edge of
     /// controlword bit 4 engages (§11.1.1); statusword bit 10 is 0 while
     /// not halted (Table 11.1.2).
-    pub(super) fn gear_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    pub(super) fn gear_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
         let view = cx.drive.view();
-        let active = od.get_i64(0x6061, 0) == Some(-1) && view.state == State::OperationEnabled;
+        let active = i64_at(od, refs.mode_display) == Some(-1) && view.state == State::OperationEnabled;
         let bit4 = view.controlword & 0x10 != 0;
         if active && !self.gear.active {
             // The stand-in holds where the axis is until engaged.
@@ -92,9 +92,9 @@ impl Ipos {
         }
         self.gear.bit4 = bit4;
         if view.controlword & 0x100 == 0
-            && let Ok(r) = od.find(0x6041, 0)
+            && let Some(r) = refs.statusword
         {
-            let sw = od.get_u32(0x6041, 0).unwrap_or(0) as u16 & !(1 << 10) & !(1 << 12);
+            let sw = u32_at(od, Some(r)).unwrap_or(0) as u16 & !(1 << 10) & !(1 << 12);
             od.set_le(r, &sw.to_le_bytes());
         }
     }

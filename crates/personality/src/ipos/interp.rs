@@ -118,8 +118,13 @@ impl Ipos {
     }
 
     pub(super) fn legacy_mode(od: &ObjectDictionary) -> Option<bool> {
-        let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
-        match Self::drive_sub_mode(od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux)? {
+        Self::legacy_of(od.get_u32(0x208E, 0), od.get_i64(0x60C0, 0))
+    }
+
+    /// [`Ipos::legacy_mode`] from the values of 208Eh and 60C0h.
+    pub(super) fn legacy_of(aux: Option<u32>, sub_mode: Option<i64>) -> Option<bool> {
+        let aux = aux.unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
+        match Self::drive_sub_mode(sub_mode.unwrap_or(0) as i16, aux)? {
             -1 => Some(false),
             -2 => Some(true),
             _ => None,
@@ -172,7 +177,7 @@ impl Ipos {
         if l.quick_stopped {
             v |= ip_status::PVT_QUICK_STOP;
         }
-        if let Ok(r) = od.find(0x2072, 0) {
+        if let Some(r) = self.refs.fresh(od).ip_status {
             od.set_le(r, &v.to_le_bytes());
         }
         let changed = self.legacy.shown.is_some_and(|s| (s ^ v) & ip_status::CHANGE_MASK != 0);

@@ -48,6 +48,7 @@ pub mod foe;
 mod gearing;
 mod homing;
 mod interp;
+mod refs;
 
 use drivebus_node::{NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
@@ -56,6 +57,7 @@ pub use gearing::{MASTER_FULL_RANGE, master_increment};
 pub use homing::MechanicalLimitHoming;
 use interp::Legacy;
 pub use interp::{AUX_LINEAR_IP, EMCY_IP_STATUS, IP_BUFFER_DEFAULT, IP_BUFFER_MAX, LegacyPoint, ip_status};
+use refs::{Refs, i64_at, u32_at};
 
 /// EMCY 8220h "PDO length exceeded" (Table 3.1.3).
 pub const EMCY_PDO_LENGTH_EXCEEDED: u16 = 0x8220;
@@ -119,6 +121,8 @@ pub struct Ipos {
     limits: (bool, bool),
     /// Power-on work of the first step done.
     started: bool,
+    /// Handles of the objects every step reads.
+    refs: Refs,
 }
 
 impl Ipos {
@@ -138,18 +142,18 @@ impl Ipos {
 
     /// Per step: limit switch EMCYs (§4.3.1), the PVT stop on an empty
     /// buffer and 2072h (§9.2.3).
-    fn watch(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    fn watch(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
         let view = cx.drive.view();
         let lsn = view.digital_inputs & 1 != 0;
         let lsp = view.digital_inputs & 2 != 0;
         // §4.3.1: 60B8h bit 6 = 1 disables the limit switch EMCYs.
-        let silent = od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 != 0;
+        let silent = u32_at(od, refs.limit_config).unwrap_or(0) & 0x40 != 0;
         for (now, was, code, bit) in [(lsp, self.limits.1, EMCY_LSP, 6u16), (lsn, self.limits.0, EMCY_LSN, 7)]
         {
             if now != was {
-                let mer = od.get_u32(0x2000, 0).unwrap_or(0) as u16;
+                let mer = u32_at(od, refs.motion_errors).unwrap_or(0) as u16;
                 let mer = if now { mer | 1 << bit } else { mer & !(1 << bit) };
-                if let Ok(r) = od.find(0x2000, 0) {
+                if let Some(r) = refs.motion_errors {
                     od.set_le(r, &mer.to_le_bytes());
                 }
                 if now && !silent {
@@ -165,7 +169,7 @@ impl Ipos {
         self.limits = (lsn, lsp);
         // §9.2.3 bit 11: PVT with the buffer run empty after a point whose
         // velocity is not 0: quick stop.
-        if Self::legacy_mode(od) == Some(true)
+        if Self::legacy_of(u32_at(od, refs.aux_settings), i64_at(od, refs.sub_mode)) == Some(true)
             && Self::ip_active(cx)
             && self.ip.underflow()
             && self.legacy.last_velocity != 0
@@ -496,23 +500,24 @@ impl Behaviour for Ipos {
         }
         // §11.2.6: 201Dh = 3, the master is the digital input (here the
         // second encoder; pulse & direction is not emulated).
-        if od.get_u32(0x201D, 0) == Some(3)
+        let refs = self.refs.fresh(od);
+        if u32_at(od, refs.master_source) == Some(3)
             && let Some(m) = self.second_encoder
             && self.second_taken != Some(m)
         {
             self.second_taken = Some(m);
             self.gear_update(cx, od, m);
         }
-        self.gear_step(cx, od);
-        self.watch(cx, od);
+        self.gear_step(cx, od, refs);
+        self.watch(cx, od, refs);
         // §7.1.2 / Table 4.4.2: a command error sets 2000h bit 14, and the
         // S-curve update refused 2002h bit 9, until the fault reset.
         let err = cx.drive.command_error().is_some();
-        for (index, bit) in [(0x2000u16, 14u16), (0x2002, 9)] {
-            let v = od.get_u32(index, 0).unwrap_or(0) as u16;
+        for (r, bit) in [(refs.motion_errors, 14u16), (refs.detailed_errors, 9)] {
+            let v = u32_at(od, r).unwrap_or(0) as u16;
             let n = if err { v | 1 << bit } else { v & !(1 << bit) };
             if n != v
-                && let Ok(r) = od.find(index, 0)
+                && let Some(r) = r
             {
                 od.set_le(r, &n.to_le_bytes());
             }

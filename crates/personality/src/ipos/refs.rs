@@ -1,0 +1,64 @@
+//! Handles of the objects the iPOS reads or patches every control period,
+//! resolved once instead of searched by index each step (a step runs 8
+//! times per 1 ms cycle and after every checked write).
+
+use drivebus_od::{EntryRef, ObjectDictionary, le_i64, le_u64};
+
+/// `None` where the dictionary lacks the object (what `get_u32` would
+/// answer `None` for).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Refs {
+    /// Number of objects when resolved: inserting or removing an object
+    /// moves handles, so a different count resolves again.
+    objects: usize,
+    resolved: bool,
+    pub(super) master_source: Option<EntryRef>,
+    pub(super) mode_display: Option<EntryRef>,
+    pub(super) statusword: Option<EntryRef>,
+    pub(super) limit_config: Option<EntryRef>,
+    pub(super) motion_errors: Option<EntryRef>,
+    pub(super) detailed_errors: Option<EntryRef>,
+    pub(super) aux_settings: Option<EntryRef>,
+    pub(super) sub_mode: Option<EntryRef>,
+    pub(super) ip_status: Option<EntryRef>,
+}
+
+impl Refs {
+    fn resolve(od: &ObjectDictionary) -> Refs {
+        let f = |i: u16| od.find(i, 0).ok();
+        Refs {
+            objects: od.objects().len(),
+            resolved: true,
+            master_source: f(0x201D),
+            mode_display: f(0x6061),
+            statusword: f(0x6041),
+            limit_config: f(0x60B8),
+            motion_errors: f(0x2000),
+            detailed_errors: f(0x2002),
+            aux_settings: f(0x208E),
+            sub_mode: f(0x60C0),
+            ip_status: f(0x2072),
+        }
+    }
+
+    /// The handles, resolved again when the dictionary's structure changed.
+    #[inline]
+    pub(super) fn fresh(&mut self, od: &ObjectDictionary) -> Refs {
+        if !self.resolved || self.objects != od.objects().len() {
+            *self = Refs::resolve(od);
+        }
+        *self
+    }
+}
+
+/// `ObjectDictionary::get_u32` through a handle.
+#[inline]
+pub(super) fn u32_at(od: &ObjectDictionary, r: Option<EntryRef>) -> Option<u32> {
+    r.map(|r| le_u64(od.bytes(r)) as u32)
+}
+
+/// `ObjectDictionary::get_i64` through a handle.
+#[inline]
+pub(super) fn i64_at(od: &ObjectDictionary, r: Option<EntryRef>) -> Option<i64> {
+    r.map(|r| le_i64(od.bytes(r)))
+}
