@@ -107,7 +107,7 @@ struct Log {
 
 /// Latencies (µs) of one drive's TPDOs against the SYNCs, and the SYNCs it
 /// missed.
-fn match_drive(syncs: &[Instant], tpdos: &[Instant]) -> (Vec<f64>, usize) {
+fn match_drive(syncs: &[Instant], tpdos: &[Instant]) -> (Vec<(usize, f64)>, usize) {
     let (mut lat, mut missed, mut k) = (Vec::new(), 0, 0);
     for &t in tpdos {
         // Skip SYNCs that went unanswered for too long before this TPDO.
@@ -116,7 +116,7 @@ fn match_drive(syncs: &[Instant], tpdos: &[Instant]) -> (Vec<f64>, usize) {
             k += 1;
         }
         if k < syncs.len() && syncs[k] <= t {
-            lat.push(t.duration_since(syncs[k]).as_secs_f64() * 1e6);
+            lat.push((k, t.duration_since(syncs[k]).as_secs_f64() * 1e6));
             k += 1;
         }
     }
@@ -206,6 +206,11 @@ fn main() -> anyhow::Result<()> {
         lat.extend(l);
         missed += m;
     }
+    // Where the worst cycles fall (start-up, periodic, random) tells what
+    // dominates the tail.
+    lat.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let worst: Vec<String> = lat.iter().take(5).map(|(k, us)| format!("{us:.0} us at cycle {k}")).collect();
+    let mut lat: Vec<f64> = lat.into_iter().map(|x| x.1).collect();
     lat.sort_by(f64::total_cmp);
     let drive_cycles = cycles * usize::from(a.drives);
     let mut hb_err: Vec<f64> = Vec::new();
@@ -232,6 +237,7 @@ fn main() -> anyhow::Result<()> {
         lat.last().copied().unwrap_or(f64::NAN),
         lat.len()
     );
+    println!("worst: {}", worst.join(", "));
     println!(
         "missed cycles: {} of {} drive-cycles ({:.3} %); SYNCs sent more than a period late: {}",
         missed,
