@@ -248,8 +248,8 @@ impl Drive {
     }
 
     /// Homing: writes 6098h, switches to homing mode, starts (bit 4 rising
-    /// edge) and waits for a *fresh* homing attained (bit 12) or a homing
-    /// error (bit 13). Bit 12 left set by an earlier homing does not count:
+    /// edge) and waits for a *fresh* homing completed (bit 12 with bit 10:
+    /// attained and at rest) or a homing error (bit 13). Bit 12 left set by an earlier homing does not count:
     /// this run is only done once bit 12 was seen low after the start
     /// (homing in progress), or it was low before the start; for the
     /// methods homing on the current position (35, 37), which may finish
@@ -272,7 +272,12 @@ impl Drive {
                     if sw & SW_BIT12 == 0 {
                         seen_low.store(true, Relaxed);
                     }
-                    sw & SW_BIT13 != 0 || (sw & SW_BIT12 != 0 && (seen_low.load(Relaxed) || offset.is_some()))
+                    // CiA 402-2 homing: bit 12 with bit 10 is "completed"; bit 12
+                    // alone is "attained, target not reached" (still moving).
+                    sw & SW_BIT13 != 0
+                        || (sw & SW_BIT12 != 0
+                            && sw & SW_TARGET_REACHED != 0
+                            && (seen_low.load(Relaxed) || offset.is_some()))
                 })
                 .await?;
             if sw & SW_BIT13 != 0 || seen_low.load(Relaxed) {

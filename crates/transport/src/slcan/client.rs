@@ -74,7 +74,7 @@ fn encode_batch(first: Out, rx: &mut tokio::sync::mpsc::Receiver<Out>, out: &mut
 pub async fn open_serial(path: &str, bitrate: Option<u32>, baud: u32) -> io::Result<CanBus> {
     let init = open_sequence(bitrate)?;
     let path = path.to_owned();
-    let mut port = tokio::task::spawn_blocking(move || -> io::Result<_> {
+    let port = tokio::task::spawn_blocking(move || -> io::Result<_> {
         let mut port = serialport::new(&path, baud).timeout(POLL).open().map_err(io::Error::from)?;
         port.write_all(&init)?;
         port.flush()?;
@@ -93,6 +93,10 @@ pub async fn open_serial(path: &str, bitrate: Option<u32>, baud: u32) -> io::Res
     let stop_rx = stop.clone();
     std::thread::Builder::new().name("slcan-rx".into()).spawn(move || {
         let _released = released;
+        // Declared after `_released`, so dropped before it: the port (and
+        // its lock) is closed before `close` hears it was released. Left
+        // in the closure, it would be dropped after the closure's locals.
+        let mut port = port;
         let mut split = LineSplitter::new();
         let mut buf = [0u8; 1024];
         loop {
