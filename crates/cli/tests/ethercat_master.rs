@@ -11,53 +11,18 @@
 //! namespace, the link and the server are removed even when it fails.
 
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Command, Output, Stdio};
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_drivebus")
 }
 
-fn ip(args: &[&str]) -> Result<(), String> {
-    match Command::new("ip").args(args).stdin(Stdio::null()).output() {
-        Ok(o) if o.status.success() => Ok(()),
-        Ok(o) => Err(format!("`ip {}`: {}", args.join(" "), String::from_utf8_lossy(&o.stderr).trim())),
-        Err(e) => Err(format!("cannot run `ip`: {e}")),
-    }
-}
-
-/// The namespace, the veth pair and the server; all removed on drop.
-struct Line {
-    ns: String,
-    outer: String,
-    inner: String,
-    serve: Option<Child>,
-}
-
-impl Drop for Line {
-    fn drop(&mut self) {
-        if let Some(mut c) = self.serve.take() {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
-        let _ = ip(&["link", "del", &self.outer]);
-        let _ = ip(&["netns", "del", &self.ns]);
-    }
-}
+mod netns;
+use netns::VethPair as Line;
 
 impl Line {
     fn new(drives: &[&str]) -> Result<Line, String> {
-        let id = std::process::id() % 100_000;
-        let ns = format!("dbem{id}");
-        ip(&["netns", "add", &ns]).map_err(|e| format!("cannot create a network namespace: {e}"))?;
-        let mut l = Line { outer: format!("dbem{id}a"), inner: format!("dbem{id}b"), ns, serve: None };
-        for step in [
-            vec!["link", "add", l.outer.as_str(), "type", "veth", "peer", "name", l.inner.as_str()],
-            vec!["link", "set", l.inner.as_str(), "netns", l.ns.as_str()],
-            vec!["link", "set", l.outer.as_str(), "up"],
-            vec!["netns", "exec", l.ns.as_str(), "ip", "link", "set", l.inner.as_str(), "up"],
-        ] {
-            ip(&step)?;
-        }
+        let mut l = Line::create("dbem")?;
         let mut cmd = Command::new(bin());
         cmd.args(["ethercat", "serve", "--iface", &l.outer]);
         for d in drives {

@@ -67,46 +67,10 @@ fn the_ethercat_demo_block_runs_as_written() {
     assert!(dir.path().join("drivebus-demo-ethercat.svg").is_file());
 }
 
-fn ip(args: &[&str]) -> Result<(), String> {
-    match Command::new("ip").args(args).stdin(Stdio::null()).output() {
-        Ok(o) if o.status.success() => Ok(()),
-        Ok(o) => Err(format!("`ip {}`: {}", args.join(" "), String::from_utf8_lossy(&o.stderr).trim())),
-        Err(e) => Err(format!("cannot run `ip`: {e}")),
-    }
-}
+mod netns;
 
-struct Pair {
-    ns: String,
-    outer: String,
-    inner: String,
-    serve: Option<Child>,
-}
-
-impl Drop for Pair {
-    fn drop(&mut self) {
-        if let Some(mut c) = self.serve.take() {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
-        let _ = ip(&["link", "del", &self.outer]);
-        let _ = ip(&["netns", "del", &self.ns]);
-    }
-}
-
-fn pair() -> Result<Pair, String> {
-    let id = std::process::id() % 100_000;
-    let ns = format!("dbrm{id}");
-    ip(&["netns", "add", &ns]).map_err(|e| format!("cannot create a network namespace: {e}"))?;
-    let p = Pair { outer: format!("dbrm{id}a"), inner: format!("dbrm{id}b"), ns, serve: None };
-    for step in [
-        vec!["link", "add", p.outer.as_str(), "type", "veth", "peer", "name", p.inner.as_str()],
-        vec!["link", "set", p.inner.as_str(), "netns", p.ns.as_str()],
-        vec!["link", "set", p.outer.as_str(), "up"],
-        vec!["netns", "exec", p.ns.as_str(), "ip", "link", "set", p.inner.as_str(), "up"],
-    ] {
-        ip(&step)?;
-    }
-    Ok(p)
+fn pair() -> Result<netns::VethPair, String> {
+    netns::VethPair::create("dbrm")
 }
 
 #[test]
