@@ -9,6 +9,8 @@
 extern crate alloc;
 
 pub mod cob;
+#[cfg(feature = "pcap")]
+pub mod pcap;
 mod device;
 mod frame;
 mod time;

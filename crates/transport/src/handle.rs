@@ -8,6 +8,7 @@ use drivebus_can::Frame;
 use tokio::sync::{broadcast, mpsc, oneshot};
 
 use crate::hub::{Hub, HubFrame, ParticipantId};
+use crate::stats::BusErrors;
 
 /// Frames buffered towards the user before the transport counts an overrun.
 /// Deep enough for bursts (an SDO block is 127 frames); a user that stops
@@ -152,6 +153,15 @@ impl CanTx {
         }
     }
 
+    /// The error frames and error counters the transport reports (SocketCAN
+    /// error frames); `None` for transports that report none.
+    pub fn bus_errors(&self) -> Option<BusErrors> {
+        match &self.0 {
+            TxInner::Hub { .. } => None,
+            TxInner::Chan { status, .. } => status.errors.lock().ok().and_then(|e| e.clone()),
+        }
+    }
+
     /// Waits until every frame this transport was given before the call
     /// has been written to the socket or device, so that a program may
     /// report success and exit without losing it. On the in-process hub
@@ -231,6 +241,8 @@ pub(crate) fn hub_handle(hub: Hub, id: ParticipantId, rx: broadcast::Receiver<Hu
 pub(crate) struct LinkStatus {
     reason: Mutex<Option<String>>,
     overruns: AtomicU64,
+    /// Set by transports that report bus errors (SocketCAN).
+    errors: Mutex<Option<BusErrors>>,
 }
 
 impl LinkStatus {
@@ -262,6 +274,20 @@ impl Uplink {
             if n.is_power_of_two() {
                 tracing::warn!(lost = n + 1, "receiver not read fast enough: frames dropped");
             }
+        }
+    }
+    /// This transport reports bus errors: [`CanTx::bus_errors`] is `Some`
+    /// from now on.
+    pub fn reports_errors(&self) {
+        if let Ok(mut e) = self.status.errors.lock() {
+            e.get_or_insert_with(BusErrors::default);
+        }
+    }
+    /// Counts one SocketCAN error frame (`class`: its `CAN_ERR_*` bits).
+    #[cfg_attr(not(target_os = "linux"), allow(dead_code))] // only SocketCAN reports them
+    pub fn error_frame(&self, class: u32, data: &[u8]) {
+        if let Ok(mut e) = self.status.errors.lock() {
+            e.get_or_insert_with(BusErrors::default).record_socketcan(class, data);
         }
     }
     /// Records why the link stopped; the user's next call reports it.
