@@ -7,8 +7,12 @@
 //! on stdout), and the exit status is 1 (2 for usage errors).
 
 mod args;
+mod args_bus;
 mod args_node;
+mod canfilter;
 mod conn;
+mod csv;
+mod cyclic;
 mod decode;
 mod demo;
 mod dict;
@@ -29,6 +33,7 @@ mod replay;
 mod sdo_cmd;
 mod serve;
 mod slcan_pty;
+mod stats_cmd;
 mod vdrive;
 
 use clap::parser::ValueSource;
@@ -72,7 +77,8 @@ fn uses(cmd: &Command) -> &'static [Opt] {
         Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
         Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
         Command::Monitor(_) => NODE_SDO,
-        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim, Machine],
+        Command::Send(_) | Command::Replay(_) | Command::Produce(_) | Command::Gen(_) => &[Bus, Json, Sim, Machine],
+        Command::Stats(_) => &[Bus, Json, Sim, Machine],
         Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim, Machine],
         Command::Eds(EdsCmd::Check(_)) => &[Json],
         Command::Eds(EdsCmd::Show(_)) => &[Eds, Json],
@@ -191,6 +197,9 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Monitor(a) => monitor::run(g, a).await.map(|()| 0),
         Command::Send(a) => replay::send(g, a).await.map(|()| 0),
         Command::Replay(a) => replay::run(g, a).await.map(|()| 0),
+        Command::Produce(a) => cyclic::produce(g, a).await.map(|()| 0),
+        Command::Gen(a) => cyclic::gen_frames(g, a).await.map(|()| 0),
+        Command::Stats(a) => stats_cmd::run(g, a).await.map(|()| 0),
         Command::Gateway(a) => gateway::run(g, a).await.map(|()| 0),
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
