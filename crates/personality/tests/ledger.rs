@@ -123,9 +123,8 @@ fn test_exists(spec: &str) -> Result<(), String> {
     let Some(at) = lines.iter().position(|l| l.contains(&needle)) else {
         return Err(format!("`{file}` has no `fn {func}(`"));
     };
-    let attributed = lines[at.saturating_sub(4)..at]
-        .iter()
-        .any(|l| l.contains("#[test]") || l.contains("#[tokio::test"));
+    let attributed =
+        lines[at.saturating_sub(4)..at].iter().any(|l| l.contains("#[test]") || l.contains("#[tokio::test"));
     // A proptest! block's functions carry no #[test] of their own.
     if attributed || text.contains("proptest!") {
         Ok(())
@@ -164,7 +163,13 @@ fn check(p: Profile) -> Result<Counts, Vec<String>> {
     for r in &rows {
         let covered = eds.iter().filter(|i| (r.first..=r.last).contains(i)).count();
         if covered == 0 {
-            errors.push(format!("{}: line {}: {:04X}h is not in {}.eds", p.name(), r.line, r.first, p.name()));
+            errors.push(format!(
+                "{}: line {}: {:04X}h is not in {}.eds",
+                p.name(),
+                r.line,
+                r.first,
+                p.name()
+            ));
         }
         match r.status {
             Status::Acts => counts.acts += covered,
@@ -254,12 +259,12 @@ fn standard_ledger_names_real_tests() {
 }
 
 fn counts_table() -> String {
-    let mut t = String::from(
-        "| product | EDS indices | acts | value | not emulated |\n|---|---|---|---|---|\n",
-    );
+    let mut t =
+        String::from("| product | EDS indices | acts | value | not emulated |\n|---|---|---|---|---|\n");
     for p in Profile::all() {
         let c = check(*p).unwrap_or_else(|e| panic!("{}", e.join("\n")));
-        let _ = writeln!(t, "| `{}` | {} | {} | {} | {} |", p.name(), c.indices, c.acts, c.value, c.not_emulated);
+        let _ =
+            writeln!(t, "| `{}` | {} | {} | {} | {} |", p.name(), c.indices, c.acts, c.value, c.not_emulated);
     }
     t
 }
@@ -312,6 +317,8 @@ fn malformed_rows_are_named_with_their_line() {
     assert!(e[2].contains(":5: an `acts` row names the test"), "{e:?}");
     assert!(e[3].contains(":6: 4 columns"), "{e:?}");
     assert!(test_exists("crates/personality/tests/ledger.rs::no_such_test").is_err());
-    assert!(test_exists("crates/personality/tests/ledger.rs::malformed_rows_are_named_with_their_line").is_ok());
+    assert!(
+        test_exists("crates/personality/tests/ledger.rs::malformed_rows_are_named_with_their_line").is_ok()
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
