@@ -237,6 +237,48 @@ fn drive_enable_move_and_fault_reset_only_when_faulted() {
     );
 }
 
+/// A generic drive whose axis has a positive limit switch a tenth of a
+/// revolution (36 of the model's 360 feed units) from its start.
+fn drive_with_limit(id: u8) -> Station {
+    use drivebus_cia402::drive::{DriveConfig, ModeHandler, generic_drive_with};
+    let handlers: Vec<Box<dyn ModeHandler + Send>> =
+        vec![Box::new(drivebus_cia402::homing::HomingMode::default())];
+    let mut cfg = DriveConfig::default();
+    cfg.params.axis.positive_limit = Some(36.0);
+    Station::Drive(Box::new(generic_drive_with(id, cfg, handlers)))
+}
+
+/// Issue 15: a move stopped by a limit switch was "target reached"; the
+/// homing with 6098h = 0 a bare "homing error".
+#[test]
+fn a_move_that_ends_on_a_limit_switch_says_so() {
+    on_both(
+        || vec![drive_with_limit(9)],
+        |m, which| async move {
+            use drivebus_master::{DriveError, MotionEnd};
+            let d = m.drive(9).await.unwrap().with_timeout(Duration::from_secs(2));
+            d.enable().await.unwrap();
+            d.set_mode(drivebus_master::drive::mode::PP).await.unwrap();
+            let ok = d.move_to(10_000, false, None, Duration::from_secs(20)).await.unwrap();
+            assert_eq!(ok.end, MotionEnd::TargetReached, "{which:?}");
+            assert_eq!(ok.target, Some(10_000));
+            let e = d.move_to(1_000_000, false, None, Duration::from_secs(60)).await.unwrap_err();
+            let DriveError::Stopped(r) = &e else { panic!("{which:?}: {e}") };
+            assert_eq!(r.end, MotionEnd::LimitSwitch { positive: true }, "{which:?}: {e}");
+            let p = r.position.unwrap();
+            assert!((10_000..500_000).contains(&p), "{which:?}: stopped at {p}");
+            assert_eq!(r.inputs.map(|i| i & 2), Some(2), "60FDh bit 1");
+            let text = e.to_string();
+            assert!(text.contains("short of the target 1000000") && text.contains("positive limit switch"), "{text}");
+            let e = d.home(0, Duration::from_secs(5)).await.unwrap_err();
+            let DriveError::Stopped(r) = &e else { panic!("{which:?}: {e}") };
+            assert_eq!(r.end, MotionEnd::HomingError, "{which:?}: {e}");
+            let text = e.to_string();
+            assert!(text.contains("6098h homing method is 0") && text.contains("60E3h offers methods"), "{text}");
+        },
+    );
+}
+
 #[test]
 fn homing_waits_for_a_fresh_attained_and_a_runaway_is_halted() {
     on_both(
