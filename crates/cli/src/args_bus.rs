@@ -60,11 +60,11 @@ pub const GEN_EXAMPLES: &str = "\
 Examples:
   drivebus --bus socketcand://127.0.0.1:29536/can0 gen                        random frames every 200 ms
   drivebus --bus socketcand://127.0.0.1:29536/can0 gen -g 1 -I 42A -L 8 -D i  42Ah, 8 counting bytes, every ms
-  drivebus --bus socketcand://127.0.0.1:29536/can0 gen -g 0 -n 10000          10000 frames back to back
-  drivebus --bus virtual gen -I i -L 2 -D 1122 -n 5 -v
+  drivebus --bus socketcand://127.0.0.1:29536/can0 gen -g 0 --count 10000     10000 frames back to back
+  drivebus --bus virtual gen -I i -L 2 -D 1122 --count 5 -v
 
 Like cangen: -I/-L/-D take a fixed value, `r` (random) or `i` (incrementing); the random sequence
-is the same for the same --seed. Stops after -n frames, --seconds or Ctrl-C, and prints the count.";
+is the same for the same --seed. Stops after --count frames, --seconds or Ctrl-C, and prints the count.";
 
 /// `drivebus gen`.
 #[derive(Args, Debug)]
@@ -87,8 +87,8 @@ pub struct GenArgs {
     /// Remote (RTR) frames (cangen -R).
     #[arg(short = 'R', long)]
     pub rtr: bool,
-    /// Stop after this many frames (cangen -n).
-    #[arg(short = 'n', long)]
+    /// Stop after this many frames (cangen's -n; -n is --node here).
+    #[arg(long, value_name = "N")]
     pub count: Option<u64>,
     /// Stop after this many seconds.
     #[arg(long)]

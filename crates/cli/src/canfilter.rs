@@ -79,11 +79,6 @@ impl Filters {
         Ok(out)
     }
 
-    /// True when no filter was given (every frame passes).
-    pub fn is_empty(&self) -> bool {
-        self.filters.is_empty()
-    }
-
     /// Whether `f` passes.
     pub fn pass(&self, f: &Frame) -> bool {
         if self.filters.is_empty() {

@@ -161,7 +161,7 @@ impl Generator {
             u32::from_str_radix(t.trim_start_matches("0x"), 16).ok().filter(|&v| v <= max_id)
         })?;
         let len = pick("-L", &a.len, |t| t.parse::<u8>().ok().filter(|&v| v <= 8))?;
-        let data = pick("-D", &a.data, |t| {
+        let data = pick::<Vec<u8>>("-D", &a.data, |t| {
             let t: String = t.chars().filter(|c| *c != '.').collect();
             if t.len() % 2 != 0 || t.len() > 16 {
                 return None;

@@ -379,8 +379,8 @@ async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(Vec<(u
     let k2 = prepare_homing(m, 2).await?;
     let h0 = m.now();
     let (a, b) =
-        tokio::join!(async { d1.home(k1, Duration::from_secs(30)).await.map(|()| secs(m, h0)) }, async {
-            d2.home(k2, Duration::from_secs(30)).await.map(|()| secs(m, h0))
+        tokio::join!(async { d1.home(k1, Duration::from_secs(30)).await.map(|_| secs(m, h0)) }, async {
+            d2.home(k2, Duration::from_secs(30)).await.map(|_| secs(m, h0))
         });
     Ok((vec![(1, k1, a.context("node 1 homing")?), (2, k2, b.context("node 2 homing")?)], h0))
 }
@@ -393,9 +393,9 @@ async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(f64, f
         drivebus_master::Profile { velocity: 720_000, acceleration: 3_600_000, deceleration: 3_600_000 };
     let t0 = m.now();
     let one = async {
-        d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|()| secs(m, t0))
+        d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|_| secs(m, t0))
     };
-    let two = async { d2.move_to(20_000, false, None, Duration::from_secs(20)).await.map(|()| secs(m, t0)) };
+    let two = async { d2.move_to(20_000, false, None, Duration::from_secs(20)).await.map(|_| secs(m, t0)) };
     let (a, b) = tokio::join!(one, two);
     Ok((a.context("node 1 move")?, b.context("node 2 move")?))
 }
@@ -445,4 +445,28 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
     outln!("  {:<40} {:.3} s", "simulated time", r.sim_seconds);
     outln!();
     outln!("plot: {} ({} samples from TPDOs)", out.display(), r.samples.len());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each node's panel shades that node's phases: node 2 homes on its
+    /// own schedule (its index pulse is elsewhere), not in node 1's span.
+    #[test]
+    fn every_node_has_its_own_phases() {
+        let r = simulate(false, 0.2, false, None).unwrap();
+        let of = |node: u8, name: &str| -> Vec<Phase> {
+            r.phases.iter().filter(|p| p.node == node && p.name == name).copied().collect()
+        };
+        let (h1, h2) = (of(1, "homing"), of(2, "homing"));
+        assert_eq!((h1.len(), h2.len()), (1, 1), "{:?}", r.phases);
+        for (node, h) in [(1, h1[0]), (2, h2[0])] {
+            let took = r.homing.iter().find(|x| x.0 == node).unwrap().2;
+            assert!((h.end - h.start - took).abs() < 1e-6, "node {node}: {h:?} vs {took} s");
+        }
+        assert!((h1[0].end - h2[0].end).abs() > 0.1, "the two homings end apart: {h1:?} {h2:?}");
+        assert_eq!((of(1, "move").len(), of(2, "move").len()), (1, 1));
+        assert_eq!((of(1, "CSP sine").len(), of(2, "CSP sine").len()), (1, 0), "the sine is node 1's");
+    }
 }

@@ -119,7 +119,6 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
             return match d {
                 DriveError::Timeout { .. } => ("drive_timeout", extra),
                 DriveError::Fault { .. } => ("drive_fault", extra),
-                DriveError::HomingError { .. } => ("homing_error", extra),
                 DriveError::Sdo(SdoError::Timeout) => ("sdo_timeout", extra),
                 DriveError::Sdo(_) => ("sdo_abort", extra),
                 _ => ("drive_error", extra),
