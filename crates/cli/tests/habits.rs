@@ -205,7 +205,11 @@ fn csv_from_monitor_and_dump_pdo() {
     db(&u, &["--node", "1", "sdo", "write", "1017", "0", "50"]).success();
     let got = lines_of(&u, &["monitor", "--csv", "--seconds", "2", "--watch", "statusword", "--watch", "6064"], || {});
     assert_eq!(got[0], "time_s,node,state,emcy,Statusword,Position actual value", "{got:?}");
-    let row = got.iter().find(|l| l.contains(",1,pre-operational,")).unwrap_or_else(|| panic!("{got:?}"));
+    // A row per change: the state first, the values once read.
+    let row = got
+        .iter()
+        .find(|l| l.contains(",1,pre-operational,") && !l.ends_with(','))
+        .unwrap_or_else(|| panic!("{got:?}"));
     let cells: Vec<&str> = row.split(',').collect();
     assert_eq!(cells.len(), 6, "{row}");
     assert!(cells[0].parse::<f64>().is_ok() && cells[4].parse::<u16>().is_ok() && cells[5] == "0", "{row}");

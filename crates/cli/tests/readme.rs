@@ -185,7 +185,7 @@ fn the_bus_traffic_section_runs_as_written() {
         assert!(lines.iter().any(|l| l.contains(want)), "the block shows {want}");
     }
     let ran = run_block(lines, common::free_port(), dir.path(), false);
-    assert_eq!(ran, 12);
+    assert_eq!(ran, 11);
     let pcap = std::fs::read(dir.path().join("bus.pcapng")).unwrap();
     // Section header block, then an interface description with link type 227.
     assert_eq!(&pcap[..4], &[0x0A, 0x0D, 0x0D, 0x0A]);

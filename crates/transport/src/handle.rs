@@ -327,3 +327,25 @@ pub(crate) fn link(rtr: bool) -> (CanBus, LinkEnd) {
     };
     (bus, LinkEnd { from_user, up: Uplink { to_user, status } })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A transport that reports bus errors (SocketCAN) makes them visible
+    /// on every sender; the others report none.
+    #[tokio::test]
+    async fn bus_errors_reach_the_senders() {
+        let (bus, end) = link(true);
+        let tx = bus.sender();
+        assert_eq!(tx.bus_errors(), None);
+        end.up.reports_errors();
+        assert_eq!(tx.bus_errors(), Some(BusErrors::default()));
+        end.up.error_frame(0x0040, &[0; 8]);
+        end.up.error_frame(0x0204, &[0, 0x08, 0, 0, 0, 0, 128, 0]);
+        let e = bus.sender().bus_errors().unwrap();
+        assert_eq!((e.error_frames, e.bus_off, e.tx_errors, e.rx_errors), (2, 1, Some(128), Some(0)));
+        let hub = Hub::default();
+        assert_eq!(hub.attach().sender().bus_errors(), None);
+    }
+}

@@ -296,15 +296,18 @@ mod tests {
         let sine = r.phases.iter().find(|p| p.name == "CSP sine").unwrap();
         let csp: Vec<&Sample> = r.samples.iter().filter(|s| s.t >= sine.start && s.t <= sine.end).collect();
         assert!(csp.len() > 900, "{}", csp.len());
-        // The first 50 ms: A·(1 − cos) moves 0.05 % of its peak speed per ms.
-        let start: Vec<&&Sample> = csp.iter().take(50).collect();
-        let v_max = start.iter().map(|s| s.velocity.abs()).fold(0.0, f64::max);
-        let f_max = start.iter().map(|s| s.following.abs()).fold(0.0, f64::max);
-        assert!(v_max < 1500.0, "velocity step at the start of the sine: {v_max} counts/s");
-        assert!(f_max < 20.0, "following-error spike at the start of the sine: {f_max} counts");
+        // The first 10 ms: A·(1 − cos 2πt) reaches 2πA·sin(2π·0.01) ≈ 390
+        // counts/s (A·sin 2πt would start at 2πA ≈ 6300 counts/s).
+        let v_max = csp.iter().take(10).map(|s| s.velocity.abs()).fold(0.0, f64::max);
+        assert!(v_max < 700.0, "velocity step at the start of the sine: {v_max} counts/s");
+        // No following-error spike as it starts (A·sin 2πt gave 12 counts
+        // there against 2-3 in the rest of the sine).
+        let f_start = csp.iter().take(50).map(|s| s.following.abs()).fold(0.0, f64::max);
+        let f_rest = csp.iter().skip(100).map(|s| s.following.abs()).fold(0.0, f64::max);
+        assert!(f_start <= f_rest + 2.0, "following-error spike at the start: {f_start} (then {f_rest})");
         // No comb: the 1-cycle difference of 1-count steps jumps by 1000 counts/s.
         let jump = csp.windows(2).map(|w| (w[1].velocity - w[0].velocity).abs()).fold(0.0, f64::max);
-        assert!(jump < 300.0, "velocity jumps by {jump} counts/s between samples");
+        assert!(jump < 600.0, "velocity jumps by {jump} counts/s between samples");
         // And it is the velocity: the peak 2πA counts/s of the sine.
         let peak = csp.iter().map(|s| s.velocity.abs()).fold(0.0, f64::max);
         assert!((5000.0..7500.0).contains(&peak), "{peak}");
