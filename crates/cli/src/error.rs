@@ -14,6 +14,8 @@ pub struct Coded {
     pub code: &'static str,
     /// The error.
     pub error: anyhow::Error,
+    /// Fields for `--json` besides code and message (a motion's outcome, position, ...).
+    pub fields: Option<serde_json::Value>,
 }
 
 impl fmt::Display for Coded {
@@ -26,7 +28,12 @@ impl std::error::Error for Coded {}
 
 /// Tags `e` with `code`.
 pub fn coded(code: &'static str, e: anyhow::Error) -> anyhow::Error {
-    anyhow::Error::new(Coded { code, error: e })
+    anyhow::Error::new(Coded { code, error: e, fields: None })
+}
+
+/// Tags `e` with `code` and the `--json` fields `fields`.
+pub fn coded_with(code: &'static str, fields: serde_json::Value, e: anyhow::Error) -> anyhow::Error {
+    anyhow::Error::new(Coded { code, error: e, fields: Some(fields) })
 }
 
 /// A duration option in seconds (`--seconds`, `--wait`), at most a year:
@@ -102,7 +109,7 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
     let mut extra = serde_json::json!({});
     for cause in e.chain() {
         if let Some(c) = cause.downcast_ref::<Coded>() {
-            return (c.code, extra);
+            return (c.code, c.fields.clone().unwrap_or(extra));
         }
         if let Some(f) = cause.downcast_ref::<SdoFailure>() {
             extra = serde_json::json!({"node": f.node, "index": format!("{:04X}", f.index), "sub": f.sub});
@@ -119,7 +126,7 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
             return match d {
                 DriveError::Timeout { .. } => ("drive_timeout", extra),
                 DriveError::Fault { .. } => ("drive_fault", extra),
-                DriveError::HomingError { .. } => ("homing_error", extra),
+                DriveError::Stopped(r) => (r.end.code(), extra),
                 DriveError::Sdo(SdoError::Timeout) => ("sdo_timeout", extra),
                 DriveError::Sdo(_) => ("sdo_abort", extra),
                 _ => ("drive_error", extra),
