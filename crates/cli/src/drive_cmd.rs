@@ -49,7 +49,10 @@ fn explain(node: u8, timeout: Duration, e: DriveError) -> anyhow::Error {
             ),
         ),
         DriveError::Stopped(r) => stopped(node, &r),
-        other => anyhow::Error::new(other).context(format!("node {node}")),
+        DriveError::Transport(why) | DriveError::Sdo(SdoError::Transport(why)) => {
+            coded("bus_lost", anyhow!("node {node}: the bus connection was lost: {why}"))
+        }
+        other => anyhow!("node {node}: {other}"),
     }
 }
 
@@ -185,6 +188,14 @@ async fn guarded<T>(
         Ok(()) = interrupted => Err(coded("interrupted", anyhow!("node {node}: {what} interrupted (Ctrl-C)"))),
     };
     let Err(e) = r else { return r };
+    let (code, _) = crate::error::describe(&e);
+    let cause = crate::error::render(&e);
+    if code == "bus_lost" {
+        return Err(coded(
+            code,
+            anyhow!("{cause} during {what}; the axis could not be stopped from here: it may still be moving"),
+        ));
+    }
     let stop = match d.stop_motion(Duration::from_secs(5)).await {
         Ok(s) => match s.action {
             StopAction::NotMoving => "the drive is not in operation enabled: no motion to stop".to_owned(),
@@ -203,12 +214,12 @@ async fn guarded<T>(
     let limits = d.motion_limits().await;
     let position = d.position().await;
     let lines = limits.describe(position, target, homing);
-    let mut text = stop;
+    let mut text = format!("{cause}; {stop}");
     if !lines.is_empty() {
         text.push_str("; objects that shape this motion:\n  ");
         text.push_str(&lines.join("\n  "));
     }
-    Err(e.context(text))
+    Err(coded(code, anyhow!(text)))
 }
 
 async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Result<Printed> {

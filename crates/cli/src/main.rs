@@ -165,12 +165,23 @@ fn main() {
         Ok(code) => std::process::exit(code),
         Err(e) => {
             let (code, extra) = error::describe(&e);
-            if json {
-                output::json_error(code, &format!("{e:#}"), extra);
-            } else {
-                eprintln!("error: {e:#}");
+            let mut msg = error::render(&e);
+            if code.ends_with("timeout")
+                && let Some(hint) = conn::empty_bus_hint()
+            {
+                msg.push_str(hint);
             }
-            std::process::exit(if code == "usage" { 2 } else { 1 });
+            if json {
+                output::json_error(code, &msg, extra);
+            } else {
+                eprintln!("error: {msg}");
+            }
+            // 130: killed by SIGINT, as shells report Ctrl-C.
+            std::process::exit(match code {
+                "usage" => 2,
+                "interrupted" => 130,
+                _ => 1,
+            });
         }
     }
 }
