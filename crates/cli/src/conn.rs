@@ -100,7 +100,7 @@ impl Conn {
             // Let the hosted drives boot before the first request.
             tokio::time::sleep(Duration::from_millis(20)).await;
         }
-        let timeout = Duration::from_millis(g.timeout.max(1));
+        let timeout = Duration::from_millis(g.timeout_ms(1000));
         let master = Master::with_config(
             bus,
             MasterConfig { sdo_timeout: timeout, sdo_retries: g.retries, ..MasterConfig::default() },
