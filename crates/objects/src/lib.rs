@@ -218,25 +218,32 @@ pub fn find(name: &str) -> Option<(u16, Option<u8>)> {
         return None;
     }
     let mut hits: alloc::vec::Vec<(u16, Option<u8>)> = alloc::vec::Vec::new();
-    for def in defs() {
-        let base = norm(def.name);
-        for index in def.first..=def.last {
-            let n = u32::from(index - def.first) + 1;
-            let full = if def.name.contains("{n}") { norm(&fill(def.name, n)) } else { base.clone() };
-            if full == want {
-                let o = ObjectInfo { index, def };
-                match sub_part {
-                    None => hits.push((index, (def.kind == Kind::Var).then_some(0))),
-                    Some(s) => {
-                        let ws = norm(s);
-                        if let Some(e) = o.entries().find(|e| norm(&e.name()) == ws) {
-                            hits.push((index, Some(e.sub)));
+    // The object's full name first; in `OBJECT/ENTRY` also its start
+    // (`identity/vendor-id`: "identity" of "Identity object").
+    for prefix in [false, true] {
+        if prefix && (sub_part.is_none() || !hits.is_empty()) {
+            break;
+        }
+        for def in defs() {
+            let base = norm(def.name);
+            for index in def.first..=def.last {
+                let n = u32::from(index - def.first) + 1;
+                let full = if def.name.contains("{n}") { norm(&fill(def.name, n)) } else { base.clone() };
+                if full == want || (prefix && full.starts_with(&want)) {
+                    let o = ObjectInfo { index, def };
+                    match sub_part {
+                        None => hits.push((index, (def.kind == Kind::Var).then_some(0))),
+                        Some(s) => {
+                            let ws = norm(s);
+                            if let Some(e) = o.entries().find(|e| norm(&e.name()) == ws) {
+                                hits.push((index, Some(e.sub)));
+                            }
                         }
                     }
                 }
-            }
-            if def.first == def.last {
-                break;
+                if def.first == def.last {
+                    break;
+                }
             }
         }
     }

@@ -33,7 +33,7 @@ pub async fn with_master<T: Send + 'static>(
     f: impl AsyncFnOnce(&Master) -> anyhow::Result<T> + Send + 'static,
 ) -> anyhow::Result<T> {
     let iface = line.iface.clone();
-    let timeout = std::time::Duration::from_millis(g.timeout.max(1));
+    let timeout = std::time::Duration::from_millis(g.timeout_ms(1000));
     tokio::task::spawn_blocking(move || {
         let m = Master::on_iface(&iface, timeout).map_err(master_err)?;
         block_on(f(&m))

@@ -383,6 +383,10 @@ impl Drive {
     /// Reads an object: from the latest TPDO when mapped (and the node is
     /// not known to have left Operational), else by SDO.
     pub async fn read_raw(&self, index: u16, sub: u8) -> Result<Vec<u8>, DriveError> {
+        // A TPDO copy is stale once the bus is gone.
+        if let Some(why) = self.master.bus_lost() {
+            return Err(DriveError::Transport(why));
+        }
         let st = self.master.node_state(self.node);
         if self.tpdo_objects.contains(&(index, sub))
             && !matches!(st, Some(RemoteState::PreOperational | RemoteState::Stopped | RemoteState::BootUp))
