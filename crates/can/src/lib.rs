@@ -9,10 +9,10 @@
 extern crate alloc;
 
 pub mod cob;
-#[cfg(feature = "pcap")]
-pub mod pcap;
 mod device;
 mod frame;
+#[cfg(feature = "pcap")]
+pub mod pcap;
 mod time;
 
 pub use device::{Device, LinkState};

@@ -14,7 +14,9 @@ use std::time::Duration;
 use pcap_file::DataLink;
 use pcap_file::pcapng::PcapNgWriter;
 use pcap_file::pcapng::blocks::enhanced_packet::{EnhancedPacketBlock, EnhancedPacketOption};
-use pcap_file::pcapng::blocks::interface_description::{InterfaceDescriptionBlock, InterfaceDescriptionOption};
+use pcap_file::pcapng::blocks::interface_description::{
+    InterfaceDescriptionBlock, InterfaceDescriptionOption,
+};
 
 use crate::{CanId, Frame};
 
@@ -186,7 +188,10 @@ mod tests {
             socketcan_bytes(&Frame::new(0x581, &[0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x02, 0x00])),
             [0, 0, 0x05, 0x81, 8, 0, 0, 0, 0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x02, 0x00]
         );
-        assert_eq!(socketcan_bytes(&Frame::remote(0x705, 1)), [0x40, 0, 0x07, 0x05, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(
+            socketcan_bytes(&Frame::remote(0x705, 1)),
+            [0x40, 0, 0x07, 0x05, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]
+        );
         let ext = Frame::try_new(CanId::Extended(0x18FF_50E5), &[1, 2]).unwrap();
         assert_eq!(socketcan_bytes(&ext)[..6], [0x98, 0xFF, 0x50, 0xE5, 2, 0]);
         let mut c = Capture::new(Vec::new(), "can0", LinkType::SocketCan).unwrap();

@@ -43,7 +43,12 @@ pub struct Cyclic {
 }
 
 /// `send --period`: `frames` every `period_ms`, `count` times or until Ctrl-C.
-pub async fn send_cyclic(conn: &Conn, frames: &[Frame], period_ms: f64, count: Option<u64>) -> anyhow::Result<Cyclic> {
+pub async fn send_cyclic(
+    conn: &Conn,
+    frames: &[Frame],
+    period_ms: f64,
+    count: Option<u64>,
+) -> anyhow::Result<Cyclic> {
     let every = period("--period", period_ms)?;
     let mut tick = tokio::time::interval(every);
     // A round that cannot keep the period is counted, not sent in a burst.
@@ -73,10 +78,16 @@ pub async fn send_cyclic(conn: &Conn, frames: &[Frame], period_ms: f64, count: O
 /// `drivebus produce`.
 pub async fn produce(g: &Global, a: &ProduceArgs) -> anyhow::Result<()> {
     if a.sync.is_none() && a.heartbeat.is_none() && a.time.is_none() {
-        bail!(coded("usage", anyhow!("nothing to produce: give --sync MS, --heartbeat MS --heartbeat-id N or --time MS")));
+        bail!(coded(
+            "usage",
+            anyhow!("nothing to produce: give --sync MS, --heartbeat MS --heartbeat-id N or --time MS")
+        ));
     }
     if a.sync_counter == 1 || a.sync_counter > 240 {
-        bail!(coded("usage", anyhow!("--sync-counter {}: 0 (no counter) or 2..240 (CiA 301 1019h)", a.sync_counter)));
+        bail!(coded(
+            "usage",
+            anyhow!("--sync-counter {}: 0 (no counter) or 2..240 (CiA 301 1019h)", a.sync_counter)
+        ));
     }
     let sync = a.sync.map(|ms| period("--sync", ms)).transpose()?;
     if a.heartbeat == Some(0) || a.time == Some(0) {
@@ -203,7 +214,8 @@ impl Generator {
             Pick::Increment => data = n.to_le_bytes(),
         }
         let id = if self.extended { CanId::Extended(id) } else { CanId::Standard(id as u16) };
-        let f = if self.rtr { Frame::try_remote(id, len) } else { Frame::try_new(id, &data[..usize::from(len)]) };
+        let f =
+            if self.rtr { Frame::try_remote(id, len) } else { Frame::try_new(id, &data[..usize::from(len)]) };
         // Every value above is in range by construction.
         f.unwrap_or_else(|_| Frame::new(0, &[]))
     }
@@ -304,7 +316,8 @@ mod tests {
         }
         let mut g = Generator::new(&gen_args(&["-R", "-L", "1", "-I", "705"])).unwrap();
         assert_eq!(g.next_frame(), Frame::remote(0x705, 1));
-        for bad in [&["-I", "800"][..], &["-L", "9"], &["-D", "123"], &["-L", "4", "-D", "11"], &["-I", "zz"]] {
+        for bad in [&["-I", "800"][..], &["-L", "9"], &["-D", "123"], &["-L", "4", "-D", "11"], &["-I", "zz"]]
+        {
             assert!(Generator::new(&gen_args(bad)).is_err(), "{bad:?}");
         }
     }

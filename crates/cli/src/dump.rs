@@ -155,7 +155,10 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
     }
     let to_stdout = a.pcap.as_deref().is_some_and(|p| p.as_os_str() == "-");
     if to_stdout && (a.candump || a.csv || g.json) {
-        bail!(coded("usage", anyhow!("--pcap - writes the capture to stdout: no --candump, --csv or --json with it")));
+        bail!(coded(
+            "usage",
+            anyhow!("--pcap - writes the capture to stdout: no --candump, --csv or --json with it")
+        ));
     }
     let mut capture = match &a.pcap {
         None => None,
@@ -175,11 +178,16 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
             Some(Capture::new(w, &iface, LinkType::SocketCan).context("writing the pcapng header")?)
         }
     };
-    let mut stamps =
-        Stamps { mode: a.timestamp.unwrap_or(if a.candump { TimestampMode::Absolute } else { TimestampMode::Zero }), first: None, prev: None };
+    let mut stamps = Stamps {
+        mode: a.timestamp.unwrap_or(if a.candump { TimestampMode::Absolute } else { TimestampMode::Zero }),
+        first: None,
+        prev: None,
+    };
     let conn = Conn::open(g).await?;
     if !conn.master.carries_rtr() && !g.json {
-        eprintln!("dump: this transport (socketcand) carries no remote (RTR) frames: node-guarding requests and other RTR frames on the bus are not shown");
+        eprintln!(
+            "dump: this transport (socketcand) carries no remote (RTR) frames: node-guarding requests and other RTR frames on the bus are not shown"
+        );
     }
     let pdos = if !a.pdo {
         PdoMaps::new()
@@ -198,7 +206,10 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
     let (header, columns) = csv_layout(&pdos, &conn.dict);
     if a.csv {
         if pdos.is_empty() {
-            bail!(coded("no_pdo", anyhow!("--csv: no valid PDO mapping found to make columns of (are the nodes there?)")));
+            bail!(coded(
+                "no_pdo",
+                anyhow!("--csv: no valid PDO mapping found to make columns of (are the nodes there?)")
+            ));
         }
         outln!("{}", crate::csv::line(&header));
     }
@@ -278,7 +289,11 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
         } else {
             let mut raw = String::new();
             let _ = candump::write_frame(&mut raw, &f);
-            let t = if stamps.mode == TimestampMode::Absolute { format!("{t:>17.6}") } else { format!("{t:>10.6}") };
+            let t = if stamps.mode == TimestampMode::Absolute {
+                format!("{t:>17.6}")
+            } else {
+                format!("{t:>10.6}")
+            };
             format!("{t}  {raw:<24} {}", decode(&f, &conn.dict, &pdos))
         };
         // A closed pipe (`| head`) ends the trace quietly.

@@ -59,8 +59,12 @@ fn csv_header(labels: &[String]) -> String {
 
 /// One `monitor --csv` row: `t` seconds since the start.
 fn csv_row(t: f64, node: u8, row: &Row, n: usize) -> String {
-    let mut cells =
-        vec![format!("{t:.3}"), node.to_string(), row.state.clone().unwrap_or_default(), row.emcy.clone().unwrap_or_default()];
+    let mut cells = vec![
+        format!("{t:.3}"),
+        node.to_string(),
+        row.state.clone().unwrap_or_default(),
+        row.emcy.clone().unwrap_or_default(),
+    ];
     cells.extend((0..n).map(|k| row.numbers.get(&k).cloned().unwrap_or_default()));
     crate::csv::line(&cells)
 }

@@ -198,7 +198,9 @@ pub fn plot_panels(
                         .map_err(err)?;
                 }
             } else {
-                legend_area.draw(&PathElement::new(line, ShapeStyle::from(c).stroke_width(width))).map_err(err)?;
+                legend_area
+                    .draw(&PathElement::new(line, ShapeStyle::from(c).stroke_width(width)))
+                    .map_err(err)?;
             }
             legend_area.draw(&Text::new(*name, (48, y - 7), ("sans-serif", 14))).map_err(err)?;
         }
@@ -229,7 +231,13 @@ mod tests {
         let s: Vec<Sample> = (0..200)
             .map(|k| {
                 let t = f64::from(k) / 100.0;
-                Sample { t, demand: 1000.0 * t, position: 990.0 * t, position2: 500.0 * t, ..Sample::default() }
+                Sample {
+                    t,
+                    demand: 1000.0 * t,
+                    position: 990.0 * t,
+                    position2: 500.0 * t,
+                    ..Sample::default()
+                }
             })
             .collect();
         plot(&path, &s, phases).unwrap();
@@ -247,7 +255,10 @@ mod tests {
         let reds: Vec<usize> = text.match_indices(red).map(|(i, _)| i).collect();
         assert!(reds.len() > 10, "dashed demand: {} red paths", reds.len());
         // The legend's sample strokes come after the data.
-        assert!(reds.iter().filter(|&&i| i < first_blue).count() > 10, "demand drawn before the actual value");
+        assert!(
+            reds.iter().filter(|&&i| i < first_blue).count() > 10,
+            "demand drawn before the actual value"
+        );
         // No tick label ends in ".0".
         for label in text.split("</text>").filter_map(|t| t.rsplit('>').next()) {
             let label = label.trim();

@@ -53,8 +53,17 @@ pub async fn send(g: &Global, a: &SendArgs) -> anyhow::Result<()> {
             g.json,
             serde_json::json!({"sent": text, "rounds": c.rounds, "period_ms": ms, "late": c.late}),
             || {
-                let late = if c.late > 0 { format!(" ({} late by a period or more)", c.late) } else { String::new() };
-                format!("sent {} frame(s) {} time(s) every {ms} ms{late}: {}", text.len(), c.rounds, text.join(" "))
+                let late = if c.late > 0 {
+                    format!(" ({} late by a period or more)", c.late)
+                } else {
+                    String::new()
+                };
+                format!(
+                    "sent {} frame(s) {} time(s) every {ms} ms{late}: {}",
+                    text.len(),
+                    c.rounds,
+                    text.join(" ")
+                )
             },
         );
         return Ok(());

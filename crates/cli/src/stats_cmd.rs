@@ -22,8 +22,12 @@ pub fn cob_name(id: CanId) -> String {
         (0x080, 0) => "SYNC".to_owned(),
         (0x080, n) => format!("EMCY node {n}"),
         (0x100, 0) => "TIME".to_owned(),
-        (b @ (0x180 | 0x280 | 0x380 | 0x480), n) if n != 0 => format!("TPDO{} node {n}", ((b - 0x180) >> 8) + 1),
-        (b @ (0x200 | 0x300 | 0x400 | 0x500), n) if n != 0 => format!("RPDO{} node {n}", ((b - 0x200) >> 8) + 1),
+        (b @ (0x180 | 0x280 | 0x380 | 0x480), n) if n != 0 => {
+            format!("TPDO{} node {n}", ((b - 0x180) >> 8) + 1)
+        }
+        (b @ (0x200 | 0x300 | 0x400 | 0x500), n) if n != 0 => {
+            format!("RPDO{} node {n}", ((b - 0x200) >> 8) + 1)
+        }
         (0x580, n) if n != 0 => format!("SDO node {n} → master"),
         (0x600, n) if n != 0 => format!("SDO master → node {n}"),
         (0x700, n) if n != 0 => format!("heartbeat node {n}"),
@@ -33,7 +37,12 @@ pub fn cob_name(id: CanId) -> String {
 }
 
 /// One report as text: the totals, then the busiest `top` COB-IDs.
-fn text(r: &LoadReport, bitrate: Option<u32>, errors: &Option<drivebus_transport::BusErrors>, top: usize) -> String {
+fn text(
+    r: &LoadReport,
+    bitrate: Option<u32>,
+    errors: &Option<drivebus_transport::BusErrors>,
+    top: usize,
+) -> String {
     let load = match (r.load, bitrate) {
         (Some(l), Some(b)) => format!("load {:.1} % of {} kbit/s", l * 100.0, b / 1000),
         _ => "load unknown (give --bitrate)".to_owned(),
@@ -45,7 +54,8 @@ fn text(r: &LoadReport, bitrate: Option<u32>, errors: &Option<drivebus_transport
                 (Some(t), Some(r)) => format!(", TX/RX error counters {t}/{r}"),
                 _ => String::new(),
             };
-            let last = if e.last.is_empty() { String::new() } else { format!(", last: {}", e.last.join(", ")) };
+            let last =
+                if e.last.is_empty() { String::new() } else { format!(", last: {}", e.last.join(", ")) };
             format!("error frames {}, bus-off {}{counters}{last}", e.error_frames, e.bus_off)
         }
     };

@@ -58,7 +58,11 @@ fn dump_takes_candump_filters_and_timestamp_modes() {
     db(&u, &["--node", "5", "sdo", "write", "1017", "0", "50"]).success();
     db(&u, &["--node", "6", "sdo", "write", "1017", "0", "50"]).success();
     // ID:MASK: node 5's heartbeat only; every line 50 ms after the last.
-    let got = lines_of(&u, &["dump", "--filter", "705:7FF", "--count", "4", "-t", "delta", "--seconds", "10"], || {});
+    let got = lines_of(
+        &u,
+        &["dump", "--filter", "705:7FF", "--count", "4", "-t", "delta", "--seconds", "10"],
+        || {},
+    );
     assert_eq!(got.len(), 4, "{got:?}");
     assert!(got.iter().all(|l| l.contains("heartbeat node 5")), "{got:?}");
     assert_eq!(time_of(&got[0]), 0.0, "{got:?}");
@@ -66,22 +70,36 @@ fn dump_takes_candump_filters_and_timestamp_modes() {
         assert!((0.02..0.2).contains(&time_of(l)), "delta of 50 ms heartbeats: {got:?}");
     }
     // Zero: from the first frame shown, rising.
-    let got = lines_of(&u, &["dump", "--filter", "706:7FF", "--count", "3", "-t", "zero", "--seconds", "10"], || {});
+    let got = lines_of(
+        &u,
+        &["dump", "--filter", "706:7FF", "--count", "3", "-t", "zero", "--seconds", "10"],
+        || {},
+    );
     let t: Vec<f64> = got.iter().map(|l| time_of(l)).collect();
     assert!(t.len() == 3 && t[0] == 0.0 && t[1] > 0.02 && t[2] > t[1], "{got:?}");
     // Absolute: Unix time.
-    let got = lines_of(&u, &["dump", "--filter", "706:7FF", "--count", "1", "-t", "absolute", "--seconds", "10"], || {});
+    let got = lines_of(
+        &u,
+        &["dump", "--filter", "706:7FF", "--count", "1", "-t", "absolute", "--seconds", "10"],
+        || {},
+    );
     assert!(time_of(&got[0]) > 1.7e9, "{got:?}");
     // ~: inverted (all but node 5's heartbeat); several filters; j joins.
     let got = lines_of(&u, &["dump", "--filter", "705~7FF", "--count", "4", "--seconds", "10"], || {});
     assert!(got.len() == 4 && got.iter().all(|l| l.contains("heartbeat node 6")), "{got:?}");
-    let got = lines_of(&u, &["dump", "--filter", "705:7FF,706:7FF", "--count", "8", "--seconds", "10"], || {});
-    assert!(got.iter().any(|l| l.contains("node 5")) && got.iter().any(|l| l.contains("node 6")), "{got:?}");
     let got =
-        lines_of(&u, &["dump", "--filter", "700:780", "--filter", "706~7FF,j", "--count", "3", "--seconds", "10"], || {});
+        lines_of(&u, &["dump", "--filter", "705:7FF,706:7FF", "--count", "8", "--seconds", "10"], || {});
+    assert!(got.iter().any(|l| l.contains("node 5")) && got.iter().any(|l| l.contains("node 6")), "{got:?}");
+    let got = lines_of(
+        &u,
+        &["dump", "--filter", "700:780", "--filter", "706~7FF,j", "--count", "3", "--seconds", "10"],
+        || {},
+    );
     assert!(got.len() == 3 && got.iter().all(|l| l.contains("heartbeat node 5")), "{got:?}");
     db(&u, &["dump", "--filter", "705", "--count", "1"]).failure().stderr(contains("bad --filter `705`"));
-    db(&u, &["dump", "--candump", "-t", "delta", "--count", "1"]).failure().stderr(contains("absolute times"));
+    db(&u, &["dump", "--candump", "-t", "delta", "--count", "1"])
+        .failure()
+        .stderr(contains("absolute times"));
 }
 
 #[test]
@@ -110,7 +128,9 @@ async fn send_repeats_with_a_period() {
     assert!(out.contains("sent 2 frame(s) 5 time(s) every 20 ms"), "{out}");
     let mut at = Vec::new();
     while at.len() < 5 {
-        wait_frame(&mut spy, Duration::from_secs(3), |f| f.std_id() == Some(0x321)).await.expect("cyclic frame");
+        wait_frame(&mut spy, Duration::from_secs(3), |f| f.std_id() == Some(0x321))
+            .await
+            .expect("cyclic frame");
         at.push(tokio::time::Instant::now());
     }
     assert!(wait_frame(&mut spy, Duration::from_millis(300), |f| f.std_id() == Some(0x321)).await.is_none());
@@ -128,8 +148,19 @@ async fn produce_sync_heartbeat_and_time() {
         stdout(db(
             &u2,
             &[
-                "produce", "--sync", "10", "--sync-counter", "4", "--heartbeat", "100", "--heartbeat-id", "100",
-                "--time", "200", "--seconds", "1.5",
+                "produce",
+                "--sync",
+                "10",
+                "--sync-counter",
+                "4",
+                "--heartbeat",
+                "100",
+                "--heartbeat-id",
+                "100",
+                "--time",
+                "200",
+                "--seconds",
+                "1.5",
             ],
         ))
     });
@@ -154,7 +185,8 @@ async fn produce_sync_heartbeat_and_time() {
     // TIME_OF_DAY: ms after midnight (28 bits), days since 1984 — today.
     let d = time[0].data();
     let days = u16::from_le_bytes([d[4], d[5]]);
-    let now_days = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs() / 86_400;
+    let now_days =
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs() / 86_400;
     assert!((u64::from(days) + 5113).abs_diff(now_days) <= 1, "TIME says day {days} since 1984");
     db(&u, &["produce", "--seconds", "0.1"]).failure().stderr(contains("nothing to produce"));
     db(&u, &["produce", "--heartbeat", "100"]).failure().stderr(contains("--heartbeat-id"));
@@ -173,7 +205,8 @@ async fn gen_makes_cangen_traffic() {
     .unwrap();
     assert!(out.contains("gen: sent 50 frame(s)"), "{out}");
     for k in 0u64..50 {
-        let f = wait_frame(&mut spy, Duration::from_secs(3), |f| f.std_id() == Some(0x42A)).await.expect("frame");
+        let f =
+            wait_frame(&mut spy, Duration::from_secs(3), |f| f.std_id() == Some(0x42A)).await.expect("frame");
         assert_eq!(f.data(), k.to_le_bytes(), "frame {k} counts");
     }
 }
@@ -203,7 +236,11 @@ fn csv_from_monitor_and_dump_pdo() {
     let srv = Serve::start(&["--drive", "generic:1"], None);
     let u = srv.url();
     db(&u, &["--node", "1", "sdo", "write", "1017", "0", "50"]).success();
-    let got = lines_of(&u, &["monitor", "--csv", "--seconds", "2", "--watch", "statusword", "--watch", "6064"], || {});
+    let got = lines_of(
+        &u,
+        &["monitor", "--csv", "--seconds", "2", "--watch", "statusword", "--watch", "6064"],
+        || {},
+    );
     assert_eq!(got[0], "time_s,node,state,emcy,Statusword,Position actual value", "{got:?}");
     // A row per change: the state first, the values once read.
     let row = got
@@ -215,14 +252,27 @@ fn csv_from_monitor_and_dump_pdo() {
     assert!(cells[0].parse::<f64>().is_ok() && cells[4].parse::<u16>().is_ok() && cells[5] == "0", "{row}");
     // dump --pdo --csv: a column per mapped object, a row per PDO.
     let u2 = u.clone();
-    let got = lines_of(&u, &["--node", "1", "dump", "--pdo", "--csv", "--count", "2", "--seconds", "10"], move || {
-        std::thread::sleep(Duration::from_millis(700));
-        Command::new(common::bin()).args(["--bus", &u2, "--node", "1", "nmt", "start"]).assert().success();
-        Command::new(common::bin()).args(["--bus", &u2, "--node", "1", "drive", "enable"]).assert().success();
-    });
+    let got = lines_of(
+        &u,
+        &["--node", "1", "dump", "--pdo", "--csv", "--count", "2", "--seconds", "10"],
+        move || {
+            std::thread::sleep(Duration::from_millis(700));
+            Command::new(common::bin())
+                .args(["--bus", &u2, "--node", "1", "nmt", "start"])
+                .assert()
+                .success();
+            Command::new(common::bin())
+                .args(["--bus", &u2, "--node", "1", "drive", "enable"])
+                .assert()
+                .success();
+        },
+    );
     let header: Vec<&str> = got[0].split(',').collect();
     assert_eq!(&header[..3], ["time_s", "cob_id", "pdo"], "{got:?}");
-    let sw = header.iter().position(|h| *h == "TPDO1 node 1 6041h:00 Statusword").unwrap_or_else(|| panic!("{got:?}"));
+    let sw = header
+        .iter()
+        .position(|h| *h == "TPDO1 node 1 6041h:00 Statusword")
+        .unwrap_or_else(|| panic!("{got:?}"));
     let row: Vec<&str> = got[1].split(',').collect();
     assert_eq!(row.len(), header.len(), "{got:?}");
     assert_eq!((row[1], row[2]), ("181", "TPDO1 node 1"), "{got:?}");
@@ -233,7 +283,8 @@ fn csv_from_monitor_and_dump_pdo() {
 /// The commands of `--help`'s examples, as written (the part before two
 /// spaces or a parenthesis; hardware URLs left out).
 fn help_examples(cmd: &str) -> Vec<String> {
-    let out = Command::new(common::bin()).args([cmd, "--help"]).assert().success().get_output().stdout.clone();
+    let out =
+        Command::new(common::bin()).args([cmd, "--help"]).assert().success().get_output().stdout.clone();
     let text = String::from_utf8_lossy(&out).into_owned();
     let from = text.find("Examples:\n").expect("Examples") + 10;
     text[from..]
@@ -277,14 +328,19 @@ fn help_examples_of_the_bus_commands_run_as_written() {
                     break s;
                 }
                 if std::time::Instant::now() > end {
-                    let _ = std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+                    let _ =
+                        std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status();
                     break child.wait().unwrap();
                 }
                 std::thread::sleep(Duration::from_millis(20));
             };
             let mut err = String::new();
             let _ = std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err);
-            assert!(status.success(), "`drivebus {ex}`{}: {err}", to_file.map(|f| format!(" > {f}")).unwrap_or_default());
+            assert!(
+                status.success(),
+                "`drivebus {ex}`{}: {err}",
+                to_file.map(|f| format!(" > {f}")).unwrap_or_default()
+            );
             ran += 1;
         }
     }

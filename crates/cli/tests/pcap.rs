@@ -46,10 +46,7 @@ fn fields(file: &std::path::Path, names: &[&str]) -> Vec<Vec<String>> {
     }
     let out = cmd.output().unwrap();
     assert!(out.status.success(), "tshark: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| l.split('|').map(str::to_owned).collect())
-        .collect()
+    String::from_utf8_lossy(&out.stdout).lines().map(|l| l.split('|').map(str::to_owned).collect()).collect()
 }
 
 #[test]
@@ -105,7 +102,10 @@ fn tshark_decodes_the_canopen_traffic_of_a_capture() {
         "SDO response 585h decoded with its data:\n{all}"
     );
     // The NMT command and SYNC the tool sent, as the bus carried them.
-    assert!(rows.iter().any(|r| id(r) == "0" && r[4] == "0x01" && r[5] == "0x05"), "NMT start node 5:\n{all}");
+    assert!(
+        rows.iter().any(|r| id(r) == "0" && r[4] == "0x01" && r[5] == "0x05"),
+        "NMT start node 5:\n{all}"
+    );
     assert!(rows.iter().any(|r| id(r) == "128" && r[11].contains("SYNC")), "SYNC:\n{all}");
     // Heartbeats of node 5, operational after the start.
     assert!(

@@ -218,8 +218,10 @@ async fn time_producer_follows_the_master_clock() {
         m.start_time(Duration::from_millis(20), ms);
         let frames = collect(&mut spy, 0x100, Duration::from_millis(200)).await;
         assert!((4..=12).contains(&frames.len()), "{} TIME stamps in 200 ms at 20 ms", frames.len());
-        let stamps: Vec<u64> =
-            frames.iter().map(|f| drivebus_sync::TimeOfDay::from_bytes(f.data()).unwrap().to_unix_ms()).collect();
+        let stamps: Vec<u64> = frames
+            .iter()
+            .map(|f| drivebus_sync::TimeOfDay::from_bytes(f.data()).unwrap().to_unix_ms())
+            .collect();
         assert!(stamps[0] >= ms && stamps[0] < ms + 50, "{stamps:?}");
         for w in stamps.windows(2) {
             assert!(w[1] >= w[0] + 19, "{stamps:?}");

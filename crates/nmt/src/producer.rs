@@ -48,13 +48,7 @@ impl HeartbeatProducer {
     }
 
     /// Send the heartbeat if due; returns the next deadline.
-    pub fn poll(
-        &mut self,
-        now: Instant,
-        id: u16,
-        state: u8,
-        out: &mut impl TxSink,
-    ) -> Option<Instant> {
+    pub fn poll(&mut self, now: Instant, id: u16, state: u8, out: &mut impl TxSink) -> Option<Instant> {
         let due = self.next?;
         if now < due {
             return Some(due);

@@ -66,11 +66,8 @@ pub async fn open_parsed(url: &str, parsed: &BusUrl) -> Result<CanBus, Transport
         #[cfg(target_os = "linux")]
         BusUrl::SocketCan { interface } => socketcan::open(interface).map_err(io),
         #[cfg(not(target_os = "linux"))]
-        BusUrl::SocketCan { .. } => Err(TransportError::new(
-            url,
-            Cause::Unsupported(
-                "SocketCAN is Linux only".into(),
-            ),
-        )),
+        BusUrl::SocketCan { .. } => {
+            Err(TransportError::new(url, Cause::Unsupported("SocketCAN is Linux only".into())))
+        }
     }
 }

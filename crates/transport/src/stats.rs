@@ -72,8 +72,7 @@ impl LoadMeter {
 
     /// The span from the start to `now`; `bitrate` (bit/s) gives the load.
     pub fn report(&self, now: Instant, bitrate: Option<u32>) -> LoadReport {
-        let seconds =
-            self.start.map_or(0.0, |s| now.saturating_duration_since(s).as_nanos() as f64 / 1e9);
+        let seconds = self.start.map_or(0.0, |s| now.saturating_duration_since(s).as_nanos() as f64 / 1e9);
         let rate = |n: u64| if seconds > 0.0 { n as f64 / seconds } else { 0.0 };
         let bits_per_second = rate(self.bits);
         LoadReport {

@@ -155,7 +155,8 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         ProgressStyle::with_template("{spinner} {msg}").unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
     let mut r = Report::default();
-    let mut trace = Trace { clock: clock.clone(), t0: clock.now(), samples: Vec::new(), last: VecDeque::new() };
+    let mut trace =
+        Trace { clock: clock.clone(), t0: clock.now(), samples: Vec::new(), last: VecDeque::new() };
     let start = clock.now();
     block_on(async {
         pb.set_message("scan: SII and 1018h over CoE");
