@@ -148,7 +148,10 @@ mod tests {
     use super::*;
     use pcap_file::pcapng::{Block, PcapNgReader};
 
-    fn packets(bytes: &[u8]) -> (Vec<DataLink>, Vec<(Vec<u8>, u64, Option<u64>)>) {
+    /// A packet read back: data, timestamp in ns, `epb_flags`.
+    type Packet = (Vec<u8>, u64, Option<u64>);
+
+    fn packets(bytes: &[u8]) -> (Vec<DataLink>, Vec<Packet>) {
         let mut r = PcapNgReader::new(bytes).unwrap();
         let (mut links, mut got) = (Vec::new(), Vec::new());
         while let Some(b) = r.next_block() {

@@ -174,7 +174,7 @@ impl Generator {
         let len = pick("-L", &a.len, |t| t.parse::<u8>().ok().filter(|&v| v <= 8))?;
         let data = pick::<Vec<u8>>("-D", &a.data, |t| {
             let t: String = t.chars().filter(|c| *c != '.').collect();
-            if t.len() % 2 != 0 || t.len() > 16 {
+            if !t.len().is_multiple_of(2) || t.len() > 16 {
                 return None;
             }
             (0..t.len()).step_by(2).map(|i| u8::from_str_radix(&t[i..i + 2], 16).ok()).collect()
