@@ -520,8 +520,15 @@ impl MachineFile {
                 m.brake = None;
             } else {
                 let base = m.brake;
+                // Placed at the brake's key the table has.
+                let given = if release.is_some() { "brake.release_delay" } else { "brake.apply_delay" };
                 let need = |v: Option<f64>, b: Option<f64>, key: &str| {
-                    v.or(b).ok_or_else(|| Placed::Key(super::err(key, "missing (no default to keep)")))
+                    v.or(b).ok_or_else(|| {
+                        Placed::Key(MachineError {
+                            other: Some(given.into()),
+                            ..super::err(key, "missing (no default to keep)")
+                        })
+                    })
                 };
                 m.brake = Some(Brake {
                     release_delay: need(release, base.map(|b| b.release_delay), "brake.release_delay")?,
