@@ -85,9 +85,11 @@ fn the_signals_keys_parse() {
     // holding torque holds twice the motor's peak.
     let off = MachineFile::parse("[[node]]\nid = 5\nbrake = { enabled = false }\n").unwrap();
     assert_eq!(off.machine_for(Profile::Generic, 5).unwrap().brake, None);
-    let mut m = Machine::default();
-    m.brake = Some(Brake { release_delay: 0.0, apply_delay: 0.0, holding_torque: None });
-    m.gear_ratio = 2.0;
+    let m = Machine {
+        brake: Some(Brake { release_delay: 0.0, apply_delay: 0.0, holding_torque: None }),
+        gear_ratio: 2.0,
+        ..Machine::default()
+    };
     let dev = Profile::Generic.build_on(5, &m).unwrap();
     let motor = dev.app.drive.model().params().motor;
     let held = dev.app.drive.model().params().io.brake.unwrap().holding_torque;
@@ -123,14 +125,26 @@ fn malformed_signals_name_their_place() {
         ("[node.temperature]\nambient = 90\n", (4, 11), "temperature.ambient: 90 is not a temperature"),
         ("[node.temperature]\nmotor = \"hot\"\n", (4, 9), "invalid type"),
         ("[[node.inputs]]\nat = 1\ninput = \"pressure\"\nvalue = 1\n", (5, 9), "pressure"),
-        ("[[node.inputs]]\nat = 1\ninput = \"digital\"\nvalue = 1\n", (5, 9), "inputs[0].input: needs `line`"),
+        (
+            "[[node.inputs]]\nat = 1\ninput = \"digital\"\nvalue = 1\n",
+            (5, 9),
+            "inputs[0].input: needs `line`",
+        ),
         (
             "[[node.inputs]]\nat = 1\ninput = \"brake\"\nline = 2\nvalue = 1\n",
             (6, 8),
             "inputs[0].line: only `digital` and `analog` take a line",
         ),
-        ("[[node.inputs]]\nat = 1\ninput = \"digital\"\nline = 3\nvalue = 2\n", (7, 9), "not a level (0 or 1)"),
-        ("[[node.inputs]]\nat = 1\ninput = \"digital\"\nline = 17\nvalue = 1\n", (6, 8), "inputs[0].line: 17"),
+        (
+            "[[node.inputs]]\nat = 1\ninput = \"digital\"\nline = 3\nvalue = 2\n",
+            (7, 9),
+            "not a level (0 or 1)",
+        ),
+        (
+            "[[node.inputs]]\nat = 1\ninput = \"digital\"\nline = 17\nvalue = 1\n",
+            (6, 8),
+            "inputs[0].line: 17",
+        ),
         ("[[node.inputs]]\nat = 1\ninput = \"analog\"\nline = 5\nvalue = 1\n", (6, 8), "not an analog input"),
         ("[[node.inputs]]\nat = 1\ninput = \"analog\"\nline = 1\nvalue = 2e3\n", (7, 9), "inputs[0].value"),
         ("[[node.inputs]]\nat = -1\ninput = \"brake\"\nvalue = 1\n", (4, 6), "inputs[0].at"),
@@ -214,9 +228,11 @@ fn generic_input_lines_and_wired_outputs_in_60fd_and_60fe() {
 /// negative at the motor (direct drive), a brake releasing in 50 ms and
 /// applying in 40 ms, profile position mode.
 fn hanging() -> Machine {
-    let mut m = Machine::default();
+    let mut m = Machine {
+        brake: Some(Brake { release_delay: 0.05, apply_delay: 0.04, holding_torque: None }),
+        ..Machine::default()
+    };
     m.load.torque = -0.3;
-    m.brake = Some(Brake { release_delay: 0.05, apply_delay: 0.04, holding_torque: None });
     m
 }
 
@@ -288,9 +304,9 @@ fn generic_set_brake_bit_and_a_released_brake_let_the_load_fall() {
     // Disable voltage, and a brake held released (a manual release lever
     // on the machine's schedule): nothing holds the load.
     controlword(&mut r, 0x00);
-    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Model(drivebus_cia402::model::Injection::Brake(
-        Some(false),
-    )));
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Model(
+        drivebus_cia402::model::Injection::Brake(Some(false)),
+    ));
     let at = position(&mut r);
     r.run_ms(100);
     assert!(position(&mut r) < at - 1000, "the load falls: {} from {at}", position(&mut r));

@@ -138,22 +138,24 @@ impl IoParams {
         if self.wiring.iter().any(|&l| usize::from(l) > DIGITAL_LINES) {
             return err("io.wiring", "input lines are 1..=16 (0: not wired)");
         }
-        for (f, v) in [("io.master_position", self.master_position), ("io.master_velocity", self.master_velocity)]
+        for (f, v) in
+            [("io.master_position", self.master_position), ("io.master_velocity", self.master_velocity)]
         {
             if !(v.is_finite() && v.abs() <= MAX_MASTER) {
                 return err(f, "must be finite, within ±1e15");
             }
         }
         if let Some(b) = self.brake {
-            for (f, v) in [
-                ("io.brake.release_delay", b.release_delay),
-                ("io.brake.apply_delay", b.apply_delay),
-            ] {
+            for (f, v) in
+                [("io.brake.release_delay", b.release_delay), ("io.brake.apply_delay", b.apply_delay)]
+            {
                 if !(v.is_finite() && (0.0..=1e3).contains(&v)) {
                     return err(f, "must be a time in 0..=1000 s");
                 }
             }
-            if !(b.holding_torque.is_finite() && (0.0..=super::params::MAX_TORQUE).contains(&b.holding_torque)) {
+            if !(b.holding_torque.is_finite()
+                && (0.0..=super::params::MAX_TORQUE).contains(&b.holding_torque))
+            {
                 return err("io.brake.holding_torque", "out of the supported range");
             }
         }

@@ -585,6 +585,6 @@ mod tests;
 #[cfg(test)]
 mod tests_axis;
 #[cfg(test)]
-mod tests_prop;
-#[cfg(test)]
 mod tests_io;
+#[cfg(test)]
+mod tests_prop;

@@ -159,7 +159,8 @@ impl FaultSchedule {
         limits: Polarity,
         home: Polarity,
     ) -> Self {
-        let faults = faults.into_iter().map(|f| Entry { at: f.at, duration: f.duration, what: What::Fault(f.kind) });
+        let faults =
+            faults.into_iter().map(|f| Entry { at: f.at, duration: f.duration, what: What::Fault(f.kind) });
         let inputs =
             inputs.into_iter().map(|c| Entry { at: c.at, duration: c.duration, what: What::Input(c.input) });
         let mut entries: Vec<(Entry, Phase)> = faults.chain(inputs).map(|e| (e, Phase::Pending)).collect();

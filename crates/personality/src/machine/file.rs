@@ -19,8 +19,8 @@
 
 use super::io::{Brake, Input, InputChange};
 use super::{Fault, FaultKind, HardStops, HomeSwitch, Limits, Machine, MachineError, Polarity, Switch};
-use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES};
 use crate::Profile;
+use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
