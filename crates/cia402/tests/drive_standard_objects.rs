@@ -222,8 +222,16 @@ fn actual_values_follow_the_drive() {
     // 2^20 increments per revolution.
     let inc = r.read(0x6063, 0) as i32;
     assert!((inc - (1 << 18)).abs() <= 300, "6063h {inc}");
-    let fe = r.read(0x60F4, 0) as i32;
-    assert!(fe.abs() <= 100, "60F4h {fe}");
+    // A load the motor cannot hold pushes the axis off: the demand stays,
+    // 60F4h is demand − actual.
+    r.write(0x6065, 0, &u32::MAX.to_le_bytes());
+    r.drive_mut().inject(Injection::Model(Plant::LoadTorqueStep(5.0)));
+    r.run_ms(20.0);
+    let (demand, actual, fe) = (r.read(0x6062, 0) as i32, r.read(0x6064, 0) as i32, r.read(0x60F4, 0) as i32);
+    assert_eq!(demand, 90_000);
+    assert!(actual > 95_000, "pushed off: {actual}");
+    assert!((fe - (demand - actual)).abs() <= 1, "60F4h {fe}, {demand} − {actual}");
+    r.drive_mut().inject(Injection::Model(Plant::LoadTorqueStep(0.0)));
     // What the DC link is forced to.
     r.drive_mut().inject(Injection::Model(Plant::BusVoltage(Some(300.0))));
     r.run_ms(1.0);
@@ -237,4 +245,76 @@ fn torque_profile_type_is_linear_only() {
     r.write_aborts(0x6088, 0, &1i16.to_le_bytes(), 0x0609_0030);
     r.write(0x6088, 0, &0i16.to_le_bytes());
     assert_eq!(r.read(0x6088, 0), 0);
+}
+
+/// 6075h motor rated current and 6076h motor rated torque are the bases
+/// of the per-mille values: the same 6071h asks twice the torque of a
+/// motor rated twice as strong; 6078h reads in ‰ of 6075h.
+#[test]
+fn rated_current_and_torque_are_the_per_mille_bases() {
+    let torque_at = |rated_torque: u32, rated_current: u32| {
+        let mut r = Rig::generic();
+        r.write(0x6060, 0, &[4]);
+        r.write(0x6076, 0, &rated_torque.to_le_bytes());
+        r.write(0x6075, 0, &rated_current.to_le_bytes());
+        r.write(0x6087, 0, &100_000u32.to_le_bytes());
+        r.enable();
+        r.write(0x6071, 0, &100i16.to_le_bytes());
+        r.run_ms(5.0);
+        (r.drive().model().torque(), r.read(0x6078, 0) as i16)
+    };
+    let (t1, i1) = torque_at(640, 1600);
+    let (t2, i2) = torque_at(1280, 1600);
+    let (t3, i3) = torque_at(640, 3200);
+    assert!((t1 - 0.064).abs() < 0.003, "100 ‰ of 0.64 N·m: {t1}");
+    assert!((t2 - 2.0 * t1).abs() < 0.005, "{t2} vs {t1}");
+    assert!((i2 - 2 * i1).abs() <= 4, "twice the current: {i2} vs {i1}");
+    assert!(
+        (t3 - t1).abs() < 0.003 && (2 * i3 - i1).abs() <= 4,
+        "half the ‰ of a doubled 6075h: {i3} vs {i1}"
+    );
+}
+
+/// 605Dh halt option code: 1 halts on the slow-down ramp (6084h), 2 on the
+/// quick-stop ramp (6085h).
+#[test]
+fn halt_option_code_selects_the_ramp() {
+    let mut stop_time = Vec::new();
+    for option in [1i16, 2] {
+        let mut r = Rig::generic();
+        r.write(0x605D, 0, &option.to_le_bytes());
+        r.write(0x6084, 0, &1_800_000u32.to_le_bytes()); // 0.2 s from 1 rev/s
+        r.write(0x6085, 0, &18_000_000u32.to_le_bytes()); // 0.02 s
+        pv_at(&mut r, 360_000);
+        r.controlword(0x10F);
+        let t = r.run_until(125, 1000.0, |r| r.drive().model().velocity().abs() < 0.05).unwrap();
+        stop_time.push(t);
+    }
+    assert!((stop_time[0] - 0.2).abs() < 0.02, "605Dh = 1: {}", stop_time[0]);
+    assert!((stop_time[1] - 0.02).abs() < 0.01, "605Dh = 2: {}", stop_time[1]);
+}
+
+/// 606Fh velocity threshold and 6070h velocity threshold time decide pv
+/// statusword bit 12 "speed = 0".
+#[test]
+fn velocity_threshold_and_time_decide_speed_zero() {
+    const SPEED_ZERO: u16 = 1 << 12;
+    let mut r = Rig::generic();
+    r.write(0x6060, 0, &[3]);
+    r.write(0x606F, 0, &60_000u16.to_le_bytes());
+    r.write(0x6070, 0, &50u16.to_le_bytes());
+    r.enable();
+    r.run_ms(40.0);
+    assert_eq!(r.statusword() & SPEED_ZERO, 0, "at rest for 40 of 6070h's 50 ms");
+    r.run_ms(15.0);
+    assert_ne!(r.statusword() & SPEED_ZERO, 0);
+    // 36 000 units/s (0.1 rev/s) is inside a 60 000 threshold …
+    r.write(0x60FF, 0, &36_000i32.to_le_bytes());
+    r.run_ms(200.0);
+    assert!(r.drive().model().velocity() > 0.5, "moving");
+    assert_ne!(r.statusword() & SPEED_ZERO, 0, "below 606Fh");
+    // … and outside a 20 000 one.
+    r.write(0x606F, 0, &20_000u16.to_le_bytes());
+    r.run_ms(5.0);
+    assert_eq!(r.statusword() & SPEED_ZERO, 0, "above 606Fh");
 }
