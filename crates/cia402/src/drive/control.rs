@@ -175,6 +175,8 @@ impl Drive {
             demand_velocity: self.dem.vel,
             events: &self.events,
             switches: self.model.switches(),
+            master_position: self.model.master_position(),
+            master_velocity: self.model.master_velocity(),
             params: &self.params,
             units: &self.units,
             dt: self.dt,
