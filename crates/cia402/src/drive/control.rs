@@ -116,6 +116,12 @@ impl Drive {
         self.units.inc_to_pos_f(self.units.rad_to_inc(self.model.velocity_measured()))
     }
 
+    /// The torque demand's limit \[‰\]: 6072h max torque and 6073h max
+    /// current (‰ of rated current, the torque's share of it).
+    fn torque_limit(&self) -> f64 {
+        f64::from(self.params.max_torque.min(self.extra.max_current))
+    }
+
     fn torque_per_mille(&self, nm: f64) -> f64 {
         nm / (f64::from(self.extra.rated_torque) / 1000.0) * 1000.0
     }
@@ -169,6 +175,8 @@ impl Drive {
             demand_velocity: self.dem.vel,
             events: &self.events,
             switches: self.model.switches(),
+            master_position: self.model.master_position(),
+            master_velocity: self.model.master_velocity(),
             params: &self.params,
             units: &self.units,
             dt: self.dt,
@@ -216,7 +224,7 @@ impl Drive {
     }
 
     /// Position-frame demand → model command.
-    fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
+    pub(super) fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
         let u = &self.units;
         Command::Position {
             position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset_f()),
@@ -287,22 +295,10 @@ impl Drive {
         self.steps = self.steps.wrapping_add(1);
         self.sync_mode_activity();
         let f = self.sm.drive_function();
-        let cmd = match f {
-            DriveFunction::Disabled => {
-                self.stop = None;
-                self.dem.pos = self.actual_pos_f();
-                self.dem.vel = self.actual_vel_frame();
-                self.dem.acc = 0.0;
-                self.dem.torque = 0.0;
-                self.status_bits = 0;
-                Command::Off
-            }
-            DriveFunction::Enabled => self.mode_step(),
-            DriveFunction::Stopping(r) => self.stop_step(r),
-            DriveFunction::Holding => {
-                self.dem.vel = 0.0;
-                self.position_command(self.dem.pos, 0.0, 0.0)
-            }
+        self.command_brake(f);
+        let cmd = match self.brake_hold(f) {
+            Some(hold) => hold,
+            None => self.function_command(f),
         };
         self.model.set_command(cmd);
         self.model.step(self.dt);
@@ -322,6 +318,27 @@ impl Drive {
             if still && ramp_done {
                 let out = self.sm.motion_stopped();
                 self.after_transition(out);
+            }
+        }
+    }
+
+    /// The power stage's command for the drive function.
+    fn function_command(&mut self, f: DriveFunction) -> Command {
+        match f {
+            DriveFunction::Disabled => {
+                self.stop = None;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = self.actual_vel_frame();
+                self.dem.acc = 0.0;
+                self.dem.torque = 0.0;
+                self.status_bits = 0;
+                Command::Off
+            }
+            DriveFunction::Enabled => self.mode_step(),
+            DriveFunction::Stopping(r) => self.stop_step(r),
+            DriveFunction::Holding => {
+                self.dem.vel = 0.0;
+                self.position_command(self.dem.pos, 0.0, 0.0)
             }
         }
     }
@@ -437,7 +454,7 @@ impl Drive {
             }
             op::TQ => {
                 let p = &self.params;
-                let lim = f64::from(p.max_torque);
+                let lim = self.torque_limit();
                 // A zero 6087h refuses torque motion (as a zero ramp does in
                 // pp/pv): the demand is 0.
                 let refused = self.extra.torque_slope == 0;
@@ -572,7 +589,7 @@ impl Drive {
                 c
             }
             ModeCommand::Torque(t) => {
-                let lim = f64::from(self.params.max_torque.min(self.extra.max_current));
+                let lim = self.torque_limit();
                 let t = if t.is_finite() { t.clamp(-lim, lim) } else { 0.0 };
                 self.dem.torque = t;
                 self.dem.pos = self.actual_pos_f();
@@ -737,7 +754,7 @@ impl Drive {
 
     /// 60FDh digital inputs as published.
     pub(crate) fn digital_inputs(&self) -> u32 {
-        self.model.switches().digital_inputs() | u32::from(self.interlock) << 3
+        self.model.switches().digital_inputs() | u32::from(self.interlock) << 3 | self.input_lines()
     }
 
     /// The statusword as the drive computes it.
