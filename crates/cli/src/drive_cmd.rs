@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use anyhow::{anyhow, bail};
 use drivebus_master::{
-    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport, Profile,
-    SdoError, StopAction, drive::human_secs, drive::mode, mode_name,
+    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
+    Profile, SdoError, StopAction, drive::human_secs, drive::mode, mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -71,7 +71,9 @@ fn next_step(node: u8, r: &MotionReport) -> String {
         MotionEnd::Fault | MotionEnd::FollowingError => {
             format!("; `drivebus --node {node} drive reset` clears a fault, `drive enable` enables again")
         }
-        MotionEnd::QuickStop | MotionEnd::Disabled => format!("; `drivebus --node {node} drive enable` enables again"),
+        MotionEnd::QuickStop | MotionEnd::Disabled => {
+            format!("; `drivebus --node {node} drive enable` enables again")
+        }
         _ => String::new(),
     }
 }
@@ -116,8 +118,6 @@ impl Report {
         }))
     }
 }
-
-
 
 /// A progress line on a terminal (stderr); nothing otherwise.
 fn progress_bar(g: &Global) -> ProgressBar {

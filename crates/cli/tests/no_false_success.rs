@@ -34,7 +34,8 @@ fn a_move_stopped_by_a_limit_switch_fails_and_says_where() {
     let srv = Serve::start(&["--drive", "generic:5"], None);
     let u = srv.url();
     db(&u, &["--node", "5", "drive", "enable"]).success();
-    let a = db(&u, &["--json", "--node", "5", "drive", "move", "50000000", "--velocity", "3000000"]).failure();
+    let a =
+        db(&u, &["--json", "--node", "5", "drive", "move", "50000000", "--velocity", "3000000"]).failure();
     let j = json_of(&a);
     let e = &j["error"];
     assert_eq!(e["code"], "limit_switch", "{j}");
@@ -57,9 +58,9 @@ fn a_move_stopped_by_a_limit_switch_fails_and_says_where() {
     assert!(j["statusword"].is_u64() && j["reason"].is_string(), "{j}");
     assert!(j.get("result").is_none(), "no prose result: {j}");
     // Text: the same on stderr, cause first.
-    db(&u, &["--node", "5", "drive", "move", "50000000", "--velocity", "3000000"])
-        .failure()
-        .stderr(contains("error: node 5: the positive limit switch is active").and(contains("short of the target")));
+    db(&u, &["--node", "5", "drive", "move", "50000000", "--velocity", "3000000"]).failure().stderr(
+        contains("error: node 5: the positive limit switch is active").and(contains("short of the target")),
+    );
 }
 
 /// `drive home` with 6098h = 0 failed as "homing error (statusword
@@ -184,8 +185,7 @@ fn the_step_after_lss_set_node_id_works_as_printed() {
     std::thread::sleep(Duration::from_millis(100));
     let a = db(&u, &["--node", "10", "lss", "set-node-id", "11"]).success();
     let text = String::from_utf8_lossy(&a.get_output().stdout).into_owned();
-    let step = text.split('`').nth(1).unwrap_or_else(|| panic!("no command in: {text}"));
-    assert_eq!(step, "drivebus --node 10 nmt reset-comm", "{text}");
+    assert!(text.contains("drivebus --node 10 nmt reset-comm"), "{text}");
     db(&u, &["--node", "10", "nmt", "reset-comm"]).success().stdout(contains("node 11"));
     db(&u, &["--node", "11", "sdo", "read", "1018:04"]).success().stdout(contains("= 16"));
     drop(server);
@@ -199,8 +199,11 @@ fn ctrl_c_exits_130() {
     let dir = tempfile::tempdir().unwrap();
     // No limit switches or hard stops: homing method 17 searches for ever.
     let machine = dir.path().join("endless.toml");
-    std::fs::write(&machine, "[[node]]\nid = 6\nlimits = { enabled = false }\nhard_stops = { enabled = false }\n")
-        .unwrap();
+    std::fs::write(
+        &machine,
+        "[[node]]\nid = 6\nlimits = { enabled = false }\nhard_stops = { enabled = false }\n",
+    )
+    .unwrap();
     let srv = Serve::start(&["--drive", "generic:6", "--machine", machine.to_str().unwrap()], None);
     let u = srv.url();
     db(&u, &["--node", "6", "drive", "enable"]).success();

@@ -116,7 +116,8 @@ impl MotionReport {
                 u8::from(positive)
             ),
             MotionEnd::SoftwareLimit => {
-                "the axis is at a software position limit 607Dh (statusword bit 11 internal limit active)".into()
+                "the axis is at a software position limit 607Dh (statusword bit 11 internal limit active)"
+                    .into()
             }
             MotionEnd::InternalLimit => "internal limit active (statusword bit 11)".into(),
             MotionEnd::FollowingError => {
@@ -153,7 +154,9 @@ impl MotionReport {
             },
             MotionEnd::QuickStop => "quick stop active".into(),
             MotionEnd::Halted => "halted (controlword bit 8)".into(),
-            MotionEnd::Disabled => format!("the drive left operation enabled ({})", DriveState::from_statusword(sw)),
+            MotionEnd::Disabled => {
+                format!("the drive left operation enabled ({})", DriveState::from_statusword(sw))
+            }
         }
     }
 
@@ -273,9 +276,11 @@ impl Drive {
         let mut error_code = None;
         let end = match state {
             DriveState::Fault | DriveState::FaultReactionActive => {
-                error_code = self.read_raw(0x603F, 0).await.ok().and_then(|v| {
-                    (v.len() >= 2).then(|| u16::from_le_bytes([v[0], v[1]]))
-                });
+                error_code = self
+                    .read_raw(0x603F, 0)
+                    .await
+                    .ok()
+                    .and_then(|v| (v.len() >= 2).then(|| u16::from_le_bytes([v[0], v[1]])));
                 MotionEnd::Fault
             }
             DriveState::QuickStopActive => MotionEnd::QuickStop,
@@ -293,7 +298,9 @@ impl Drive {
                     } else {
                         let lim = self.read_i32(0x607D, 1).await.zip(self.read_i32(0x607D, 2).await);
                         match (lim, position) {
-                            (Some((lo, hi)), Some(p)) if lo < hi && (p <= lo || p >= hi) => MotionEnd::SoftwareLimit,
+                            (Some((lo, hi)), Some(p)) if lo < hi && (p <= lo || p >= hi) => {
+                                MotionEnd::SoftwareLimit
+                            }
                             _ => MotionEnd::InternalLimit,
                         }
                     }
