@@ -163,7 +163,8 @@ type Printed = Option<(String, serde_json::Value)>;
 /// A command's report: `msg` in words; for `--json` the outcome `code`,
 /// the statusword and state, and `fields`.
 fn done(node: u8, code: &str, msg: String, sw: u16, fields: serde_json::Value) -> Printed {
-    let mut json = serde_json::json!({"node": node, "outcome": code, "statusword": sw, "state": state_name(sw)});
+    let mut json =
+        serde_json::json!({"node": node, "outcome": code, "statusword": sw, "state": state_name(sw)});
     if let (Some(j), serde_json::Value::Object(f)) = (json.as_object_mut(), fields) {
         j.extend(f);
     }
@@ -312,15 +313,33 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
         }
         DriveCmd::Enable => {
             d.enable().await.map_err(ex)?;
-            done(node, "operation_enabled", "operation enabled".into(), d.statusword().await.map_err(ex)?, serde_json::json!({}))
+            done(
+                node,
+                "operation_enabled",
+                "operation enabled".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Disable => {
             d.disable().await.map_err(ex)?;
-            done(node, "disabled", "operation disabled".into(), d.statusword().await.map_err(ex)?, serde_json::json!({}))
+            done(
+                node,
+                "disabled",
+                "operation disabled".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Quickstop => {
             d.quick_stop().await.map_err(ex)?;
-            done(node, "quick_stop", "quick stop".into(), d.statusword().await.map_err(ex)?, serde_json::json!({}))
+            done(
+                node,
+                "quick_stop",
+                "quick stop".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Stop => {
             let s = d.stop_motion(Duration::from_secs(5)).await.map_err(ex)?;
@@ -330,13 +349,22 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 StopAction::QuickStopped => ("quick_stopped", "halt did not stop the axis: quick stop"),
             };
             let pos = s.position.map_or_else(String::new, |p| format!(" at position {p}"));
-            done(node, code, format!("{what}{pos}"), s.statusword, serde_json::json!({"position": s.position}))
+            done(
+                node,
+                code,
+                format!("{what}{pos}"),
+                s.statusword,
+                serde_json::json!({"position": s.position}),
+            )
         }
         DriveCmd::Reset => {
             let reset = d.fault_reset().await.map_err(ex)?;
             let sw = d.statusword().await.map_err(ex)?;
-            let (code, msg) =
-                if reset { ("fault_reset", "fault reset") } else { ("no_fault", "no fault to reset: left as it is") };
+            let (code, msg) = if reset {
+                ("fault_reset", "fault reset")
+            } else {
+                ("no_fault", "no fault to reset: left as it is")
+            };
             done(node, code, msg.into(), sw, serde_json::json!({}))
         }
         DriveCmd::Move(a) => {
@@ -390,7 +418,13 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             .await;
             r?;
             let sw = d.statusword().await.map_err(ex)?;
-            done(node, "target_velocity", format!("target velocity {}", a.value), sw, serde_json::json!({"velocity": a.value}))
+            done(
+                node,
+                "target_velocity",
+                format!("target velocity {}", a.value),
+                sw,
+                serde_json::json!({"velocity": a.value}),
+            )
         }
         DriveCmd::Torque(a) => {
             let t = i16::try_from(a.value)

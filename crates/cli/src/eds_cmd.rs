@@ -58,8 +58,17 @@ pub fn with_file_name(text: &str, name: &str) -> String {
                 done = true;
             }
             in_info = t.eq_ignore_ascii_case("[FileInfo]");
-        } else if in_info && !done && t.split('=').next().is_some_and(|k| k.trim().eq_ignore_ascii_case("FileName")) {
-            let eol = if line.ends_with("\r\n") { "\r\n" } else if line.ends_with('\n') { "\n" } else { "" };
+        } else if in_info
+            && !done
+            && t.split('=').next().is_some_and(|k| k.trim().eq_ignore_ascii_case("FileName"))
+        {
+            let eol = if line.ends_with("\r\n") {
+                "\r\n"
+            } else if line.ends_with('\n') {
+                "\n"
+            } else {
+                ""
+            };
             out.push_str(&format!("FileName={name}{eol}"));
             done = true;
             continue;
@@ -73,12 +82,13 @@ pub fn with_file_name(text: &str, name: &str) -> String {
 /// §4.2 asks for, keeping what the template had.
 fn stamp_file_info(dcf: &mut Eds, name: &str, node: u8) {
     let (date, time) = now_306();
-    let set = |fi: &mut Vec<(String, String)>, k: &str, v: String, replace: bool| {
-        match fi.iter_mut().find(|(key, _)| key.eq_ignore_ascii_case(k)) {
-            Some(e) if replace || e.1.trim().is_empty() => e.1 = v,
-            Some(_) => {}
-            None => fi.push((k.to_owned(), v)),
-        }
+    let set = |fi: &mut Vec<(String, String)>, k: &str, v: String, replace: bool| match fi
+        .iter_mut()
+        .find(|(key, _)| key.eq_ignore_ascii_case(k))
+    {
+        Some(e) if replace || e.1.trim().is_empty() => e.1 = v,
+        Some(_) => {}
+        None => fi.push((k.to_owned(), v)),
     };
     let fi = &mut dcf.file_info;
     set(fi, "FileName", name.to_owned(), true);
@@ -290,16 +300,21 @@ mod tests {
         let w = with_file_name(t, "akd-node1.eds");
         assert_eq!(w, t.replace("drivebus.eds", "akd-node1.eds"));
         let none = "[FileInfo]\nFileVersion=1\n[DeviceInfo]\n";
-        assert_eq!(with_file_name(none, "x.eds"), "[FileInfo]\nFileVersion=1\nFileName=x.eds\r\n[DeviceInfo]\n");
+        assert_eq!(
+            with_file_name(none, "x.eds"),
+            "[FileInfo]\nFileVersion=1\nFileName=x.eds\r\n[DeviceInfo]\n"
+        );
         let (date, time) = now_306();
         assert_eq!((date.len(), date.as_bytes()[2], time.len()), (10, b'-', 7), "{date} {time}");
     }
 
     #[test]
     fn a_broken_eds_names_its_cause_first() {
-        let e = parse_text("[FileInfo]\nFileName=x\n[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n[1000\nDataType=7\n")
-            .unwrap_err()
-            .to_string();
+        let e = parse_text(
+            "[FileInfo]\nFileName=x\n[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n[1000\nDataType=7\n",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.starts_with("line 6: section header without ']'"), "{e}");
     }
 }

@@ -241,3 +241,42 @@ fn help_examples_resolve_and_errors_say_the_cause_first_once() {
     assert!(err.starts_with("error: Connection refused"), "{err}");
     assert_eq!(err.matches("Connection refused").count(), 1, "{err}");
 }
+
+/// A malformed EDS showed its consequences ("line 0: object 1000 is
+/// listed but has no section") and not its cause; `eds dcf` wrote an
+/// empty `[FileInfo]` that `eds check` passed; an EDS read off a node said
+/// `FileName=drivebus.eds` whatever `--out` was.
+#[test]
+fn eds_files_name_their_cause_and_themselves() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    db("virtual", &["eds", "export", "--profile", "generic", "--out", &at("g.eds")]).success();
+    let good = std::fs::read_to_string(at("g.eds")).unwrap();
+    let n = good.lines().position(|l| l.trim() == "[1000]").unwrap();
+    let bad: String = good
+        .lines()
+        .enumerate()
+        .map(|(i, l)| if i == n { "[1000\n".to_owned() } else { format!("{l}\n") })
+        .collect();
+    std::fs::write(at("bad.eds"), bad).unwrap();
+    db("virtual", &["--eds", &at("bad.eds"), "--sim", "generic:5", "--node", "5", "sdo", "read", "1000"])
+        .failure()
+        .stderr(contains(format!("bad.eds: line {}: section header without ']'", n + 1)));
+    Command::new(common::bin())
+        .args(["eds", "check", &at("bad.eds")])
+        .assert()
+        .failure()
+        .stdout(contains(format!("bad.eds:{}: error: section header without ']'", n + 1)));
+    db("virtual", &["--sim", "generic:5", "--node", "5", "eds", "dcf", "--out", &at("n5.dcf")]).success();
+    let dcf = std::fs::read_to_string(at("n5.dcf")).unwrap();
+    assert!(dcf.contains("FileName=n5.dcf") && dcf.contains("EDSVersion=4.0"), "{dcf:.400}");
+    Command::new(common::bin())
+        .args(["eds", "check", &at("n5.dcf")])
+        .assert()
+        .success()
+        .stdout(contains("0 error(s)"));
+    db("virtual", &["--sim", "generic:5", "--node", "5", "eds", "export", "--out", &at("node5.eds")])
+        .success();
+    let eds = std::fs::read_to_string(at("node5.eds")).unwrap();
+    assert!(eds.contains("FileName=node5.eds") && !eds.contains("FileName=drivebus.eds"), "{eds:.400}");
+}

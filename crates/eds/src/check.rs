@@ -309,7 +309,8 @@ impl Ctx<'_> {
 /// errors when missing (an empty section passed before), the dates and
 /// authors warnings.
 fn file_info(c: &mut Ctx<'_>) {
-    let has = |k: &str| c.eds.file_info.iter().any(|(key, v)| key.eq_ignore_ascii_case(k) && !v.trim().is_empty());
+    let has =
+        |k: &str| c.eds.file_info.iter().any(|(key, v)| key.eq_ignore_ascii_case(k) && !v.trim().is_empty());
     let missing = |keys: &[&'static str]| keys.iter().copied().filter(|k| !has(k)).collect::<Vec<_>>();
     let errors = missing(&["FileName", "FileVersion", "FileRevision", "EDSVersion"]);
     let warnings = missing(&[
