@@ -285,9 +285,11 @@ impl Drive {
             }
             DriveState::QuickStopActive => MotionEnd::QuickStop,
             DriveState::OperationEnabled => {
-                if homing.is_some() && sw & SW_BIT13 != 0 {
-                    MotionEnd::HomingError
-                } else if homing.is_none() && sw & SW_BIT13 != 0 {
+                if homing.is_some() {
+                    // Homing ends on attained (bits 12 and 10) or error (bit
+                    // 13); attained on an active switch is still attained.
+                    if sw & SW_BIT13 != 0 { MotionEnd::HomingError } else { MotionEnd::HomingAttained }
+                } else if sw & SW_BIT13 != 0 {
                     MotionEnd::FollowingError
                 } else if sw & sw::INTERNAL_LIMIT != 0 {
                     let i = inputs.unwrap_or(0);
@@ -304,8 +306,6 @@ impl Drive {
                             _ => MotionEnd::InternalLimit,
                         }
                     }
-                } else if homing.is_some() {
-                    MotionEnd::HomingAttained
                 } else if self.read_raw(super::CONTROLWORD, 0).await.ok().is_some_and(|v| {
                     v.len() >= 2 && u16::from_le_bytes([v[0], v[1]]) & super::motion::CW_HALT != 0
                 }) {
