@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use anyhow::{anyhow, bail};
 use drivebus_master::{
-    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport, Profile,
-    SdoError, StopAction, drive::human_secs, drive::mode, mode_name,
+    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
+    Profile, SdoError, StopAction, drive::human_secs, drive::mode, mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -71,7 +71,9 @@ fn next_step(node: u8, r: &MotionReport) -> String {
         MotionEnd::Fault | MotionEnd::FollowingError => {
             format!("; `drivebus --node {node} drive reset` clears a fault, `drive enable` enables again")
         }
-        MotionEnd::QuickStop | MotionEnd::Disabled => format!("; `drivebus --node {node} drive enable` enables again"),
+        MotionEnd::QuickStop | MotionEnd::Disabled => {
+            format!("; `drivebus --node {node} drive enable` enables again")
+        }
         _ => String::new(),
     }
 }
@@ -117,8 +119,6 @@ impl Report {
     }
 }
 
-
-
 /// A progress line on a terminal (stderr); nothing otherwise.
 fn progress_bar(g: &Global) -> ProgressBar {
     if g.json {
@@ -160,11 +160,15 @@ pub async fn run(g: &Global, c: &DriveCmd) -> anyhow::Result<()> {
 
 type Printed = Option<(String, serde_json::Value)>;
 
-fn done(node: u8, msg: String, sw: u16) -> Printed {
-    Some((
-        format!("node {node}: {msg} (statusword {sw:04X}h, {})", state_name(sw)),
-        serde_json::json!({"node": node, "result": msg, "statusword": sw, "state": state_name(sw)}),
-    ))
+/// A command's report: `msg` in words; for `--json` the outcome `code`,
+/// the statusword and state, and `fields`.
+fn done(node: u8, code: &str, msg: String, sw: u16, fields: serde_json::Value) -> Printed {
+    let mut json =
+        serde_json::json!({"node": node, "outcome": code, "statusword": sw, "state": state_name(sw)});
+    if let (Some(j), serde_json::Value::Object(f)) = (json.as_object_mut(), fields) {
+        j.extend(f);
+    }
+    Some((format!("node {node}: {msg} (statusword {sw:04X}h, {})", state_name(sw)), json))
 }
 
 /// Runs `motion`; on an error, a timeout or Ctrl-C stops the axis and
@@ -309,31 +313,59 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
         }
         DriveCmd::Enable => {
             d.enable().await.map_err(ex)?;
-            done(node, "operation enabled".into(), d.statusword().await.map_err(ex)?)
+            done(
+                node,
+                "operation_enabled",
+                "operation enabled".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Disable => {
             d.disable().await.map_err(ex)?;
-            done(node, "operation disabled".into(), d.statusword().await.map_err(ex)?)
+            done(
+                node,
+                "disabled",
+                "operation disabled".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Quickstop => {
             d.quick_stop().await.map_err(ex)?;
-            done(node, "quick stop".into(), d.statusword().await.map_err(ex)?)
+            done(
+                node,
+                "quick_stop",
+                "quick stop".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Stop => {
             let s = d.stop_motion(Duration::from_secs(5)).await.map_err(ex)?;
-            let what = match s.action {
-                StopAction::NotMoving => "not in operation enabled: nothing to stop",
-                StopAction::Halted => "halted",
-                StopAction::QuickStopped => "halt did not stop the axis: quick stop",
+            let (code, what) = match s.action {
+                StopAction::NotMoving => ("not_moving", "not in operation enabled: nothing to stop"),
+                StopAction::Halted => ("halted", "halted"),
+                StopAction::QuickStopped => ("quick_stopped", "halt did not stop the axis: quick stop"),
             };
             let pos = s.position.map_or_else(String::new, |p| format!(" at position {p}"));
-            done(node, format!("{what}{pos}"), s.statusword)
+            done(
+                node,
+                code,
+                format!("{what}{pos}"),
+                s.statusword,
+                serde_json::json!({"position": s.position}),
+            )
         }
         DriveCmd::Reset => {
             let reset = d.fault_reset().await.map_err(ex)?;
             let sw = d.statusword().await.map_err(ex)?;
-            let msg = if reset { "fault reset" } else { "no fault to reset: left as it is" };
-            done(node, msg.into(), sw)
+            let (code, msg) = if reset {
+                ("fault_reset", "fault reset")
+            } else {
+                ("no_fault", "no fault to reset: left as it is")
+            };
+            done(node, code, msg.into(), sw, serde_json::json!({}))
         }
         DriveCmd::Move(a) => {
             require_enabled().await?;
@@ -385,7 +417,14 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             })
             .await;
             r?;
-            done(node, format!("target velocity {}", a.value), d.statusword().await.map_err(ex)?)
+            let sw = d.statusword().await.map_err(ex)?;
+            done(
+                node,
+                "target_velocity",
+                format!("target velocity {}", a.value),
+                sw,
+                serde_json::json!({"velocity": a.value}),
+            )
         }
         DriveCmd::Torque(a) => {
             let t = i16::try_from(a.value)
@@ -397,7 +436,8 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 d.controlword(0x0F).await
             })
             .await?;
-            done(node, format!("target torque {t} ‰"), d.statusword().await.map_err(ex)?)
+            let sw = d.statusword().await.map_err(ex)?;
+            done(node, "target_torque", format!("target torque {t} ‰"), sw, serde_json::json!({"torque": t}))
         }
         DriveCmd::Home(a) => {
             require_enabled().await?;

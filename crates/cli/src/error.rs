@@ -167,7 +167,6 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
         if cause.downcast_ref::<std::io::Error>().is_some() {
             return ("io", extra);
         }
-
     }
     ("error", extra)
 }
@@ -178,7 +177,8 @@ mod tests {
 
     #[test]
     fn the_cause_comes_first_and_once() {
-        let io = std::io::Error::new(std::io::ErrorKind::ConnectionRefused, "Connection refused (os error 111)");
+        let io =
+            std::io::Error::new(std::io::ErrorKind::ConnectionRefused, "Connection refused (os error 111)");
         let e = anyhow::Error::new(io).context("cannot open `x`: Connection refused (os error 111)");
         assert_eq!(render(&e), "Connection refused (os error 111): cannot open `x`");
         let e = coded("bus", anyhow::anyhow!("inner")).context("closing the bus");

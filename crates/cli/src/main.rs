@@ -281,6 +281,67 @@ mod tests {
         c.render_long_help().to_string()
     }
 
+    /// Splits an example line as a shell would (quotes, a `>` redirection
+    /// and the comment after two spaces dropped).
+    fn words(line: &str) -> Vec<String> {
+        let cmd = line.trim_start();
+        let cmd = cmd.split("  ").next().unwrap_or(cmd);
+        let cmd = cmd.split(" > ").next().unwrap_or(cmd);
+        let (mut out, mut cur, mut quote) = (Vec::new(), String::new(), None);
+        for c in cmd.chars() {
+            match (quote, c) {
+                (None, '\'' | '"') => quote = Some(c),
+                (Some(q), c) if c == q => quote = None,
+                (None, ' ') => {
+                    if !cur.is_empty() {
+                        out.push(std::mem::take(&mut cur));
+                    }
+                }
+                (_, c) => cur.push(c),
+            }
+        }
+        if !cur.is_empty() {
+            out.push(cur);
+        }
+        out
+    }
+
+    /// Every example line of every command's help.
+    fn examples(c: &clap::Command, into: &mut Vec<String>) {
+        for text in [c.get_after_help(), c.get_after_long_help()].into_iter().flatten() {
+            for line in text.to_string().lines() {
+                if line.trim_start().starts_with("drivebus ") {
+                    into.push(line.to_owned());
+                }
+            }
+        }
+        for sc in c.get_subcommands() {
+            examples(sc, into);
+        }
+    }
+
+    /// Issue 15: the examples of `--help` run as written: each parses,
+    /// takes only options its command uses, and names objects that resolve.
+    #[test]
+    fn every_help_example_parses_as_written() {
+        let mut all = Vec::new();
+        examples(&command(), &mut all);
+        assert!(all.len() > 60, "{} examples", all.len());
+        for line in all {
+            let w = words(&line);
+            let m = command().try_get_matches_from(&w).unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            check_options(&m).unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            let cli = Cli::from_arg_matches(&m).unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            if let Command::Sdo(args::SdoCmd::Read(a)) = &cli.cmd {
+                dict::Dict::default()
+                    .resolve(&a.object, a.sub.as_deref())
+                    .unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            }
+        }
+        // The top-level help names an object the same way.
+        assert!(dict::Dict::default().resolve("identity/vendor-id", None).is_ok());
+    }
+
     #[test]
     fn each_command_lists_only_its_own_options() {
         let eds = help(&["eds", "check"]);

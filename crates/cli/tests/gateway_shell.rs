@@ -23,12 +23,24 @@ fn read_until(rx: &mpsc::Receiver<Vec<u8>>, seen: &mut String, want: &str) -> bo
     true
 }
 
+/// The shell's process, killed when the test ends.
+struct Shell(Option<std::process::Child>);
+
+impl Drop for Shell {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.0.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
 #[test]
 fn the_shell_answers_on_a_terminal_and_keeps_its_history() {
     let home = tempfile::tempdir().unwrap();
     let pty = nix::pty::openpty(None, None).expect("openpty");
     let slave = std::fs::File::from(pty.slave);
-    let mut child = Command::new(common::bin())
+    let child = Command::new(common::bin())
         .args(["--bus", "virtual", "--sim", "generic:5", "--node", "5", "gateway"])
         .env_remove("DRIVEBUS_BUS")
         .env("HOME", home.path())
@@ -37,6 +49,9 @@ fn the_shell_answers_on_a_terminal_and_keeps_its_history() {
         .stderr(Stdio::from(slave))
         .spawn()
         .expect("spawn drivebus gateway");
+    // Killed if the test fails while it runs.
+    let mut guard = Shell(Some(child));
+    let child = guard.0.as_mut().expect("running");
     let mut term = std::fs::File::from(pty.master);
     let mut reader = term.try_clone().unwrap();
     let (tx, rx) = mpsc::channel();
@@ -50,11 +65,7 @@ fn the_shell_answers_on_a_terminal_and_keeps_its_history() {
         }
     });
     let mut seen = String::new();
-    let prompt = read_until(&rx, &mut seen, "gateway> ");
-    if !prompt {
-        let _ = child.kill();
-    }
-    assert!(prompt, "no prompt: {seen}");
+    assert!(read_until(&rx, &mut seen, "gateway> "), "no prompt: {seen}");
     term.write_all(b"r 0x1000 0 u32\r").unwrap();
     assert!(read_until(&rx, &mut seen, "[1] 131474"), "no answer: {seen}");
     // Ctrl-D ends the shell.
@@ -64,10 +75,7 @@ fn the_shell_answers_on_a_terminal_and_keeps_its_history() {
         if let Some(st) = child.try_wait().unwrap() {
             break st;
         }
-        if Instant::now() > end {
-            let _ = child.kill();
-            panic!("the shell did not end on Ctrl-D: {seen}");
-        }
+        assert!(Instant::now() <= end, "the shell did not end on Ctrl-D: {seen}");
         std::thread::sleep(Duration::from_millis(20));
     };
     // What the terminal showed after the answer (a panic would be there).

@@ -10,7 +10,23 @@ use std::time::{Duration, Instant};
 
 use common::Serve;
 
-fn spawn(url: &str, args: &[&str]) -> Child {
+/// A client process, killed if the test ends (or fails) while it runs.
+struct Client(Option<Child>);
+
+impl Drop for Client {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.0.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+fn spawn(url: &str, args: &[&str]) -> Client {
+    Client(Some(spawn_child(url, args)))
+}
+
+fn spawn_child(url: &str, args: &[&str]) -> Child {
     Command::new(common::bin())
         .arg("--bus")
         .arg(url)
@@ -23,7 +39,8 @@ fn spawn(url: &str, args: &[&str]) -> Child {
 }
 
 /// Waits for `child` until `by`; its stderr, or a failure if it still runs.
-fn ended_by(mut child: Child, by: Instant, what: &str) -> (std::process::ExitStatus, String) {
+fn ended_by(mut client: Client, by: Instant, what: &str) -> (std::process::ExitStatus, String) {
+    let mut child = client.0.take().expect("running");
     loop {
         if let Some(st) = child.try_wait().unwrap() {
             let out = child.wait_with_output().unwrap();
@@ -41,7 +58,7 @@ fn ended_by(mut child: Child, by: Instant, what: &str) -> (std::process::ExitSta
 fn every_client_notices_a_dead_server() {
     let mut srv = Serve::start(&["--drive", "generic:5"], None);
     let u = srv.url();
-    let ok = |args: &[&str]| assert!(spawn(&u, args).wait().unwrap().success(), "{args:?}");
+    let ok = |args: &[&str]| assert!(spawn_child(&u, args).wait().unwrap().success(), "{args:?}");
     ok(&["--node", "5", "nmt", "start"]);
     ok(&["--node", "5", "drive", "enable"]);
     // A move of 5 s (within --wait 6), a trace and a gateway, all waiting.

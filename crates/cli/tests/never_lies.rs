@@ -240,9 +240,7 @@ fn lss_refuses_to_configure_two_slaves_at_once() {
     std::thread::sleep(Duration::from_millis(100));
     db(&u, &["--node", "9", "sdo", "read", "1018:04"]).success().stdout(contains("= 32"));
     // One unconfigured slave left: the global path is safe now.
-    db(&u, &["lss", "set-node-id", "10"])
-        .success()
-        .stdout(contains("only unconfigured slave"));
+    db(&u, &["lss", "set-node-id", "10"]).success().stdout(contains("only unconfigured slave"));
     std::thread::sleep(Duration::from_millis(100));
     db(&u, &["--node", "10", "sdo", "read", "1018:04"]).success().stdout(contains("= 16"));
     // A configured node by its node-ID: 1018h by SDO, selective switch.

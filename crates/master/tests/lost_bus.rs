@@ -58,4 +58,7 @@ async fn every_wait_ends_when_the_bus_is_lost() {
     tokio::time::timeout(limit, m.sleep(Duration::from_secs(3600))).await.expect("no timer after the loss");
     let e = m.sdo(5).read::<u32>(0x1000, 0).await.unwrap_err();
     assert!(e.to_string().contains("closed the connection"), "{e}");
+    // LSS too: its exchange is not left for a driver that has stopped.
+    let e = tokio::time::timeout(limit, m.lss().fastscan()).await.expect("LSS ends").unwrap_err();
+    assert!(e.to_string().contains("closed the connection"), "{e}");
 }

@@ -281,7 +281,6 @@ pub struct EcatServeArgs {
     pub pcap: Option<PathBuf>,
 }
 
-
 /// Runs a `drivebus ethercat` command.
 pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
     match cmd {

@@ -201,6 +201,10 @@ impl Core {
     /// Starts a frame-driven operation (LSS, fastscan) now.
     pub(crate) fn start_op(&mut self, mut op: Box<dyn ops::Op>) -> u64 {
         let id = self.id();
+        // No driver runs a lost bus: dropping the op ends its future now.
+        if self.closed.is_some() {
+            return id;
+        }
         let now = self.now;
         let mut out = Vec::new();
         op.start(now, &mut out);

@@ -169,7 +169,12 @@ impl fmt::Display for DriveError {
             }
             DriveError::Fault { statusword } => write!(f, "drive fault (statusword {statusword:04X}h)"),
             DriveError::Stopped(r) => {
-                write!(f, "{r} (statusword {:04X}h, {})", r.statusword, DriveState::from_statusword(r.statusword))
+                write!(
+                    f,
+                    "{r} (statusword {:04X}h, {})",
+                    r.statusword,
+                    DriveState::from_statusword(r.statusword)
+                )
             }
             DriveError::NoSync => f.write_str("no SYNC producer running"),
             DriveError::Transport(s) => write!(f, "bus error: {s}"),

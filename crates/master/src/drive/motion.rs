@@ -9,8 +9,8 @@ use tokio::sync::broadcast;
 
 use super::outcome::pp_at_rest;
 use super::{
-    Drive, DriveError, DriveState, MotionProgress, MotionReport, Profile, SW_BIT12, SW_BIT13, SW_TARGET_REACHED,
-    mode,
+    Drive, DriveError, DriveState, MotionProgress, MotionReport, Profile, SW_BIT12, SW_BIT13,
+    SW_TARGET_REACHED, mode,
 };
 
 /// Controlword: halt (bit 8).
@@ -233,20 +233,25 @@ impl Drive {
             self.sdo.write(0x6083, 0, p.acceleration).await?;
             self.sdo.write(0x6084, 0, p.deceleration).await?;
         }
-        let absolute = if relative { self.position().await.map(|p| p.saturating_add(target)) } else { Some(target) };
+        let absolute =
+            if relative { self.position().await.map(|p| p.saturating_add(target)) } else { Some(target) };
         self.write_raw(0x607A, 0, &target.to_le_bytes()).await?;
         let base = CW_ENABLED | 0x20 | if relative { 0x40 } else { 0 };
         self.controlword(base).await?;
         self.controlword(base | 0x10).await?;
         let sw = self
-            .wait_sw("set-point acknowledge", true, |sw| sw & SW_BIT12 != 0 || Drive::ended_abnormally(sw, false))
+            .wait_sw("set-point acknowledge", true, |sw| {
+                sw & SW_BIT12 != 0 || Drive::ended_abnormally(sw, false)
+            })
             .await?;
         if Drive::ended_abnormally(sw, false) {
             return Drive::settle(self.classify(sw, absolute, None, started).await);
         }
         self.controlword(base).await?;
         let sw = self
-            .wait_sw_for("target reached", true, timeout, |sw| pp_at_rest(sw) || Drive::ended_abnormally(sw, false))
+            .wait_sw_for("target reached", true, timeout, |sw| {
+                pp_at_rest(sw) || Drive::ended_abnormally(sw, false)
+            })
             .await?;
         Drive::settle(self.classify(sw, absolute, None, started).await)
     }

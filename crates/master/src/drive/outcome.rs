@@ -116,7 +116,8 @@ impl MotionReport {
                 u8::from(positive)
             ),
             MotionEnd::SoftwareLimit => {
-                "the axis is at a software position limit 607Dh (statusword bit 11 internal limit active)".into()
+                "the axis is at a software position limit 607Dh (statusword bit 11 internal limit active)"
+                    .into()
             }
             MotionEnd::InternalLimit => "internal limit active (statusword bit 11)".into(),
             MotionEnd::FollowingError => {
@@ -153,7 +154,9 @@ impl MotionReport {
             },
             MotionEnd::QuickStop => "quick stop active".into(),
             MotionEnd::Halted => "halted (controlword bit 8)".into(),
-            MotionEnd::Disabled => format!("the drive left operation enabled ({})", DriveState::from_statusword(sw)),
+            MotionEnd::Disabled => {
+                format!("the drive left operation enabled ({})", DriveState::from_statusword(sw))
+            }
         }
     }
 
@@ -273,16 +276,20 @@ impl Drive {
         let mut error_code = None;
         let end = match state {
             DriveState::Fault | DriveState::FaultReactionActive => {
-                error_code = self.read_raw(0x603F, 0).await.ok().and_then(|v| {
-                    (v.len() >= 2).then(|| u16::from_le_bytes([v[0], v[1]]))
-                });
+                error_code = self
+                    .read_raw(0x603F, 0)
+                    .await
+                    .ok()
+                    .and_then(|v| (v.len() >= 2).then(|| u16::from_le_bytes([v[0], v[1]])));
                 MotionEnd::Fault
             }
             DriveState::QuickStopActive => MotionEnd::QuickStop,
             DriveState::OperationEnabled => {
-                if homing.is_some() && sw & SW_BIT13 != 0 {
-                    MotionEnd::HomingError
-                } else if homing.is_none() && sw & SW_BIT13 != 0 {
+                if homing.is_some() {
+                    // Homing ends on attained (bits 12 and 10) or error (bit
+                    // 13); attained on an active switch is still attained.
+                    if sw & SW_BIT13 != 0 { MotionEnd::HomingError } else { MotionEnd::HomingAttained }
+                } else if sw & SW_BIT13 != 0 {
                     MotionEnd::FollowingError
                 } else if sw & sw::INTERNAL_LIMIT != 0 {
                     let i = inputs.unwrap_or(0);
@@ -293,12 +300,12 @@ impl Drive {
                     } else {
                         let lim = self.read_i32(0x607D, 1).await.zip(self.read_i32(0x607D, 2).await);
                         match (lim, position) {
-                            (Some((lo, hi)), Some(p)) if lo < hi && (p <= lo || p >= hi) => MotionEnd::SoftwareLimit,
+                            (Some((lo, hi)), Some(p)) if lo < hi && (p <= lo || p >= hi) => {
+                                MotionEnd::SoftwareLimit
+                            }
                             _ => MotionEnd::InternalLimit,
                         }
                     }
-                } else if homing.is_some() {
-                    MotionEnd::HomingAttained
                 } else if self.read_raw(super::CONTROLWORD, 0).await.ok().is_some_and(|v| {
                     v.len() >= 2 && u16::from_le_bytes([v[0], v[1]]) & super::motion::CW_HALT != 0
                 }) {
