@@ -82,11 +82,10 @@ PROFILES["kc1"]["overrides"].update({
     (0x35B9, 1): ov(type=I32, why="type not given; INTEGER32 as the AKD appendix lists MT.CNTL (35B9h)", sec="7.11.2.1"),
 })
 PROFILES["akd"]["overrides"] = dict(KC1_AKD_COMMON)
-PROFILES["akd"]["remove_subs"] = [(0x60C1, 2), (0x60C1, 3)]
 PROFILES["akd"]["overrides"].update({
     (0x6099, 2): ov(default="18000", why="default '50 % of sub 1': 36000 / 2 = 18000 written", sec="6.10.2.3"),
     (0x6087, 0): ov(default="10000", why="no default given ('-'); drivebus's working value 10000 per mille/s written (above the ~2385 minimum)", sec="6.7.2.6; 7.1.5"),
-    (0x60C1, 0): ov(why="sub 0 = 1 (body: linear interpolation only); subs 2 and 3 of the appendix are remnants of the PVT mode removed in edition M and left out, so sub 0 is the highest sub-index", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
+    (0x60C1, 0): ov(default="3", why="sub 0 = 1 in the body (linear interpolation only) but the appendix of this edition lists subs 2 and 3 (the PVT record removed in edition M): the firmware's dictionary still has them, so they are kept as values the linear interpolation ignores, and sub 0 = 3 is the highest sub-index", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
 })
 PROFILES["ipos"]["overrides"] = {
     (0x1000, 0): ov(default="0x00060192", why="default: table prints '60192' meaning hex; 0x00060192 written", sec="4.8.1"),

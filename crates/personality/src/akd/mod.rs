@@ -33,7 +33,7 @@ use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, op};
 use drivebus_cia402::homing::{HomingContext, HomingMethod, MethodStep, StandardMethod};
 use drivebus_node::{Node, NodeConfig, NodeEvent};
-use drivebus_od::{ObjectDictionary, SdoAbort};
+use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
 
 extern crate alloc;
 
@@ -91,7 +91,7 @@ impl Default for Akd {
 const HOOKED: &[u16] = &[
     0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403, 0x1800,
     0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6071, 0x60FF,
-    0x60C4,
+    0x60C4, 0x1026, 0x2071, 0x3431,
 ];
 
 impl Behaviour for Akd {
@@ -151,6 +151,15 @@ impl Behaviour for Akd {
             }
             return Ok(Verdict::Pass);
         }
+        // §6.9.2.1: linear interpolation only (60C0h = 0).
+        if index == 0x60C0 && le_u64(data) != 0 {
+            return Err(SdoAbort::INVALID_VALUE);
+        }
+        // §7.1.5: 60C1h:2/3 are listed (the PVT mode's record, removed in
+        // edition M): kept as values, the linear interpolation ignores them.
+        if index == 0x60C1 && (2..=3).contains(&sub) {
+            return Ok(Verdict::Store);
+        }
         if index == 0x6060 && sub == 0 {
             let m = data.first().copied().unwrap_or(0) as i8;
             if m < 0 && self.manufacturer_mode(m).is_some() {
@@ -175,6 +184,9 @@ impl Behaviour for Akd {
     }
     fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
         self.0.on_event(cx, od, event);
+    }
+    fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        self.0.on_boot(cx, od);
     }
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         self.0.after_step(cx, od);

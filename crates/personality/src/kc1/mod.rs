@@ -17,8 +17,11 @@
 //! - 6099h homing speeds above 65535 velocity units → `0609 0031`
 //!   (example 9 frames 43–44; our reading, see docs/personalities.md).
 
+mod ascii;
 mod emcy;
 mod facts;
+pub mod status;
+mod timing;
 
 pub use facts::INFO;
 
@@ -30,8 +33,9 @@ use crate::Profile;
 extern crate alloc;
 use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
 use drivebus_can::Frame;
-use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp};
+use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp, op};
 use drivebus_cia402::interp::IpMode;
+use drivebus_cia402::state_machine::State;
 use drivebus_node::{Node, NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort, Value, le_u64};
 use drivebus_pdo::PdoConfig;
@@ -58,9 +62,22 @@ pub struct Kollmorgen {
     /// A PVT point's position (60C1h:1), held until the point's last item
     /// (60C1h:3) completes the record (§7.9.2.2).
     pvt_position: Option<[u8; 4]>,
-    /// 2026h ASCII channel: the command being received, the reply being read.
-    ascii_in: alloc::string::String,
-    ascii_out: alloc::collections::VecDeque<u8>,
+    /// 2026h ASCII channel (4 characters per SDO).
+    telnet: ascii::Line,
+    /// 1026h OS prompt (one character per SDO).
+    prompt: ascii::Line,
+    /// The parameter names of the object table, for Telnet.
+    names: alloc::vec::Vec<(alloc::string::String, u16, u8)>,
+    /// Motion tasks stored by MT.SET.
+    tasks: alloc::vec::Vec<ascii::Task>,
+    /// MT.NUM where the dictionary has no object for it.
+    task_num: usize,
+    /// 1002h, 2000h–2002h, 2011h–2013h and the warnings.
+    status: status::Status,
+    /// The fieldbus PLL (36E6h, 3496h).
+    pll: timing::Pll,
+    /// 60C2h written as a pair.
+    period: timing::PeriodPair,
 }
 
 impl Kollmorgen {
@@ -72,8 +89,14 @@ impl Kollmorgen {
             lifted: None,
             sync_seen: false,
             pvt_position: None,
-            ascii_in: alloc::string::String::new(),
-            ascii_out: alloc::collections::VecDeque::new(),
+            telnet: ascii::Line::default(),
+            prompt: ascii::Line::default(),
+            names: alloc::vec::Vec::new(),
+            tasks: alloc::vec![ascii::Task::default(); ascii::TASKS],
+            task_num: 0,
+            status: status::Status::new(profile.info().emcy),
+            pll: timing::Pll::default(),
+            period: timing::PeriodPair::default(),
         }
     }
 
@@ -87,7 +110,7 @@ impl Kollmorgen {
     pub const HOOKED: &'static [u16] = &[
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
-        0x60C4,
+        0x60C4, 0x1026, 0x2071, 0x3431,
     ];
 }
 
@@ -107,6 +130,9 @@ impl Behaviour for Kollmorgen {
         cfg.sync_window = false;
         cfg.sync_counter = false;
         cfg.sdo_server_param = false;
+        // KC1 §6.4.4.2 / AKD §5.4.4.2: F129 (guarding/heartbeat loss,
+        // §7.1) goes out like every drive fault: class bits, category.
+        cfg.comm_error_emcy = Some((crate::shared::class_bit(0x8130), [EMCY_CATEGORY, 0, 0, 0, 0]));
     }
 
     fn hooked_objects(&self) -> &'static [u16] {
@@ -137,10 +163,20 @@ impl Behaviour for Kollmorgen {
         }
         if matches!(event, NodeEvent::ResetCommunication | NodeEvent::ResetApplication) {
             self.sync_seen = false;
+            self.pll.stop();
+        }
+        if matches!(event, NodeEvent::ResetApplication) {
+            self.status.reset();
+            self.period.reset();
         }
     }
 
+    fn on_boot(&mut self, cx: &mut Context<'_>, _od: &mut ObjectDictionary) {
+        self.status.boot(cx.now);
+    }
+
     fn finish(&mut self, node: &mut Node) {
+        self.names = ascii::parameter_names(&self.profile.eds().eds);
         for index in 0x2014..=0x2017u16 {
             let mask = tpdo_mask(node.od(), index);
             node.set_tpdo_change_mask(index - 0x2014, mask);
@@ -175,6 +211,7 @@ impl Behaviour for Kollmorgen {
             && u32::from(id) == cob & 0x7FF
         {
             self.sync_seen = true;
+            self.pll.sync_pending = true;
         }
         if let Some(f) = crate::shared::resize_expedited(od, node_id, frame) {
             return FilterOutcome::Replace(f);
@@ -197,14 +234,77 @@ impl Behaviour for Kollmorgen {
             // §7.2.2.6 / example 10: Telnet commands, 4 characters per write,
             // executed at CR LF.
             0x2026 if sub == 1 => {
-                self.ascii_in.extend(data.iter().map(|&b| char::from(b)));
-                if let Some(end) = self.ascii_in.find("\r\n") {
-                    let cmd: alloc::string::String = self.ascii_in.drain(..end + 2).collect();
-                    let reply = ascii_command(cmd.trim(), cx.drive);
-                    self.ascii_out.clear();
-                    self.ascii_out.extend(reply.bytes());
+                if let Some(cmd) = self.telnet.receive(data) {
+                    let text = self.command(cx, od, &cmd);
+                    self.telnet.answer(&text);
                 }
                 Ok(Verdict::Handled)
+            }
+            // §7.2.1.18: the same channel one character at a time.
+            0x1026 if sub == 1 => {
+                if let Some(cmd) = self.prompt.receive(data) {
+                    let text = self.command(cx, od, &cmd);
+                    self.prompt.answer(&text);
+                }
+                Ok(Verdict::Handled)
+            }
+            // §7.7.2.1: the torque controller's input in mA, "alternatively
+            // to 6071h": 6071h = mA × 1000 / the motor's rated current (mA;
+            // 6075h is not in the object table).
+            0x2071 => {
+                let ma = le_u64(data) as u32 as i32;
+                let peak = [0x5084u16, 0x358F]
+                    .iter()
+                    .filter_map(|&i| od.get_u32(i, 0))
+                    .filter(|&p| p != 0)
+                    .min()
+                    .map_or(i64::MAX, i64::from);
+                if i64::from(ma) > peak {
+                    return Err(SdoAbort::VALUE_TOO_HIGH);
+                }
+                if -i64::from(ma) > peak {
+                    return Err(SdoAbort::VALUE_TOO_LOW);
+                }
+                let rated = status::rated_ma(cx.drive);
+                let t = (i64::from(ma) * 1000 / rated).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16;
+                if let Ok(r) = od.find(0x6071, 0) {
+                    od.set_raw(r, &t.to_le_bytes());
+                }
+                cx.drive.on_write(od, 0x6071, 0, &t.to_le_bytes())?;
+                Ok(Verdict::Store)
+            }
+            // §7.11.2.2: "changed values must be saved and the drive must be
+            // restarted": stored, the drive takes them when it reloads its
+            // parameters (NMT reset node, power-on).
+            0x607D if (1..=2).contains(&sub) => {
+                let x = le_u64(data) as u32 as i32;
+                let other = od.get_i64(0x607D, 3 - sub).unwrap_or(0) as i32;
+                let (lo, hi) = if sub == 1 { (x, other) } else { (other, x) };
+                if lo > hi {
+                    return Err(SdoAbort::MAX_LESS_THAN_MIN);
+                }
+                Ok(Verdict::Store)
+            }
+            // §7.9.2.1: −1 is reserved (0 linear, −2 PVT).
+            0x60C0 if le_u64(data) as u16 as i16 == -1 => Err(SdoAbort::INVALID_VALUE),
+            // §7.9.2.3: the period changes when both subs are written, and
+            // only to whole milliseconds.
+            0x60C2 if (1..=2).contains(&sub) => match self.period.write(sub, le_u64(data) as u8)? {
+                timing::PeriodWrite::Hold => Ok(Verdict::Store),
+                timing::PeriodWrite::Complete(other, v) => {
+                    cx.drive.on_write(od, 0x60C2, other, &[v])?;
+                    Ok(Verdict::Pass)
+                }
+            },
+            // MT.SET (§8.1.3): the pp set-point stored as motion task n.
+            0x3431 => {
+                let n = le_u64(data) as usize;
+                let cntl = self.names.iter().find(|(m, _, _)| m == "MT.CNTL").map(|&(_, i, s)| (i, s));
+                match self.tasks.get_mut(n) {
+                    Some(t) => *t = ascii::current_task(od, cntl),
+                    None => return Err(SdoAbort::VALUE_TOO_HIGH),
+                }
+                Ok(Verdict::Store)
             }
             // §8.2.2.1: the placeholder takes the RPDO bytes and ignores them.
             0x2100 => Ok(Verdict::Handled),
@@ -297,12 +397,14 @@ impl Behaviour for Kollmorgen {
         if (index, sub) == (0x2026, 2) {
             // The next 4 characters of the reply; NUL once it is exhausted
             // (the manual does not say).
-            let mut chunk = [0u8; 4];
-            for c in &mut chunk {
-                *c = self.ascii_out.pop_front().unwrap_or(0);
-            }
+            let chunk = self.telnet.read::<4>();
             let r = od.find(index, sub)?;
             od.set_raw(r, &chunk);
+        }
+        if (index, sub) == (0x1026, 2) {
+            let c = self.prompt.read::<1>();
+            let r = od.find(index, sub)?;
+            od.set_raw(r, &c);
         }
         Ok(())
     }
@@ -319,8 +421,9 @@ impl Behaviour for Kollmorgen {
         }
     }
 
-    fn after_step(&mut self, _cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         kollmorgen_statusword(od, self.dc_bus_before_switch_on);
+        self.supervise(cx, od);
         // ip: bit 10 is not shown (example 12 frames 53/55: 0237h, 1237h;
         // CiA 402 would show 0637h while ip is not active).
         if od.get_i64(0x6061, 0) == Some(7)
@@ -356,6 +459,36 @@ impl Behaviour for Kollmorgen {
     }
 }
 
+impl Kollmorgen {
+    /// After every step: software limits, PLL, then the status objects
+    /// (which set statusword bit 7 for the warnings).
+    fn supervise(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let view = cx.drive.view();
+        // KC1 §7.11.2.2 / AKD §6.11.2.2: limits relative to the machine
+        // home; 0/0 = off; not while homing.
+        let (lo, hi) = cx.drive.mode_params().software_limits;
+        let active = (lo != 0 || hi != 0) && view.mode != op::HM;
+        let pos = cx.drive.position();
+        let (above, below) = (active && pos > i64::from(hi), active && pos < i64::from(lo));
+        if self.profile == Profile::Kc1 {
+            // KC1 §7.1: F107/F108 (8580h/8581h) when the axis passes a
+            // limit moving outwards; back inwards it may move.
+            let v = cx.drive.demand_velocity();
+            if view.state == State::OperationEnabled && ((above && v > 0.0) || (below && v < 0.0)) {
+                cx.drive.inject(Injection::Fault(if above { 0x8580 } else { 0x8581 }));
+            }
+        } else {
+            // AKD §6.1 lists only the warnings n107/n108 (8582h/8583h).
+            self.status.set(cx, od, status::Warning::PositiveSoftLimit, above);
+            self.status.set(cx, od, status::Warning::NegativeSoftLimit, below);
+        }
+        let period = cx.drive.mode_params().interpolation_period_s().map(|s| (s * 1e9).round() as u64);
+        self.pll.run(od, cx.now, period, matches!(view.mode, op::IP | op::CSP));
+        self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);
+        self.status.update(cx, od);
+    }
+}
+
 /// Statusword bit 4 "voltage enabled" is only shown from *Switched on*
 /// on: *Ready to switch on* reads 0221h (KC1 example 9 frame 47, AKD §9),
 /// not CiA 402's 0231h.
@@ -376,21 +509,6 @@ pub fn kollmorgen_statusword(od: &mut ObjectDictionary, dc_bus_before_switch_on:
             od.set_le(r, &new.to_le_bytes());
         }
     }
-}
-
-/// The drive's answer to a Telnet command on 2026h (example 10): a prompt
-/// `>`, the text, `\n\r\n`. Only `DRV.FAULTS` is interpreted; other
-/// commands answer as an unknown command.
-pub fn ascii_command(cmd: &str, drive: &drivebus_cia402::drive::Drive) -> alloc::string::String {
-    let text = if cmd.eq_ignore_ascii_case("DRV.FAULTS") {
-        match drive.state_machine().fault_code() {
-            0 => alloc::string::String::from("No faults active"),
-            code => alloc::format!("{code:04X}h: fault active"),
-        }
-    } else {
-        alloc::string::String::from("Error: unknown command")
-    };
-    alloc::format!(">{text}\n\r\n")
 }
 
 /// The Kollmorgen EMCY code for a fault the CiA 402 drive reports with its

@@ -1,0 +1,135 @@
+//! AKD manufacturer objects acting as the manual says (issue 14): each
+//! test names the section; the bodies are shared with the KC1
+//! (`replay_rig/kc_objects.rs`).
+
+mod replay_rig;
+use drivebus_personality::Profile;
+use replay_rig::kc_objects::{self as k, emcy};
+
+const P: Profile = Profile::Akd;
+
+/// §6.2.1.3, §6.2.2.2, §6.2.2.3.
+#[test]
+fn status_register_and_faults() {
+    k::status_register(P);
+}
+
+/// §5.4.4, §6.1 (n439 = FF12h), §6.2.2.1.
+#[test]
+fn warning_sends_emcy_and_bit7() {
+    k::warning_n439(P);
+}
+
+/// §3.4 FBUS.PARAM05 bit 11: with it set, a warning sends no EMCY (bit 7
+/// and 2000h still show it).
+#[test]
+fn warning_emcy_off_with_fbus_param05_bit11() {
+    let mut r = k::operational(P);
+    k::put(&mut r, 0x36E9, 0, &(1u32 << 11).to_le_bytes());
+    k::put(&mut r, 0x3483, 0, &1i32.to_le_bytes());
+    k::put(&mut r, 0x6083, 0, &3_600_000u32.to_le_bytes());
+    k::put(&mut r, 0x6081, 0, &360_000u32.to_le_bytes());
+    k::enable(&mut r, 1);
+    r.take();
+    k::put(&mut r, 0x607A, 0, &360_000i32.to_le_bytes());
+    k::put(&mut r, 0x6040, 0, &0x1Fu16.to_le_bytes());
+    let e = k::emcys_after(&mut r, 20);
+    assert!(e.is_empty(), "no warning EMCY: {e:?}");
+    assert_eq!(k::getu(&mut r, 0x2000, 1), 439);
+    assert_ne!(r.statusword() & 0x80, 0);
+}
+
+/// §6.11.2.2; §6.1: n107 = 8582h (the AKD table has no F107).
+#[test]
+fn software_limit_after_save_and_restart() {
+    k::software_limit_after_restart(P, emcy(0x8582, 0x80));
+}
+
+/// §6.7.2.1, §6.7.2.2.
+#[test]
+fn target_current_and_current_actual() {
+    k::target_current(P);
+}
+
+/// §6.9.2.3.
+#[test]
+fn interpolation_period_whole_milliseconds() {
+    k::ip_period_whole_ms(P);
+}
+
+/// §3.4 FBUS.PARAM02, §6.2.2.22.
+#[test]
+fn pll_locks_to_the_sync_period() {
+    k::pll_lock(P);
+}
+
+/// §5.4.4.2, §6.1 (F129).
+#[test]
+fn heartbeat_loss_emcy_in_drive_form() {
+    k::heartbeat_emcy_form(P);
+}
+
+/// §6.2.2.9, §7.1.4 (parameter names).
+#[test]
+fn ascii_channel_parameters() {
+    k::ascii_parameters(P);
+}
+
+/// §6.2.1.19.
+#[test]
+fn os_prompt_one_character_at_a_time() {
+    k::os_prompt(P);
+}
+
+/// §4.1 (motion tasks), §7.1.4 MT.*.
+#[test]
+fn motion_task_through_telnet() {
+    k::motion_task(P);
+}
+
+/// §6.9.2.1: 0 only (linear interpolation).
+#[test]
+fn interpolation_submode_zero_only() {
+    let mut r = k::operational(P);
+    for m in [-1i16, -2] {
+        assert_eq!(k::refused(&mut r, 0x60C0, 0, &m.to_le_bytes()), 0x0609_0030, "{m}");
+    }
+    k::put(&mut r, 0x60C0, 0, &0i16.to_le_bytes());
+}
+
+/// §7.1.5: the appendix lists 60C1h:2/3; they are read and written (the
+/// linear interpolation does not use them).
+#[test]
+fn interpolation_record_subs_2_3_listed() {
+    let mut r = k::operational(P);
+    k::put(&mut r, 0x60C1, 2, &5u32.to_le_bytes());
+    assert_eq!(k::getu(&mut r, 0x60C1, 2), 5);
+    k::put(&mut r, 0x60C1, 3, &(-7i32).to_le_bytes());
+    assert_eq!(k::get(&mut r, 0x60C1, 3), -7);
+}
+
+/// §6.2.2.4: DRV.RUNTIME in seconds.
+#[test]
+fn runtime_in_seconds() {
+    let mut r = k::operational(P);
+    r.run_ms(3000);
+    assert_eq!(k::getu(&mut r, 0x2011, 0), 3);
+}
+
+/// §6.2.2.5, §6.2.2.6: the fault history, newest at sub 1, with its
+/// DRV.RUNTIME time stamp.
+#[test]
+fn fault_history_numbers_and_times() {
+    let mut r = k::operational(P);
+    r.run_ms(2000);
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x8611));
+    r.run_ms(10);
+    k::put(&mut r, 0x6040, 0, &0x80u16.to_le_bytes());
+    r.run_ms(1500);
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x4310));
+    r.run_ms(10);
+    assert_eq!(k::getu(&mut r, 0x2012, 1), 235, "F235 newest");
+    assert_eq!(k::getu(&mut r, 0x2012, 2), 439, "F439 before");
+    assert_eq!(k::getu(&mut r, 0x2013, 1), 3);
+    assert_eq!(k::getu(&mut r, 0x2013, 2), 2);
+}

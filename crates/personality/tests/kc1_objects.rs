@@ -1,0 +1,78 @@
+//! KC1 manufacturer objects acting as the manual says (issue 14): each
+//! test names the section; the bodies are shared with the AKD
+//! (`replay_rig/kc_objects.rs`).
+
+mod replay_rig;
+use drivebus_personality::Profile;
+use replay_rig::kc_objects::{self as k, emcy};
+
+const P: Profile = Profile::Kc1;
+
+/// §7.2.1.3, §7.2.2.2, §7.2.2.3.
+#[test]
+fn status_register_and_faults() {
+    k::status_register(P);
+}
+
+/// §6.4.4, §7.1 (n439 = FF12h), §7.2.2.1.
+#[test]
+fn warning_sends_emcy_and_bit7() {
+    k::warning_n439(P);
+}
+
+/// §7.11.2.2; §7.1: F107 = 8580h.
+#[test]
+fn software_limit_after_save_and_restart() {
+    k::software_limit_after_restart(P, emcy(0x8580, 0x80));
+}
+
+/// §7.7.2.1, §7.7.2.2.
+#[test]
+fn target_current_and_current_actual() {
+    k::target_current(P);
+}
+
+/// §7.9.2.3.
+#[test]
+fn interpolation_period_whole_milliseconds() {
+    k::ip_period_whole_ms(P);
+}
+
+/// §5.4 FBUS.PARAM02, §7.2.2.18.
+#[test]
+fn pll_locks_to_the_sync_period() {
+    k::pll_lock(P);
+}
+
+/// §6.4.4.2, §7.1 (F129).
+#[test]
+fn heartbeat_loss_emcy_in_drive_form() {
+    k::heartbeat_emcy_form(P);
+}
+
+/// §7.2.2.6, §8.1.3 (parameter names).
+#[test]
+fn ascii_channel_parameters() {
+    k::ascii_parameters(P);
+}
+
+/// §7.2.1.18.
+#[test]
+fn os_prompt_one_character_at_a_time() {
+    k::os_prompt(P);
+}
+
+/// §5.1.2 (motion tasks), §8.1.3 MT.*.
+#[test]
+fn motion_task_through_telnet() {
+    k::motion_task(P);
+}
+
+/// §7.9.2.1: −1 is reserved; 0 and −2 are taken.
+#[test]
+fn interpolation_submode_reserved_refused() {
+    let mut r = k::operational(P);
+    assert_eq!(k::refused(&mut r, 0x60C0, 0, &(-1i16).to_le_bytes()), 0x0609_0030);
+    k::put(&mut r, 0x60C0, 0, &(-2i16).to_le_bytes());
+    k::put(&mut r, 0x60C0, 0, &0i16.to_le_bytes());
+}

@@ -1,0 +1,333 @@
+//! The bodies of the Kollmorgen manufacturer-object tests (`kc1_objects.rs`,
+//! `akd_objects.rs`): the KC1 and the AKD document the same objects (KC1
+//! §7.2.2, AKD §6.2.2); each function takes the profile and says in its
+//! callers which section it proves.
+
+use super::Rig;
+use drivebus_can::Frame;
+use drivebus_personality::Profile;
+
+/// Node-ID of the drive under test.
+pub const ID: u8 = 3;
+
+/// `profile` as node 3, NMT operational.
+pub fn operational(profile: Profile) -> Rig {
+    let (mut r, _) = Rig::new(profile, ID);
+    r.send("000#0103");
+    r.run_ms(5);
+    r.take();
+    r
+}
+
+/// Write `data` to `index:sub`; panic with the abort code if refused.
+pub fn put(r: &mut Rig, index: u16, sub: u8, data: &[u8]) {
+    if let Err(a) = r.download(ID, index, sub, data) {
+        panic!("write {index:04X}h:{sub}: abort {a:08X}");
+    }
+}
+
+/// The abort code of a write that must be refused.
+pub fn refused(r: &mut Rig, index: u16, sub: u8, data: &[u8]) -> u32 {
+    match r.download(ID, index, sub, data) {
+        Ok(()) => panic!("write {index:04X}h:{sub} := {data:02X?} was taken"),
+        Err(a) => a,
+    }
+}
+
+/// An upload as a signed number of its length.
+pub fn get(r: &mut Rig, index: u16, sub: u8) -> i64 {
+    let v = r.upload(ID, index, sub).unwrap_or_else(|a| panic!("read {index:04X}h:{sub}: abort {a:08X}"));
+    match v.len() {
+        1 => i64::from(v[0] as i8),
+        2 => i64::from(i16::from_le_bytes([v[0], v[1]])),
+        4 => i64::from(i32::from_le_bytes([v[0], v[1], v[2], v[3]])),
+        _ => panic!("read {index:04X}h:{sub}: {} bytes", v.len()),
+    }
+}
+
+/// An unsigned upload.
+pub fn getu(r: &mut Rig, index: u16, sub: u8) -> u64 {
+    let v = r.upload(ID, index, sub).unwrap_or_else(|a| panic!("read {index:04X}h:{sub}: abort {a:08X}"));
+    let mut b = [0u8; 8];
+    b[..v.len().min(8)].copy_from_slice(&v[..v.len().min(8)]);
+    u64::from_le_bytes(b)
+}
+
+/// Mode `mode`, then shutdown, switch on, enable operation.
+pub fn enable(r: &mut Rig, mode: i8) {
+    put(r, 0x6060, 0, &[mode as u8]);
+    for cw in [0x06u16, 0x07, 0x0F] {
+        put(r, 0x6040, 0, &cw.to_le_bytes());
+        r.run_ms(2);
+    }
+    assert_eq!(r.statusword() & 0x6F, 0x27, "operation enabled: {:04X}", r.statusword());
+}
+
+/// The EMCY frames (80h + node-ID) among `frames`.
+pub fn emcys(frames: &[Frame]) -> Vec<Frame> {
+    frames.iter().copied().filter(|f| f.std_id() == Some(0x80 + u16::from(ID))).collect()
+}
+
+/// An EMCY frame in the Kollmorgen form (KC1 §6.4.4.2, AKD §5.4.4.2):
+/// code, error register, category 01h, bytes 4–7 zero.
+pub fn emcy(code: u16, register: u8) -> Frame {
+    let [lo, hi] = code.to_le_bytes();
+    Frame::new(0x80 + u16::from(ID), &[lo, hi, register, 0x01, 0, 0, 0, 0])
+}
+
+/// Let `ms` pass; the EMCY frames sent meanwhile.
+pub fn emcys_after(r: &mut Rig, ms: u64) -> Vec<Frame> {
+    r.take();
+    r.run_ms(ms);
+    emcys(&r.take())
+}
+
+/// Sends one SYNC every `period_us` for `ms` milliseconds.
+pub fn syncs(r: &mut Rig, period_us: u64, ms: u64) -> Vec<Frame> {
+    let mut out = Vec::new();
+    let n = ms * 1000 / period_us;
+    for _ in 0..n {
+        r.send("080#");
+        r.run_for(drivebus_can::Duration::from_micros(period_us - 1));
+        out.extend(r.take());
+    }
+    out
+}
+
+/// Sends `cmd` (with CR LF) 4 characters per write to 2026h:1 and reads
+/// 2026h:2 until the reply's end (NUL): the reply text (KC1 §7.2.2.6, AKD
+/// §6.2.2.9).
+pub fn ascii(r: &mut Rig, cmd: &str) -> String {
+    let line = format!("{cmd}\r\n");
+    for chunk in line.as_bytes().chunks(4) {
+        put(r, 0x2026, 1, chunk);
+    }
+    let mut out = String::new();
+    for _ in 0..64 {
+        let v = r.upload(ID, 0x2026, 2).expect("2026h:2");
+        let end = v.iter().position(|&b| b == 0);
+        out.extend(v[..end.unwrap_or(v.len())].iter().map(|&b| char::from(b)));
+        if end.is_some() {
+            break;
+        }
+    }
+    out
+}
+
+/// 1002h bit 14 "power stage enabled" and 2002h:2 (its second byte) while
+/// enabled; in fault bit 15 "error state", 2001h:1 the fault number
+/// (F439 following error, F129 heartbeat loss), 1002h mapped in a TPDO
+/// carries the same bits (KC1 §7.2.1.3, §7.2.2.2, §7.2.2.3; AKD §6.2.1.3,
+/// §6.2.2.2, §6.2.2.3).
+pub fn status_register(profile: Profile) {
+    let mut r = operational(profile);
+    assert_eq!(getu(&mut r, 0x1002, 0) & (1 << 14), 0, "disabled: no power stage");
+    enable(&mut r, 3);
+    let s = getu(&mut r, 0x1002, 0);
+    assert_ne!(s & (1 << 14), 0, "1002h {s:08X}: power stage enabled");
+    assert_eq!(s & (1 << 15), 0, "1002h {s:08X}: no error state");
+    for (sub, byte) in (1..=4u8).zip(s.to_le_bytes()) {
+        assert_eq!(getu(&mut r, 0x2002, sub), u64::from(byte), "2002h:{sub} = byte {sub} of 1002h");
+    }
+    // TPDO4 event-driven with 1002h: the bits go out as they change.
+    put(&mut r, 0x1803, 1, &0x8000_0483u32.to_le_bytes());
+    put(&mut r, 0x1A03, 0, &[0]);
+    put(&mut r, 0x1A03, 1, &0x1002_0020u32.to_le_bytes());
+    put(&mut r, 0x1A03, 0, &[1]);
+    put(&mut r, 0x1803, 1, &0x0000_0483u32.to_le_bytes());
+    r.take();
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x8611));
+    r.run_ms(50);
+    let frames = r.take();
+    let s = getu(&mut r, 0x1002, 0);
+    assert_ne!(s & (1 << 15), 0, "1002h {s:08X}: error state");
+    assert_eq!(getu(&mut r, 0x2001, 1), 439, "2001h:1 = F439");
+    let tpdo = frames.iter().rev().find(|f| f.std_id() == Some(0x483)).expect("TPDO4 with 1002h");
+    assert_eq!(u64::from(u32::from_le_bytes(tpdo.data()[..4].try_into().unwrap())), s, "TPDO4 = 1002h");
+    // Fault reset, then a heartbeat loss while enabled: F129.
+    put(&mut r, 0x6040, 0, &0x80u16.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(getu(&mut r, 0x2001, 1), 0, "no fault after the reset");
+    enable(&mut r, 3);
+    put(&mut r, 0x1016, 1, &0x0001_0064u32.to_le_bytes());
+    r.send("701#05");
+    r.run_ms(300);
+    assert_eq!(getu(&mut r, 0x2001, 1), 129, "2001h:1 = F129");
+    assert_ne!(getu(&mut r, 0x1002, 0) & (1 << 15), 0, "error state");
+}
+
+/// PL.ERRWTHRESH (3483h) exceeded: warning n439 sends EMCY FF12h, sets
+/// statusword bit 7, 1002h bit 8 and 2000h:1 = 439, without a state change;
+/// gone, the reset EMCY 0000h follows (KC1 §6.4.4, §7.1, §7.2.2.1; AKD
+/// §5.4.4, §6.1, §6.2.2.1).
+pub fn warning_n439(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x3483, 0, &1i32.to_le_bytes());
+    put(&mut r, 0x6083, 0, &3_600_000u32.to_le_bytes());
+    put(&mut r, 0x6084, 0, &3_600_000u32.to_le_bytes());
+    put(&mut r, 0x6081, 0, &360_000u32.to_le_bytes());
+    enable(&mut r, 1);
+    r.take();
+    put(&mut r, 0x607A, 0, &360_000i32.to_le_bytes());
+    put(&mut r, 0x6040, 0, &0x1Fu16.to_le_bytes());
+    r.run_ms(20);
+    let e = emcys(&r.take());
+    assert_eq!(e.first(), Some(&emcy(0xFF12, 0x80)), "n439 EMCY: {e:?}");
+    let sw = r.statusword();
+    assert_eq!(sw & 0x6F, 0x27, "still operation enabled");
+    assert_ne!(sw & 0x80, 0, "statusword bit 7: {sw:04X}");
+    assert_eq!(getu(&mut r, 0x2000, 1), 439, "2000h:1");
+    assert_ne!(getu(&mut r, 0x1002, 0) & (1 << 8), 0, "1002h bit 8");
+    // At standstill the error is gone: the warning clears.
+    r.run_ms(2000);
+    let e: Vec<Frame> = emcys(&r.take());
+    assert_eq!(getu(&mut r, 0x2000, 1), 0, "2000h:1 after the move");
+    assert_eq!(r.statusword() & 0x80, 0, "bit 7 after the move");
+    assert_eq!(e.last().map(|f| f.data()[..2].to_vec()), Some(vec![0, 0]), "reset EMCY: {e:?}");
+}
+
+/// 607Dh written takes effect only after it is saved and the drive
+/// restarted (KC1 §7.11.2.2, AKD §6.11.2.2): before, pv runs through the
+/// new limit; after 1010h and NMT reset node the limit acts, as
+/// `beyond` (EMCY frame the profile sends when pv passes +1 revolution).
+pub fn software_limit_after_restart(profile: Profile, beyond: Frame) {
+    let mut r = operational(profile);
+    put(&mut r, 0x607D, 1, &(-36_000i32).to_le_bytes());
+    put(&mut r, 0x607D, 2, &36_000i32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &72_000i32.to_le_bytes());
+    let e = emcys_after(&mut r, 1000);
+    assert!(r.position() > 40_000, "ran past the new limit: {}", r.position());
+    assert!(e.is_empty(), "no limit before the restart: {e:?}");
+    put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    put(&mut r, 0x6040, 0, &0u16.to_le_bytes());
+    put(&mut r, 0x1010, 1, b"save");
+    r.send("000#8103");
+    r.run_ms(10);
+    r.send("000#0103");
+    r.run_ms(5);
+    // A warning shows at once (the axis stands beyond the limit), a fault
+    // when the axis moves on outwards.
+    let mut e = emcys(&r.take());
+    assert_eq!(get(&mut r, 0x607D, 2), 36_000, "saved");
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &72_000i32.to_le_bytes());
+    e.extend(emcys_after(&mut r, 1500));
+    assert!(e.contains(&beyond), "limit EMCY {beyond:?} after the restart: {e:?}");
+}
+
+/// 2071h (mA) is the torque controller's input as 6071h in tq; 2077h reads
+/// the present current in mA, 6077h × rated current / 1000 (KC1
+/// §7.7.2.1–2, AKD §6.7.2.1–2).
+pub fn target_current(profile: Profile) {
+    let mut r = operational(profile);
+    enable(&mut r, 4);
+    put(&mut r, 0x2071, 0, &500i32.to_le_bytes());
+    r.run_ms(50);
+    assert!(r.velocity() > 0, "2071h accelerates the motor");
+    // The motor's rated current in mA (6075h is not in the object table).
+    let rated = (r.pn().app.drive.config().params.motor.rated_current * 1000.0).round() as i64;
+    let t = get(&mut r, 0x6077, 0);
+    let i = get(&mut r, 0x2077, 0);
+    assert!(t > 0, "6077h {t}");
+    assert_eq!(i, t * rated / 1000, "2077h = 6077h × rated current / 1000");
+    assert_eq!(get(&mut r, 0x6071, 0), 500 * 1000 / rated, "6071h shows the set-point in ‰");
+}
+
+/// 60C2h (KC1 §7.9.2.3, AKD §6.9.2.3): "only multiples of 1 ms"; the
+/// second of the two writes that makes 0.5 ms is refused (0609 0030).
+pub fn ip_period_whole_ms(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x60C2, 1, &[5]);
+    assert_eq!(refused(&mut r, 0x60C2, 2, &[(-4i8) as u8]), 0x0609_0030, "5 × 10⁻⁴ s");
+    put(&mut r, 0x60C2, 2, &[(-3i8) as u8]);
+    put(&mut r, 0x60C2, 1, &[2]);
+    assert_eq!(getu(&mut r, 0x60C2, 1), 2);
+    assert_eq!(get(&mut r, 0x60C2, 2), -3);
+    put(&mut r, 0x60C2, 1, &[20]);
+    put(&mut r, 0x60C2, 2, &[(-4i8) as u8]);
+    // The pair in the other order.
+    put(&mut r, 0x60C2, 2, &[(-4i8) as u8]);
+    assert_eq!(refused(&mut r, 0x60C2, 1, &[5]), 0x0609_0030, "5 × 10⁻⁴ s again");
+}
+
+/// FBUS.PARAM02 = 1 (36E6h): the PLL locks onto SYNCs at the 60C2h period
+/// (3496h:2 inside 3496h:1 ± 3496h:3); SYNCs at another period leave it
+/// unlocked: warning n125, EMCY 8781h (KC1 §5.4, §7.2.2.18; AKD §3.4,
+/// §6.2.2.22).
+pub fn pll_lock(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x36E6, 0, &1u32.to_le_bytes());
+    put(&mut r, 0x60C2, 1, &[1]);
+    put(&mut r, 0x60C2, 2, &[(-3i8) as u8]);
+    enable(&mut r, 7);
+    r.take();
+    let frames = syncs(&mut r, 1000, 300);
+    assert!(emcys(&frames).is_empty(), "locked at 1 ms: {:?}", emcys(&frames));
+    let dist = getu(&mut r, 0x3496, 1) as i64;
+    let wnd = getu(&mut r, 0x3496, 3) as i64;
+    let act = getu(&mut r, 0x3496, 2) as i64;
+    assert!((act - dist).abs() < wnd, "3496h:2 {act} within {dist} ± {wnd}");
+    let frames = syncs(&mut r, 1500, 300);
+    assert_eq!(emcys(&frames).first(), Some(&emcy(0x8781, 0x80)), "n125");
+    assert_ne!(r.statusword() & 0x80, 0, "bit 7");
+    assert_eq!(getu(&mut r, 0x2000, 1), 125);
+}
+
+/// The guarding/heartbeat loss EMCY 8130h (F129) in the form of the other
+/// drive faults: register without the generic bit (10h, communication),
+/// category 01h (KC1 §6.4.4.2, §7.1; AKD §5.4.4.2, §6.1).
+pub fn heartbeat_emcy_form(profile: Profile) {
+    let mut r = operational(profile);
+    enable(&mut r, 3);
+    put(&mut r, 0x1016, 1, &0x0001_0064u32.to_le_bytes());
+    r.send("701#05");
+    let e = emcys_after(&mut r, 300);
+    assert_eq!(e, vec![emcy(0x8130, 0x10)], "heartbeat loss");
+}
+
+/// The Telnet commands of the ASCII channel (KC1 §7.2.2.6, AKD §6.2.2.9):
+/// a parameter by its name reads and writes the object the appendix gives
+/// it (MOTOR.TBRAKEAPP = 366Eh), DRV.WARNINGS lists the warnings, an
+/// unknown name is an error.
+pub fn ascii_parameters(profile: Profile) {
+    let mut r = operational(profile);
+    assert_eq!(ascii(&mut r, "MOTOR.TBRAKEAPP 75"), ">\n\r\n");
+    assert_eq!(get(&mut r, 0x366E, 0), 75, "366Eh written through Telnet");
+    put(&mut r, 0x366E, 0, &80i32.to_le_bytes());
+    assert_eq!(ascii(&mut r, "MOTOR.TBRAKEAPP"), ">80\n\r\n");
+    assert_eq!(ascii(&mut r, "DRV.WARNINGS"), ">No warnings active\n\r\n");
+    assert_eq!(ascii(&mut r, "NO.SUCH"), ">Error: unknown command\n\r\n");
+}
+
+/// 1026h OS prompt (KC1 §7.2.1.18, AKD §6.2.1.19): one character per
+/// write to sub 1, the reply one character per read of sub 2.
+pub fn os_prompt(profile: Profile) {
+    let mut r = operational(profile);
+    for b in "DRV.FAULTS\r\n".bytes() {
+        put(&mut r, 0x1026, 1, &[b]);
+    }
+    let mut out = String::new();
+    for _ in 0..40 {
+        let c = getu(&mut r, 0x1026, 2) as u8;
+        if c == 0 {
+            break;
+        }
+        out.push(char::from(c));
+    }
+    assert_eq!(out, ">No faults active\n\r\n");
+}
+
+/// A motion task set and started through Telnet (MT.NUM, MT.P, MT.V,
+/// MT.SET, MT.MOVE; KC1 §5.1.2, AKD §4.1) runs in pp to its position.
+pub fn motion_task(profile: Profile) {
+    let mut r = operational(profile);
+    enable(&mut r, 1);
+    for c in ["MT.NUM 1", "MT.P 18000", "MT.V 36000", "MT.CNTL 0", "MT.SET"] {
+        assert_eq!(ascii(&mut r, c), ">\n\r\n", "{c}");
+    }
+    assert_eq!(ascii(&mut r, "MT.MOVE 1"), ">\n\r\n");
+    r.run_ms(2000);
+    assert!((r.position() - 18_000).abs() < 100, "at the task's position: {}", r.position());
+    assert_ne!(r.statusword() & 0x400, 0, "target reached");
+}
