@@ -76,3 +76,45 @@ fn interpolation_submode_reserved_refused() {
     k::put(&mut r, 0x60C0, 0, &(-2i16).to_le_bytes());
     k::put(&mut r, 0x60C0, 0, &0i16.to_le_bytes());
 }
+
+/// Object table mirrors of the measurements.
+#[test]
+fn measurement_mirrors() {
+    k::measurement_mirrors(P);
+}
+
+/// VL.THRESH, F302.
+#[test]
+fn overspeed_fault() {
+    k::overspeed(P);
+}
+
+/// MOTOR.TEMPWARN n301, MOTOR.TEMPFAULT F301.
+#[test]
+fn motor_temperature_warning_and_fault() {
+    k::motor_temperature(P);
+}
+
+/// PL.ERRFTHRESH = 6065h.
+#[test]
+fn following_error_threshold() {
+    k::following_error_threshold(P);
+}
+
+/// FBUS.PLLTHRESH.
+#[test]
+fn pll_lock_threshold() {
+    k::pll_threshold(P);
+}
+
+/// FBUS.PARAM05 bit 0 and DRV.CLRFAULTS.
+#[test]
+fn fault_reset_by_telnet() {
+    k::clear_faults_by_telnet(P);
+}
+
+/// MT.SET 3431h; MOTOR.IPEAK limits 2071h.
+#[test]
+fn motion_task_object_and_peak_current() {
+    k::motion_task_object_and_peak_current(P);
+}

@@ -20,6 +20,7 @@
 mod ascii;
 mod emcy;
 mod facts;
+mod monitor;
 pub mod status;
 mod timing;
 
@@ -78,6 +79,8 @@ pub struct Kollmorgen {
     pll: timing::Pll,
     /// 60C2h written as a pair.
     period: timing::PeriodPair,
+    /// The measurement mirrors and their limits.
+    monitor: monitor::Monitor,
 }
 
 impl Kollmorgen {
@@ -97,6 +100,7 @@ impl Kollmorgen {
             status: status::Status::new(profile.info().emcy),
             pll: timing::Pll::default(),
             period: timing::PeriodPair::default(),
+            monitor: monitor::Monitor::default(),
         }
     }
 
@@ -110,7 +114,7 @@ impl Kollmorgen {
     pub const HOOKED: &'static [u16] = &[
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
-        0x60C4, 0x1026, 0x2071, 0x3431,
+        0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7,
     ];
 }
 
@@ -296,6 +300,11 @@ impl Behaviour for Kollmorgen {
                     Ok(Verdict::Pass)
                 }
             },
+            // PL.ERRFTHRESH (§8.1.3 "max. following error") is 6065h.
+            0x35C7 => {
+                self.local_write(cx, od, 0x6065, 0, &(le_u64(data) as u32).to_le_bytes())?;
+                Ok(Verdict::Store)
+            }
             // MT.SET (§8.1.3): the pp set-point stored as motion task n.
             0x3431 => {
                 let n = le_u64(data) as usize;
@@ -401,6 +410,11 @@ impl Behaviour for Kollmorgen {
             let r = od.find(index, sub)?;
             od.set_raw(r, &chunk);
         }
+        if index == 0x35C7
+            && let (Some(w), Ok(r)) = (od.get_u32(0x6065, 0), od.find(index, sub))
+        {
+            od.set_raw(r, &w.to_le_bytes());
+        }
         if (index, sub) == (0x1026, 2) {
             let c = self.prompt.read::<1>();
             let r = od.find(index, sub)?;
@@ -486,6 +500,7 @@ impl Kollmorgen {
         self.pll.run(od, cx.now, period, matches!(view.mode, op::IP | op::CSP));
         self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);
         self.status.update(cx, od);
+        self.monitor.update(cx, od, &mut self.status);
     }
 }
 

@@ -25,6 +25,8 @@ pub enum Warning {
     NegativeSoftLimit,
     /// n125: the PLL lost the SYNC (FBUS.PARAM02 = 1), EMCY 8781h.
     SyncLost,
+    /// n301: motor temperature above MOTOR.TEMPWARN (3453h), EMCY 7186h.
+    MotorTemperature,
 }
 
 impl Warning {
@@ -35,6 +37,7 @@ impl Warning {
             Warning::PositiveSoftLimit => 107,
             Warning::NegativeSoftLimit => 108,
             Warning::SyncLost => 125,
+            Warning::MotorTemperature => 301,
         }
     }
 
@@ -45,12 +48,13 @@ impl Warning {
             Warning::PositiveSoftLimit => 0x8582,
             Warning::NegativeSoftLimit => 0x8583,
             Warning::SyncLost => 0x8781,
+            Warning::MotorTemperature => 0x7186,
         }
     }
 }
 
-/// Up to this many warnings are active at once (there are four kinds).
-const MAX_WARNINGS: usize = 4;
+/// Up to this many warnings are active at once (there are five kinds).
+const MAX_WARNINGS: usize = 5;
 /// AKD 2012h/2013h: the last 20 faults.
 const HISTORY: usize = 20;
 

@@ -331,3 +331,117 @@ pub fn motion_task(profile: Profile) {
     assert!((r.position() - 18_000).abs() < 100, "at the task's position: {}", r.position());
     assert_ne!(r.statusword() & 0x400, 0, "target reached");
 }
+
+/// The measurement mirrors of the object table (KC1 §8.1.3, AKD §7.1.4)
+/// read the model: VL.FB 3618h = 606Ch, PL.ERR 35C5h = 60F4h, IL.FB 3558h
+/// = 2077h, VBUS.VALUE 361Ah the DC bus, MOTOR.TEMP 3612h the winding,
+/// FB1.MECHPOS 35D2h the position within one turn.
+pub fn measurement_mirrors(profile: Profile) {
+    let mut r = operational(profile);
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &36_000i32.to_le_bytes());
+    r.run_ms(800);
+    let (v, vl) = (get(&mut r, 0x606C, 0), get(&mut r, 0x3618, 0));
+    assert!(v > 30_000 && (v - vl).abs() <= 50, "VL.FB {vl} vs 606Ch {v}");
+    let (fe, pl) = (get(&mut r, 0x60F4, 0), get(&mut r, 0x35C5, 0));
+    assert!((fe - pl).abs() <= 50, "PL.ERR {pl} vs 60F4h {fe}");
+    let (i, il) = (get(&mut r, 0x2077, 0), get(&mut r, 0x3558, 0));
+    assert!((i - il).abs() <= 50, "IL.FB {il} vs 2077h {i}");
+    let m = r.pn().app.drive.model();
+    let (bus, temp) = (m.bus_voltage().round() as i64, m.temperature().round() as i64);
+    assert!(bus > 0);
+    assert_eq!(get(&mut r, 0x361A, 0), bus, "VBUS.VALUE");
+    assert_eq!(get(&mut r, 0x3612, 0), temp, "MOTOR.TEMP");
+    let per_rev = u64::from(r.pn().app.drive.config().params.encoder.counts_per_rev);
+    let inc = r.pn().app.drive.position_increments().rem_euclid(per_rev as i64) as u64;
+    let mech = getu(&mut r, 0x35D2, 0);
+    assert!(mech < per_rev, "FB1.MECHPOS {mech} within a turn");
+    assert!(mech.abs_diff(inc) < per_rev / 10, "FB1.MECHPOS {mech} near {inc}");
+}
+
+/// VL.THRESH (3627h): above it the drive faults F302 (EMCY 8480h).
+pub fn overspeed(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x3627, 0, &18_000i32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &36_000i32.to_le_bytes());
+    let e = emcys_after(&mut r, 1000);
+    assert_eq!(e.first(), Some(&emcy(0x8480, 0x80)), "F302: {e:?}");
+    assert_eq!(getu(&mut r, 0x2001, 1), 302);
+}
+
+/// MOTOR.TEMPWARN (3453h) below the winding temperature: warning n301
+/// (EMCY 7186h); MOTOR.TEMPFAULT (3586h): fault F301 (EMCY 7180h).
+pub fn motor_temperature(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x3453, 0, &1u32.to_le_bytes());
+    let e = emcys_after(&mut r, 5);
+    assert_eq!(e, vec![emcy(0x7186, 0x80)], "n301");
+    assert_eq!(getu(&mut r, 0x2000, 1), 301);
+    put(&mut r, 0x3586, 0, &1u32.to_le_bytes());
+    let e = emcys_after(&mut r, 5);
+    assert_eq!(e, vec![emcy(0x7180, 0x80)], "F301");
+    assert_eq!(getu(&mut r, 0x2001, 1), 301);
+}
+
+/// PL.ERRFTHRESH (35C7h) is the following error window 6065h.
+pub fn following_error_threshold(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x35C7, 0, &1i32.to_le_bytes());
+    assert_eq!(getu(&mut r, 0x6065, 0), 1);
+    put(&mut r, 0x6065, 0, &2u32.to_le_bytes());
+    assert_eq!(get(&mut r, 0x35C7, 0), 2, "reads 6065h");
+    put(&mut r, 0x6083, 0, &3_600_000u32.to_le_bytes());
+    put(&mut r, 0x6081, 0, &360_000u32.to_le_bytes());
+    enable(&mut r, 1);
+    put(&mut r, 0x607A, 0, &360_000i32.to_le_bytes());
+    put(&mut r, 0x6040, 0, &0x1Fu16.to_le_bytes());
+    r.run_ms(200);
+    assert_eq!(getu(&mut r, 0x2001, 1), 439, "F439");
+}
+
+/// FBUS.PLLTHRESH (50B1h): the PLL locks only after that many cycles in
+/// the window; one that never locked reports no loss.
+pub fn pll_threshold(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x36E6, 0, &1u32.to_le_bytes());
+    put(&mut r, 0x50B1, 0, &100_000u32.to_le_bytes());
+    put(&mut r, 0x60C2, 1, &[1]);
+    put(&mut r, 0x60C2, 2, &[(-3i8) as u8]);
+    enable(&mut r, 7);
+    syncs(&mut r, 1000, 300);
+    let frames = syncs(&mut r, 1500, 300);
+    assert!(emcys(&frames).is_empty(), "never locked: {:?}", emcys(&frames));
+}
+
+/// FBUS.PARAM05 bit 0 (KC1 §5.4, AKD §3.4): faults reset by the
+/// controlword only; clear, DRV.CLRFAULTS resets them too.
+pub fn clear_faults_by_telnet(profile: Profile) {
+    let mut r = operational(profile);
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x4310));
+    r.run_ms(5);
+    put(&mut r, 0x36E9, 0, &1u32.to_le_bytes());
+    assert!(ascii(&mut r, "DRV.CLRFAULTS").starts_with(">Error"), "bit 0 set");
+    assert_eq!(r.statusword() & 0x4F, 0x08, "still fault");
+    put(&mut r, 0x36E9, 0, &0u32.to_le_bytes());
+    assert_eq!(ascii(&mut r, "DRV.CLRFAULTS"), ">\n\r\n");
+    r.run_ms(2);
+    assert_eq!(r.statusword() & 0x4F, 0x40, "switch on disabled: {:04X}", r.statusword());
+}
+
+/// MT.SET as an object (3431h): the pp set-point stored as task n; the
+/// task runs with MT.MOVE. 2071h beyond MOTOR.IPEAK (358Fh) is refused.
+pub fn motion_task_object_and_peak_current(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x607A, 0, &9_000i32.to_le_bytes());
+    put(&mut r, 0x6081, 0, &36_000u32.to_le_bytes());
+    put(&mut r, 0x3431, 0, &2u16.to_le_bytes());
+    put(&mut r, 0x607A, 0, &0i32.to_le_bytes());
+    enable(&mut r, 1);
+    assert_eq!(ascii(&mut r, "MT.MOVE 2"), ">\n\r\n");
+    r.run_ms(1500);
+    assert!((r.position() - 9_000).abs() < 100, "task 2: {}", r.position());
+    put(&mut r, 0x358F, 0, &1000u32.to_le_bytes());
+    assert_eq!(refused(&mut r, 0x2071, 0, &1500i32.to_le_bytes()), 0x0609_0031);
+    put(&mut r, 0x2071, 0, &(-900i32).to_le_bytes());
+}

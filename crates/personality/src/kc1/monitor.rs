@@ -1,0 +1,102 @@
+//! The parameter mirrors of the drive's measurements and their limits
+//! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
+//! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h read
+//! what the model measures; VL.THRESH 3627h (overspeed, F302),
+//! MOTOR.TEMPWARN 3453h (n301) and MOTOR.TEMPFAULT 3586h (F301) act on
+//! them (0 = off).
+
+use super::status::{Status, Warning};
+use crate::build::Context;
+use drivebus_cia402::drive::Injection;
+use drivebus_cia402::state_machine::State;
+use drivebus_od::{EntryRef, ObjectDictionary};
+
+/// KC1 §7.1 / AKD §6.1: F302 over speed.
+const OVERSPEED: u16 = 0x8480;
+/// KC1 §7.1 / AKD §6.1: F301 motor overheat.
+const MOTOR_OVERHEAT: u16 = 0x7180;
+
+#[derive(Debug, Clone, Default)]
+struct Refs {
+    objects: usize,
+    pl_err: Option<EntryRef>,
+    vl_fb: Option<EntryRef>,
+    vbus: Option<EntryRef>,
+    temp: Option<EntryRef>,
+    il_fb: Option<EntryRef>,
+    mechpos: Option<EntryRef>,
+    overspeed: Option<EntryRef>,
+    temp_warn: Option<EntryRef>,
+    temp_fault: Option<EntryRef>,
+    current: Option<EntryRef>,
+    velocity: Option<EntryRef>,
+}
+
+/// The measurement mirrors and their limits.
+#[derive(Debug, Clone, Default)]
+pub struct Monitor {
+    refs: Refs,
+}
+
+fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
+    r.map_or(0, |r| od.word(r))
+}
+
+fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: i64) {
+    if let Some(r) = r {
+        let n = od.bytes(r).len().min(4);
+        od.set_raw(r, &(v as i32).to_le_bytes()[..n]);
+    }
+}
+
+impl Monitor {
+    fn resolve(od: &ObjectDictionary) -> Refs {
+        let f = |i: u16| od.find(i, 0).ok();
+        Refs {
+            objects: od.objects().len(),
+            pl_err: f(0x35C5),
+            vl_fb: f(0x3618),
+            vbus: f(0x361A),
+            temp: f(0x3612),
+            il_fb: f(0x3558),
+            mechpos: f(0x35D2),
+            overspeed: f(0x3627),
+            temp_warn: f(0x3453),
+            temp_fault: f(0x3586),
+            current: f(0x2077),
+            velocity: f(0x606C),
+        }
+    }
+
+    /// After every step (after [`Status::update`], whose 2077h IL.FB
+    /// mirrors): the mirrors, then the limits.
+    pub fn update(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, status: &mut Status) {
+        if self.refs.objects != od.objects().len() {
+            self.refs = Self::resolve(od);
+        }
+        let r = self.refs.clone();
+        let drive = &*cx.drive;
+        let model = drive.model();
+        let velocity = i64::from(word(od, r.velocity) as u32 as i32);
+        let temp = model.temperature();
+        put(od, r.pl_err, (drive.demand_position() - drive.position() as f64).round() as i64);
+        put(od, r.vl_fb, velocity);
+        put(od, r.vbus, model.bus_voltage().round() as i64);
+        put(od, r.temp, temp.round() as i64);
+        put(od, r.il_fb, i64::from(word(od, r.current) as u32 as i32));
+        let per_rev = i64::from(drive.config().params.encoder.counts_per_rev).max(1);
+        put(od, r.mechpos, drive.position_increments().rem_euclid(per_rev));
+        let state = drive.state_machine().state();
+        let faulted = matches!(state, State::Fault | State::FaultReactionActive);
+        let over = word(od, r.overspeed) as u32 as i32;
+        if over > 0 && velocity.abs() > i64::from(over) && state == State::OperationEnabled {
+            cx.drive.inject(Injection::Fault(OVERSPEED));
+        }
+        let warn = word(od, r.temp_warn) as u32;
+        status.set(cx, od, Warning::MotorTemperature, warn > 0 && temp > f64::from(warn));
+        let fault = word(od, r.temp_fault) as u32;
+        if fault > 0 && temp > f64::from(fault) && !faulted {
+            cx.drive.inject(Injection::Fault(MOTOR_OVERHEAT));
+        }
+    }
+}
