@@ -175,3 +175,52 @@ fn fault_reset_by_telnet() {
 fn motion_task_object_and_peak_current() {
     k::motion_task_object_and_peak_current(P);
 }
+
+/// B.4 (2014h–2017h): a TPDO change mask keeps masked statusword changes
+/// from sending the event-driven TPDO1.
+#[test]
+fn tpdo_change_mask() {
+    let mut r = k::operational(P);
+    let tpdo1_after = |r: &mut replay_rig::Rig, cw: u16| {
+        let [lo, hi] = cw.to_le_bytes();
+        r.take();
+        r.send(&format!("603#2B406000{lo:02X}{hi:02X}0000"));
+        r.run_ms(10);
+        r.take().iter().filter(|f| f.std_id() == Some(0x183)).count()
+    };
+    assert_eq!(tpdo1_after(&mut r, 0x06), 1, "default mask: every change");
+    k::put(&mut r, 0x2014, 1, &0u32.to_le_bytes());
+    k::put(&mut r, 0x2014, 2, &0u32.to_le_bytes());
+    assert_eq!(tpdo1_after(&mut r, 0x07), 0, "nothing monitored");
+    k::put(&mut r, 0x2014, 1, &4u32.to_le_bytes());
+    assert_eq!(tpdo1_after(&mut r, 0x06), 0, "bit 2 unchanged");
+    assert_eq!(tpdo1_after(&mut r, 0x0F), 1, "bit 2 set");
+}
+
+/// §3.4 FBUS.PARAM04 = 1: SYNC loss after the first SYNC is F125 (EMCY
+/// 8780h); 0 leaves it unsupervised.
+#[test]
+fn sync_supervision_fbus_param04() {
+    for on in [0u32, 1] {
+        let mut r = k::operational(P);
+        k::put(&mut r, 0x36E8, 0, &on.to_le_bytes());
+        k::put(&mut r, 0x1006, 0, &1000u32.to_le_bytes());
+        k::syncs(&mut r, 1000, 5);
+        let e = k::emcys_after(&mut r, 20);
+        if on == 0 {
+            assert!(e.is_empty(), "{e:?}");
+        } else {
+            assert_eq!(e.first(), Some(&emcy(0x8780, 0x80)), "F125");
+            assert_eq!(k::getu(&mut r, 0x2001, 1), 125);
+        }
+    }
+}
+
+/// §7.1.5 (608Fh:1 RW): encoder increments, powers of 2 only.
+#[test]
+fn encoder_resolution_powers_of_two() {
+    let mut r = k::operational(P);
+    k::put(&mut r, 0x608F, 1, &0x0010_0000u32.to_le_bytes());
+    assert_eq!(k::getu(&mut r, 0x608F, 1), 0x0010_0000);
+    assert_eq!(k::refused(&mut r, 0x608F, 1, &3000u32.to_le_bytes()), 0x0609_0030);
+}
