@@ -224,3 +224,15 @@ fn encoder_resolution_powers_of_two() {
     assert_eq!(k::getu(&mut r, 0x608F, 1), 0x0010_0000);
     assert_eq!(k::refused(&mut r, 0x608F, 1, &3000u32.to_le_bytes()), 0x0609_0030);
 }
+
+/// DRV.DIR, MOTOR.VMAX, MT.TPOSWND, MT.TVELWND.
+#[test]
+fn drive_parameters() {
+    k::drive_parameters(P);
+}
+
+/// pv scaling factor 204Ch with FBUS.PARAM05 bit 4.
+#[test]
+fn pv_scaling_factor() {
+    k::pv_scaling(P);
+}

@@ -118,3 +118,15 @@ fn fault_reset_by_telnet() {
 fn motion_task_object_and_peak_current() {
     k::motion_task_object_and_peak_current(P);
 }
+
+/// DRV.DIR, MOTOR.VMAX, MT.TPOSWND, MT.TVELWND.
+#[test]
+fn drive_parameters() {
+    k::drive_parameters(P);
+}
+
+/// pv scaling factor 204Ch with FBUS.PARAM05 bit 4.
+#[test]
+fn pv_scaling_factor() {
+    k::pv_scaling(P);
+}

@@ -21,6 +21,7 @@ mod ascii;
 mod emcy;
 mod facts;
 mod monitor;
+mod params;
 pub mod status;
 mod timing;
 
@@ -114,7 +115,7 @@ impl Kollmorgen {
     pub const HOOKED: &'static [u16] = &[
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
-        0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7,
+        0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9,
     ];
 }
 
@@ -172,6 +173,13 @@ impl Behaviour for Kollmorgen {
         if matches!(event, NodeEvent::ResetApplication) {
             self.status.reset();
             self.period.reset();
+        }
+        // The drive reloaded its parameters: set those that follow a
+        // manufacturer parameter again.
+        if let NodeEvent::NmtState { to: drivebus_node::NmtState::PreOperational, from } = event
+            && *from != drivebus_node::NmtState::Operational
+        {
+            self.forward_all(cx, od);
         }
     }
 
@@ -300,6 +308,10 @@ impl Behaviour for Kollmorgen {
                     Ok(Verdict::Pass)
                 }
             },
+            i if params::FORWARDED.contains(&i) => {
+                self.forward(cx, od, index, sub, data)?;
+                Ok(Verdict::Store)
+            }
             // PL.ERRFTHRESH (§8.1.3 "max. following error") is 6065h.
             0x35C7 => {
                 self.local_write(cx, od, 0x6065, 0, &(le_u64(data) as u32).to_le_bytes())?;

@@ -445,3 +445,51 @@ pub fn motion_task_object_and_peak_current(profile: Profile) {
     assert_eq!(refused(&mut r, 0x2071, 0, &1500i32.to_le_bytes()), 0x0609_0031);
     put(&mut r, 0x2071, 0, &(-900i32).to_le_bytes());
 }
+
+/// The model's velocity \[rad/s\] (motor side), for effects the user units hide.
+fn motor_velocity(r: &Rig) -> f64 {
+    r.pn().app.drive.model().velocity()
+}
+
+/// DRV.DIR 352Ah inverts the direction (the motor turns the other way,
+/// 606Ch keeps the sign of the set-point); MOTOR.VMAX 35A3h (rpm) limits
+/// the speed; MT.TPOSWND 35C6h is the drive's position window, MT.TVELWND
+/// 3856h the velocity window 606Dh.
+pub fn drive_parameters(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x352A, 0, &1u32.to_le_bytes());
+    put(&mut r, 0x35A3, 0, &30u32.to_le_bytes());
+    put(&mut r, 0x35C6, 0, &1234i32.to_le_bytes());
+    put(&mut r, 0x3856, 0, &321i32.to_le_bytes());
+    assert_eq!(getu(&mut r, 0x606D, 0), 321, "MT.TVELWND = 606Dh");
+    assert_eq!(r.pn().app.drive.mode_params().position_window, 1234, "MT.TPOSWND = 6067h");
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &36_000i32.to_le_bytes());
+    r.run_ms(1000);
+    let v = get(&mut r, 0x606C, 0);
+    assert!((v - 18_000).abs() < 500, "30 rpm = 18000 units/s: {v}");
+    assert!(motor_velocity(&r) < -1.0, "DRV.DIR: the motor turns negative: {}", motor_velocity(&r));
+}
+
+/// 204Ch (KC1 §7.5.2.1, AKD §6.5.2.1) with FBUS.PARAM05 bit 4: the velocity
+/// set-point is scaled by numerator/denominator (2/1: twice the speed), a
+/// negative factor reverses it; 0 is refused.
+pub fn pv_scaling(profile: Profile) {
+    let mut r = operational(profile);
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &18_000i32.to_le_bytes());
+    r.run_ms(800);
+    let plain = motor_velocity(&r);
+    assert_eq!(refused(&mut r, 0x204C, 1, &0i32.to_le_bytes()), 0x0609_0030);
+    put(&mut r, 0x204C, 1, &2i32.to_le_bytes());
+    r.run_ms(800);
+    assert!((motor_velocity(&r) - plain).abs() < plain * 0.05, "bit 4 clear: 204Ch inactive");
+    put(&mut r, 0x36E9, 0, &0x10u32.to_le_bytes());
+    r.run_ms(800);
+    let scaled = motor_velocity(&r);
+    // The set-point × numerator / denominator drives the motor.
+    assert!((scaled / plain - 2.0).abs() < 0.05, "scaled {scaled} vs {plain}");
+    put(&mut r, 0x204C, 1, &(-1i32).to_le_bytes());
+    r.run_ms(1500);
+    assert!(motor_velocity(&r) < -plain * 0.9, "negative factor reverses: {}", motor_velocity(&r));
+}
