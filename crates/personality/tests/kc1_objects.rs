@@ -130,3 +130,15 @@ fn drive_parameters() {
 fn pv_scaling_factor() {
     k::pv_scaling(P);
 }
+
+/// MOTOR.ICONT scales 6071h/6077h/2077h.
+#[test]
+fn rated_current_scales_torque() {
+    k::rated_current(P);
+}
+
+/// VBUS.UVFTHRESH, F502.
+#[test]
+fn under_voltage_fault() {
+    k::under_voltage(P);
+}

@@ -115,7 +115,7 @@ impl Kollmorgen {
     pub const HOOKED: &'static [u16] = &[
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
-        0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9,
+        0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
     ];
 }
 
@@ -277,7 +277,7 @@ impl Behaviour for Kollmorgen {
                 if -i64::from(ma) > peak {
                     return Err(SdoAbort::VALUE_TOO_LOW);
                 }
-                let rated = status::rated_ma(cx.drive);
+                let rated = status::rated_ma(cx.drive, od.get_u64(0x358E, 0).unwrap_or(0));
                 let t = (i64::from(ma) * 1000 / rated).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16;
                 if let Ok(r) = od.find(0x6071, 0) {
                     od.set_raw(r, &t.to_le_bytes());

@@ -3,7 +3,7 @@
 //! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h read
 //! what the model measures; VL.THRESH 3627h (overspeed, F302),
 //! MOTOR.TEMPWARN 3453h (n301) and MOTOR.TEMPFAULT 3586h (F301) act on
-//! them (0 = off).
+//! them, VBUS.UVFTHRESH 361Dh (F502) on the DC bus (0 = off).
 
 use super::status::{Status, Warning};
 use crate::build::Context;
@@ -15,6 +15,8 @@ use drivebus_od::{EntryRef, ObjectDictionary};
 const OVERSPEED: u16 = 0x8480;
 /// KC1 §7.1 / AKD §6.1: F301 motor overheat.
 const MOTOR_OVERHEAT: u16 = 0x7180;
+/// KC1 §7.1 / AKD §6.1: F502 DC bus under-voltage.
+const UNDER_VOLTAGE: u16 = 0x3220;
 
 #[derive(Debug, Clone, Default)]
 struct Refs {
@@ -28,6 +30,7 @@ struct Refs {
     overspeed: Option<EntryRef>,
     temp_warn: Option<EntryRef>,
     temp_fault: Option<EntryRef>,
+    uv_fault: Option<EntryRef>,
     current: Option<EntryRef>,
     velocity: Option<EntryRef>,
 }
@@ -63,6 +66,7 @@ impl Monitor {
             overspeed: f(0x3627),
             temp_warn: f(0x3453),
             temp_fault: f(0x3586),
+            uv_fault: f(0x361D),
             current: f(0x2077),
             velocity: f(0x606C),
         }
@@ -79,6 +83,7 @@ impl Monitor {
         let model = drive.model();
         let velocity = i64::from(word(od, r.velocity) as u32 as i32);
         let temp = model.temperature();
+        let bus_mv = model.bus_voltage() * 1000.0;
         put(od, r.pl_err, (drive.demand_position() - drive.position() as f64).round() as i64);
         put(od, r.vl_fb, velocity);
         put(od, r.vbus, model.bus_voltage().round() as i64);
@@ -97,6 +102,13 @@ impl Monitor {
         let fault = word(od, r.temp_fault) as u32;
         if fault > 0 && temp > f64::from(fault) && !faulted {
             cx.drive.inject(Injection::Fault(MOTOR_OVERHEAT));
+        }
+        // VBUS.UVFTHRESH (mV, float scale 1000:1): below it with the power
+        // stage on, F502.
+        let uv = word(od, r.uv_fault) as u32;
+        let powered = matches!(state, State::OperationEnabled | State::QuickStopActive);
+        if uv > 0 && powered && bus_mv < f64::from(uv) {
+            cx.drive.inject(Injection::Fault(UNDER_VOLTAGE));
         }
     }
 }

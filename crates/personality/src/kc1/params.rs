@@ -2,11 +2,12 @@
 //! §8.1.3, AKD §7.1.4 object tables): DRV.DIR 352Ah (polarity 607Eh),
 //! MOTOR.VMAX 35A3h (rpm, the drive's maximum speed 6080h), MT.TPOSWND
 //! 35C6h (position window 6067h), MT.TVELWND 3856h (velocity window
-//! 606Dh), and the pv scaling factor 204Ch (KC1 §7.5.2.1 / AKD §6.5.2.1,
+//! 606Dh), MOTOR.ICONT 358Eh (rated current and torque, 6075h/6076h), and
+//! the pv scaling factor 204Ch (KC1 §7.5.2.1 / AKD §6.5.2.1,
 //! the velocity factor 6096h, active with FBUS.PARAM05 bit 4; a negative
 //! factor reverses the velocity direction).
 //!
-//! 607Eh, 6067h, 6080h and 6096h are not in the manuals' dictionaries:
+//! 607Eh, 6067h, 6075h, 6076h, 6080h and 6096h are not in the manuals' dictionaries:
 //! the drive keeps them as its own parameters, reached only from here.
 
 use super::{Kollmorgen, UNITS_PER_REV};
@@ -14,7 +15,7 @@ use crate::build::Context;
 use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
 
 /// The indices whose writes this module turns into drive parameters.
-pub const FORWARDED: [u16; 6] = [0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9];
+pub const FORWARDED: [u16; 7] = [0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E];
 
 /// FBUS.PARAM05 bit 4: scaling by the DS402 objects (204Ch active).
 const DS402_SCALING: u64 = 1 << 4;
@@ -77,6 +78,16 @@ impl Kollmorgen {
                 cx.drive.on_write(od, 0x6067, 0, &w.to_le_bytes())?;
             }
             0x3856 => self.local_write(cx, od, 0x606D, 0, &(v as u16).to_le_bytes())?,
+            // MOTOR.ICONT (mA): the rated current, and with the motor's
+            // torque constant the rated torque 6071h/6077h count in.
+            0x358E => {
+                let m = &cx.drive.config().params.motor;
+                let ma = if v == 0 { (m.rated_current * 1000.0).round() } else { v as u32 as f64 };
+                let mnm = (ma * m.kt).round().clamp(1.0, f64::from(u32::MAX)) as u32;
+                let ma = ma.clamp(1.0, f64::from(u32::MAX)) as u32;
+                cx.drive.on_write(od, 0x6075, 0, &ma.to_le_bytes())?;
+                cx.drive.on_write(od, 0x6076, 0, &mnm.to_le_bytes())?;
+            }
             _ => {}
         }
         Ok(())
@@ -85,7 +96,7 @@ impl Kollmorgen {
     /// The forwarded parameters again from the dictionary (after the node
     /// restored stored values and the drive reloaded its own).
     pub(crate) fn forward_all(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        for index in [0x352A, 0x35A3, 0x35C6] {
+        for index in [0x352A, 0x35A3, 0x35C6, 0x358E] {
             if let Some(v) = od.get_u64(index, 0)
                 && (v != 0 || index == 0x352A)
             {

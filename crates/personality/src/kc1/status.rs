@@ -75,6 +75,7 @@ struct Refs {
     profile_velocity: Option<EntryRef>,
     torque: Option<EntryRef>,
     current: Option<EntryRef>,
+    icont: Option<EntryRef>,
 }
 
 impl Refs {
@@ -95,6 +96,7 @@ impl Refs {
             profile_velocity: f(0x6081, 0),
             torque: f(0x6077, 0),
             current: f(0x2077, 0),
+            icont: f(0x358E, 0),
         }
     }
 }
@@ -140,8 +142,12 @@ pub fn table_number(table: &[EmcyEntry], code: u16) -> u32 {
         .unwrap_or(0)
 }
 
-/// The motor's rated current \[mA\] (at least 1): the unit of 6071h/6077h.
-pub fn rated_ma(drive: &drivebus_cia402::drive::Drive) -> i64 {
+/// The motor's rated current \[mA\] (at least 1), the unit of 6071h/6077h:
+/// MOTOR.ICONT (`icont`, 358Eh, mA) when set, else the motor model's.
+pub fn rated_ma(drive: &drivebus_cia402::drive::Drive, icont: u64) -> i64 {
+    if icont > 0 {
+        return icont.min(u64::from(u32::MAX)) as i64;
+    }
     ((drive.config().params.motor.rated_current * 1000.0).round() as i64).max(1)
 }
 
@@ -313,7 +319,11 @@ impl Status {
         put(od, self.refs.runtime, secs);
         // KC1 §7.7.2.2 / AKD §6.7.2.2: 6077h in mA.
         let torque = word(od, self.refs.torque) as u16 as i16;
-        put(od, self.refs.current, (i64::from(torque) * rated_ma(drive) / 1000) as i32 as u32);
+        put(
+            od,
+            self.refs.current,
+            (i64::from(torque) * rated_ma(drive, word(od, self.refs.icont)) / 1000) as i32 as u32,
+        );
         if fault && code != 0 && code != self.last_fault {
             self.history.copy_within(..HISTORY - 1, 1);
             self.history[0] = (number, secs);

@@ -493,3 +493,46 @@ pub fn pv_scaling(profile: Profile) {
     r.run_ms(1500);
     assert!(motor_velocity(&r) < -plain * 0.9, "negative factor reverses: {}", motor_velocity(&r));
 }
+
+/// MOTOR.ICONT 358Eh (mA) is the rated current 6071h/6077h count in: twice
+/// the rating, twice the torque for the same per mille; 2077h follows.
+pub fn rated_current(profile: Profile) {
+    let accel = |icont: Option<u32>| {
+        let mut r = operational(profile);
+        if let Some(i) = icont {
+            put(&mut r, 0x358E, 0, &i.to_le_bytes());
+        }
+        enable(&mut r, 4);
+        put(&mut r, 0x6071, 0, &100i16.to_le_bytes());
+        r.run_ms(20);
+        let (t, i) = (get(&mut r, 0x6077, 0), get(&mut r, 0x2077, 0));
+        (r.pn().app.drive.model().torque(), t, i)
+    };
+    let rated =
+        (operational(profile).pn().app.drive.config().params.motor.rated_current * 1000.0).round() as u32;
+    let (v1, _, _) = accel(None);
+    let (v2, t2, i2) = accel(Some(2 * rated));
+    assert!((v2 / v1 - 2.0).abs() < 0.05, "twice the torque (N·m): {v2} vs {v1}");
+    assert_eq!(i2, t2 * i64::from(2 * rated) / 1000, "2077h in MOTOR.ICONT");
+}
+
+/// VBUS.UVFTHRESH 361Dh (mV): a DC bus below it with the power stage on
+/// is F502 (EMCY 3220h).
+pub fn under_voltage(profile: Profile) {
+    let mut r = operational(profile);
+    let bus = get(&mut r, 0x361A, 0);
+    put(&mut r, 0x361D, 0, &(((bus + 10) * 1000) as u32).to_le_bytes());
+    assert!(emcys_after(&mut r, 5).is_empty(), "disabled: no fault");
+    enable_quietly(&mut r, 3);
+    let e = emcys_after(&mut r, 5);
+    assert_eq!(e.first(), Some(&emcy(0x3220, 0x04)), "F502: {e:?}");
+    assert_eq!(getu(&mut r, 0x2001, 1), 502);
+}
+
+/// [`enable`] without asserting the state (a fault may follow at once).
+fn enable_quietly(r: &mut Rig, mode: i8) {
+    put(r, 0x6060, 0, &[mode as u8]);
+    for cw in [0x06u16, 0x07, 0x0F] {
+        put(r, 0x6040, 0, &cw.to_le_bytes());
+    }
+}
