@@ -248,3 +248,9 @@ fn rated_current_scales_torque() {
 fn under_voltage_fault() {
     k::under_voltage(P);
 }
+
+/// Latch objects over the touch probe.
+#[test]
+fn latch_objects() {
+    k::latches(P);
+}

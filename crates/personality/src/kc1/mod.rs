@@ -20,6 +20,7 @@
 mod ascii;
 mod emcy;
 mod facts;
+mod latch;
 mod monitor;
 mod params;
 pub mod status;
@@ -82,6 +83,8 @@ pub struct Kollmorgen {
     period: timing::PeriodPair,
     /// The measurement mirrors and their limits.
     monitor: monitor::Monitor,
+    /// The latch objects over the touch probe.
+    latch: latch::Latch,
 }
 
 impl Kollmorgen {
@@ -102,6 +105,7 @@ impl Kollmorgen {
             pll: timing::Pll::default(),
             period: timing::PeriodPair::default(),
             monitor: monitor::Monitor::default(),
+            latch: latch::Latch::default(),
         }
     }
 
@@ -116,6 +120,7 @@ impl Kollmorgen {
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
         0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
+        0x20A4, 0x20A5,
     ];
 }
 
@@ -311,6 +316,15 @@ impl Behaviour for Kollmorgen {
             i if params::FORWARDED.contains(&i) => {
                 self.forward(cx, od, index, sub, data)?;
                 Ok(Verdict::Store)
+            }
+            // §7.2.2.11/12: the latches are the touch probes.
+            0x20A4 => {
+                self.latch_control(cx, od, le_u64(data) as u16)?;
+                Ok(Verdict::Store)
+            }
+            0x20A5 => {
+                self.latch_acknowledge(cx, od, le_u64(data) as u16)?;
+                Ok(Verdict::Handled)
             }
             // PL.ERRFTHRESH (§8.1.3 "max. following error") is 6065h.
             0x35C7 => {
@@ -513,6 +527,7 @@ impl Kollmorgen {
         self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);
         self.status.update(cx, od);
         self.monitor.update(cx, od, &mut self.status);
+        self.latch.update(od);
     }
 }
 

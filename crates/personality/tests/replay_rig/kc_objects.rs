@@ -536,3 +536,32 @@ fn enable_quietly(r: &mut Rig, mode: i8) {
         put(r, 0x6040, 0, &cw.to_le_bytes());
     }
 }
+
+/// The latch objects (KC1 §7.2.2.7–13, AKD §6.2.2.10–17) on a machine with
+/// a home switch: 20A4h = 3 latches both edges of the input, 20A5h shows
+/// them valid, 20A0h/20A1h the positions (as 60BAh/60BBh), 20A6h the last
+/// edge; acknowledging latch 1 (20A5h := 0100h) re-arms it.
+pub fn latches(profile: Profile) {
+    let pn = drivebus_personality::build::build_on_machine(
+        profile,
+        ID,
+        Box::new(drivebus_node::MemoryStorage::new()),
+        |c| c.params.axis.home_switch = Some((0.25, 0.5)),
+    )
+    .unwrap();
+    let (mut r, _) = Rig::with(pn);
+    r.send("000#0103");
+    r.run_ms(5);
+    put(&mut r, 0x20A4, 0, &0x0003u16.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &18_000i32.to_le_bytes());
+    r.run_ms(3000);
+    let st = getu(&mut r, 0x20A5, 0);
+    assert_eq!(st & 0x1F, 0x03, "latch 1 rising and falling valid: {st:04X}");
+    let (rise, fall) = (get(&mut r, 0x20A0, 0), get(&mut r, 0x20A1, 0));
+    assert!(0 < rise && rise < fall, "edges at {rise}, {fall}");
+    assert_eq!((rise, fall), (get(&mut r, 0x60BA, 0), get(&mut r, 0x60BB, 0)), "the touch probe's");
+    assert_eq!(get(&mut r, 0x20A6, 0), fall, "20A6h: the last edge");
+    put(&mut r, 0x20A5, 0, &0x0100u16.to_le_bytes());
+    assert_eq!(getu(&mut r, 0x20A5, 0) & 0x03, 0, "re-armed");
+}
