@@ -148,3 +148,9 @@ fn under_voltage_fault() {
 fn latch_objects() {
     k::latches(P);
 }
+
+/// DRV.ACC / DRV.DEC: the pv ramps while 6083h/6084h are 0.
+#[test]
+fn drive_ramps() {
+    k::drive_ramps(P);
+}

@@ -88,12 +88,19 @@ impl Default for Akd {
     }
 }
 
-const HOOKED: &[u16] = &[
-    0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403, 0x1800,
-    0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6071, 0x60FF,
-    0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E, 0x20A4,
-    0x20A5,
-];
+/// The KC1's hooked objects plus 6071h/60FFh (the set-points modes
+/// −1..−3 take from their inputs).
+const HOOKED: [u16; Kollmorgen::HOOKED.len() + 2] = {
+    let k = Kollmorgen::HOOKED;
+    let mut all = [0x6071; Kollmorgen::HOOKED.len() + 2];
+    let mut i = 0;
+    while i < k.len() {
+        all[i] = k[i];
+        i += 1;
+    }
+    all[k.len() + 1] = 0x60FF;
+    all
+};
 
 impl Behaviour for Akd {
     fn profile(&self) -> Profile {
@@ -103,7 +110,7 @@ impl Behaviour for Akd {
         self.0.adjust_node_config(cfg);
     }
     fn hooked_objects(&self) -> &'static [u16] {
-        HOOKED
+        &HOOKED
     }
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
         self.0.adjust_drive_config(cfg);

@@ -120,7 +120,7 @@ impl Kollmorgen {
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
         0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
-        0x20A4, 0x20A5,
+        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502,
     ];
 }
 
@@ -209,6 +209,15 @@ impl Behaviour for Kollmorgen {
         // write).
         set_default(od, 0x60C4, 5, &Value::U8(1));
         set_default(od, 0x60C4, 6, &Value::U8(0));
+        // DRV.ACC, DRV.DEC, HOME.ACC: the drive's own ramps (what 0 in
+        // 6083h/6084h/609Ah selects, `kollmorgen_power_on`).
+        let mut dc = DriveConfig::default();
+        self.adjust_drive_config(&mut dc);
+        if let ZeroRamp::DriveRamp { acceleration, deceleration, homing } = dc.zero_ramp {
+            for (i, v) in [(0x3501, acceleration), (0x3522, deceleration), (0x3502, homing)] {
+                set_default(od, i, 0, &Value::I32(v.min(i32::MAX as u32) as i32));
+            }
+        }
         // §7.10.2.3: 6099h:1 "equivalent 60 rpm", :2 1/8 of it.
         set_default(od, 0x6099, 1, &Value::U32(UNITS_PER_REV));
         set_default(od, 0x6099, 2, &Value::U32(UNITS_PER_REV / 8));

@@ -2,7 +2,8 @@
 //! §8.1.3, AKD §7.1.4 object tables): DRV.DIR 352Ah (polarity 607Eh),
 //! MOTOR.VMAX 35A3h (rpm, the drive's maximum speed 6080h), MT.TPOSWND
 //! 35C6h (position window 6067h), MT.TVELWND 3856h (velocity window
-//! 606Dh), MOTOR.ICONT 358Eh (rated current and torque, 6075h/6076h), and
+//! 606Dh), DRV.ACC 3501h / DRV.DEC 3522h / HOME.ACC 3502h (the drive's
+//! own ramps 6083h/6084h/609Ah = 0 select), MOTOR.ICONT 358Eh (rated current and torque, 6075h/6076h), and
 //! the pv scaling factor 204Ch (KC1 §7.5.2.1 / AKD §6.5.2.1,
 //! the velocity factor 6096h, active with FBUS.PARAM05 bit 4; a negative
 //! factor reverses the velocity direction).
@@ -12,10 +13,12 @@
 
 use super::{Kollmorgen, UNITS_PER_REV};
 use crate::build::Context;
+use drivebus_cia402::drive::ZeroRamp;
 use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
 
 /// The indices whose writes this module turns into drive parameters.
-pub const FORWARDED: [u16; 7] = [0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E];
+pub const FORWARDED: [u16; 10] =
+    [0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E, 0x3501, 0x3522, 0x3502];
 
 /// FBUS.PARAM05 bit 4: scaling by the DS402 objects (204Ch active).
 const DS402_SCALING: u64 = 1 << 4;
@@ -78,6 +81,29 @@ impl Kollmorgen {
                 cx.drive.on_write(od, 0x6067, 0, &w.to_le_bytes())?;
             }
             0x3856 => self.local_write(cx, od, 0x606D, 0, &(v as u16).to_le_bytes())?,
+            // DRV.ACC, DRV.DEC, HOME.ACC: the drive's own ramps, which 6083h,
+            // 6084h, 609Ah = 0 select (KC1 §7.11.2.4/5, §7.10.2.4).
+            0x3501 | 0x3522 | 0x3502 => {
+                let x = v as u32 as i32;
+                if x <= 0 {
+                    return Err(SdoAbort::VALUE_TOO_LOW);
+                }
+                let ZeroRamp::DriveRamp { mut acceleration, mut deceleration, mut homing } =
+                    cx.drive.config().zero_ramp
+                else {
+                    return Ok(());
+                };
+                let (slot, object) = match index {
+                    0x3501 => (&mut acceleration, 0x6083),
+                    0x3522 => (&mut deceleration, 0x6084),
+                    _ => (&mut homing, 0x609A),
+                };
+                *slot = x as u32;
+                cx.drive.set_zero_ramp(ZeroRamp::DriveRamp { acceleration, deceleration, homing });
+                if od.get_u32(object, 0) == Some(0) {
+                    cx.drive.on_write(od, object, 0, &0u32.to_le_bytes())?;
+                }
+            }
             // MOTOR.ICONT (mA): the rated current, and with the motor's
             // torque constant the rated torque 6071h/6077h count in.
             0x358E => {
@@ -96,7 +122,7 @@ impl Kollmorgen {
     /// The forwarded parameters again from the dictionary (after the node
     /// restored stored values and the drive reloaded its own).
     pub(crate) fn forward_all(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        for index in [0x352A, 0x35A3, 0x35C6, 0x358E] {
+        for index in [0x352A, 0x35A3, 0x35C6, 0x358E, 0x3501, 0x3522, 0x3502] {
             if let Some(v) = od.get_u64(index, 0)
                 && (v != 0 || index == 0x352A)
             {

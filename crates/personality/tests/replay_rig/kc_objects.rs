@@ -565,3 +565,27 @@ pub fn latches(profile: Profile) {
     put(&mut r, 0x20A5, 0, &0x0100u16.to_le_bytes());
     assert_eq!(getu(&mut r, 0x20A5, 0) & 0x03, 0, "re-armed");
 }
+
+/// DRV.ACC 3501h / DRV.DEC 3522h are the ramps pv runs with while
+/// 6083h/6084h are 0 (KC1 §7.11.2.4/5, AKD §6.11.2.4/5: "DRV.ACC in the
+/// profile velocity mode"); they read the drive's own ramps at power-on.
+/// HOME.ACC 3502h is the homing acceleration while 609Ah is 0.
+pub fn drive_ramps(profile: Profile) {
+    let mut r = operational(profile);
+    assert!(get(&mut r, 0x3501, 0) > 0, "DRV.ACC shows the drive's ramp");
+    put(&mut r, 0x3501, 0, &3_600i32.to_le_bytes());
+    put(&mut r, 0x3522, 0, &7_200i32.to_le_bytes());
+    assert_eq!(refused(&mut r, 0x3501, 0, &0i32.to_le_bytes()), 0x0609_0032);
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &36_000i32.to_le_bytes());
+    r.run_ms(1000);
+    let v = get(&mut r, 0x606C, 0);
+    assert!((v - 3_600).abs() < 400, "1 s at DRV.ACC 3600: {v}");
+    put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    r.run_ms(250);
+    let v = get(&mut r, 0x606C, 0);
+    assert!((v - 1_800).abs() < 400, "250 ms at DRV.DEC 7200: {v}");
+    // HOME.ACC 3502h: the homing acceleration while 609Ah is 0.
+    put(&mut r, 0x3502, 0, &5_000i32.to_le_bytes());
+    assert_eq!(r.pn().app.drive.mode_params().homing_acceleration, 5_000);
+}
