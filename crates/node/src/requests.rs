@@ -75,6 +75,13 @@ impl Node {
                 self.poll_services(now, app, out);
                 self.nmt_command(cmd, now, app, out);
             }
+            Request::StoreParameters => {
+                if let Ok(r) = self.od.find(0x1010, 1) {
+                    let at = self.od.target(r);
+                    let save = crate::owners::SAVE_SIGNATURE.to_le_bytes();
+                    let _ = crate::owners::store_restore(&mut *self.s.storage, &self.od, &at, &save);
+                }
+            }
             Request::Restore { index, sub, value, only_if } => {
                 if let Ok(r) = self.od.find(index, sub)
                     && only_if.is_none_or(|v| self.od.get_u32(index, sub) == Some(v))

@@ -260,3 +260,9 @@ fn latch_objects() {
 fn drive_ramps() {
     k::drive_ramps(P);
 }
+
+/// DRV.NVSAVE.
+#[test]
+fn nvsave_stores_parameters() {
+    k::nvsave(P);
+}

@@ -589,3 +589,15 @@ pub fn drive_ramps(profile: Profile) {
     put(&mut r, 0x3502, 0, &5_000i32.to_le_bytes());
     assert_eq!(r.pn().app.drive.mode_params().homing_acceleration, 5_000);
 }
+
+/// DRV.NVSAVE 35EBh saves the parameters as 1010h:1 does: a value saved
+/// survives NMT reset node, one written after it does not.
+pub fn nvsave(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x366E, 0, &80i32.to_le_bytes());
+    put(&mut r, 0x35EB, 0, &1i32.to_le_bytes());
+    put(&mut r, 0x366E, 0, &90i32.to_le_bytes());
+    r.send("000#8103");
+    r.run_ms(10);
+    assert_eq!(get(&mut r, 0x366E, 0), 80, "the saved value");
+}
