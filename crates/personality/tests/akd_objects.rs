@@ -266,3 +266,15 @@ fn drive_ramps() {
 fn nvsave_stores_parameters() {
     k::nvsave(P);
 }
+
+/// 345Ah brake control (0 → 1 → 3).
+#[test]
+fn brake_control_by_the_fieldbus() {
+    k::brake_control(P);
+}
+
+/// MOTOR.BRAKERLS.
+#[test]
+fn brake_release_command() {
+    k::brake_release_command(P);
+}

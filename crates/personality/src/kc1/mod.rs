@@ -18,6 +18,7 @@
 //!   (example 9 frames 43–44; our reading, see docs/personalities.md).
 
 mod ascii;
+mod brake;
 mod emcy;
 mod facts;
 mod latch;
@@ -85,6 +86,8 @@ pub struct Kollmorgen {
     monitor: monitor::Monitor,
     /// The latch objects over the touch probe.
     latch: latch::Latch,
+    /// The brake objects 345Ah, MOTOR.BRAKERLS.
+    brake: brake::Brake,
 }
 
 impl Kollmorgen {
@@ -106,6 +109,7 @@ impl Kollmorgen {
             period: timing::PeriodPair::default(),
             monitor: monitor::Monitor::default(),
             latch: latch::Latch::default(),
+            brake: brake::Brake::default(),
         }
     }
 
@@ -120,7 +124,7 @@ impl Kollmorgen {
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
         0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
-        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB,
+        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450,
     ];
 }
 
@@ -178,6 +182,16 @@ impl Behaviour for Kollmorgen {
         if matches!(event, NodeEvent::ResetApplication) {
             self.status.reset();
             self.period.reset();
+            self.brake = brake::Brake::default();
+        }
+        // §7.2.2.15: "when fieldbus communication is lost, the drive will
+        // regain control of the brake".
+        let left_operational =
+            matches!(event, NodeEvent::NmtState { from: drivebus_node::NmtState::Operational, .. });
+        if left_operational
+            || matches!(event, NodeEvent::HeartbeatTimeout { .. } | NodeEvent::LifeGuardingLost)
+        {
+            self.brake.lost();
         }
         // The drive reloaded its parameters: set those that follow a
         // manufacturer parameter again.
@@ -334,6 +348,15 @@ impl Behaviour for Kollmorgen {
             0x20A5 => {
                 self.latch_acknowledge(cx, od, le_u64(data) as u16)?;
                 Ok(Verdict::Handled)
+            }
+            // §7.2.2.15: brake control by the fieldbus.
+            0x345A if sub == 1 => {
+                self.brake.command(le_u64(data) as u16);
+                Ok(Verdict::Store)
+            }
+            0x3450 => {
+                self.brake.manual(le_u64(data) as u8)?;
+                Ok(Verdict::Store)
             }
             // DRV.NVSAVE (§8.1.3): save the parameters, as 1010h:1.
             0x35EB => {
@@ -542,6 +565,7 @@ impl Kollmorgen {
         self.status.update(cx, od);
         self.monitor.update(cx, od, &mut self.status);
         self.latch.update(od);
+        self.brake.update(cx, od);
     }
 }
 

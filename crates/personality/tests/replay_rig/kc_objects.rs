@@ -601,3 +601,75 @@ pub fn nvsave(profile: Profile) {
     r.run_ms(10);
     assert_eq!(get(&mut r, 0x366E, 0), 80, "the saved value");
 }
+
+/// `profile` as node 3 on its default machine with a holding brake
+/// (50 ms release, 40 ms apply), NMT operational.
+pub fn with_brake(profile: Profile) -> Rig {
+    let text = "[[node]]\nid = 3\n[node.brake]\nrelease_delay = 0.05\napply_delay = 0.04\n";
+    let file = drivebus_personality::machine::MachineFile::parse(text).unwrap();
+    let m = file.machine_for(profile, ID).unwrap();
+    let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
+    r.send("000#0103");
+    r.run_ms(5);
+    r
+}
+
+/// 345Ah (KC1 §7.2.2.15, AKD §6.2.2.19): 0 → 1 → 3 takes the brake over
+/// and releases it (345Ah:2 = 3 once the release delay passed); 1 applies
+/// it; bit 0 cleared gives it back to the drive (disabled: applied); a
+/// fault and a lost fieldbus (NMT stop) end the fieldbus control.
+pub fn brake_control(profile: Profile) {
+    let mut r = with_brake(profile);
+    let released = |r: &Rig| !r.pn().app.drive.model().brake().engaged;
+    assert!(!released(&r), "disabled: the drive applies the brake");
+    for v in [0u16, 1, 3] {
+        put(&mut r, 0x345A, 1, &v.to_le_bytes());
+    }
+    r.run_ms(20);
+    assert_eq!(getu(&mut r, 0x345A, 2), 1, "fieldbus control, release delay running");
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 3, "fieldbus control, released");
+    assert!(released(&r));
+    put(&mut r, 0x345A, 1, &1u16.to_le_bytes());
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 1, "applied by the fieldbus");
+    put(&mut r, 0x345A, 1, &0u16.to_le_bytes());
+    put(&mut r, 0x345A, 1, &3u16.to_le_bytes());
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 3);
+    put(&mut r, 0x345A, 1, &2u16.to_le_bytes());
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 0, "bit 0 clear: the drive applies it");
+    // A fault ends the fieldbus control; it needs a new rising edge.
+    put(&mut r, 0x345A, 1, &3u16.to_le_bytes());
+    r.run_ms(60);
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x4310));
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 0, "after a fault: the drive's");
+    put(&mut r, 0x6040, 0, &0x80u16.to_le_bytes());
+    put(&mut r, 0x345A, 1, &3u16.to_le_bytes());
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 0, "bit 0 still set: no rising edge, the drive applies it");
+    put(&mut r, 0x345A, 1, &0u16.to_le_bytes());
+    put(&mut r, 0x345A, 1, &3u16.to_le_bytes());
+    r.run_ms(60);
+    assert_eq!(getu(&mut r, 0x345A, 2), 3);
+    // The fieldbus lost: NMT stop gives the brake back.
+    r.send("000#0203");
+    r.run_ms(60);
+    assert!(!released(&r), "NMT stopped: the drive applies the brake");
+}
+
+/// MOTOR.BRAKERLS 3450h: 1 releases, 2 applies, 0 gives the brake back to
+/// the drive; others are refused.
+pub fn brake_release_command(profile: Profile) {
+    let mut r = with_brake(profile);
+    let released = |r: &Rig| !r.pn().app.drive.model().brake().engaged;
+    put(&mut r, 0x3450, 0, &[1]);
+    r.run_ms(60);
+    assert!(released(&r), "MOTOR.BRAKERLS 1");
+    put(&mut r, 0x3450, 0, &[0]);
+    r.run_ms(60);
+    assert!(!released(&r), "0: the drive's (disabled: applied)");
+    assert_eq!(refused(&mut r, 0x3450, 0, &[3]), 0x0609_0030);
+}
