@@ -278,3 +278,67 @@ fn brake_control_by_the_fieldbus() {
 fn brake_release_command() {
     k::brake_release_command(P);
 }
+
+/// `P` on its default machine, NMT operational, with analog input 1 at
+/// `volts` and the master encoder at `master` counts/s.
+fn with_inputs(volts: f64, master: f64) -> replay_rig::Rig {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let m = drivebus_personality::machine::Machine::default_for(P);
+    let (mut r, _) = replay_rig::Rig::with(P.build_on(k::ID, &m).unwrap());
+    r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts }));
+    r.pn_mut().app.inject(Injection::Model(Plant::MasterVelocity(master)));
+    r.send("000#0103");
+    r.run_ms(5);
+    r
+}
+
+/// §6.4.2.4 mode −2: analog velocity, analog input 1 (2.5 V, less
+/// AIN.OFFSET 0.5 V) × AIN.VSCALE (10 rpm/V) = 20 rpm = 12000 units/s;
+/// AIN.VALUE 3509h reads the input (mV); inside AIN.DEADBAND nothing moves.
+#[test]
+fn mode_minus_2_analog_velocity() {
+    let mut r = with_inputs(2.5, 0.0);
+    assert_eq!(k::get(&mut r, 0x3509, 0), 2500, "AIN.VALUE mV");
+    k::put(&mut r, 0x3629, 0, &10_000i32.to_le_bytes());
+    k::put(&mut r, 0x5003, 0, &500u32.to_le_bytes());
+    k::enable(&mut r, -2);
+    r.run_ms(1000);
+    let v = k::get(&mut r, 0x606C, 0);
+    assert!((v - 12_000).abs() < 300, "20 rpm: {v}");
+    k::put(&mut r, 0x5001, 0, &2500u32.to_le_bytes());
+    r.run_ms(1000);
+    assert!(k::get(&mut r, 0x606C, 0).abs() < 300, "inside the deadband");
+}
+
+/// Mode −1: analog current, 2 V × AIN.ISCALE 250 mA/V = 500 mA (6071h =
+/// 500 mA in per mille of the rated current); 2077h reads it.
+#[test]
+fn mode_minus_1_analog_current() {
+    let mut r = with_inputs(2.0, 0.0);
+    k::put(&mut r, 0x5002, 0, &250u32.to_le_bytes());
+    k::enable(&mut r, -1);
+    r.run_ms(30);
+    let i = k::get(&mut r, 0x2077, 0);
+    assert!((i - 500).abs() < 60, "500 mA: {i}");
+    assert!(k::get(&mut r, 0x606C, 0) > 0, "the motor accelerates");
+}
+
+/// Mode −3: electronic gearing, the master encoder at 2^19 counts/s ×
+/// GEAR.OUT/GEAR.IN = 1/2 → 2^18 increments/s = 1/4 rev/s = 9000 units/s.
+#[test]
+fn mode_minus_3_gearing() {
+    let mut r = with_inputs(0.0, f64::from(1u32 << 19));
+    k::put(&mut r, 0x50BE, 0, &1u32.to_le_bytes());
+    k::put(&mut r, 0x50BB, 0, &2u32.to_le_bytes());
+    k::enable(&mut r, -3);
+    r.run_ms(1000);
+    let v = k::get(&mut r, 0x606C, 0);
+    assert!((v - 9_000).abs() < 300, "geared: {v}");
+}
+
+/// AIN.VALUE.
+#[test]
+fn analog_input_value() {
+    k::analog_input_value(P);
+}

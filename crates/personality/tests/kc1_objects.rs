@@ -172,3 +172,9 @@ fn brake_control_by_the_fieldbus() {
 fn brake_release_command() {
     k::brake_release_command(P);
 }
+
+/// AIN.VALUE.
+#[test]
+fn analog_input_value() {
+    k::analog_input_value(P);
+}

@@ -5,11 +5,11 @@
 //! plus:
 //!
 //! - manufacturer modes (§6.4.2.4 / 6060h table): −1 analog current, −2
-//!   analog velocity, −3 electronic gearing. The virtual drive has no analog
-//!   input and no master encoder, so the set-point is 0: −1 runs as torque
-//!   mode with 0 ‰, −2 and −3 as profile velocity with 0. While one of them
-//!   is active, 6071h/60FFh writes are stored but do not move the motor
-//!   (the set-point comes from the input, not the bus). 6061h shows the
+//!   analog velocity, −3 electronic gearing, with their set-points from the
+//!   machine's analog input 1 and master encoder (`modes.rs`): −1 runs as
+//!   torque mode, −2 and −3 as profile velocity. While one of them is
+//!   active, 6071h/60FFh writes are stored but do not move the motor (the
+//!   set-point comes from the input, not the bus). 6061h shows the
 //!   negative code.
 //! - manufacturer homing methods (§6.10.2.2 table, edition R): −7/−6 to the
 //!   reference switch negative/positive then the next feedback zero
@@ -18,6 +18,7 @@
 
 mod emcy;
 mod facts;
+mod modes;
 
 pub use facts::INFO;
 
@@ -65,20 +66,20 @@ impl HomingMethod for Alias {
 /// AKD manufacturer homing methods and the standard method each runs as.
 pub const HOMING_ALIASES: [(i8, i8); 5] = [(-7, 5), (-6, 3), (-5, 37), (-4, 19), (-3, 21)];
 
-/// The AKD.
+/// The AKD: the Kollmorgen behaviour and the input-driven modes.
 #[derive(Debug, Clone)]
-pub struct Akd(Kollmorgen);
+pub struct Akd(Kollmorgen, modes::InputModes);
 
 impl Akd {
     /// The AKD behaviour.
     pub fn new() -> Self {
-        Akd(Kollmorgen::new(Profile::Akd))
+        Akd(Kollmorgen::new(Profile::Akd), modes::InputModes::default())
     }
 
     /// With the DC bus charged before *Switch on* (statusword 0231h; see
     /// [`Kollmorgen::dc_bus_before_switch_on`]).
     pub fn with_dc_bus_before_switch_on(self, on: bool) -> Self {
-        Akd(self.0.with_dc_bus_before_switch_on(on))
+        Akd(self.0.with_dc_bus_before_switch_on(on), self.1)
     }
 }
 
@@ -197,6 +198,7 @@ impl Behaviour for Akd {
         self.0.on_boot(cx, od);
     }
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        self.1.update(cx, od);
         self.0.after_step(cx, od);
     }
     fn emcy(&self, code: u16) -> EmcyFrame {

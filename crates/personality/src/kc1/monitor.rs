@@ -1,6 +1,7 @@
 //! The parameter mirrors of the drive's measurements and their limits
 //! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
-//! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h read
+//! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h,
+//! AIN.VALUE 3509h/3470h:4 (analog input 1) read
 //! what the model measures; VL.THRESH 3627h (overspeed, F302),
 //! MOTOR.TEMPWARN 3453h (n301) and MOTOR.TEMPFAULT 3586h (F301) act on
 //! them, VBUS.UVFTHRESH 361Dh (F502) on the DC bus (0 = off).
@@ -31,6 +32,7 @@ struct Refs {
     temp_warn: Option<EntryRef>,
     temp_fault: Option<EntryRef>,
     uv_fault: Option<EntryRef>,
+    ain: [Option<EntryRef>; 2],
     current: Option<EntryRef>,
     velocity: Option<EntryRef>,
 }
@@ -67,6 +69,7 @@ impl Monitor {
             temp_warn: f(0x3453),
             temp_fault: f(0x3586),
             uv_fault: f(0x361D),
+            ain: [f(0x3509), od.find(0x3470, 4).ok()],
             current: f(0x2077),
             velocity: f(0x606C),
         }
@@ -91,6 +94,11 @@ impl Monitor {
         put(od, r.il_fb, i64::from(word(od, r.current) as u32 as i32));
         let per_rev = i64::from(drive.config().params.encoder.counts_per_rev).max(1);
         put(od, r.mechpos, drive.position_increments().rem_euclid(per_rev));
+        // AIN.VALUE (mV, float scale 1000:1): the machine's analog input 1.
+        let mv = (model.analog_input(1) * 1000.0).round().clamp(-32768.0, 32767.0) as i64;
+        for a in r.ain {
+            put(od, a, mv);
+        }
         let state = drive.state_machine().state();
         let faulted = matches!(state, State::Fault | State::FaultReactionActive);
         let over = word(od, r.overspeed) as u32 as i32;

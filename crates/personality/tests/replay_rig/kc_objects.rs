@@ -673,3 +673,16 @@ pub fn brake_release_command(profile: Profile) {
     assert!(!released(&r), "0: the drive's (disabled: applied)");
     assert_eq!(refused(&mut r, 0x3450, 0, &[3]), 0x0609_0030);
 }
+
+/// AIN.VALUE 3509h and 3470h:4 (mV, float scale 1000:1) read the machine's
+/// analog input 1.
+pub fn analog_input_value(profile: Profile) {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let m = drivebus_personality::machine::Machine::default_for(profile);
+    let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
+    r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: -1.25 }));
+    r.run_ms(2);
+    assert_eq!(get(&mut r, 0x3509, 0), -1250);
+    assert_eq!(get(&mut r, 0x3470, 4), -1250);
+}
