@@ -342,3 +342,15 @@ fn mode_minus_3_gearing() {
 fn analog_input_value() {
     k::analog_input_value(P);
 }
+
+/// DIN1–7 in 60FDh, change flags, 20B8h; DOUT1/2.
+#[test]
+fn digital_inputs_and_outputs() {
+    k::digital_io(P);
+}
+
+/// 60FEh bit 0 "set brake".
+#[test]
+fn set_brake_bit() {
+    k::set_brake_bit(P);
+}

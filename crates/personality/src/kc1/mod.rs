@@ -21,6 +21,7 @@ mod ascii;
 mod brake;
 mod emcy;
 mod facts;
+mod io;
 mod latch;
 mod monitor;
 mod params;
@@ -88,6 +89,8 @@ pub struct Kollmorgen {
     latch: latch::Latch,
     /// The brake objects 345Ah, MOTOR.BRAKERLS.
     brake: brake::Brake,
+    /// DIN1–7 and their change flags in 60FDh.
+    inputs: io::Inputs,
 }
 
 impl Kollmorgen {
@@ -110,6 +113,7 @@ impl Kollmorgen {
             monitor: monitor::Monitor::default(),
             latch: latch::Latch::default(),
             brake: brake::Brake::default(),
+            inputs: io::Inputs::default(),
         }
     }
 
@@ -124,7 +128,7 @@ impl Kollmorgen {
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
         0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
-        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450,
+        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450, 0x20B8,
     ];
 }
 
@@ -163,6 +167,10 @@ impl Behaviour for Kollmorgen {
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
         kollmorgen_units(cfg);
+        // KC1 §7.2.3.9 / AKD §6.2.3.9: 60FEh:1 bit 0 "set brake", bits
+        // 16/17 DOUT1/2 (as far as 60FEh:2 enables them).
+        cfg.io.output_lines = true;
+        cfg.io.set_brake_bit = true;
         // SYNC loss is supervised only when FBUS.PARAM04 (36E8h) = 1.
         cfg.sync_loss_fault = false;
         kollmorgen_power_on(cfg);
@@ -348,6 +356,11 @@ impl Behaviour for Kollmorgen {
             0x20A5 => {
                 self.latch_acknowledge(cx, od, le_u64(data) as u16)?;
                 Ok(Verdict::Handled)
+            }
+            // §7.2.2.14: reset the change flags of DIN1–7 (60FDh bits 24–30).
+            0x20B8 => {
+                self.inputs.reset_changes(le_u64(data) as u16);
+                Ok(Verdict::Store)
             }
             // §7.2.2.15: brake control by the fieldbus.
             0x345A if sub == 1 => {
@@ -562,6 +575,7 @@ impl Kollmorgen {
         let period = cx.drive.mode_params().interpolation_period_s().map(|s| (s * 1e9).round() as u64);
         self.pll.run(od, cx.now, period, matches!(view.mode, op::IP | op::CSP));
         self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);
+        self.inputs.update(cx, od);
         self.status.update(cx, od);
         self.monitor.update(cx, od, &mut self.status);
         self.latch.update(od);

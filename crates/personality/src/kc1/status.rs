@@ -275,7 +275,7 @@ impl Status {
         let pp_at_speed = view.mode == op::PP
             && moving
             && drive.demand_velocity().abs() + 0.5 >= word(od, self.refs.profile_velocity) as f64;
-        let di = view.digital_inputs;
+        let di = view.digital_inputs | u32::from(drive.model().digital_inputs() & 0x7F) << 16;
         let bits = [
             (0, moving && matches!(view.mode, op::PP | op::HM | op::IP | op::CSP)),
             (1, self.homed),

@@ -686,3 +686,43 @@ pub fn analog_input_value(profile: Profile) {
     assert_eq!(get(&mut r, 0x3509, 0), -1250);
     assert_eq!(get(&mut r, 0x3470, 4), -1250);
 }
+
+/// 60FDh bits 16–22 mirror DIN1–7, bits 24–30 flag their changes until
+/// 20B8h resets them (KC1 §7.2.3.8, §7.2.2.14; AKD §6.2.3.8, §6.2.2.18);
+/// 1002h bits 25–28 show DIN1–4. 60FEh:1 bits 16/17 set DOUT1/2 as far as
+/// 60FEh:2 enables them (KC1 §7.2.3.9, AKD §6.2.3.9).
+pub fn digital_io(profile: Profile) {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let m = drivebus_personality::machine::Machine::default_for(profile);
+    let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
+    r.run_ms(2);
+    assert_eq!(getu(&mut r, 0x60FD, 0) >> 16, 0, "no input, no change");
+    r.pn_mut().app.inject(Injection::Model(Plant::DigitalInput { line: 2, level: true }));
+    r.run_ms(2);
+    let di = getu(&mut r, 0x60FD, 0);
+    assert_eq!(di >> 16, 0x0202, "DIN2 high and changed: {di:08X}");
+    assert_ne!(getu(&mut r, 0x1002, 0) & (1 << 26), 0, "1002h bit 26: DIN2");
+    put(&mut r, 0x20B8, 0, &0x0002u16.to_le_bytes());
+    r.run_ms(1);
+    assert_eq!(getu(&mut r, 0x60FD, 0) >> 16, 0x0002, "change flag reset");
+    r.pn_mut().app.inject(Injection::Model(Plant::DigitalInput { line: 2, level: false }));
+    r.run_ms(2);
+    assert_eq!(getu(&mut r, 0x60FD, 0) >> 16, 0x0200, "DIN2 low, changed again");
+    put(&mut r, 0x60FE, 2, &0x0003_0000u32.to_le_bytes());
+    put(&mut r, 0x60FE, 1, &0x0002_0000u32.to_le_bytes());
+    assert_eq!(r.pn().app.drive.output_lines(), 0b10, "DOUT2");
+}
+
+/// 60FEh:1 bit 0 "set brake" (enabled in 60FEh:2) applies the holding
+/// brake while the drive is enabled (KC1 §7.2.3.9, AKD §6.2.3.9).
+pub fn set_brake_bit(profile: Profile) {
+    let mut r = with_brake(profile);
+    enable(&mut r, 3);
+    r.run_ms(100);
+    assert!(!r.pn().app.drive.model().brake().engaged, "enabled: released");
+    put(&mut r, 0x60FE, 2, &1u32.to_le_bytes());
+    put(&mut r, 0x60FE, 1, &1u32.to_le_bytes());
+    r.run_ms(100);
+    assert!(r.pn().app.drive.model().brake().engaged, "set brake");
+}
