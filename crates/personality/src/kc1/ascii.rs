@@ -244,7 +244,7 @@ impl Kollmorgen {
         text: &str,
     ) -> Result<(), SdoAbort> {
         let dt = od.get(index, sub).map(|e| e.data_type).ok_or(SdoAbort::NO_OBJECT)?;
-        if !matches!(dt.num_kind(), Some(_)) && dt != DataType::VisibleString {
+        if dt.num_kind().is_none() && dt != DataType::VisibleString {
             return Err(SdoAbort::TYPE_MISMATCH);
         }
         let v = Value::parse(dt, text).map_err(|_| SdoAbort::INVALID_VALUE)?;

@@ -76,9 +76,9 @@ struct Refs {
 /// The PLL of §7.2.2.18: once per fieldbus cycle (60C2h) the drive's PLL
 /// function measures the time since the last SYNC (FBUS.SYNCACT, 3496h:2)
 /// and moves its next call by FBUS.COMPTIME per 62.5 µs tick towards
-/// FBUS.SYNCDIST (3496h:1). Locked after FBUS.PLLTHRESH (50B1h, at least
-/// 1) calls inside ± FBUS.SYNCWND (3496h:3); a locked PLL leaving the
-/// window is warning n125.
+/// FBUS.SYNCDIST (3496h:1). Locked after FBUS.PLLTHRESH (50B1h, at
+/// least one) calls inside ± FBUS.SYNCWND (3496h:3); a locked PLL leaving
+/// the window is warning n125.
 #[derive(Debug, Clone, Default)]
 pub struct Pll {
     refs: Refs,
