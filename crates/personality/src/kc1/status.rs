@@ -114,6 +114,8 @@ pub struct Status {
     history: [(u32, u32); HISTORY],
     boot: Option<Instant>,
     homed: bool,
+    /// The fault code last looked up and its number.
+    number: (u16, u32),
 }
 
 /// A number read from a handle (0 if absent).
@@ -171,6 +173,7 @@ impl Status {
             history: [(0, 0); HISTORY],
             boot: None,
             homed: false,
+            number: (0, 0),
         }
     }
 
@@ -313,7 +316,11 @@ impl Status {
         }
         // The drive holds one fault at a time (603Fh).
         let code = drive.state_machine().fault_code();
-        let number = if fault && code != 0 { self.fault_number(code) } else { 0 };
+        // The table is searched once per fault, not every step.
+        if self.number.0 != code {
+            self.number = (code, self.fault_number(code));
+        }
+        let number = if fault && code != 0 { self.number.1 } else { 0 };
         put(od, self.refs.faults[0], number);
         let secs = self.boot.map_or(0, |b| cx.now.saturating_duration_since(b).as_secs() as u32);
         put(od, self.refs.runtime, secs);
