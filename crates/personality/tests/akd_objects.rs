@@ -354,3 +354,19 @@ fn digital_inputs_and_outputs() {
 fn set_brake_bit() {
     k::set_brake_bit(P);
 }
+
+/// DRV.HANDWHEEL, DRV.TEMPERATURES; §6.5.4: 60E4h:1 is the secondary
+/// feedback in user units through 60E8h/60EDh (gear) and 60E9h/60EEh
+/// (feed), one revolution = FB2.ENCRES counts (0: the primary's 2^20).
+#[test]
+fn secondary_feedback_and_additional_position() {
+    let mut r = k::secondary_feedback(P);
+    assert_eq!(k::get(&mut r, 0x60E4, 1), 1, "one revolution, feed 1");
+    k::put(&mut r, 0x60E9, 1, &36_000u32.to_le_bytes());
+    k::put(&mut r, 0x60E8, 1, &2u32.to_le_bytes());
+    r.run_ms(1);
+    assert_eq!(k::get(&mut r, 0x60E4, 1), 18_000, "gear 2:1, feed 36000");
+    k::put(&mut r, 0x51EC, 0, &(1u32 << 19).to_le_bytes());
+    r.run_ms(1);
+    assert_eq!(k::get(&mut r, 0x60E4, 1), 36_000, "FB2.ENCRES 2^19: two revolutions");
+}

@@ -190,3 +190,9 @@ fn digital_inputs_and_outputs() {
 fn set_brake_bit() {
     k::set_brake_bit(P);
 }
+
+/// DRV.HANDWHEEL, DRV.TEMPERATURES.
+#[test]
+fn secondary_feedback_and_ambient() {
+    k::secondary_feedback(P);
+}

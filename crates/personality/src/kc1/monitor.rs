@@ -1,7 +1,9 @@
 //! The parameter mirrors of the drive's measurements and their limits
 //! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
 //! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h,
-//! AIN.VALUE 3509h/3470h:4 (analog input 1) read
+//! AIN.VALUE 3509h/3470h:4 (analog input 1), DRV.HANDWHEEL 2050h and AKD
+//! 60E4h:1 (the master encoder as secondary feedback), DRV.TEMPERATURES
+//! 3610h (the ambient) read
 //! what the model measures; VL.THRESH 3627h (overspeed, F302),
 //! MOTOR.TEMPWARN 3453h (n301) and MOTOR.TEMPFAULT 3586h (F301) act on
 //! them, VBUS.UVFTHRESH 361Dh (F502) on the DC bus (0 = off).
@@ -33,6 +35,11 @@ struct Refs {
     temp_fault: Option<EntryRef>,
     uv_fault: Option<EntryRef>,
     ain: [Option<EntryRef>; 2],
+    handwheel: Option<EntryRef>,
+    ambient: Option<EntryRef>,
+    /// 60E4h:1, and its factors 60E8h:1, 60EDh:1, 60E9h:1, 60EEh:1, FB2.ENCRES.
+    additional: Option<EntryRef>,
+    factors: [Option<EntryRef>; 5],
     current: Option<EntryRef>,
     velocity: Option<EntryRef>,
 }
@@ -70,6 +77,16 @@ impl Monitor {
             temp_fault: f(0x3586),
             uv_fault: f(0x361D),
             ain: [f(0x3509), od.find(0x3470, 4).ok()],
+            handwheel: f(0x2050),
+            ambient: f(0x3610),
+            additional: od.find(0x60E4, 1).ok(),
+            factors: [
+                od.find(0x60E8, 1).ok(),
+                od.find(0x60ED, 1).ok(),
+                od.find(0x60E9, 1).ok(),
+                od.find(0x60EE, 1).ok(),
+                f(0x51EC),
+            ],
             current: f(0x2077),
             velocity: f(0x606C),
         }
@@ -99,6 +116,20 @@ impl Monitor {
         for a in r.ain {
             put(od, a, mv);
         }
+        // DRV.HANDWHEEL: the secondary feedback, the machine's master
+        // encoder (counts); AKD 60E4h:1 its position in user units, as
+        // 6064h through the factors 60E8h/60EDh (gear) and 60E9h/60EEh
+        // (feed) (§6.5.4), one revolution = FB2.ENCRES counts (0: the
+        // primary feedback's resolution).
+        let master = model.master_position();
+        put(od, r.handwheel, master);
+        if r.additional.is_some() {
+            let w = |k: usize| (word(od, r.factors[k]) as u32).max(1) as f64;
+            let res = if word(od, r.factors[4]) == 0 { per_rev as f64 } else { w(4) };
+            let pos = master as f64 / res * w(1) / w(0) * w(2) / w(3);
+            put(od, r.additional, pos.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i64);
+        }
+        put(od, r.ambient, model.params().motor.ambient_temperature.round() as i64);
         let state = drive.state_machine().state();
         let faulted = matches!(state, State::Fault | State::FaultReactionActive);
         let over = word(od, r.overspeed) as u32 as i32;

@@ -726,3 +726,19 @@ pub fn set_brake_bit(profile: Profile) {
     r.run_ms(100);
     assert!(r.pn().app.drive.model().brake().engaged, "set brake");
 }
+
+/// DRV.HANDWHEEL 2050h reads the secondary feedback, the machine's master
+/// encoder (counts); DRV.TEMPERATURES 3610h the ambient.
+pub fn secondary_feedback(profile: Profile) -> Rig {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let text = "[[node]]\nid = 3\n[node.temperature]\nambient = 31.0\n";
+    let m =
+        drivebus_personality::machine::MachineFile::parse(text).unwrap().machine_for(profile, ID).unwrap();
+    let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
+    r.pn_mut().app.inject(Injection::Model(Plant::MasterPosition(f64::from(1u32 << 20))));
+    r.run_ms(2);
+    assert_eq!(get(&mut r, 0x2050, 0), 1 << 20, "DRV.HANDWHEEL");
+    assert_eq!(get(&mut r, 0x3610, 0), 31, "ambient");
+    r
+}
