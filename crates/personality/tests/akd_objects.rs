@@ -370,3 +370,9 @@ fn secondary_feedback_and_additional_position() {
     r.run_ms(1);
     assert_eq!(k::get(&mut r, 0x60E4, 1), 36_000, "FB2.ENCRES 2^19: two revolutions");
 }
+
+/// n167: a pp target clamped to the software limit.
+#[test]
+fn pp_target_clamped_to_software_limit() {
+    k::target_clamped_to_limit(P);
+}

@@ -196,3 +196,9 @@ fn set_brake_bit() {
 fn secondary_feedback_and_ambient() {
     k::secondary_feedback(P);
 }
+
+/// n167: a pp target clamped to the software limit.
+#[test]
+fn pp_target_clamped_to_software_limit() {
+    k::target_clamped_to_limit(P);
+}

@@ -453,9 +453,12 @@ impl Kollmorgen {
         let pos = cx.drive.position();
         let (above, below) = (active && pos > i64::from(hi), active && pos < i64::from(lo));
         if self.profile == Profile::Kc1 {
-            // KC1 §7.1: F107/F108 (8580h/8581h) when the axis passes a
-            // limit moving outwards; back inwards it may move.
+            // KC1 §7.1: F107/F108 (8580h/8581h) when the set-point takes
+            // the axis past a limit outwards (not the settling of a move
+            // that stops at it); back inwards it may move.
             let v = cx.drive.demand_velocity();
+            let d = cx.drive.demand_position();
+            let (above, below) = (active && d > f64::from(hi), active && d < f64::from(lo));
             if view.state == State::OperationEnabled && ((above && v > 0.0) || (below && v < 0.0)) {
                 cx.drive.inject(Injection::Fault(if above { 0x8580 } else { 0x8581 }));
             }
@@ -464,6 +467,14 @@ impl Kollmorgen {
             self.status.set(cx, od, status::Warning::PositiveSoftLimit, above);
             self.status.set(cx, od, status::Warning::NegativeSoftLimit, below);
         }
+        // n167: the drive clamped a pp target to a limit (statusword bit
+        // 11 without a limit switch).
+        let clamped = active
+            && view.mode == op::PP
+            && view.state == State::OperationEnabled
+            && view.statusword & 0x800 != 0
+            && view.digital_inputs & 0x3 == 0;
+        self.status.set(cx, od, status::Warning::SoftLimitTraversed, clamped);
         let period = cx.drive.mode_params().interpolation_period_s().map(|s| (s * 1e9).round() as u64);
         self.pll.run(od, cx.now, period, matches!(view.mode, op::IP | op::CSP));
         self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);

@@ -27,6 +27,9 @@ pub enum Warning {
     SyncLost,
     /// n301: motor temperature above MOTOR.TEMPWARN (3453h), EMCY 7186h.
     MotorTemperature,
+    /// n167: a pp target beyond a software limit was clamped to it, EMCY
+    /// 86A9h.
+    SoftLimitTraversed,
 }
 
 impl Warning {
@@ -38,6 +41,7 @@ impl Warning {
             Warning::NegativeSoftLimit => 108,
             Warning::SyncLost => 125,
             Warning::MotorTemperature => 301,
+            Warning::SoftLimitTraversed => 167,
         }
     }
 
@@ -49,12 +53,13 @@ impl Warning {
             Warning::NegativeSoftLimit => 0x8583,
             Warning::SyncLost => 0x8781,
             Warning::MotorTemperature => 0x7186,
+            Warning::SoftLimitTraversed => 0x86A9,
         }
     }
 }
 
-/// Up to this many warnings are active at once (there are five kinds).
-const MAX_WARNINGS: usize = 5;
+/// Up to this many warnings are active at once (there are six kinds).
+const MAX_WARNINGS: usize = 6;
 /// AKD 2012h/2013h: the last 20 faults.
 const HISTORY: usize = 20;
 

@@ -742,3 +742,25 @@ pub fn secondary_feedback(profile: Profile) -> Rig {
     assert_eq!(get(&mut r, 0x3610, 0), 31, "ambient");
     r
 }
+
+/// A pp target beyond an active software limit is clamped to it (the
+/// axis stops at the limit) and reported as warning n167 (EMCY 86A9h,
+/// KC1 §7.1 / AKD §6.1).
+pub fn target_clamped_to_limit(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x607D, 1, &(-36_000i32).to_le_bytes());
+    put(&mut r, 0x607D, 2, &36_000i32.to_le_bytes());
+    put(&mut r, 0x1010, 1, b"save");
+    r.send("000#8103");
+    r.run_ms(10);
+    r.send("000#0103");
+    r.run_ms(5);
+    enable(&mut r, 1);
+    put(&mut r, 0x6081, 0, &36_000u32.to_le_bytes());
+    put(&mut r, 0x607A, 0, &100_000i32.to_le_bytes());
+    put(&mut r, 0x6040, 0, &0x1Fu16.to_le_bytes());
+    let e = emcys_after(&mut r, 2500);
+    assert_eq!(e.first(), Some(&emcy(0x86A9, 0x80)), "n167: {e:?}");
+    assert!((r.position() - 36_000).abs() < 100, "stopped at the limit: {}", r.position());
+    assert_eq!(getu(&mut r, 0x2000, 1), 167);
+}
