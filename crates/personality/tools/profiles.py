@@ -73,6 +73,8 @@ KC1_AKD_COMMON = {
     (0x6072, 0): ov(default="4000", why="no default given; drivebus's working value 4000 per mille (the motor's peak / rated current) written", sec="KC1 8.1.4 / AKD 7.1.5"),
 }
 
+for _i, _n in ((0x3501, "DRV.ACC"), (0x3522, "DRV.DEC"), (0x3502, "HOME.ACC")):
+    KC1_AKD_COMMON[(_i, 0)] = ov(default="36000000", why=f"no default given; {_n} is the drive's own ramp that 6083h/6084h/609Ah = 0 select, drivebus's working value 36000000 units/s² (1000 rev/s² at 36000 units per revolution) written", sec="KC1 7.11.2.4, 7.11.2.5, 7.10.2.4, 8.1.3 / AKD 6.11.2.4, 6.11.2.5, 6.10.2.4, 7.1.4")
 KC1_AKD_COMMON[(0x6063, 0)] = ov(default="0", why="default: the table prints 2^20 ('as printed'), the increments of one turn (PRBASE 20, §7.8.2.1), not a position; the drive starts at 0 increments (what the running drive reads)", sec="KC1 7.8.2.1 / AKD 6.8.2.1")
 
 PROFILES["kc1"]["overrides"] = dict(KC1_AKD_COMMON)

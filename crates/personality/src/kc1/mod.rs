@@ -232,15 +232,6 @@ impl Behaviour for Kollmorgen {
         // write).
         set_default(od, 0x60C4, 5, &Value::U8(1));
         set_default(od, 0x60C4, 6, &Value::U8(0));
-        // DRV.ACC, DRV.DEC, HOME.ACC: the drive's own ramps (what 0 in
-        // 6083h/6084h/609Ah selects, `kollmorgen_power_on`).
-        let mut dc = DriveConfig::default();
-        self.adjust_drive_config(&mut dc);
-        if let ZeroRamp::DriveRamp { acceleration, deceleration, homing } = dc.zero_ramp {
-            for (i, v) in [(0x3501, acceleration), (0x3522, deceleration), (0x3502, homing)] {
-                set_default(od, i, 0, &Value::I32(v.min(i32::MAX as u32) as i32));
-            }
-        }
         // §7.10.2.3: 6099h:1 "equivalent 60 rpm", :2 1/8 of it.
         set_default(od, 0x6099, 1, &Value::U32(UNITS_PER_REV));
         set_default(od, 0x6099, 2, &Value::U32(UNITS_PER_REV / 8));
