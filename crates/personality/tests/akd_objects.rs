@@ -376,3 +376,18 @@ fn secondary_feedback_and_additional_position() {
 fn pp_target_clamped_to_software_limit() {
     k::target_clamped_to_limit(P);
 }
+
+/// A warning whose EMCY went out before FBUS.PARAM05 bit 11 was set still
+/// sends its reset EMCY when it goes (1001h back to 0).
+#[test]
+fn warning_reset_emcy_after_bit11_set() {
+    let mut r = k::operational(P);
+    k::put(&mut r, 0x3453, 0, &1u32.to_le_bytes());
+    assert_eq!(k::emcys_after(&mut r, 5), vec![emcy(0x7186, 0x80)], "n301");
+    k::put(&mut r, 0x36E9, 0, &(1u32 << 11).to_le_bytes());
+    k::put(&mut r, 0x3453, 0, &0u32.to_le_bytes());
+    let e = k::emcys_after(&mut r, 5);
+    // The error-reset EMCY: code 0000h, register 00h, bytes 3–7 zero.
+    assert_eq!(e, vec![drivebus_can::Frame::new(0x83, &[0; 8])], "reset EMCY");
+    assert_eq!(k::getu(&mut r, 0x1001, 0), 0);
+}

@@ -113,6 +113,8 @@ pub struct Status {
     emcy: &'static [EmcyEntry],
     /// Active warnings, oldest first.
     warnings: [Option<Warning>; MAX_WARNINGS],
+    /// The warnings whose EMCY was sent (bit `Warning as u8`).
+    sent: u8,
     /// The fault code (603Fh) last seen, to note a new fault once.
     last_fault: u16,
     /// Fault numbers and their DRV.RUNTIME seconds, newest first.
@@ -174,6 +176,7 @@ impl Status {
             refs: Refs::default(),
             emcy,
             warnings: [None; MAX_WARNINGS],
+            sent: 0,
             last_fault: 0,
             history: [(0, 0); HISTORY],
             boot: None,
@@ -203,19 +206,23 @@ impl Status {
         if on == self.has(w) {
             return;
         }
-        let quiet = word(od, self.refs.param05) & (1 << 11) != 0;
+        let bit = 1u8 << (w as u8);
         if on {
             if let Some(slot) = self.warnings.iter_mut().find(|s| s.is_none()) {
                 *slot = Some(w);
             }
-            if !quiet {
+            if word(od, self.refs.param05) & (1 << 11) == 0 {
                 cx.request(frame(w.code()).raise());
+                self.sent |= bit;
             }
         } else {
             // Keep the order of the rest (2000h lists them oldest first).
             let mut rest = self.warnings.iter().flatten().copied().filter(|&x| x != w);
             self.warnings = core::array::from_fn(|_| rest.next());
-            if !quiet {
+            // The reset EMCY for a warning whose EMCY went out, whatever
+            // bit 11 says now.
+            if self.sent & bit != 0 {
+                self.sent &= !bit;
                 cx.request(Request::ClearEmcy(w.code()));
             }
         }
@@ -230,6 +237,7 @@ impl Status {
     /// (the history is the drive's, kept).
     pub fn reset(&mut self) {
         self.warnings = [None; MAX_WARNINGS];
+        self.sent = 0;
         self.last_fault = 0;
         self.homed = false;
     }
