@@ -280,13 +280,10 @@ impl Status {
         let enabled = state == State::OperationEnabled;
         let moving = enabled && drive.demand_velocity() != 0.0;
         let fault = matches!(state, State::Fault | State::FaultReactionActive);
-        // FBUS.PARAM05 bit 8 = 0 (default): Switched on has the power stage on.
-        let param05 = word(od, self.refs.param05);
-        let power = match state {
-            State::OperationEnabled | State::QuickStopActive | State::FaultReactionActive => true,
-            State::SwitchedOn => param05 & (1 << 8) == 0,
-            _ => false,
-        };
+        // The model's power stage is on from Operation enabled (FBUS.PARAM05
+        // bit 8 = 0, power on in Switched on, is not emulated).
+        let power =
+            matches!(state, State::OperationEnabled | State::QuickStopActive | State::FaultReactionActive);
         let pv_reached = view.mode == op::PV && enabled && sw & 0x400 != 0;
         let pp_at_speed = view.mode == op::PP
             && moving
