@@ -395,38 +395,45 @@ def test_csp_on_dc_sync0_in_soem_order(master, line):
     assert (ipos.sdo_read(0x60C2, 1), ipos.sdo_read(0x60C2, 2)) == (bytes([4]), bytes([0xFD])), "60C2h = 4 ms"
 
     period = SYNC0_NS / 1e9
+    expected = master.expected_wkc
     next_at = time.monotonic()
 
-    def cycle(controlword: int, target: int) -> tuple[int, int]:
+    def cycle(controlword: int, target: int) -> tuple[int, int] | None:
+        """One frame: (statusword, 6064h), or None when the reply did not
+        come back complete within 100 ms (a loaded host can stall either
+        process that long; the inputs are then stale)."""
         nonlocal next_at
         ipos.output = controlword.to_bytes(2, "little") + target.to_bytes(4, "little", signed=True)
         master.send_processdata()
-        master.receive_processdata(100_000)
-        next_at += period
+        wkc = master.receive_processdata(100_000)
+        next_at = max(next_at + period, time.monotonic() - period)
         time.sleep(max(0.0, next_at - time.monotonic()))
+        if wkc != expected:
+            return None
         return int.from_bytes(ipos.input[0:2], "little"), int.from_bytes(ipos.input[2:6], "little", signed=True)
 
     start = int.from_bytes(ipos.sdo_read(0x6064, 0), "little", signed=True)
     for cw, want in ((0x0006, 0x0021), (0x0007, 0x0023), (0x000F, 0x0027)):
         for _ in range(200):
-            sw, _ = cycle(cw, start)
-            if sw & 0x6F == want:
+            got = cycle(cw, start)
+            if got and got[0] & 0x6F == want:
                 break
         else:
-            pytest.fail(f"controlword {cw:04X}h: statusword {sw:04X}h never & 6Fh = {want:04X}h")
-    # 1 s ramp of 4 counts per cycle (1000 counts/s), then 1 s at the end.
-    step, ramp = 4, 250
-    worst_lag = 0
-    for k in range(1, ramp + 1):
-        sw, p = cycle(0x000F, start + step * k)
-        assert sw & 0x6F == 0x27, f"left Operation enabled: statusword {sw:04X}h"
-        if k > 50:
-            # Steady ramp: the actual position trails the set-point sent
-            # by the set-point's own delay (a cycle or two plus the loop).
-            worst_lag = max(worst_lag, abs(start + step * k - p))
+            pytest.fail(f"controlword {cw:04X}h: statusword never & 6Fh = {want:04X}h")
+    # 1 s ramp of 4 counts per frame, then 1 s on the last target.
+    step, ramp, hold = 4, 250, 250
+    trace = [(start + step * k, cycle(0x000F, start + step * k)) for k in range(1, ramp + 1)]
     target = start + step * ramp
-    tail = [cycle(0x000F, target)[1] for _ in range(250)][-75:]
-    assert worst_lag <= 10 * step, f"the drive does not follow the ramp: lag up to {worst_lag} counts"
+    trace += [(target, cycle(0x000F, target)) for _ in range(hold)]
+    good = [(t, r) for t, r in trace if r is not None]
+    assert len(good) * 10 >= 9 * len(trace), f"{len(trace) - len(good)} of {len(trace)} frames without a reply"
+    assert all(sw & 0x6F == 0x27 for _, (sw, _) in good), "left Operation enabled"
+    # Along the steady ramp the position trails the set-point sent by the
+    # set-point's own delay: the next SYNC0 latches it, 60C2h later it is
+    # the demand, the position loop follows (a few frames in all).
+    lags = [t - p for t, (_, p) in good[50:] if t != target]
+    assert lags and max(lags) <= 10 * step and min(lags) >= 0, f"the drive does not follow the ramp: lags {lags}"
+    tail = [p for _, (_, p) in good[-75:]]
     worst = max(abs(p - target) for p in tail)
     assert worst <= 3, f"6064h does not hold still on {target}: worst {worst}, last {tail[-8:]}"
     master.state = pysoem.INIT_STATE
