@@ -36,7 +36,13 @@ fn main() {
         let target = (90_000.0 * (k as f64 * 1e-3 * std::f64::consts::PI).sin()) as i32;
         // pp: a new set-point each cycle ("change immediately"); csp: the
         // target is taken at SYNC.
-        let cw: u16 = if csp { 0x0F } else if k.is_multiple_of(2) { 0x3F } else { 0x2F };
+        let cw: u16 = if csp {
+            0x0F
+        } else if k.is_multiple_of(2) {
+            0x3F
+        } else {
+            0x2F
+        };
         let mut d = [0u8; 6];
         d[..2].copy_from_slice(&cw.to_le_bytes());
         d[2..].copy_from_slice(&target.to_le_bytes());
