@@ -135,6 +135,12 @@ pub enum Request {
     /// A local NMT command: the device acts on it as on one received for
     /// its node-ID (see [`crate::Node::nmt_command`]).
     Nmt(NmtCommand),
+    /// Save every parameter group as a 1010h:01 "save all parameters"
+    /// write does (a manufacturer's own save object, e.g. Technosoft iPOS
+    /// 2076h); the stored values come back at the next power-on or reset.
+    /// A storage failure leaves the previous images (the request has no
+    /// answer to carry an abort).
+    StoreParameters,
     /// Put this raw value back into a sub-object after the current call,
     /// and re-read the PDO configuration (used to lift a restriction for
     /// one write, e.g. remapping a valid PDO).

@@ -75,6 +75,9 @@ impl Node {
                 self.poll_services(now, app, out);
                 self.nmt_command(cmd, now, app, out);
             }
+            Request::StoreParameters => {
+                let _ = crate::owners::commit_groups(&mut *self.s.storage, &self.od, 1, true);
+            }
             Request::Restore { index, sub, value, only_if } => {
                 if let Ok(r) = self.od.find(index, sub)
                     && only_if.is_none_or(|v| self.od.get_u32(index, sub) == Some(v))

@@ -685,6 +685,27 @@ impl Drive {
         } else {
             0
         };
+        // Software limits as limit switches (iPOS §4.3.2): a limit passed
+        // moving towards it stops the motion like the switch does.
+        // Once passed, the limit holds until a motion away from it (§4.3.2:
+        // "the motor will stand still until a new command is given to
+        // travel within the space defined by the limits").
+        let soft = if homing || !self.cfg.io.software_limit_switches {
+            0
+        } else {
+            match self.passed_soft_limit() {
+                0 if self.dem.vel * f64::from(self.sup.soft_limit) >= 0.0 => self.sup.soft_limit,
+                0 => 0,
+                side => side,
+            }
+        };
+        if soft != 0 && soft != self.sup.soft_limit && enabled && self.dem.vel * f64::from(soft) > 0.0 {
+            self.limit_stop();
+        }
+        self.sup.soft_limit = soft;
+        if self.sup.limit_block == 0 {
+            self.sup.limit_block = soft;
+        }
         self.limit_active = self.sup.limit_block != 0;
         self.warning = self.limit_active || self.sup.sync_lost;
         for i in 0..self.events.len() {
@@ -709,6 +730,23 @@ impl Drive {
         {
             let out = self.sm.fault(c);
             self.after_transition(out);
+        }
+    }
+
+    /// −1 / +1 when the position actual value is below / above 607Dh
+    /// (both 0: no limits, as for pp targets).
+    fn passed_soft_limit(&self) -> i8 {
+        let (lo, hi) = self.params.software_limits;
+        if lo == 0 && hi == 0 {
+            return 0;
+        }
+        let p = self.position();
+        if p < i64::from(lo) {
+            -1
+        } else if p > i64::from(hi) {
+            1
+        } else {
+            0
         }
     }
 

@@ -46,7 +46,7 @@ pub use config::{
 };
 pub use generic::{default_pdo_mapping, generic_drive, generic_drive_with};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
-pub use units::{Carry, FactorGroup, Ratio, Units};
+pub use units::{Carry, FactorGroup, Ratio, Scaling, Units};
 
 use crate::model::{DriveModel, ParamError, StepEvents};
 use crate::state_machine::StateMachine;
@@ -391,6 +391,34 @@ impl Drive {
         self.limit_switches_off = !on;
     }
 
+    /// Puts direct scaling objects in force ([`FactorGroup::scaling`], e.g.
+    /// Technosoft iPOS 6093h/6094h/210Fh), or the CiA 402-2 chain again
+    /// (`None`); the position stays where it is. `false` (nothing changed)
+    /// if a term is 0 or the units would not be exact.
+    pub fn set_scaling(&mut self, scaling: Option<Scaling>) -> bool {
+        let f = FactorGroup { scaling, ..self.factor };
+        if Units::new(&f).is_none() {
+            return false;
+        }
+        if f != self.factor {
+            self.factor = f;
+            self.retune_units();
+        }
+        true
+    }
+
+    /// Sets position actual internal value (6063h) to `increments` where
+    /// the axis stands (e.g. Technosoft iPOS 2081h): the reference shifts,
+    /// the demand moves with it, nothing moves.
+    pub fn set_position_increments(&mut self, increments: i64) {
+        let delta = increments.saturating_sub(self.position_increments());
+        self.inc_offset = self.inc_offset.saturating_add(delta);
+        self.inc_frac = 0;
+        let d = self.units.inc_to_pos_f(delta as f64);
+        self.dem.pos += d;
+        self.pp.reset(self.dem.pos);
+    }
+
     /// Sets the jerk of the jerk-limited ramp (6086h = 3), e.g. from a
     /// manufacturer object: a [`ProfileJerk::Time`] (Technosoft iPOS 2023h
     /// jerk time) follows later 6083h/6084h changes; a [`ProfileJerk::Rate`]
@@ -434,6 +462,7 @@ impl Drive {
             controlword: self.cw,
             digital_inputs: self.digital_inputs(),
             operational: self.operational,
+            software_limit: self.sup.soft_limit,
         }
     }
 
@@ -670,6 +699,10 @@ pub struct DriveView {
     pub digital_inputs: u32,
     /// The node is NMT *Operational* (tracked from the node's events).
     pub operational: bool,
+    /// Past the negative (−1) or positive (+1) software position limit
+    /// acting as a limit switch (`IoConfig::software_limit_switches`), 0
+    /// inside or without.
+    pub software_limit: i8,
 }
 
 impl Drive {

@@ -62,8 +62,11 @@ impl Ipos {
         }
     }
 
+    /// The slave reference \[increments\] as 607Ah of the csp stand-in, in
+    /// position units (the factor group scales 607Ah, §5).
     pub(super) fn gear_target(cx: &mut Context<'_>, od: &mut ObjectDictionary, reference: f64) {
-        let t = reference.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+        let t = cx.drive.units().inc_to_pos_f(reference);
+        let t = t.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
         let _ = cx.drive.on_write(od, 0x607A, 0, &t.to_le_bytes());
     }
 
@@ -78,7 +81,7 @@ impl Ipos {
             // The stand-in holds where the axis is until engaged.
             self.gear.engaged = false;
             self.gear.bit4 = bit4;
-            self.gear.reference = cx.drive.demand_position();
+            self.gear.reference = cx.drive.units().pos_to_inc_f(cx.drive.demand_position());
             Self::gear_target(cx, od, self.gear.reference);
         }
         self.gear.active = active;

@@ -38,12 +38,13 @@ pub const EDS: &str = include_str!("../../eds/ipos.eds");
 
 use crate::Profile;
 use crate::build::{Behaviour, Context, EmcyFrame, Verdict};
-use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, profile_type};
+use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, Scaling, profile_type};
 use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::{IpMode, IpMonitor};
 use drivebus_cia402::state_machine::State;
 
 pub mod ecat;
+mod factor;
 pub mod foe;
 mod gearing;
 mod homing;
@@ -104,6 +105,10 @@ pub const EMCY_COMMAND_ERROR: u16 = 0x9000;
 pub const EMCY_LSP: u16 = 0x5443;
 /// EMCY 5442h "negative limit switch active" (§4.3.1, Table 3.1.3).
 pub const EMCY_LSN: u16 = 0x5442;
+/// EMCY FF06h "positive software position limit triggered" (§4.3.2).
+pub const EMCY_SOFT_LIMIT_POSITIVE: u16 = 0xFF06;
+/// EMCY FF07h "negative software position limit triggered" (§4.3.2).
+pub const EMCY_SOFT_LIMIT_NEGATIVE: u16 = 0xFF07;
 
 /// The iPOS quirks around the CiA 402 drive.
 #[derive(Debug, Clone, Default)]
@@ -119,6 +124,8 @@ pub struct Ipos {
     second_taken: Option<i64>,
     /// Limit switches as last seen (LSN, LSP).
     limits: (bool, bool),
+    /// Software limit passed as last seen (−1, 0, +1; §4.3.2).
+    soft_limit: i8,
     /// Power-on work of the first step done.
     started: bool,
     /// Handles of the objects every step reads.
@@ -167,6 +174,29 @@ impl Ipos {
             }
         }
         self.limits = (lsn, lsp);
+        // §4.3.2: the software limits act as limit switches (the drive
+        // stops); FF06h / FF07h and 2002h bits 6 / 7 while one is passed,
+        // 0000h when it is left.
+        let soft = view.software_limit;
+        if soft != self.soft_limit {
+            for (side, code, bit) in [(1i8, EMCY_SOFT_LIMIT_POSITIVE, 6u16), (-1, EMCY_SOFT_LIMIT_NEGATIVE, 7)] {
+                let (now, was) = (soft == side, self.soft_limit == side);
+                if now == was {
+                    continue;
+                }
+                let der = u32_at(od, refs.detailed_errors).unwrap_or(0) as u16;
+                let der = if now { der | 1 << bit } else { der & !(1 << bit) };
+                if let Some(r) = refs.detailed_errors {
+                    od.set_le(r, &der.to_le_bytes());
+                }
+                cx.request(if now {
+                    EmcyFrame { code, register: Some(error_register(code)), bytes: [0; 5] }.raise()
+                } else {
+                    Request::ClearEmcy(code)
+                });
+            }
+            self.soft_limit = soft;
+        }
         // §9.2.3 bit 11: PVT with the buffer run empty after a point whose
         // velocity is not 0: quick stop.
         if Self::legacy_of(u32_at(od, refs.aux_settings), i64_at(od, refs.sub_mode)) == Some(true)
@@ -187,6 +217,13 @@ impl Ipos {
     fn sync_jerk(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         let ms = od.get_u32(0x2023, 0).unwrap_or(0);
         cx.drive.set_profile_jerk(od, ProfileJerk::Time(f64::from(ms) * 1e-3));
+    }
+
+    /// The scaling objects in force (§5, factor.rs) → the drive's units.
+    fn sync_scaling(cx: &mut Context<'_>, od: &ObjectDictionary) {
+        if let Some(s) = factor::scaling(od) {
+            cx.drive.set_scaling(Some(s));
+        }
     }
 
     /// kₜ × 6075h: the torque the drive's ‰ refer to (§8.2.1: 6071h, 6072h,
@@ -226,17 +263,13 @@ impl Behaviour for Ipos {
         cfg.params.control.velocity_filter = SPEED_FILTER_S;
         // Internal units (§1.3, §5): position = increments; velocity =
         // increments per slow-loop sample (1 ms) in 16.16 fixed point;
-        // acceleration = increments per sample² in 16.16. Factors in
-        // position units/s per velocity unit: 1000/65536, 10^6/65536.
+        // acceleration = increments per sample² in 16.16. The scaling
+        // objects 6093h/6094h/210Fh (§5.2) convert to them, default 1/1;
+        // 6091h/6092h/6096h/6097h are stored set-up parameters (factor.rs).
         cfg.factor = FactorGroup {
-            velocity_factor: (125, 8192),
-            acceleration_factor: (15_625, 1024),
+            scaling: Some(Scaling::unit(factor::VELOCITY_IU, factor::ACCELERATION_IU)),
             ..FactorGroup::increments(COUNTS_PER_REV)
         };
-        // §5.2.2: the conversion is the position factor 6093h (set by
-        // EasyMotion Studio); 6091h/6092h/6096h/6097h are stored set-up
-        // parameters, default 1/1 (§5.2.5, §5.2.8, §5.2.11).
-        cfg.fixed_factor_group = true;
         cfg.initial_mode = 0;
         let p = &mut cfg.profile;
         // 133 IU = 133 increments per 1 ms sample = 4000 rpm at 2000
@@ -275,6 +308,8 @@ impl Behaviour for Ipos {
         // moves back to the home position after braking.
         cfg.homing_return_to_home = true;
         cfg.remote = true;
+        // §4.3.2: 607Dh works like LSP/LSN in every mode.
+        cfg.io.software_limit_switches = true;
     }
 
     fn finish(&mut self, node: &mut drivebus_node::Node) {
@@ -295,7 +330,7 @@ impl Behaviour for Ipos {
         set_default(od, 0x6099, 2, &Value::U32(0x0001_0000));
         set_default(od, 0x609A, 0, &Value::U32(0x0000_199A));
         // §5.2.5, §5.2.8, §5.2.11: feed constant, velocity and acceleration
-        // factors 1/1 (stored; `fixed_factor_group` keeps internal units).
+        // factors 1/1 (set-up values; the scaling objects are in force).
         for index in [0x6092, 0x6096, 0x6097] {
             for sub in [1, 2] {
                 set_default(od, index, sub, &Value::U32(1));
@@ -333,7 +368,8 @@ impl Behaviour for Ipos {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
-            0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8,
+            0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
+            0x608E,
         ]
     }
 
@@ -346,6 +382,9 @@ impl Behaviour for Ipos {
         data: &[u8],
     ) -> Result<Verdict, SdoAbort> {
         let le = |d: &[u8]| drivebus_od::le_u64(d);
+        if factor::refuses_zero(index, sub) && le(data) == 0 {
+            return Err(SdoAbort::VALUE_TOO_LOW);
+        }
         match (index, sub) {
             (0x6075, 0) => {
                 // §8.2.2: default 0, set by the master; the drive computes
@@ -443,6 +482,7 @@ impl Behaviour for Ipos {
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
         match (index, sub) {
             (0x6075, 0) => Self::sync_torque_reference(cx, od),
+            (i, _) if factor::OBJECTS.contains(&i) => Self::sync_scaling(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
             (0x60B8, 0) => cx.drive.set_limit_switches(od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 == 0),
@@ -472,6 +512,7 @@ impl Behaviour for Ipos {
                 // The node forgot its errors: an active switch is reported
                 // again, as at power-on.
                 self.limits = (false, false);
+                self.soft_limit = 0;
                 self.started = false;
             }
             NodeEvent::NmtState { .. } => {
@@ -481,6 +522,7 @@ impl Behaviour for Ipos {
                 let _ = Self::sync_sub_mode(cx, od, od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux);
                 Self::sync_torque_reference(cx, od);
                 Self::sync_jerk(cx, od);
+                Self::sync_scaling(cx, od);
                 if self.gear.active {
                     Self::gear_target(cx, od, self.gear.reference);
                 }
@@ -497,6 +539,7 @@ impl Behaviour for Ipos {
             let _ = cx.drive.on_write(od, 0x60C4, 2, &u64::from(IP_BUFFER_DEFAULT).to_le_bytes());
             Self::sync_torque_reference(cx, od);
             Self::sync_jerk(cx, od);
+            Self::sync_scaling(cx, od);
         }
         // §11.2.6: 201Dh = 3, the master is the digital input (here the
         // second encoder; pulse & direction is not emulated).

@@ -1,0 +1,159 @@
+//! The iPOS manufacturer objects and the factor group acting as the manual
+//! (seed002) says, each on the virtual bus against the built personality
+//! (the behaviour ledger `src/ipos/ledger.tsv` names these tests).
+
+mod ipos_rig;
+
+use ipos_rig::*;
+
+/// The rig with the examples' PDOs, started, in `mode`, enabled.
+fn enabled_in(mode: i8) -> Rig {
+    let mut r = Rig::new();
+    map_examples_rpdos(&mut r);
+    r.start_remote_node();
+    r.modes_of_operation(mode);
+    r.enable();
+    r
+}
+
+/// 6093h:01/02 as 32-bit values.
+fn factor(r: &mut Rig, index: u16, num: u32, div: u32) {
+    r.sdo(index, 1, &num.to_le_bytes());
+    r.sdo(index, 2, &div.to_le_bytes());
+}
+
+/// IU velocity per rpm on the 2000-count motor: 2000/60 counts/s = 1/30
+/// count per 1 ms sample, × 65536 = 131072/60.
+const RPM: (u32, u32) = (131_072, 60);
+/// IU acceleration per rpm/s: 2000/60 counts/s² / 10⁶ × 65536 = 4096/1875.
+const RPM_PER_S: (u32, u32) = (4096, 1875);
+
+/// §5.1.10.1 / §5.2.2: with the manual's own 2:1 example (6093h:01 =
+/// 20000h, 6093h:02 = 10000h) a move of +1000 position units travels 2000
+/// increments: one revolution of the 2000-count motor; 6064h reads the
+/// user units, 6063h the increments.
+#[test]
+fn position_factor_two_to_one() {
+    let mut r = enabled_in(1);
+    factor(&mut r, 0x6093, 0x2_0000, 0x1_0000);
+    r.target_position_rpdo2(1000);
+    let bound = move_bound_ms(&mut r, 2000.0, iu_to_counts_s(f64::from(0x0021_0000)));
+    start_and_wait(&mut r, 0x1F, bound);
+    let inc = r.upload(0x6063, 0, 4);
+    assert!((inc - 2000).abs() <= 2 * FEW_COUNTS, "6063h = {inc} increments, want 2000");
+    let pos = r.upload(0x6064, 0, 4);
+    assert!((pos - 1000).abs() <= FEW_COUNTS, "6064h = {pos} units, want 1000");
+    assert!((r.motor_revs() - 1.0).abs() < 0.01, "one motor revolution, {}", r.motor_revs());
+    // 6062h is scaled too: the demand is the target in user units.
+    assert_eq!(r.upload(0x6062, 0, 4), 1000);
+}
+
+/// §5.2.7: velocities are VU × 6094h; in rpm (6094h = 131072/60) a
+/// target velocity of 600 runs the motor at 600 rpm and 606Ch reads 600.
+#[test]
+fn velocity_encoder_factor_in_rpm() {
+    let mut r = enabled_in(3);
+    factor(&mut r, 0x6094, RPM.0, RPM.1);
+    r.sdo(0x60FF, 0, &600i32.to_le_bytes());
+    r.run_ms(500);
+    let rpm = r.motor_rpm();
+    assert!((rpm - 600.0).abs() < 6.0, "motor at {rpm} rpm, want 600");
+    let v = r.upload(0x606C, 0, 4);
+    // One 606Ch reading is within one increment per sample (30 rpm).
+    assert!((v - 600).abs() <= 31, "606Ch = {v}, want 600 rpm");
+}
+
+/// The time a pv ramp from rest to 600 rpm takes at 6083h = 1200 (in the
+/// acceleration unit in force): the speed after 250 ms, half of it when
+/// the unit is rpm/s.
+fn speed_after_quarter_second(r: &mut Rig) -> f64 {
+    r.sdo(0x6083, 0, &1200u32.to_le_bytes());
+    r.sdo(0x60FF, 0, &600i32.to_le_bytes());
+    r.run_ms(250);
+    r.motor_rpm()
+}
+
+/// §5.2.10: accelerations are AU × 210Fh; in rpm/s (210Fh = 4096/1875)
+/// 6083h = 1200 takes the motor to 300 rpm in 250 ms.
+#[test]
+fn acceleration_encoder_factor_in_rpm_per_s() {
+    let mut r = enabled_in(3);
+    factor(&mut r, 0x6094, RPM.0, RPM.1);
+    factor(&mut r, 0x210F, RPM_PER_S.0, RPM_PER_S.1);
+    let rpm = speed_after_quarter_second(&mut r);
+    assert!((rpm - 300.0).abs() < 15.0, "{rpm} rpm after 250 ms at 1200 rpm/s");
+}
+
+/// §5.1.12 (obsolete group): a non-zero acceleration dimension index 608Eh
+/// validates 6097h as the acceleration factor (§5.1: "writing a non-zero
+/// value into the respective dimension index objects validates these
+/// factors"); with 608Eh = 0, 6097h is the §5.2.11 set-up value only.
+#[test]
+fn legacy_acceleration_factor_with_dimension_index() {
+    let mut r = enabled_in(3);
+    factor(&mut r, 0x6094, RPM.0, RPM.1);
+    factor(&mut r, 0x6097, RPM_PER_S.0, RPM_PER_S.1);
+    // Not validated: 1200 IU = 1200/65536 counts/ms² ≈ 549 rpm/s.
+    let rpm = speed_after_quarter_second(&mut r);
+    assert!((rpm - 137.0).abs() < 15.0, "{rpm} rpm after 250 ms at 1200 IU");
+    r.sdo(0x60FF, 0, &0i32.to_le_bytes());
+    r.run_ms(1500);
+    r.sdo(0x608E, 0, &[0xB4]);
+    let rpm = speed_after_quarter_second(&mut r);
+    assert!((rpm - 300.0).abs() < 15.0, "{rpm} rpm after 250 ms at 1200 rpm/s");
+}
+
+/// A factor of 0 is refused (it would map every value to 0 or divide by
+/// 0); the scaling in force stays.
+#[test]
+fn zero_factor_refused() {
+    let mut r = Rig::new();
+    for (index, sub) in [(0x6093, 1), (0x6093, 2), (0x6094, 2), (0x210F, 1), (0x2110, 2)] {
+        r.sdo.clear();
+        r.send(Frame::new(0x601, &[0x23, index as u8, (index >> 8) as u8, sub, 0, 0, 0, 0]));
+        let abort = Frame::new(0x581, &[0x80, index as u8, (index >> 8) as u8, sub, 0x32, 0x00, 0x09, 0x06]);
+        assert_eq!(r.sdo, vec![abort], "{index:04X}h:{sub} := 0");
+    }
+    assert_eq!(r.dn().app.drive.units().pos_to_inc(1000), 1000);
+}
+
+/// §4.3.2 / §4.6.1: the software limits work like LSP/LSN in profile
+/// velocity too: past 607Dh:02 the motor decelerates on 6085h and stands,
+/// EMCY FF06h goes out and 2002h bit 6 is set; motion further that way is
+/// refused, the opposite way taken; leaving the limit sends 0000h and
+/// resets the bit.
+#[test]
+fn software_limit_stops_profile_velocity() {
+    let mut r = enabled_in(3);
+    r.sdo(0x607D, 2, &5000i32.to_le_bytes());
+    r.emcy.clear();
+    r.sdo(0x60FF, 0, &(10i32 << 16).to_le_bytes());
+    r.run_ms(1500);
+    let pos = r.upload(0x6064, 0, 4);
+    assert!((5000..5100).contains(&pos), "stopped just past the limit: 6064h = {pos}");
+    assert!(r.motor_rpm().abs() < 1.0, "standing, {} rpm", r.motor_rpm());
+    assert_eq!(r.emcy, vec![Frame::new(0x081, &[0x06, 0xFF, 0x01, 0, 0, 0, 0, 0])], "EMCY FF06h");
+    assert_eq!(r.upload(0x2002, 0, 2) & 0xC0, 0x40, "2002h bit 6");
+    assert_ne!(r.sw.unwrap() & 1 << 11, 0, "statusword bit 11 internal limit active");
+    // Back inside: the opposite motion is taken.
+    r.emcy.clear();
+    r.sdo(0x60FF, 0, &(-10i32 << 16).to_le_bytes());
+    r.run_ms(100);
+    assert!(r.upload(0x6064, 0, 4) < 5000);
+    assert_eq!(r.emcy, vec![Frame::new(0x081, &[0, 0, 0, 0, 0, 0, 0, 0])], "EMCY 0000h");
+    assert_eq!(r.upload(0x2002, 0, 2) & 0xC0, 0);
+}
+
+/// §4.3.2: the negative limit likewise, with FF07h and 2002h bit 7.
+#[test]
+fn negative_software_limit_sends_ff07() {
+    let mut r = enabled_in(3);
+    r.sdo(0x607D, 1, &(-3000i32).to_le_bytes());
+    r.emcy.clear();
+    r.sdo(0x60FF, 0, &(-10i32 << 16).to_le_bytes());
+    r.run_ms(1000);
+    let pos = r.upload(0x6064, 0, 4);
+    assert!((-3100..-3000).contains(&pos), "stopped just past the limit: 6064h = {pos}");
+    assert_eq!(r.emcy, vec![Frame::new(0x081, &[0x07, 0xFF, 0x01, 0, 0, 0, 0, 0])], "EMCY FF07h");
+    assert_eq!(r.upload(0x2002, 0, 2) & 0xC0, 0x80, "2002h bit 7");
+}
