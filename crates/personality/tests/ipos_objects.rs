@@ -157,3 +157,89 @@ fn negative_software_limit_sends_ff07() {
     assert_eq!(r.emcy, vec![Frame::new(0x081, &[0x07, 0xFF, 0x01, 0, 0, 0, 0, 0])], "EMCY FF07h");
     assert_eq!(r.upload(0x2002, 0, 2) & 0xC0, 0x80, "2002h bit 7");
 }
+
+/// §7.2.19: 2081h sets the motor position, in increments whatever the
+/// factor group: 6063h, 6064h and 6062h follow, the motor does not move.
+#[test]
+fn set_actual_position_object() {
+    let mut r = enabled_in(1);
+    let revs = r.motor_revs();
+    r.sdo(0x2081, 0, &12_345i32.to_le_bytes());
+    r.run_ms(10);
+    assert_eq!(r.upload(0x6063, 0, 4), 12_345);
+    assert_eq!(r.upload(0x6064, 0, 4), 12_345);
+    assert_eq!(r.upload(0x6062, 0, 4), 12_345);
+    assert!((r.motor_revs() - revs).abs() < 1e-3, "the motor stays");
+    // Not scaled: with the 2:1 position factor 12346 increments are 6173 units.
+    r.sdo(0x6093, 1, &0x2_0000u32.to_le_bytes());
+    r.sdo(0x6093, 2, &0x1_0000u32.to_le_bytes());
+    r.sdo(0x2081, 0, &12_346i32.to_le_bytes());
+    r.run_ms(10);
+    assert_eq!(r.upload(0x6063, 0, 4), 12_346);
+    assert_eq!(r.upload(0x6064, 0, 4), 6173);
+}
+
+/// §4.9.8: a non-zero 2080h resets the drive: it leaves Operation enabled
+/// for Switch on disabled and restarts (boot-up on CAN), as at power-on.
+#[test]
+fn reset_drive_object() {
+    let mut r = enabled_in(1);
+    assert_eq!(r.upload(0x6041, 0, 2) & 0x6F, 0x27);
+    // 0 does nothing.
+    r.sdo(0x2080, 0, &0u16.to_le_bytes());
+    r.run_ms(5);
+    assert_eq!(r.upload(0x6041, 0, 2) & 0x6F, 0x27);
+    r.sdo.clear();
+    r.send(Frame::new(0x601, &[0x2B, 0x80, 0x20, 0x00, 0x01, 0x00, 0x00, 0x00]));
+    r.run_ms(5);
+    assert_eq!(r.sdo.first(), Some(&Frame::new(0x581, &[0x60, 0x80, 0x20, 0, 0, 0, 0, 0])));
+    r.bus.take_received(r.probe);
+    r.run_ms(5);
+    let sw = r.upload(0x6041, 0, 2);
+    assert_eq!(sw & 0x4F, 0x40, "switch on disabled after the reset: {sw:04X}h");
+    assert_eq!(r.upload(0x603F, 0, 2), 0, "no fault");
+}
+
+/// §4.9.6: 2076h saves the operating parameters: after a reset they come
+/// back, unsaved changes do not.
+#[test]
+fn save_configuration_object() {
+    let mut r = Rig::new();
+    r.sdo(0x6081, 0, &0x0005_0000u32.to_le_bytes());
+    r.sdo(0x2092, 1, &0xCAFEu32.to_le_bytes());
+    r.sdo(0x2076, 0, &1u16.to_le_bytes());
+    assert_eq!(r.upload(0x208A, 0, 2) & 1, 1, "208Ah bit 0: save complete");
+    r.sdo(0x6083, 0, &0x0003_0000u32.to_le_bytes());
+    // NMT reset node.
+    r.send(Frame::new(0x000, &[0x81, 0x01]));
+    r.run_ms(10);
+    assert_eq!(r.upload(0x6081, 0, 4), 0x0005_0000, "saved");
+    assert_eq!(r.upload(0x2092, 1, 4), 0xCAFE, "saved");
+    assert_eq!(r.upload(0x6083, 0, 4), 0x0001_0000, "not saved: the default");
+}
+
+/// §4.2.4: a mode written below Operation enabled shows in 6061h only
+/// once Operation enabled is reached.
+#[test]
+fn mode_display_follows_in_operation_enabled() {
+    let mut r = Rig::new();
+    map_examples_rpdos(&mut r);
+    r.start_remote_node();
+    r.modes_of_operation(3);
+    r.controlword(0x06);
+    r.controlword(0x07);
+    r.wait_sw("switched on", 0x6F, 0x23, 100);
+    assert_eq!(r.upload(0x6061, 0, 1), 0, "6061h keeps the power-on mode");
+    r.controlword(0x0F);
+    r.wait_sw("operation enabled", 0x6F, 0x27, 100);
+    assert_eq!(r.upload(0x6061, 0, 1), 3);
+    // In Operation enabled a change shows at once.
+    r.modes_of_operation(1);
+    r.run_ms(2);
+    assert_eq!(r.upload(0x6061, 0, 1), 1);
+    // Below it, the display keeps the last mode shown.
+    r.controlword(0x07);
+    r.modes_of_operation(6);
+    r.run_ms(2);
+    assert_eq!(r.upload(0x6061, 0, 1), 1);
+}

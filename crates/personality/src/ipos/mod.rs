@@ -126,6 +126,8 @@ pub struct Ipos {
     limits: (bool, bool),
     /// Software limit passed as last seen (−1, 0, +1; §4.3.2).
     soft_limit: i8,
+    /// 6061h as shown: it takes 6060h only in Operation enabled (§4.2.4).
+    mode_shown: i8,
     /// Power-on work of the first step done.
     started: bool,
     /// Handles of the objects every step reads.
@@ -210,6 +212,19 @@ impl Ipos {
             let _ = cx.drive.on_write(od, 0x6040, 0, &cw.to_le_bytes());
         }
         self.publish_ip_status(cx, od, false);
+    }
+
+    /// §4.2.4: "if the drive is in an inferior state than Operation enabled
+    /// and 6060h is changed, 6061h will take the value of 6060h only after
+    /// the drive reached Operation enabled".
+    fn show_mode(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
+        let Some(r) = refs.mode_display else { return };
+        if cx.drive.view().state == State::OperationEnabled {
+            self.mode_shown = cx.drive.manufacturer_mode().unwrap_or(cx.drive.mode());
+        }
+        if od.bytes(r).first() != Some(&(self.mode_shown as u8)) {
+            od.set_le(r, &[self.mode_shown as u8]);
+        }
     }
 
     /// 2023h jerk time (ms, §7.2.5: the S-curve's time to reach the
@@ -369,7 +384,7 @@ impl Behaviour for Ipos {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
             0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
-            0x608E,
+            0x608E, 0x2076, 0x2080, 0x2081,
         ]
     }
 
@@ -430,6 +445,23 @@ impl Behaviour for Ipos {
                 }
                 return Ok(Verdict::Store);
             }
+            (0x2076, 0) => {
+                // §4.9.6: any value saves the operating parameters to the
+                // EEPROM (the node's parameter storage, as 1010h:01 does);
+                // they come back at the next power-on or reset.
+                cx.request(Request::StoreParameters);
+                return Ok(Verdict::Handled);
+            }
+            (0x2080, 0) => {
+                // §4.9.8: a non-zero value resets the drive, as a power
+                // cycle: parameters from the EEPROM, Switch on disabled,
+                // the position counter restarts (the CAN node's reset;
+                // on EtherCAT the ESM stays, ecat/behaviour.rs).
+                if le(data) != 0 {
+                    cx.request(Request::Nmt(drivebus_nmt::NmtCommand::ResetNode));
+                }
+                return Ok(Verdict::Handled);
+            }
             (0x2073, 0) => {
                 // §9.2.4: a new length resets the buffer; 0 is not allowed.
                 let n = le(data);
@@ -482,6 +514,9 @@ impl Behaviour for Ipos {
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
         match (index, sub) {
             (0x6075, 0) => Self::sync_torque_reference(cx, od),
+            // §7.2.19: the motor position := the value, in increments (not
+            // scaled); 6063h, 6064h and 6062h follow.
+            (0x2081, 0) => cx.drive.set_position_increments(od.get_i64(0x2081, 0).unwrap_or(0)),
             (i, _) if factor::OBJECTS.contains(&i) => Self::sync_scaling(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
@@ -513,6 +548,7 @@ impl Behaviour for Ipos {
                 // again, as at power-on.
                 self.limits = (false, false);
                 self.soft_limit = 0;
+                self.mode_shown = 0;
                 self.started = false;
             }
             NodeEvent::NmtState { .. } => {
@@ -540,6 +576,11 @@ impl Behaviour for Ipos {
             Self::sync_torque_reference(cx, od);
             Self::sync_jerk(cx, od);
             Self::sync_scaling(cx, od);
+            // §4.9.7: 208Ah bit 0 = 1, a save (2076h) may be started; a
+            // save completes at once.
+            if let Ok(r) = od.find(0x208A, 0) {
+                od.set_le(r, &1u16.to_le_bytes());
+            }
         }
         // §11.2.6: 201Dh = 3, the master is the digital input (here the
         // second encoder; pulse & direction is not emulated).
@@ -551,6 +592,7 @@ impl Behaviour for Ipos {
             self.second_taken = Some(m);
             self.gear_update(cx, od, m);
         }
+        self.show_mode(cx, od, refs);
         self.gear_step(cx, od, refs);
         self.watch(cx, od, refs);
         // §7.1.2 / Table 4.4.2: a command error sets 2000h bit 14, and the
