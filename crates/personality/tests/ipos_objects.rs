@@ -243,3 +243,61 @@ fn mode_display_follows_in_operation_enabled() {
     r.run_ms(2);
     assert_eq!(r.upload(0x6061, 0, 1), 1);
 }
+
+fn inject(r: &mut Rig, what: drivebus_cia402::model::Injection) {
+    r.bus.node_mut::<PersonalityDevice>(r.dut).unwrap().app.inject(drivebus_cia402::drive::Injection::Model(what));
+    r.run_ms(5);
+}
+
+/// §4.4.2 Table 4.4.2: 2000h shows the drive's protections — set when
+/// triggered, reset by a Reset Fault command.
+#[test]
+fn motion_error_register_shows_the_faults() {
+    use drivebus_cia402::model::Injection;
+    for (what, bit) in [
+        (Injection::OverCurrent, 8),
+        (Injection::BusOverVoltage, 12),
+        (Injection::BusUnderVoltage, 13),
+        (Injection::OverTemperature, 10),
+        (Injection::EncoderFailure, 5),
+    ] {
+        let mut r = enabled_in(1);
+        assert_eq!(r.upload(0x2000, 0, 2), 0);
+        inject(&mut r, what);
+        assert_eq!(r.upload(0x2000, 0, 2), 1 << bit, "{what:?}");
+        inject(&mut r, Injection::Clear);
+        r.controlword(0x80);
+        r.run_ms(5);
+        assert_eq!(r.upload(0x2000, 0, 2), 0, "{what:?}: reset by Reset Fault");
+    }
+}
+
+/// §4.5.5 / §4.5.4 / §4.5.3.1: 2045h shows the outputs 60FEh drives; the
+/// 8-bit 2090h commands OUT0..OUT7 like 60FEh bits 16-23.
+#[test]
+fn digital_outputs_status_and_8bit_outputs() {
+    let mut r = Rig::new();
+    // §4.5.3.1: OUT0 := 0, OUT1 := 1.
+    r.sdo(0x60FE, 1, &0x0002_0000u32.to_le_bytes());
+    r.sdo(0x60FE, 2, &0x0003_0000u32.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.upload(0x2045, 0, 2), 0x0002);
+    r.sdo(0x2090, 1, &[0x05]);
+    r.sdo(0x2090, 2, &[0x07]);
+    r.run_ms(2);
+    assert_eq!(r.upload(0x2045, 0, 2), 0x0005);
+    assert_eq!(r.upload(0x60FE, 1, 4), 0x0005_0000);
+    assert_eq!(r.upload(0x60FE, 2, 4), 0x0007_0000);
+}
+
+/// §4.5.2: 208Fh:01 shows 60FDh bits 0-3 (here the LSN).
+#[test]
+fn digital_inputs_8bit() {
+    use drivebus_cia402::model::{Injection, SwitchInput};
+    let mut r = Rig::new();
+    inject(&mut r, Injection::ForceSwitch(SwitchInput::NegativeLimit, Some(true)));
+    assert_eq!(r.upload(0x60FD, 0, 4) & 0x0F, 0x01);
+    assert_eq!(r.upload(0x208F, 1, 1), 0x01);
+    inject(&mut r, Injection::ForceSwitch(SwitchInput::NegativeLimit, Some(false)));
+    assert_eq!(r.upload(0x208F, 1, 1), 0x00);
+}

@@ -50,6 +50,7 @@ mod gearing;
 mod homing;
 mod interp;
 mod refs;
+mod status;
 
 use drivebus_node::{NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
@@ -384,7 +385,7 @@ impl Behaviour for Ipos {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
             0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
-            0x608E, 0x2076, 0x2080, 0x2081,
+            0x608E, 0x2076, 0x2080, 0x2081, 0x2090,
         ]
     }
 
@@ -517,6 +518,7 @@ impl Behaviour for Ipos {
             // §7.2.19: the motor position := the value, in increments (not
             // scaled); 6063h, 6064h and 6062h follow.
             (0x2081, 0) => cx.drive.set_position_increments(od.get_i64(0x2081, 0).unwrap_or(0)),
+            (0x2090, 1 | 2) => Self::digital_outputs_8bit(cx, od, sub),
             (i, _) if factor::OBJECTS.contains(&i) => Self::sync_scaling(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
@@ -595,6 +597,7 @@ impl Behaviour for Ipos {
         self.show_mode(cx, od, refs);
         self.gear_step(cx, od, refs);
         self.watch(cx, od, refs);
+        self.publish_status(cx, od, refs);
         // §7.1.2 / Table 4.4.2: a command error sets 2000h bit 14, and the
         // S-curve update refused 2002h bit 9, until the fault reset.
         let err = cx.drive.command_error().is_some();

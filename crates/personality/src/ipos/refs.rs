@@ -21,6 +21,10 @@ pub(super) struct Refs {
     pub(super) aux_settings: Option<EntryRef>,
     pub(super) sub_mode: Option<EntryRef>,
     pub(super) ip_status: Option<EntryRef>,
+    pub(super) outputs_status: Option<EntryRef>,
+    /// 208Fh:01 / :02.
+    pub(super) inputs8: [Option<EntryRef>; 2],
+    pub(super) error_code: Option<EntryRef>,
 }
 
 impl Refs {
@@ -38,6 +42,9 @@ impl Refs {
             aux_settings: f(0x208E),
             sub_mode: f(0x60C0),
             ip_status: f(0x2072),
+            outputs_status: f(0x2045),
+            inputs8: [od.find(0x208F, 1).ok(), od.find(0x208F, 2).ok()],
+            error_code: f(0x603F),
         }
     }
 

@@ -1,0 +1,76 @@
+//! The iPOS status objects that mirror the drive (§4.4, §4.5): the fault
+//! bits of the motion error register 2000h, the outputs status 2045h, the
+//! 8-bit input and output images 208Fh / 2090h.
+
+use super::*;
+
+/// 2000h bits this module keeps (Table 4.4.2): 3 control error, 4
+/// communication error, 5 feedback error, 8 over-current, 10 motor
+/// over-temperature, 12 over-voltage, 13 under-voltage. Bits 0, 6, 7 and
+/// 14 are kept where their conditions are watched (ESM, limit switches,
+/// command error).
+const FAULT_BITS: u16 = 1 << 3 | 1 << 4 | 1 << 5 | 1 << 8 | 1 << 10 | 1 << 12 | 1 << 13;
+
+/// The 2000h fault bits of the drive's present faults: "set when the
+/// protection is triggered, reset by a Reset Fault command" (Table 4.4.2).
+fn fault_bits(cx: &Context<'_>, error_code: u16) -> u16 {
+    let f = cx.drive.model().faults();
+    let mut bits = u16::from(f.over_current) << 8
+        | u16::from(f.over_temperature) << 10
+        | u16::from(f.over_voltage) << 12
+        | u16::from(f.under_voltage) << 13
+        | u16::from(f.encoder) << 5;
+    if matches!(cx.drive.view().state, State::Fault | State::FaultReactionActive) {
+        bits |= match error_code {
+            // Control error: the following error fault (Table 3.1.3 8611h).
+            0x8611 => 1 << 3,
+            // Communication error (node guarding / NMT, 7500h).
+            0x7500 | 0x8130 => 1 << 4,
+            _ => 0,
+        };
+    }
+    bits
+}
+
+impl Ipos {
+    /// Per step: 2000h fault bits, 2045h, 208Fh.
+    pub(super) fn publish_status(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
+        if let Some(r) = refs.motion_errors {
+            let code = u32_at(od, refs.error_code).unwrap_or(0) as u16;
+            let mer = u32_at(od, Some(r)).unwrap_or(0) as u16;
+            let n = (mer & !FAULT_BITS) | fault_bits(cx, code);
+            if n != mer {
+                od.set_le(r, &n.to_le_bytes());
+            }
+        }
+        // §4.5.5: OUTn status = 60FEh bit 16 + n as the drive drives it.
+        let out = (cx.drive.digital_outputs() >> 16) as u16;
+        if let Some(r) = refs.outputs_status
+            && u32_at(od, Some(r)) != Some(u32::from(out))
+        {
+            od.set_le(r, &out.to_le_bytes());
+        }
+        // §4.5.2: "the same data as 60FDh": sub 1 bits 0-3 (limit
+        // switches, home, interlock), sub 2 IN0..IN7 (60FDh bits 16-23).
+        let di = cx.drive.view().digital_inputs;
+        for (r, v) in refs.inputs8.into_iter().zip([(di & 0x0F) as u8, (di >> 16) as u8]) {
+            if let Some(r) = r
+                && od.bytes(r).first() != Some(&v)
+            {
+                od.set_le(r, &[v]);
+            }
+        }
+    }
+
+    /// §4.5.4: 2090h "has the same functionality as 60FEh", 8 bits: sub 1
+    /// commands OUT0..OUT7 (60FEh:01 bits 16-23), sub 2 is their mask
+    /// (60FEh:02 bits 16-23); 60FEh shows the result.
+    pub(super) fn digital_outputs_8bit(cx: &mut Context<'_>, od: &mut ObjectDictionary, sub: u8) {
+        let Some(v) = od.get_u32(0x2090, sub) else { return };
+        let Ok(r) = od.find(0x60FE, sub) else { return };
+        let old = u32_at(od, Some(r)).unwrap_or(0);
+        let new = (old & !0x00FF_0000) | (v & 0xFF) << 16;
+        od.set_le(r, &new.to_le_bytes());
+        let _ = cx.drive.on_write(od, 0x60FE, sub, &new.to_le_bytes());
+    }
+}
