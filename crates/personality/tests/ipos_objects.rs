@@ -301,3 +301,184 @@ fn digital_inputs_8bit() {
     inject(&mut r, Injection::ForceSwitch(SwitchInput::NegativeLimit, Some(false)));
     assert_eq!(r.upload(0x208F, 1, 1), 0x00);
 }
+
+/// The cam of §12.2.6 (master 640 → slave 4000): X step 2⁶, Y = 40·i².
+fn cam() -> drivebus_personality::ipos::CamTable {
+    drivebus_personality::ipos::CamTable { x0: 0, step_log2: 6, y: (0..=10).map(|i| i * i * 40).collect() }
+}
+
+/// E34 (§12.2.6.2): 2064h := load address + 08h (EEPROM, 16 bit,
+/// auto-increment), then every word of the .sw block by 2065h.
+fn download(r: &mut Rig, load: u16, words: &[u16]) {
+    r.sdo(0x2064, 0, &(u32::from(load) << 16 | 0x08).to_le_bytes());
+    for w in words {
+        r.sdo(0x2065, 0, &u32::from(*w).to_le_bytes());
+    }
+}
+
+/// §17.2: what 2065h wrote reads back through 2066h (the address
+/// advancing), 2069h sums it into 206Ah, 2067h writes one word anywhere.
+#[test]
+fn memory_objects_write_read_checksum() {
+    let mut r = Rig::new();
+    let words = cam().to_words();
+    download(&mut r, 0x5638, &words);
+    assert_eq!(r.upload(0x2064, 0, 4) as u32, (0x5638 + words.len() as u32) << 16 | 0x08, "auto-increment");
+    r.sdo(0x2064, 0, &(0x5638u32 << 16 | 0x08).to_le_bytes());
+    for w in &words[..3] {
+        assert_eq!(r.upload(0x2066, 0, 4) as u32, u32::from(*w));
+    }
+    // 32-bit read (bit 0) without increment (bit 7): X0 low and high word.
+    r.sdo(0x2064, 0, &(0x5639u32 << 16 | 0x89).to_le_bytes());
+    assert_eq!(r.upload(0x2066, 0, 4), 0);
+    assert_eq!(r.upload(0x2064, 0, 4) as u32, 0x5639u32 << 16 | 0x89, "no increment");
+    let end = 0x5638 + words.len() as u32;
+    r.sdo(0x2069, 0, &(end << 16 | 0x5638).to_le_bytes());
+    let sum = words.iter().fold(0u16, |a, w| a.wrapping_add(*w));
+    assert_eq!(r.upload(0x206A, 0, 2) as u16, sum);
+    // §17.2.4.1: 2067h := 036A1234h writes 1234h at 036Ah.
+    r.sdo(0x2064, 0, &0x0000_0084u32.to_le_bytes());
+    r.sdo(0x2067, 0, &0x036A_1234u32.to_le_bytes());
+    r.sdo(0x2064, 0, &(0x036Au32 << 16 | 0x84).to_le_bytes());
+    assert_eq!(r.upload(0x2066, 0, 4), 0x1234);
+}
+
+/// The camming slave of §12.4 on the cam of §12.2.6: the table downloaded
+/// as E34 does, copied to the RAM by 2019h (201Ah first, §12.2.1), the
+/// master position online in 201Eh, one SYNC per 1 ms cycle.
+fn camming_slave(cw_start: u16) -> Rig {
+    let mut r = Rig::new();
+    map_examples_rpdos(&mut r);
+    download(&mut r, 0x5638, &cam().to_words());
+    r.sdo(0x201A, 0, &0x97F6u16.to_le_bytes());
+    r.sdo(0x2019, 0, &0x5638u16.to_le_bytes());
+    r.sdo(0x201D, 0, &1u16.to_le_bytes());
+    r.start_remote_node();
+    r.modes_of_operation(-2);
+    r.enable();
+    assert_eq!(r.upload(0x6061, 0, 1), -2);
+    master_to(&mut r, 0, 0);
+    r.controlword(cw_start);
+    r
+}
+
+/// Moves the online master from `from` to `to` in 8-increment steps, one
+/// per 1 ms cycle with its SYNC, then lets the slave settle.
+fn master_to(r: &mut Rig, from: i32, to: i32) {
+    let step = if to >= from { 8 } else { -8 };
+    let mut m = from;
+    loop {
+        r.sdo(0x201E, 0, &m.to_le_bytes());
+        r.send(Frame::new(0x080, &[]));
+        r.run_us(500);
+        if m == to {
+            break;
+        }
+        m = if (to - m).abs() < 8 { to } else { m + step };
+    }
+    for _ in 0..100 {
+        r.send(Frame::new(0x080, &[]));
+        r.run_us(500);
+    }
+}
+
+/// §12.1 absolute mode (controlword bit 6 = 1): the slave position is the
+/// cam output of the master position, interpolated between the points.
+#[test]
+fn camming_absolute_follows_the_table() {
+    let mut r = camming_slave(0x5F);
+    master_to(&mut r, 0, 320);
+    let p = r.upload(0x6064, 0, 4);
+    assert!((p - 1000).abs() <= FEW_COUNTS, "master 320 → slave 1000, at {p}");
+    master_to(&mut r, 320, 352);
+    let p = r.upload(0x6064, 0, 4);
+    assert!((p - 1220).abs() <= FEW_COUNTS, "master 352 → slave 1220, at {p}");
+    // 206Ch output scaling 2.0 (FIXED32).
+    r.sdo(0x206C, 0, &0x0002_0000u32.to_le_bytes());
+    master_to(&mut r, 352, 640);
+    let p = r.upload(0x6064, 0, 4);
+    assert!((p - 8000).abs() <= FEW_COUNTS, "master 640 → 2 × 4000, at {p}");
+}
+
+/// §12.1 relative mode (bit 6 = 0): the slave adds dY to where it stood;
+/// the cam offset 201Bh shifts the master (§12.2.3).
+#[test]
+fn camming_relative_adds_the_cam_increments() {
+    let mut r = camming_slave(0x0F);
+    r.sdo(0x201B, 0, &320u32.to_le_bytes());
+    let p0 = r.upload(0x6064, 0, 4);
+    // Master 320 + 201Bh 320 = X 320 at the start: Y_old = 1000.
+    master_to(&mut r, 0, 640);
+    r.controlword(0x1F);
+    master_to(&mut r, 640, 960);
+    let p = r.upload(0x6064, 0, 4);
+    assert!((p - p0 - 3000).abs() <= FEW_COUNTS, "X 320 → 640 adds 4000 − 1000: moved {}", p - p0);
+}
+
+/// An expedited SDO download answered by an abort with `code`.
+fn sdo_aborts(r: &mut Rig, index: u16, sub: u8, data: &[u8], code: u32) {
+    r.sdo.clear();
+    let cmd = 0x23 | ((4 - data.len() as u8) << 2);
+    let mut b = [cmd, index as u8, (index >> 8) as u8, sub, 0, 0, 0, 0];
+    b[4..4 + data.len()].copy_from_slice(data);
+    r.send(Frame::new(0x601, &b));
+    let c = code.to_le_bytes();
+    let abort = Frame::new(0x581, &[0x80, index as u8, (index >> 8) as u8, sub, c[0], c[1], c[2], c[3]]);
+    assert_eq!(r.sdo, vec![abort], "{index:04X}h:{sub} := {data:02X?}");
+    r.sdo.clear();
+}
+
+/// §18.2.2.1 / §18.3.1: a function number outside 1..10 is 0609 0030h; a
+/// valid one with no TML function there, or a program start with no
+/// program, 0800 0020h (the twin holds no TML).
+#[test]
+fn tml_function_and_program_objects() {
+    let mut r = Rig::new();
+    sdo_aborts(&mut r, 0x2006, 0, &11u16.to_le_bytes(), 0x0609_0030);
+    sdo_aborts(&mut r, 0x2006, 0, &0u16.to_le_bytes(), 0x0609_0030);
+    sdo_aborts(&mut r, 0x2006, 0, &3u16.to_le_bytes(), 0x0800_0020);
+    sdo_aborts(&mut r, 0x2077, 0, &1u16.to_le_bytes(), 0x0800_0020);
+}
+
+/// §3.2.6: 2112h ≠ 0 gives TML priority: 6040h and 6060h are not written
+/// (SDO: 0800 0021h local control; an RPDO's controlword is dropped).
+#[test]
+fn tml_priority_locks_controlword_and_mode() {
+    let mut r = Rig::new();
+    map_examples_rpdos(&mut r);
+    r.start_remote_node();
+    r.sdo(0x2112, 0, &1u16.to_le_bytes());
+    sdo_aborts(&mut r, 0x6040, 0, &6u16.to_le_bytes(), 0x0800_0021);
+    sdo_aborts(&mut r, 0x6060, 0, &[1], 0x0800_0021);
+    r.controlword(0x06);
+    r.run_ms(5);
+    assert_eq!(r.upload(0x6041, 0, 2) & 0x4F, 0x40, "still switch on disabled");
+    r.sdo(0x2112, 0, &0u16.to_le_bytes());
+    r.sdo(0x6060, 0, &[3]);
+    r.enable();
+}
+
+/// §7.2.17 / §10.2.1 / §4.9.16: 60FCh is the demand in increments, 6069h
+/// the encoder speed in internal units whatever the factor group, 2103h
+/// the counts per revolution.
+#[test]
+fn internal_demand_and_velocity_sensor_values() {
+    let mut r = enabled_in(3);
+    assert_eq!(r.upload(0x2103, 0, 4), 2000);
+    r.sdo(0x6093, 1, &2u32.to_le_bytes());
+    r.sdo(0x6094, 1, &RPM.0.to_le_bytes());
+    r.sdo(0x6094, 2, &RPM.1.to_le_bytes());
+    r.sdo(0x60FF, 0, &600i32.to_le_bytes());
+    r.run_ms(500);
+    // 600 rpm = 20 increments per 1 ms sample = 20 × 65536.
+    let v = r.upload(0x6069, 0, 4);
+    assert!((v - 20 * 65536).abs() <= 65536, "6069h = {v}");
+    r.sdo(0x60FF, 0, &0i32.to_le_bytes());
+    r.modes_of_operation(1);
+    r.run_ms(300);
+    let here = r.upload(0x6064, 0, 4) as i32;
+    r.target_position_rpdo2(here + 500);
+    start_and_wait(&mut r, 0x1F, 2000);
+    let demand = r.upload(0x6062, 0, 4);
+    assert_eq!(r.upload(0x60FC, 0, 4), 2 * demand, "60FCh = 2 × 6062h at 2:1");
+}

@@ -16,13 +16,26 @@ pub(super) struct Gear {
     pub(super) master: i64,
     /// Slave position reference \[increments, fractional\].
     pub(super) reference: f64,
-    /// In the gearing mode at the last step.
+    /// In the gearing (−1) or camming (−2) mode at the last step.
     pub(super) active: bool,
+    /// The manufacturer mode in force (−1 gearing, −2 camming).
+    pub(super) mode: i8,
+    /// When the master position was last taken \[ns\].
+    pub(super) updated_ns: u64,
 }
 
 impl Default for Gear {
     fn default() -> Self {
-        Gear { ratio: 1.0, bit4: false, engaged: false, master: 0, reference: 0.0, active: false }
+        Gear {
+            ratio: 1.0,
+            bit4: false,
+            engaged: false,
+            master: 0,
+            reference: 0.0,
+            active: false,
+            mode: -1,
+            updated_ns: 0,
+        }
     }
 }
 
@@ -56,8 +69,17 @@ impl Ipos {
             od.set_le(r, &(d.clamp(-32768, 32767) as i16).to_le_bytes());
         }
         self.gear.master = master;
+        let now = cx.now.as_nanos();
+        let dt = now.saturating_sub(self.gear.updated_ns) as f64 * 1e-9;
+        self.gear.updated_ns = now;
         if self.gear.active && self.gear.engaged {
-            self.gear.reference += d as f64 * self.gear.ratio;
+            if self.gear.mode == -2 {
+                // §12.1: the cam table's output for the new master position.
+                let Some(r) = self.cam_update(od, d, dt) else { return };
+                self.gear.reference = r;
+            } else {
+                self.gear.reference += d as f64 * self.gear.ratio;
+            }
             Self::gear_target(cx, od, self.gear.reference);
         }
     }
@@ -70,12 +92,13 @@ impl Ipos {
         let _ = cx.drive.on_write(od, 0x607A, 0, &t.to_le_bytes());
     }
 
-    /// Per step in mode −1: entry holds the position; the 0 → 1 edge of
-    /// controlword bit 4 engages (§11.1.1); statusword bit 10 is 0 while
-    /// not halted (Table 11.1.2).
+    /// Per step in mode −1 / −2: entry holds the position; the 0 → 1 edge
+    /// of controlword bit 4 engages (§11.1.1, §12.1.1); statusword bit 10
+    /// is 0 while not halted (Tables 11.1.2, 12.1.2).
     pub(super) fn gear_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
         let view = cx.drive.view();
-        let active = i64_at(od, refs.mode_display) == Some(-1) && view.state == State::OperationEnabled;
+        let mode = i64_at(od, refs.mode_display).unwrap_or(0) as i8;
+        let active = matches!(mode, -1 | -2) && view.state == State::OperationEnabled;
         let bit4 = view.controlword & 0x10 != 0;
         if active && !self.gear.active {
             // The stand-in holds where the axis is until engaged.
@@ -88,10 +111,14 @@ impl Ipos {
         if !active {
             return;
         }
+        self.gear.mode = mode;
         if bit4 && !self.gear.bit4 && !self.gear.engaged {
             // "The slave executes a relative move, which starts from its
             // actual position" (§11.1): from the reference it holds.
             self.gear.engaged = true;
+            if mode == -2 {
+                self.cam_engage(od, view.controlword);
+            }
         }
         self.gear.bit4 = bit4;
         if view.controlword & 0x100 == 0

@@ -46,6 +46,7 @@ use drivebus_cia402::state_machine::State;
 pub mod ecat;
 mod factor;
 pub mod foe;
+mod cam;
 mod gearing;
 mod homing;
 mod interp;
@@ -56,6 +57,7 @@ use drivebus_node::{NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 use gearing::Gear;
 pub use gearing::{MASTER_FULL_RANGE, master_increment};
+pub use cam::{CamTable, Memory};
 pub use homing::MechanicalLimitHoming;
 use interp::Legacy;
 pub use interp::{AUX_LINEAR_IP, EMCY_IP_STATUS, IP_BUFFER_DEFAULT, IP_BUFFER_MAX, LegacyPoint, ip_status};
@@ -133,12 +135,18 @@ pub struct Ipos {
     started: bool,
     /// Handles of the objects every step reads.
     refs: Refs,
+    /// The drive memory behind 2064h–2069h (§17.2).
+    memory: cam::Memory,
+    /// Electronic camming (§12).
+    cam: cam::Camming,
+    /// Internal velocity units per velocity unit (6094h in force).
+    velocity_iu: (u32, u32),
 }
 
 impl Ipos {
     /// The iPOS.
     pub fn new() -> Self {
-        Ipos { legacy: Legacy { counter: 1, ..Legacy::default() }, ..Ipos::default() }
+        Ipos { legacy: Legacy { counter: 1, ..Legacy::default() }, velocity_iu: (1, 1), ..Ipos::default() }
     }
 
     /// The second encoder input (§11.1, §11.3: "the encoder from the master
@@ -236,9 +244,11 @@ impl Ipos {
     }
 
     /// The scaling objects in force (§5, factor.rs) → the drive's units.
-    fn sync_scaling(cx: &mut Context<'_>, od: &ObjectDictionary) {
-        if let Some(s) = factor::scaling(od) {
-            cx.drive.set_scaling(Some(s));
+    fn sync_scaling(&mut self, cx: &mut Context<'_>, od: &ObjectDictionary) {
+        if let Some(s) = factor::scaling(od)
+            && cx.drive.set_scaling(Some(s))
+        {
+            self.velocity_iu = s.velocity;
         }
     }
 
@@ -332,6 +342,8 @@ impl Behaviour for Ipos {
         use crate::build::set_default;
         use drivebus_od::Value;
         let od = node.od_mut();
+        // §4.9.16: the encoder counts per motor revolution.
+        set_default(od, 0x2103, 0, &Value::I32(COUNTS_PER_REV as i32));
         // §8.2.2: 6075h motor rated current default 0 (set by the master,
         // as in the §8.3 example; the drive computes with at least 1 mA).
         set_default(od, 0x6075, 0, &Value::U32(0));
@@ -366,11 +378,9 @@ impl Behaviour for Ipos {
             // −1 gearing (§11): the drive runs csp with the reference the
             // behaviour computes from the master position 201Eh (online).
             -1 => Some(8),
-            // −2 camming (§12): accepted and displayed; the drive holds
-            // its position under profile position (cam tables are not
-            // emulated: their memory format is not in the manual,
-            // docs/personalities.md).
-            -2 => Some(1),
+            // −2 camming (§12): the drive runs csp with the reference the
+            // behaviour computes from the cam table (cam.rs).
+            -2 => Some(8),
             _ => None,
         }
     }
@@ -385,7 +395,8 @@ impl Behaviour for Ipos {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
             0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
-            0x608E, 0x2076, 0x2080, 0x2081, 0x2090,
+            0x608E, 0x2076, 0x2080, 0x2081, 0x2090, 0x2065, 0x2066, 0x2067, 0x2069, 0x2019,
+            0x2006, 0x2077, 0x6040, 0x6060,
         ]
     }
 
@@ -400,6 +411,11 @@ impl Behaviour for Ipos {
         let le = |d: &[u8]| drivebus_od::le_u64(d);
         if factor::refuses_zero(index, sub) && le(data) == 0 {
             return Err(SdoAbort::VALUE_TOO_LOW);
+        }
+        // §3.2.6: with 2112h ≠ 0 the TML program has priority: 6060h and
+        // 6040h are not written (local control).
+        if matches!(index, 0x6040 | 0x6060) && od.get_u32(0x2112, 0).unwrap_or(0) != 0 {
+            return Err(SdoAbort::LOCAL_CONTROL);
         }
         match (index, sub) {
             (0x6075, 0) => {
@@ -445,6 +461,16 @@ impl Behaviour for Ipos {
                     self.load_point(cx, od, pvt, le(data) as u32)?;
                 }
                 return Ok(Verdict::Store);
+            }
+            // §18.2.2.1 / §18.3.1: the twin holds no TML functions or
+            // program (it runs no TML): 1..10 or any program start is
+            // "not defined" (0800 0020h), other function numbers 0609 0030h.
+            (0x2006, 0) if !(1..=10).contains(&le(data)) => return Err(SdoAbort::INVALID_VALUE),
+            (0x2006 | 0x2077, 0) => return Err(SdoAbort::CANNOT_STORE),
+            (0x2065 | 0x2067, 0) => {
+                // §17.2.2 / §17.2.4: write-only commands on the memory.
+                self.memory_write(od, index, le(data) as u32)?;
+                return Ok(Verdict::Handled);
             }
             (0x2076, 0) => {
                 // §4.9.6: any value saves the operating parameters to the
@@ -519,7 +545,12 @@ impl Behaviour for Ipos {
             // scaled); 6063h, 6064h and 6062h follow.
             (0x2081, 0) => cx.drive.set_position_increments(od.get_i64(0x2081, 0).unwrap_or(0)),
             (0x2090, 1 | 2) => Self::digital_outputs_8bit(cx, od, sub),
-            (i, _) if factor::OBJECTS.contains(&i) => Self::sync_scaling(cx, od),
+            // §17.2.5 checksum; §12.2.1 cam table copy.
+            (0x2069 | 0x2019, 0) => {
+                let v = od.get_u32(index, 0).unwrap_or(0);
+                let _ = self.memory_write(od, index, v);
+            }
+            (i, _) if factor::OBJECTS.contains(&i) => self.sync_scaling(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
             (0x60B8, 0) => cx.drive.set_limit_switches(od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 == 0),
@@ -560,7 +591,7 @@ impl Behaviour for Ipos {
                 let _ = Self::sync_sub_mode(cx, od, od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux);
                 Self::sync_torque_reference(cx, od);
                 Self::sync_jerk(cx, od);
-                Self::sync_scaling(cx, od);
+                self.sync_scaling(cx, od);
                 if self.gear.active {
                     Self::gear_target(cx, od, self.gear.reference);
                 }
@@ -577,7 +608,7 @@ impl Behaviour for Ipos {
             let _ = cx.drive.on_write(od, 0x60C4, 2, &u64::from(IP_BUFFER_DEFAULT).to_le_bytes());
             Self::sync_torque_reference(cx, od);
             Self::sync_jerk(cx, od);
-            Self::sync_scaling(cx, od);
+            self.sync_scaling(cx, od);
             // §4.9.7: 208Ah bit 0 = 1, a save (2076h) may be started; a
             // save completes at once.
             if let Ok(r) = od.find(0x208A, 0) {
@@ -610,6 +641,20 @@ impl Behaviour for Ipos {
                 od.set_le(r, &n.to_le_bytes());
             }
         }
+    }
+
+    fn on_read(
+        &mut self,
+        _cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        index: u16,
+        _sub: u8,
+    ) -> Result<(), SdoAbort> {
+        // §17.2.3: each read of 2066h moves data from the memory.
+        if index == 0x2066 {
+            self.memory_read(od)?;
+        }
+        Ok(())
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {

@@ -25,6 +25,9 @@ pub(super) struct Refs {
     /// 208Fh:01 / :02.
     pub(super) inputs8: [Option<EntryRef>; 2],
     pub(super) error_code: Option<EntryRef>,
+    pub(super) demand_internal: Option<EntryRef>,
+    pub(super) velocity_sensor: Option<EntryRef>,
+    pub(super) velocity_actual: Option<EntryRef>,
 }
 
 impl Refs {
@@ -45,6 +48,9 @@ impl Refs {
             outputs_status: f(0x2045),
             inputs8: [od.find(0x208F, 1).ok(), od.find(0x208F, 2).ok()],
             error_code: f(0x603F),
+            demand_internal: f(0x60FC),
+            velocity_sensor: f(0x6069),
+            velocity_actual: f(0x606C),
         }
     }
 

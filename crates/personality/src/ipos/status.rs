@@ -43,6 +43,25 @@ impl Ipos {
                 od.set_le(r, &n.to_le_bytes());
             }
         }
+        // §7.2.17: 60FCh, the demand in increments.
+        if let Some(r) = refs.demand_internal {
+            let u = cx.drive.units();
+            let inc = u.pos_to_inc_f(cx.drive.demand_position()).round();
+            let inc = inc.clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+            if i64_at(od, Some(r)) != Some(i64::from(inc)) {
+                od.set_le(r, &inc.to_le_bytes());
+            }
+        }
+        // §10.2.1: 6069h, the speed read from the encoder in internal
+        // units (65536 = 1 increment per sample): 606Ch through 6094h.
+        if let (Some(r), Some(v)) = (refs.velocity_sensor, i64_at(od, refs.velocity_actual)) {
+            let (num, den) = self.velocity_iu;
+            let iu = (i128::from(v) * i128::from(num) / i128::from(den.max(1)))
+                .clamp(i128::from(i32::MIN), i128::from(i32::MAX)) as i32;
+            if i64_at(od, Some(r)) != Some(i64::from(iu)) {
+                od.set_le(r, &iu.to_le_bytes());
+            }
+        }
         // §4.5.5: OUTn status = 60FEh bit 16 + n as the drive drives it.
         let out = (cx.drive.digital_outputs() >> 16) as u16;
         if let Some(r) = refs.outputs_status
