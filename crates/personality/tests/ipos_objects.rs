@@ -6,16 +6,6 @@ mod ipos_rig;
 
 use ipos_rig::*;
 
-/// The rig with the examples' PDOs, started, in `mode`, enabled.
-fn enabled_in(mode: i8) -> Rig {
-    let mut r = Rig::new();
-    map_examples_rpdos(&mut r);
-    r.start_remote_node();
-    r.modes_of_operation(mode);
-    r.enable();
-    r
-}
-
 /// 6093h:01/02 as 32-bit values.
 fn factor(r: &mut Rig, index: u16, num: u32, div: u32) {
     r.sdo(index, 1, &num.to_le_bytes());
@@ -413,19 +403,6 @@ fn camming_relative_adds_the_cam_increments() {
     master_to(&mut r, 640, 960);
     let p = r.upload(0x6064, 0, 4);
     assert!((p - p0 - 3000).abs() <= FEW_COUNTS, "X 320 → 640 adds 4000 − 1000: moved {}", p - p0);
-}
-
-/// An expedited SDO download answered by an abort with `code`.
-fn sdo_aborts(r: &mut Rig, index: u16, sub: u8, data: &[u8], code: u32) {
-    r.sdo.clear();
-    let cmd = 0x23 | ((4 - data.len() as u8) << 2);
-    let mut b = [cmd, index as u8, (index >> 8) as u8, sub, 0, 0, 0, 0];
-    b[4..4 + data.len()].copy_from_slice(data);
-    r.send(Frame::new(0x601, &b));
-    let c = code.to_le_bytes();
-    let abort = Frame::new(0x581, &[0x80, index as u8, (index >> 8) as u8, sub, c[0], c[1], c[2], c[3]]);
-    assert_eq!(r.sdo, vec![abort], "{index:04X}h:{sub} := {data:02X?}");
-    r.sdo.clear();
 }
 
 /// §18.2.2.1 / §18.3.1: a function number outside 1..10 is 0609 0030h; a
