@@ -123,6 +123,8 @@ fn software_limit_stops_profile_velocity() {
     assert!((5000..5100).contains(&pos), "stopped just past the limit: 6064h = {pos}");
     assert!(r.motor_rpm().abs() < 1.0, "standing, {} rpm", r.motor_rpm());
     assert_eq!(r.emcy, vec![Frame::new(0x081, &[0x06, 0xFF, 0x01, 0, 0, 0, 0, 0])], "EMCY FF06h");
+    // §4.4.1: the error register has bit 0 (generic) while it is active.
+    assert_eq!(r.upload(0x1001, 0, 1), 0x01);
     assert_eq!(r.upload(0x2002, 0, 2) & 0xC0, 0x40, "2002h bit 6");
     assert_ne!(r.sw.unwrap() & 1 << 11, 0, "statusword bit 11 internal limit active");
     // Back inside: the opposite motion is taken.
