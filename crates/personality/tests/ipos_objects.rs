@@ -237,7 +237,11 @@ fn mode_display_follows_in_operation_enabled() {
 }
 
 fn inject(r: &mut Rig, what: drivebus_cia402::model::Injection) {
-    r.bus.node_mut::<PersonalityDevice>(r.dut).unwrap().app.inject(drivebus_cia402::drive::Injection::Model(what));
+    r.bus
+        .node_mut::<PersonalityDevice>(r.dut)
+        .unwrap()
+        .app
+        .inject(drivebus_cia402::drive::Injection::Model(what));
     r.run_ms(5);
 }
 
@@ -460,4 +464,68 @@ fn internal_demand_and_velocity_sensor_values() {
     start_and_wait(&mut r, 0x1F, 2000);
     let demand = r.upload(0x6062, 0, 4);
     assert_eq!(r.upload(0x60FC, 0, 4), 2 * demand, "60FCh = 2 × 6062h at 2:1");
+}
+
+/// §5.1.13: with a non-zero time dimension index 2070h the time factor
+/// 2071h scales the times: 6068h = 5 in units of 10 ms (2071h = 10/1)
+/// holds target reached back 50 ms instead of 5 ms; 6068h reads 5.
+#[test]
+fn time_factor_with_dimension_index() {
+    let reached_after = |validate: bool| {
+        let mut r = enabled_in(1);
+        r.sdo(0x2071, 1, &10u32.to_le_bytes());
+        if validate {
+            r.sdo(0x2070, 0, &[0x03]);
+        }
+        r.sdo(0x6068, 0, &5u16.to_le_bytes());
+        assert_eq!(r.upload(0x6068, 0, 2), 5);
+        r.target_position_rpdo2(2000);
+        start_and_wait(&mut r, 0x1F, 2000)
+    };
+    let plain = reached_after(false);
+    let scaled = reached_after(true);
+    assert!((40..=50).contains(&(scaled - plain)), "5 ms vs 50 ms window time: {plain} / {scaled} ms");
+}
+
+/// §4.9.12: 210Bh bit 12 = 1 keeps the actual position at the end of a
+/// homing; 0 (default) sets it to 607Ch (method 35: here).
+#[test]
+fn homing_keeps_the_position_with_asr2_bit_12() {
+    let home = |keep: bool| {
+        let mut r = enabled_in(1);
+        r.target_position_rpdo2(1500);
+        start_and_wait(&mut r, 0x1F, 2000);
+        r.controlword(0x0F);
+        if keep {
+            r.sdo(0x210B, 0, &0x1000u16.to_le_bytes());
+        }
+        r.sdo(0x607C, 0, &500i32.to_le_bytes());
+        r.sdo(0x6098, 0, &[35]);
+        r.modes_of_operation(6);
+        r.controlword(0x1F);
+        r.wait_sw("homing attained", 0x1400, 0x1400, 1000);
+        r.run_ms(10);
+        r.upload(0x6064, 0, 4)
+    };
+    assert_eq!(home(false), 500);
+    let kept = home(true);
+    assert!((kept - 1500).abs() <= FEW_COUNTS, "position kept: {kept}");
+}
+
+/// §4.9.4 / §4.9.5: 2085h gives OUT0 to position trigger 1 (2075h:01):
+/// with bit 8 = 1 it is high once 6064h has reached the trigger, with bit
+/// 8 = 0 the other way round; 2045h shows it.
+#[test]
+fn position_triggered_outputs() {
+    let mut r = enabled_in(1);
+    r.sdo(0x2075, 1, &500i32.to_le_bytes());
+    r.sdo(0x2085, 0, &0x0101u16.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.upload(0x2045, 0, 2) & 1, 0, "before the trigger");
+    r.target_position_rpdo2(1000);
+    start_and_wait(&mut r, 0x1F, 2000);
+    assert_eq!(r.upload(0x2045, 0, 2) & 1, 1, "past the trigger");
+    r.sdo(0x2085, 0, &0x0001u16.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.upload(0x2045, 0, 2) & 1, 0, "inverted polarity");
 }

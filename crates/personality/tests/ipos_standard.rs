@@ -88,7 +88,11 @@ fn fault_reaction_option_code() {
         r.sdo(0x605E, 0, &code.to_le_bytes());
         r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
         r.run_ms(300);
-        r.bus.node_mut::<PersonalityDevice>(r.dut).unwrap().app.inject(Injection::Model(Model::BusOverVoltage));
+        r.bus
+            .node_mut::<PersonalityDevice>(r.dut)
+            .unwrap()
+            .app
+            .inject(Injection::Model(Model::BusOverVoltage));
         r.run_ms(10);
         (r.motor_rpm(), r.upload(0x603F, 0, 2) as u16)
     };

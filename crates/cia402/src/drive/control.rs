@@ -120,7 +120,7 @@ impl Drive {
         nm / (f64::from(self.extra.rated_torque) / 1000.0) * 1000.0
     }
 
-    fn enter_mode(&mut self, from_disabled: bool) {
+    pub(crate) fn enter_mode(&mut self, from_disabled: bool) {
         if from_disabled {
             self.dem.pos = self.actual_pos_f();
             self.dem.vel = 0.0;

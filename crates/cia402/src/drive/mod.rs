@@ -407,9 +407,17 @@ impl Drive {
         true
     }
 
+    /// Homing ends without setting the position to the home offset: the
+    /// counter keeps its value and a return-to-home goes back to the point
+    /// found (Technosoft iPOS 210Bh bit 12). Applies from the next homing.
+    pub fn set_homing_keeps_position(&mut self, on: bool) {
+        self.params.homing_keeps_position = on;
+    }
+
     /// Sets position actual internal value (6063h) to `increments` where
     /// the axis stands (e.g. Technosoft iPOS 2081h): the reference shifts,
-    /// the demand moves with it, nothing moves.
+    /// the demand moves with it, nothing moves (a mode handler's mode is
+    /// entered again from the new position).
     pub fn set_position_increments(&mut self, increments: i64) {
         let delta = increments.saturating_sub(self.position_increments());
         self.inc_offset = self.inc_offset.saturating_add(delta);
@@ -417,6 +425,12 @@ impl Drive {
         let d = self.units.inc_to_pos_f(delta as f64);
         self.dem.pos += d;
         self.pp.reset(self.dem.pos);
+        // A mode handler holds a position of the old coordinates: it
+        // starts again from here.
+        if self.mode_active {
+            self.exit_mode();
+            self.enter_mode(false);
+        }
     }
 
     /// Sets the jerk of the jerk-limited ramp (6086h = 3), e.g. from a

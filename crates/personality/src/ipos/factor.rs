@@ -19,7 +19,10 @@
 //! objects; its acceleration factor is 6097h (§5.1.12): with 608Eh ≠ 0
 //! the drive scales accelerations by 6097h instead of 210Fh. No object of
 //! the dictionary is in jerk units (60A4h is not listed), so 2110h scales
-//! nothing; 2023h is a time.
+//! nothing; 2023h is a time. Its time factor 2071h, validated by a
+//! non-zero time dimension index 2070h (§5.1.13), scales the times the
+//! drive takes in slow-loop samples (1 ms): 6066h, 6068h, 2023h (2005h
+//! and 2051h belong to protections the model does not have).
 
 use drivebus_cia402::drive::Scaling;
 use drivebus_od::ObjectDictionary;
@@ -35,10 +38,31 @@ pub const ACCELERATION_IU: (u32, u32) = (15_625, 1024);
 /// The objects whose writes change the scaling in force.
 pub(super) const OBJECTS: [u16; 5] = [0x6093, 0x6094, 0x210F, 0x6097, 0x608E];
 
+/// The time objects 2071h scales (§5.1.13) that the drive uses.
+pub(super) const TIMES: [u16; 2] = [0x6066, 0x6068];
+
+/// Time internal units (1 ms samples) per time unit: 2071h when 2070h ≠ 0
+/// validates it (§5.1.13), else 1/1.
+pub(super) fn time_factor(od: &ObjectDictionary) -> (u64, u64) {
+    if od.get_u32(0x2070, 0).unwrap_or(0) == 0 {
+        return (1, 1);
+    }
+    match (od.get_u32(0x2071, 1), od.get_u32(0x2071, 2)) {
+        (Some(n), Some(d)) if n != 0 && d != 0 => (u64::from(n), u64::from(d)),
+        _ => (1, 1),
+    }
+}
+
+/// `t` time units in internal units (ms), rounded, saturating at `max`.
+pub(super) fn time_iu(od: &ObjectDictionary, t: u64, max: u64) -> u64 {
+    let (n, d) = time_factor(od);
+    ((u128::from(t) * u128::from(n) + u128::from(d) / 2) / u128::from(d)).min(u128::from(max)) as u64
+}
+
 /// Scaling objects a zero sub-index would make meaningless (a 0 factor
 /// maps every value to 0 or divides by 0): refused.
 pub(super) fn refuses_zero(index: u16, sub: u8) -> bool {
-    matches!(index, 0x6093 | 0x6094 | 0x210F | 0x2110) && matches!(sub, 1 | 2)
+    matches!(index, 0x6093 | 0x6094 | 0x210F | 0x2110 | 0x2071) && matches!(sub, 1 | 2)
 }
 
 /// The scaling in force as the dictionary holds it; `None` while an

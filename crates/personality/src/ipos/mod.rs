@@ -43,21 +43,21 @@ use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::{IpMode, IpMonitor};
 use drivebus_cia402::state_machine::State;
 
+mod cam;
 pub mod ecat;
 mod factor;
 pub mod foe;
-mod cam;
 mod gearing;
 mod homing;
 mod interp;
 mod refs;
 mod status;
 
+pub use cam::{CamTable, Memory};
 use drivebus_node::{NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 use gearing::Gear;
 pub use gearing::{MASTER_FULL_RANGE, master_increment};
-pub use cam::{CamTable, Memory};
 pub use homing::MechanicalLimitHoming;
 use interp::Legacy;
 pub use interp::{AUX_LINEAR_IP, EMCY_IP_STATUS, IP_BUFFER_DEFAULT, IP_BUFFER_MAX, LegacyPoint, ip_status};
@@ -190,7 +190,9 @@ impl Ipos {
         // 0000h when it is left.
         let soft = view.software_limit;
         if soft != self.soft_limit {
-            for (side, code, bit) in [(1i8, EMCY_SOFT_LIMIT_POSITIVE, 6u16), (-1, EMCY_SOFT_LIMIT_NEGATIVE, 7)] {
+            for (side, code, bit) in
+                [(1i8, EMCY_SOFT_LIMIT_POSITIVE, 6u16), (-1, EMCY_SOFT_LIMIT_NEGATIVE, 7)]
+            {
                 let (now, was) = (soft == side, self.soft_limit == side);
                 if now == was {
                     continue;
@@ -239,8 +241,26 @@ impl Ipos {
     /// 2023h jerk time (ms, §7.2.5: the S-curve's time to reach the
     /// profile acceleration) → the drive's jerk = 6083h / t.
     fn sync_jerk(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        let ms = od.get_u32(0x2023, 0).unwrap_or(0);
+        let ms =
+            factor::time_iu(od, u64::from(od.get_u32(0x2023, 0).unwrap_or(0)), u64::from(u32::MAX)) as u32;
         cx.drive.set_profile_jerk(od, ProfileJerk::Time(f64::from(ms) * 1e-3));
+    }
+
+    /// §4.9.12: 210Bh bit 12 = 1, "after finishing a homing procedure, do
+    /// not reset the actual position. Homing ends keeping position on home
+    /// switch".
+    fn sync_asr2(cx: &mut Context<'_>, od: &ObjectDictionary) {
+        cx.drive.set_homing_keeps_position(od.get_u32(0x210B, 0).unwrap_or(0) & 1 << 12 != 0);
+    }
+
+    /// The time objects in time units → the drive's ms (2071h, §5.1.13).
+    fn sync_times(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        for index in factor::TIMES {
+            let t = od.get_u32(index, 0).unwrap_or(0);
+            let ms = factor::time_iu(od, u64::from(t), u64::from(u16::MAX)) as u16;
+            let _ = cx.drive.on_write(od, index, 0, &ms.to_le_bytes());
+        }
+        Self::sync_jerk(cx, od);
     }
 
     /// The scaling objects in force (§5, factor.rs) → the drive's units.
@@ -342,8 +362,6 @@ impl Behaviour for Ipos {
         use crate::build::set_default;
         use drivebus_od::Value;
         let od = node.od_mut();
-        // §4.9.16: the encoder counts per motor revolution.
-        set_default(od, 0x2103, 0, &Value::I32(COUNTS_PER_REV as i32));
         // §8.2.2: 6075h motor rated current default 0 (set by the master,
         // as in the §8.3 example; the drive computes with at least 1 mA).
         set_default(od, 0x6075, 0, &Value::U32(0));
@@ -395,8 +413,8 @@ impl Behaviour for Ipos {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
             0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
-            0x608E, 0x2076, 0x2080, 0x2081, 0x2090, 0x2065, 0x2066, 0x2067, 0x2069, 0x2019,
-            0x2006, 0x2077, 0x6040, 0x6060,
+            0x608E, 0x2076, 0x2080, 0x2081, 0x2090, 0x2065, 0x2066, 0x2067, 0x2069, 0x2019, 0x2006, 0x2077,
+            0x6040, 0x6060, 0x6066, 0x6068, 0x2070, 0x2071, 0x210B,
         ]
     }
 
@@ -418,6 +436,12 @@ impl Behaviour for Ipos {
             return Err(SdoAbort::LOCAL_CONTROL);
         }
         match (index, sub) {
+            (0x6066 | 0x6068, 0) if factor::time_factor(od) != (1, 1) => {
+                // §5.1.13: the time in time units; the drive takes ms.
+                let ms = factor::time_iu(od, le(data), u64::from(u16::MAX)) as u16;
+                cx.drive.on_write(od, index, 0, &ms.to_le_bytes())?;
+                return Ok(Verdict::Store);
+            }
             (0x6075, 0) => {
                 // §8.2.2: default 0, set by the master; the drive computes
                 // with at least 1 mA (the generic drive refuses 0).
@@ -551,6 +575,8 @@ impl Behaviour for Ipos {
                 let _ = self.memory_write(od, index, v);
             }
             (i, _) if factor::OBJECTS.contains(&i) => self.sync_scaling(cx, od),
+            (0x2070 | 0x2071, _) => Self::sync_times(cx, od),
+            (0x210B, 0) => Self::sync_asr2(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
             (0x60B8, 0) => cx.drive.set_limit_switches(od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 == 0),
@@ -590,7 +616,8 @@ impl Behaviour for Ipos {
                 let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
                 let _ = Self::sync_sub_mode(cx, od, od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux);
                 Self::sync_torque_reference(cx, od);
-                Self::sync_jerk(cx, od);
+                Self::sync_times(cx, od);
+                Self::sync_asr2(cx, od);
                 self.sync_scaling(cx, od);
                 if self.gear.active {
                     Self::gear_target(cx, od, self.gear.reference);

@@ -28,6 +28,10 @@ pub(super) struct Refs {
     pub(super) demand_internal: Option<EntryRef>,
     pub(super) velocity_sensor: Option<EntryRef>,
     pub(super) velocity_actual: Option<EntryRef>,
+    pub(super) position_actual: Option<EntryRef>,
+    /// 2075h:01..04.
+    pub(super) triggers: [Option<EntryRef>; 4],
+    pub(super) triggered_outputs: Option<EntryRef>,
 }
 
 impl Refs {
@@ -51,6 +55,9 @@ impl Refs {
             demand_internal: f(0x60FC),
             velocity_sensor: f(0x6069),
             velocity_actual: f(0x606C),
+            position_actual: f(0x6064),
+            triggers: [1, 2, 3, 4].map(|s| od.find(0x2075, s).ok()),
+            triggered_outputs: f(0x2085),
         }
     }
 

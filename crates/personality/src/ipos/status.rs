@@ -62,8 +62,9 @@ impl Ipos {
                 od.set_le(r, &iu.to_le_bytes());
             }
         }
-        // §4.5.5: OUTn status = 60FEh bit 16 + n as the drive drives it.
-        let out = (cx.drive.digital_outputs() >> 16) as u16;
+        // §4.5.5: OUTn status = 60FEh bit 16 + n as the drive drives it,
+        // with the outputs the position triggers control (§4.9.5).
+        let out = Self::triggered(od, refs, (cx.drive.digital_outputs() >> 16) as u16);
         if let Some(r) = refs.outputs_status
             && u32_at(od, Some(r)) != Some(u32::from(out))
         {
@@ -79,6 +80,30 @@ impl Ipos {
                 od.set_le(r, &[v]);
             }
         }
+    }
+
+    /// §4.9.4 / §4.9.5: position trigger n is 1 once 6064h has reached
+    /// 2075h:n (the TML status register bits SRH.1-4 are not objects; the
+    /// exact value is passed within one control period, so "is the value"
+    /// reads as reached); 2085h bits 0/1/3 give OUT0/OUT1/OUT5 to triggers
+    /// 1/2/4, bits 8/9/11 their polarity (0: the output is 1 while the
+    /// trigger is 0).
+    fn triggered(od: &ObjectDictionary, refs: Refs, out: u16) -> u16 {
+        let cfg = u32_at(od, refs.triggered_outputs).unwrap_or(0) as u16;
+        if cfg & 0x0B == 0 {
+            return out;
+        }
+        let pos = i64_at(od, refs.position_actual).unwrap_or(0);
+        let mut out = out;
+        for (enable, trigger, output) in [(0u16, 0usize, 0u16), (1, 1, 1), (3, 3, 5)] {
+            if cfg & 1 << enable == 0 {
+                continue;
+            }
+            let reached = i64_at(od, refs.triggers[trigger]).is_some_and(|t| pos >= t);
+            let high = reached == (cfg & 1 << (8 + enable) != 0);
+            out = if high { out | 1 << output } else { out & !(1 << output) };
+        }
+        out
     }
 
     /// §4.5.4: 2090h "has the same functionality as 60FEh", 8 bits: sub 1
