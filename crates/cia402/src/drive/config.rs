@@ -148,6 +148,17 @@ pub struct IoConfig {
     /// [`DriveView::software_limit`](super::DriveView::software_limit)
     /// reports which. `false`: 607Dh only clamps pp targets.
     pub software_limit_switches: bool,
+    /// 60FDh bits 16–31 (manufacturer-specific in CiA 402-2) show the
+    /// machine's digital input lines 1–16
+    /// ([`crate::model::DriveModel::digital_inputs`]).
+    pub input_lines: bool,
+    /// 60FEh:1 bits 16–31 (manufacturer-specific) drive the machine's
+    /// digital output lines 1–16, as far as 60FEh:2 enables them.
+    pub output_lines: bool,
+    /// 60FEh:1 bit 0 is CiA 402-2's "set brake": while set (and enabled in
+    /// 60FEh:2) the holding brake is engaged whatever the drive's brake
+    /// sequence wants.
+    pub set_brake_bit: bool,
 }
 
 impl Default for IoConfig {
@@ -160,6 +171,9 @@ impl Default for IoConfig {
             probe_inputs: [ProbeInput::HomeSwitch; 2],
             probe_source_object: true,
             software_limit_switches: false,
+            input_lines: false,
+            output_lines: false,
+            set_brake_bit: false,
         }
     }
 }
