@@ -529,3 +529,73 @@ fn position_triggered_outputs() {
     r.run_ms(2);
     assert_eq!(r.upload(0x2045, 0, 2) & 1, 0, "inverted polarity");
 }
+
+/// §4.5.6: 2102h is 1 while the brake output holds the motor's brake: at
+/// rest disabled, through the release delay after the enable ("it may still
+/// be active even when the drive reaches the Operation Enabled state"), 0
+/// once released, 1 again after a disable.
+#[test]
+fn brake_status_follows_the_brake() {
+    let mut r = Rig::on(|c| {
+        c.params.io.brake = Some(drivebus_cia402::model::BrakeParams {
+            release_delay: 0.1,
+            apply_delay: 0.05,
+            holding_torque: 1.0,
+        });
+    });
+    map_examples_rpdos(&mut r);
+    r.start_remote_node();
+    r.run_ms(2);
+    assert_eq!(r.upload(0x2102, 0, 1), 1, "disabled: the brake holds");
+    r.modes_of_operation(1);
+    r.enable();
+    assert_eq!(r.upload(0x2102, 0, 1), 1, "Operation enabled, the release delay runs");
+    r.run_ms(120);
+    assert_eq!(r.upload(0x2102, 0, 1), 0, "released");
+    r.controlword(0x06);
+    r.run_ms(80);
+    assert_eq!(r.upload(0x2102, 0, 1), 1, "applied after the disable");
+    // Without a brake fitted the output never holds one.
+    let mut r = Rig::new();
+    r.run_ms(2);
+    assert_eq!(r.upload(0x2102, 0, 1), 0);
+}
+
+/// §4.5.1 / §4.5.2: the machine's input lines 1–16 are IN0..IN15 (60FDh
+/// bits 16–31, 208Fh:02); the home switch is IN0 too (§6.1: "home switch
+/// (IN0)").
+#[test]
+fn digital_input_lines() {
+    use drivebus_cia402::model::{Injection, SwitchInput};
+    let mut r = Rig::new();
+    inject(&mut r, Injection::DigitalInput { line: 3, level: true });
+    assert_eq!(r.upload(0x60FD, 0, 4) as u32, 1 << 18, "IN2");
+    assert_eq!(r.upload(0x208F, 2, 1), 0x04);
+    inject(&mut r, Injection::ForceSwitch(SwitchInput::Home, Some(true)));
+    assert_eq!(r.upload(0x60FD, 0, 4) as u32, 1 << 18 | 1 << 16 | 1 << 2, "home = bit 2 and IN0");
+    assert_eq!(r.upload(0x208F, 2, 1), 0x05);
+}
+
+/// §4.5.3: 60FEh drives the machine's output lines (OUT0 = line 1); an
+/// output the iPOS360x does not have (OUT4..OUT15) selected in the mask
+/// sends EMCY FF05h and does not reach the machine.
+#[test]
+fn output_lines_and_unavailable_outputs() {
+    let mut r = Rig::new();
+    r.sdo(0x60FE, 1, &0x0082_0000u32.to_le_bytes());
+    r.emcy.clear();
+    r.sdo(0x60FE, 2, &0x0002_0000u32.to_le_bytes());
+    r.run_ms(2);
+    assert!(r.emcy.is_empty(), "OUT1 exists: {:?}", r.emcy);
+    assert_eq!(r.dn().app.drive.output_lines(), 0x0002, "line 2 = OUT1");
+    r.sdo(0x60FE, 2, &0x0082_0000u32.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.emcy, vec![Frame::new(0x081, &[0x05, 0xFF, 0x01, 0, 0, 0, 0, 0])], "EMCY FF05h");
+    assert_eq!(r.dn().app.drive.output_lines(), 0x0002, "OUT7 does not exist");
+    assert_eq!(r.upload(0x60FE, 2, 4) as u32, 0x0082_0000, "the mask reads as written");
+    // The 8-bit image likewise.
+    r.emcy.clear();
+    r.sdo(0x2090, 2, &[0x10]);
+    r.run_ms(2);
+    assert_eq!(r.emcy.len(), 1, "OUT4 through 2090h: FF05h");
+}

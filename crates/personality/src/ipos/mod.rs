@@ -62,6 +62,7 @@ pub use homing::MechanicalLimitHoming;
 use interp::Legacy;
 pub use interp::{AUX_LINEAR_IP, EMCY_IP_STATUS, IP_BUFFER_DEFAULT, IP_BUFFER_MAX, LegacyPoint, ip_status};
 use refs::{Refs, i64_at, u32_at};
+pub use status::{AVAILABLE_OUTPUTS, EMCY_IO_NOT_AVAILABLE};
 
 /// EMCY 8220h "PDO length exceeded" (Table 3.1.3).
 pub const EMCY_PDO_LENGTH_EXCEEDED: u16 = 0x8220;
@@ -120,10 +121,8 @@ pub struct Ipos {
     ip: IpMonitor,
     legacy: Legacy,
     gear: Gear,
-    /// The count of a master encoder wired to the second encoder input
-    /// (simulated: set by [`Ipos::set_second_encoder`]), and the count last
-    /// taken by gearing.
-    second_encoder: Option<i64>,
+    /// The master encoder count (second encoder input) last taken by
+    /// gearing.
     second_taken: Option<i64>,
     /// Limit switches as last seen (LSN, LSP).
     limits: (bool, bool),
@@ -147,15 +146,6 @@ impl Ipos {
     /// The iPOS.
     pub fn new() -> Self {
         Ipos { legacy: Legacy { counter: 1, ..Legacy::default() }, velocity_iu: (1, 1), ..Ipos::default() }
-    }
-
-    /// The second encoder input (§11.1, §11.3: "the encoder from the master
-    /// drive … connected … to the second encoder input"): the emulated
-    /// drive has no such input, so its count is set here (a test, a
-    /// simulated master). With 201Dh = 3 gearing follows it, taken at the
-    /// next step.
-    pub fn set_second_encoder(&mut self, count: i64) {
-        self.second_encoder = Some(count);
     }
 
     /// Per step: limit switch EMCYs (§4.3.1), the PVT stop on an empty
@@ -356,6 +346,11 @@ impl Behaviour for Ipos {
         cfg.remote = true;
         // §4.3.2: 607Dh works like LSP/LSN in every mode.
         cfg.io.software_limit_switches = true;
+        // §4.5.1 / §4.5.3: 60FDh bits 16–31 are IN0..IN15, 60FEh bits
+        // 16–31 OUT0..OUT15: the machine's lines 1–16 (status.rs keeps the
+        // outputs the iPOS360x has).
+        cfg.io.input_lines = true;
+        cfg.io.output_lines = true;
     }
 
     fn finish(&mut self, node: &mut drivebus_node::Node) {
@@ -414,7 +409,7 @@ impl Behaviour for Ipos {
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
             0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
             0x608E, 0x2076, 0x2080, 0x2081, 0x2090, 0x2065, 0x2066, 0x2067, 0x2069, 0x2019, 0x2006, 0x2077,
-            0x6040, 0x6060, 0x6066, 0x6068, 0x2070, 0x2071, 0x210B,
+            0x6040, 0x6060, 0x6066, 0x6068, 0x2070, 0x2071, 0x210B, 0x60FE,
         ]
     }
 
@@ -491,6 +486,13 @@ impl Behaviour for Ipos {
             // "not defined" (0800 0020h), other function numbers 0609 0030h.
             (0x2006, 0) if !(1..=10).contains(&le(data)) => return Err(SdoAbort::INVALID_VALUE),
             (0x2006 | 0x2077, 0) => return Err(SdoAbort::CANNOT_STORE),
+            (0x60FE, 2) => {
+                // §4.5.3: an output the drive does not have selected in the
+                // mask: EMCY FF05h; it does not reach the machine.
+                let mask = Self::available_outputs(cx, le(data) as u32);
+                cx.drive.on_write(od, 0x60FE, 2, &mask.to_le_bytes())?;
+                return Ok(Verdict::Store);
+            }
             (0x2065 | 0x2067, 0) => {
                 // §17.2.2 / §17.2.4: write-only commands on the memory.
                 self.memory_write(od, index, le(data) as u32)?;
@@ -642,13 +644,11 @@ impl Behaviour for Ipos {
                 od.set_le(r, &1u16.to_le_bytes());
             }
         }
-        // §11.2.6: 201Dh = 3, the master is the digital input (here the
-        // second encoder; pulse & direction is not emulated).
+        // §11.2.6: 201Dh = 3, the master is the digital reference: the
+        // machine's master encoder on the second encoder input (§11.3).
         let refs = self.refs.fresh(od);
-        if u32_at(od, refs.master_source) == Some(3)
-            && let Some(m) = self.second_encoder
-            && self.second_taken != Some(m)
-        {
+        let m = cx.drive.model().master_position();
+        if u32_at(od, refs.master_source) == Some(3) && self.second_taken != Some(m) {
             self.second_taken = Some(m);
             self.gear_update(cx, od, m);
         }

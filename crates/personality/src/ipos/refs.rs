@@ -32,6 +32,9 @@ pub(super) struct Refs {
     /// 2075h:01..04.
     pub(super) triggers: [Option<EntryRef>; 4],
     pub(super) triggered_outputs: Option<EntryRef>,
+    pub(super) inputs: Option<EntryRef>,
+    pub(super) brake: Option<EntryRef>,
+    pub(super) aux_encoder: Option<EntryRef>,
 }
 
 impl Refs {
@@ -58,6 +61,9 @@ impl Refs {
             position_actual: f(0x6064),
             triggers: [1, 2, 3, 4].map(|s| od.find(0x2075, s).ok()),
             triggered_outputs: f(0x2085),
+            inputs: f(0x60FD),
+            brake: f(0x2102),
+            aux_encoder: f(0x208D),
         }
     }
 

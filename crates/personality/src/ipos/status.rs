@@ -1,6 +1,17 @@
 //! The iPOS status objects that mirror the drive (§4.4, §4.5): the fault
 //! bits of the motion error register 2000h, the outputs status 2045h, the
-//! 8-bit input and output images 208Fh / 2090h.
+//! 8-bit input and output images 208Fh / 2090h, the brake status 2102h,
+//! the auxiliary encoder 208Dh; the outputs the iPOS360x has.
+
+/// OUT0..OUT3 as 60FEh bits: the outputs of the emulated iPOS360x VX-CAT
+/// ("the actual number of available digital outputs is product
+/// dependent", §4.5.3; the manual names OUT0, OUT1, Error/OUT2 and
+/// Ready/OUT3 for this family, §3.2.3, §4.5.3.1; OUT5 "may not be
+/// available", §4.9.5).
+pub const AVAILABLE_OUTPUTS: u32 = 0x000F_0000;
+
+/// EMCY FF05h "specified digital I/O line not available" (§4.5.3).
+pub const EMCY_IO_NOT_AVAILABLE: u16 = 0xFF05;
 
 use super::*;
 
@@ -62,9 +73,10 @@ impl Ipos {
                 od.set_le(r, &iu.to_le_bytes());
             }
         }
-        // §4.5.5: OUTn status = 60FEh bit 16 + n as the drive drives it,
+        // §4.5.5: OUTn status = the output lines as the drive drives them,
         // with the outputs the position triggers control (§4.9.5).
-        let out = Self::triggered(od, refs, (cx.drive.digital_outputs() >> 16) as u16);
+        let lines = cx.drive.output_lines() & (AVAILABLE_OUTPUTS >> 16) as u16;
+        let out = Self::triggered(od, refs, lines);
         if let Some(r) = refs.outputs_status
             && u32_at(od, Some(r)) != Some(u32::from(out))
         {
@@ -72,7 +84,31 @@ impl Ipos {
         }
         // §4.5.2: "the same data as 60FDh": sub 1 bits 0-3 (limit
         // switches, home, interlock), sub 2 IN0..IN7 (60FDh bits 16-23).
+        // §4.5.1: the device profile inputs are mapped on the manufacturer
+        // inputs as well: the home switch is IN0 (§6.1).
         let di = cx.drive.view().digital_inputs;
+        let di = di | (di >> 2 & 1) << 16;
+        if let Some(r) = refs.inputs
+            && u32_at(od, Some(r)) != Some(di)
+        {
+            od.set_le(r, &di.to_le_bytes());
+        }
+        // §4.5.6: 2102h = 1 while the brake output holds the brake.
+        let b = cx.drive.model().brake();
+        let brake = u8::from(b.fitted && b.engaged);
+        if let Some(r) = refs.brake
+            && od.bytes(r).first() != Some(&brake)
+        {
+            od.set_le(r, &[brake]);
+        }
+        // §7.2.21: the auxiliary encoder = the second encoder input, where
+        // the machine's master encoder is wired (§11.3).
+        if let Some(r) = refs.aux_encoder {
+            let m = cx.drive.model().master_position() as i32;
+            if i64_at(od, Some(r)) != Some(i64::from(m)) {
+                od.set_le(r, &m.to_le_bytes());
+            }
+        }
         for (r, v) in refs.inputs8.into_iter().zip([(di & 0x0F) as u8, (di >> 16) as u8]) {
             if let Some(r) = r
                 && od.bytes(r).first() != Some(&v)
@@ -106,6 +142,16 @@ impl Ipos {
         out
     }
 
+    /// The 60FEh:2 mask the drive takes: only the outputs the iPOS360x
+    /// has; selecting another sends EMCY FF05h (§4.5.3).
+    pub(super) fn available_outputs(cx: &mut Context<'_>, mask: u32) -> u32 {
+        if mask & 0xFFFF_0000 & !AVAILABLE_OUTPUTS != 0 {
+            let code = EMCY_IO_NOT_AVAILABLE;
+            cx.request(EmcyFrame { code, register: Some(error_register(code)), bytes: [0; 5] }.raw());
+        }
+        mask & (AVAILABLE_OUTPUTS | 0xFFFF)
+    }
+
     /// §4.5.4: 2090h "has the same functionality as 60FEh", 8 bits: sub 1
     /// commands OUT0..OUT7 (60FEh:01 bits 16-23), sub 2 is their mask
     /// (60FEh:02 bits 16-23); 60FEh shows the result.
@@ -115,6 +161,7 @@ impl Ipos {
         let old = u32_at(od, Some(r)).unwrap_or(0);
         let new = (old & !0x00FF_0000) | (v & 0xFF) << 16;
         od.set_le(r, &new.to_le_bytes());
-        let _ = cx.drive.on_write(od, 0x60FE, sub, &new.to_le_bytes());
+        let take = if sub == 2 { Self::available_outputs(cx, new) } else { new };
+        let _ = cx.drive.on_write(od, 0x60FE, sub, &take.to_le_bytes());
     }
 }
