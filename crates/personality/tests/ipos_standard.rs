@@ -182,3 +182,56 @@ fn max_motor_speed() {
     r.run_ms(300);
     assert!((r.motor_rpm() - 300.0).abs() < 10.0, "limited to 10 IU = 300 rpm: {}", r.motor_rpm());
 }
+
+/// §10.1 remark 2: a target velocity set before profile velocity is
+/// entered does not start the motion; writing 60FFh again (even the same
+/// value) does.
+#[test]
+fn target_velocity_must_be_written_again_in_pv() {
+    let mut r = enabled_in(1);
+    r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
+    r.modes_of_operation(3);
+    r.run_ms(200);
+    assert!(r.motor_rpm().abs() < 1.0, "standing: {} rpm", r.motor_rpm());
+    assert_eq!(r.upload(0x60FF, 0, 4), i64::from(SPEED), "60FFh keeps its value");
+    r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
+    r.run_ms(200);
+    assert!((r.motor_rpm() - 600.0).abs() < 10.0, "{} rpm", r.motor_rpm());
+}
+
+/// §10.2.8 / §10.2.9: with a max slippage 60F8h set, a speed error beyond
+/// it for longer than 2005h is a control error (8611h, 2000h bit 3); with
+/// 60F8h = 0 (the speed control error off, as in the set-up by default)
+/// the same blocked motor does not fault. The motor is blocked by the
+/// machine's holding brake, held engaged.
+#[test]
+fn max_slippage_and_time_out() {
+    use drivebus_cia402::drive::BrakeControl;
+    use drivebus_cia402::model::BrakeParams;
+    let blocked = |slippage: i32| {
+        let mut r = Rig::on(|c| {
+            c.params.io.brake =
+                Some(BrakeParams { release_delay: 0.0, apply_delay: 0.0, holding_torque: 100.0 });
+        });
+        map_examples_rpdos(&mut r);
+        r.start_remote_node();
+        r.modes_of_operation(3);
+        r.enable();
+        r.sdo(0x60F8, 0, &slippage.to_le_bytes());
+        r.sdo(0x2005, 0, &20u16.to_le_bytes());
+        r.bus
+            .node_mut::<PersonalityDevice>(r.dut)
+            .unwrap()
+            .app
+            .drive
+            .set_brake_control(BrakeControl::Engaged);
+        r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
+        r.run_ms(100);
+        r
+    };
+    let mut r = blocked(2 << 16);
+    assert_eq!(r.upload(0x603F, 0, 2) as u16, 0x8611, "control error");
+    assert_ne!(r.upload(0x2000, 0, 2) & 1 << 3, 0, "2000h bit 3");
+    let mut r = blocked(0);
+    assert_eq!(r.upload(0x603F, 0, 2), 0, "off with 60F8h = 0");
+}

@@ -130,6 +130,10 @@ pub struct Ipos {
     soft_limit: i8,
     /// 6061h as shown: it takes 6060h only in Operation enabled (§4.2.4).
     mode_shown: i8,
+    /// Profile velocity ran (enabled) at the last step (§10.1 remark 2).
+    in_pv: bool,
+    /// Since when the speed error has been beyond 60F8h \[ns\] (§10.2.8).
+    slipping_since: Option<u64>,
     /// Power-on work of the first step done.
     started: bool,
     /// Handles of the objects every step reads.
@@ -225,6 +229,51 @@ impl Ipos {
         }
         if od.bytes(r).first() != Some(&(self.mode_shown as u8)) {
             od.set_le(r, &[self.mode_shown as u8]);
+        }
+    }
+
+    /// §10.1 remark 2: "if the velocity is already set when entering
+    /// velocity mode, the motion will not start until a value (even if it
+    /// is the same) will be set again in Target Velocity 60FFh": on entry
+    /// the drive's target is 0 until the next 60FFh write.
+    fn enter_pv(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let view = cx.drive.view();
+        let pv = view.mode == 3 && view.state == State::OperationEnabled;
+        if pv && !self.in_pv {
+            let _ = cx.drive.on_write(od, 0x60FF, 0, &0i32.to_le_bytes());
+        }
+        self.in_pv = pv;
+    }
+
+    /// §10.2.8 / §10.2.9: the speed control error. With 60F8h > 0 (0, the
+    /// working default, is the set-up's "disabled"), a speed error
+    /// |606Bh − 606Ch| beyond 60F8h for longer than 2005h (time units)
+    /// sets statusword bit 13 "max slippage error" and faults with a
+    /// control error (8611h, 2000h bit 3), in pv and csv.
+    fn watch_slippage(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
+        let max = i64_at(od, refs.max_slippage).unwrap_or(0);
+        let view = cx.drive.view();
+        if max <= 0 || !matches!(view.mode, 3 | 9) || view.state != State::OperationEnabled {
+            self.slipping_since = None;
+            return;
+        }
+        let demand = i64_at(od, refs.velocity_demand).unwrap_or(0);
+        let actual = i64_at(od, refs.velocity_actual).unwrap_or(0);
+        if (demand - actual).abs() <= max {
+            self.slipping_since = None;
+            return;
+        }
+        let now = cx.now.as_nanos();
+        let since = *self.slipping_since.get_or_insert(now);
+        if let Some(r) = refs.statusword {
+            let sw = u32_at(od, Some(r)).unwrap_or(0) as u16 | 1 << 13;
+            od.set_le(r, &sw.to_le_bytes());
+        }
+        let limit_ms =
+            factor::time_iu(od, u32_at(od, refs.slippage_time).unwrap_or(0).into(), u64::from(u32::MAX));
+        if now.saturating_sub(since) > limit_ms * 1_000_000 {
+            self.slipping_since = None;
+            cx.drive.inject(drivebus_cia402::drive::Injection::Fault(0x8611));
         }
     }
 
@@ -653,6 +702,8 @@ impl Behaviour for Ipos {
             self.gear_update(cx, od, m);
         }
         self.show_mode(cx, od, refs);
+        self.enter_pv(cx, od);
+        self.watch_slippage(cx, od, refs);
         self.gear_step(cx, od, refs);
         self.watch(cx, od, refs);
         self.publish_status(cx, od, refs);

@@ -35,6 +35,9 @@ pub(super) struct Refs {
     pub(super) inputs: Option<EntryRef>,
     pub(super) brake: Option<EntryRef>,
     pub(super) aux_encoder: Option<EntryRef>,
+    pub(super) max_slippage: Option<EntryRef>,
+    pub(super) slippage_time: Option<EntryRef>,
+    pub(super) velocity_demand: Option<EntryRef>,
 }
 
 impl Refs {
@@ -64,6 +67,9 @@ impl Refs {
             inputs: f(0x60FD),
             brake: f(0x2102),
             aux_encoder: f(0x208D),
+            max_slippage: f(0x60F8),
+            slippage_time: f(0x2005),
+            velocity_demand: f(0x606B),
         }
     }
 
