@@ -235,3 +235,29 @@ fn max_slippage_and_time_out() {
     let mut r = blocked(0);
     assert_eq!(r.upload(0x603F, 0, 2), 0, "off with 60F8h = 0");
 }
+
+/// §7.2.14 / §7.2.15: on a modulo axis (607Bh = 0..1999, one revolution)
+/// 60F2h rado decides the way: 00 (default) as a linear axis (absolute
+/// 3000 from 0 is one and a half turns, Figure 7.2.2), 01 only negative,
+/// 10 only positive, 11 the shortest way; 6064h wraps in the range.
+#[test]
+fn positioning_option_code_on_a_modulo_axis() {
+    let turns = |rado: u16, target: i32| {
+        let mut r = enabled_in(1);
+        r.sdo(0x607B, 1, &0i32.to_le_bytes());
+        r.sdo(0x607B, 2, &1999i32.to_le_bytes());
+        r.sdo(0x60F2, 0, &rado.to_le_bytes());
+        let revs = r.motor_revs();
+        r.target_position_rpdo2(target);
+        start_and_wait(&mut r, 0x1F, 3000);
+        (r.motor_revs() - revs, r.upload(0x6064, 0, 4))
+    };
+    let (t, p) = turns(0x00, 3000);
+    assert!((t - 1.5).abs() < 0.01 && (p - 1000).abs() <= FEW_COUNTS, "rado 00: {t} turns to {p}");
+    let (t, _) = turns(0x40, 500);
+    assert!((t + 0.75).abs() < 0.01, "rado 01: negative only, {t} turns");
+    let (t, _) = turns(0x80, 1500);
+    assert!((t - 0.75).abs() < 0.01, "rado 10: positive only, {t} turns");
+    let (t, _) = turns(0xC0, 1500);
+    assert!((t + 0.25).abs() < 0.01, "rado 11: the shortest way, {t} turns");
+}

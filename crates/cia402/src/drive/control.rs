@@ -362,6 +362,7 @@ impl Drive {
                     halt_dec: self.halt_deceleration(),
                     soft_limits: self.params.software_limits,
                     range: self.params.position_range,
+                    rado: self.rado,
                     dt,
                 };
                 let (p, v, a) = self.pp.step(&pin, self.dem.pos, self.dem.vel);

@@ -170,6 +170,8 @@ pub struct Drive {
     interlock: bool,
     /// The limit-switch function is off (inputs still read in 60FDh).
     limit_switches_off: bool,
+    /// 60F2h rado: how pp reaches a target on a modulo axis.
+    rado: pp::Rado,
     /// NMT operational (for [`DriveView::operational`]).
     operational: bool,
     /// The active handler's warning (statusword bit 7).
@@ -258,6 +260,7 @@ impl Drive {
             events: StepEvents::default(),
             interlock: false,
             limit_switches_off: false,
+            rado: pp::Rado::Shortest,
             operational: false,
             mode_warning: false,
             mode_emcy: Vec::with_capacity(4),
@@ -422,6 +425,12 @@ impl Drive {
     /// found (Technosoft iPOS 210Bh bit 12). Applies from the next homing.
     pub fn set_homing_keeps_position(&mut self, on: bool) {
         self.params.homing_keeps_position = on;
+    }
+
+    /// How pp reaches a target on a modulo axis (60F2h bits 7–6, e.g. the
+    /// Technosoft iPOS's 60F2h); the shortest way until set.
+    pub fn set_positioning_option(&mut self, code: u16) {
+        self.rado = pp::Rado::from_option_code(code);
     }
 
     /// Sets position actual internal value (6063h) to `increments` where
