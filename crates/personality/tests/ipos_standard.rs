@@ -261,3 +261,61 @@ fn positioning_option_code_on_a_modulo_axis() {
     let (t, _) = turns(0xC0, 1500);
     assert!((t + 0.25).abs() < 0.01, "rado 11: the shortest way, {t} turns");
 }
+
+/// Over-voltage in pv at speed: the motor's speed 12 ms later, the state
+/// bits, and the EMCY codes sent.
+fn over_voltage_in_pv(setup: impl FnOnce(&mut Rig)) -> (f64, u16, Rig) {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Model;
+    let mut r = enabled_in(3);
+    setup(&mut r);
+    r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
+    r.run_ms(300);
+    r.emcy.clear();
+    r.bus.node_mut::<PersonalityDevice>(r.dut).unwrap().app.inject(Injection::Model(Model::BusOverVoltage));
+    r.run_ms(12);
+    let sw = r.upload(0x6041, 0, 2) as u16;
+    (r.motor_rpm(), sw, r)
+}
+
+/// §4.4.11: 605Eh = −1, "no action" for a non-fatal error (over-voltage):
+/// the motion goes on, EMCY 3210h and 2000h bit 12 signal it.
+#[test]
+fn fault_reaction_no_action() {
+    let (rpm, sw, mut r) = over_voltage_in_pv(|r| r.sdo(0x605E, 0, &(-1i16).to_le_bytes()));
+    assert_eq!(sw & 0x6F, 0x27, "still Operation enabled: {sw:04X}h");
+    assert!((rpm - 600.0).abs() < 10.0, "still running: {rpm} rpm");
+    assert_eq!(r.emcy.first().map(|f| f.data()[..2].to_vec()), Some(vec![0x10, 0x32]), "EMCY 3210h");
+    assert_ne!(r.upload(0x2000, 0, 2) & 1 << 12, 0, "2000h bit 12");
+}
+
+/// §4.4.13 / §4.4.14: a 2114h bit hands its error to the 2113h option,
+/// before 605Eh: over-voltage (bit 12, sub 12) with option 2 stops on the
+/// quick-stop ramp although 605Eh = 0 would let the motor coast.
+#[test]
+fn fault_override_option_codes() {
+    let (rpm, _, _) = over_voltage_in_pv(|r| {
+        r.sdo(0x605E, 0, &0i16.to_le_bytes());
+        r.sdo(0x2113, 0x0C, &2u16.to_le_bytes());
+        r.sdo(0x2114, 0, &0x9000u16.to_le_bytes());
+    });
+    assert!(rpm.abs() < 40.0, "quick-stop ramp by 2113h:0Ch: {rpm} rpm");
+    let (rpm, _, _) = over_voltage_in_pv(|r| r.sdo(0x605E, 0, &0i16.to_le_bytes()));
+    assert!(rpm > 300.0, "605Eh = 0 without the override: coasting, {rpm} rpm");
+}
+
+/// §4.4.11: 605Eh is for the non-fatal errors; an over-current (fatal)
+/// disables the drive at once even with 605Eh = 2.
+#[test]
+fn fatal_errors_disable_the_drive() {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Model;
+    let mut r = enabled_in(3);
+    r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
+    r.run_ms(300);
+    r.bus.node_mut::<PersonalityDevice>(r.dut).unwrap().app.inject(Injection::Model(Model::OverCurrent));
+    r.run_ms(12);
+    assert_eq!(r.upload(0x603F, 0, 2) as u16, 0x2310);
+    assert_eq!(r.upload(0x6041, 0, 2) & 0x4F, 0x08, "Fault at once");
+    assert!(r.motor_rpm() > 300.0, "coasting: {} rpm", r.motor_rpm());
+}

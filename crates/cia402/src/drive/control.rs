@@ -738,8 +738,39 @@ impl Drive {
         if let Some(c) = fault
             && !matches!(self.sm.state(), State::Fault | State::FaultReactionActive)
         {
-            let out = self.sm.fault(c);
-            self.after_transition(out);
+            match self.fault_action(c) {
+                Some(a) => self.take_fault(c, a),
+                None => {
+                    let out = self.sm.fault(c);
+                    self.after_transition(out);
+                }
+            }
+        } else if fault.is_none()
+            && let Some(c) = self.ignored_fault.take()
+        {
+            // The condition of a fault taken without action is gone.
+            self.raised.retain(|r| *r != c);
+            self.emcy.push(EmcyRequest::Clear(c));
+        }
+    }
+
+    /// A fault with a personality's action (`Drive::set_fault_action`).
+    pub(crate) fn take_fault(&mut self, c: u16, a: super::FaultAction) {
+        match a {
+            super::FaultAction::React(r) => {
+                let out = self.sm.fault_with(c, r);
+                self.after_transition(out);
+            }
+            super::FaultAction::NoAction => {
+                // Signalled once; the latch is cleared so that the fault
+                // comes back only while its condition lasts.
+                self.model.clear_faults();
+                self.ignored_fault = Some(c);
+                if c != code::GUARDING && !self.raised.contains(&c) {
+                    self.raised.push(c);
+                    self.emcy.push(EmcyRequest::Raise(c));
+                }
+            }
         }
     }
 

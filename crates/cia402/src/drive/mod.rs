@@ -75,6 +75,17 @@ pub enum Injection {
     ConnectionLost,
 }
 
+/// What the drive does on a fault of one code instead of 605Eh's (or
+/// 6007h's) reaction: a manufacturer's per-error option code (Technosoft
+/// iPOS 2113h/2114h, 605Eh −1 "no action" for its non-fatal errors).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultAction {
+    /// Signal it (EMCY while the condition lasts) and go on.
+    NoAction,
+    /// Fault with this reaction.
+    React(crate::state_machine::Reaction),
+}
+
 /// An EMCY the drive asks for (603Fh codes); [`Drive::flush_emcy`] turns
 /// them into the node's [`Request`]s at the end of every callback.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,6 +183,10 @@ pub struct Drive {
     limit_switches_off: bool,
     /// 60F2h rado: how pp reaches a target on a modulo axis.
     rado: pp::Rado,
+    /// Per-code fault actions ([`Drive::set_fault_action`]).
+    fault_actions: Vec<(u16, FaultAction)>,
+    /// A fault taken with [`FaultAction::NoAction`] whose condition lasts.
+    ignored_fault: Option<u16>,
     /// NMT operational (for [`DriveView::operational`]).
     operational: bool,
     /// The active handler's warning (statusword bit 7).
@@ -261,6 +276,8 @@ impl Drive {
             interlock: false,
             limit_switches_off: false,
             rado: pp::Rado::Shortest,
+            fault_actions: Vec::new(),
+            ignored_fault: None,
             operational: false,
             mode_warning: false,
             mode_emcy: Vec::with_capacity(4),
@@ -425,6 +442,27 @@ impl Drive {
     /// found (Technosoft iPOS 210Bh bit 12). Applies from the next homing.
     pub fn set_homing_keeps_position(&mut self, on: bool) {
         self.params.homing_keeps_position = on;
+    }
+
+    /// What a fault with `code` does from now on instead of 605Eh's (and,
+    /// for a lost connection with 6007h = 1, instead of its fault); `None`
+    /// goes back to 605Eh.
+    pub fn set_fault_action(&mut self, code: u16, action: Option<FaultAction>) {
+        self.fault_actions.retain(|(c, _)| *c != code);
+        if let Some(a) = action {
+            self.fault_actions.push((code, a));
+        }
+    }
+
+    /// The fault taken with [`FaultAction::NoAction`] whose condition still
+    /// lasts, if any.
+    pub fn ignored_fault(&self) -> Option<u16> {
+        self.ignored_fault
+    }
+
+    /// The action for a fault with `code`, if a personality set one.
+    pub(crate) fn fault_action(&self, code: u16) -> Option<FaultAction> {
+        self.fault_actions.iter().find(|(c, _)| *c == code).map(|(_, a)| *a)
     }
 
     /// How pp reaches a target on a modulo axis (60F2h bits 7–6, e.g. the
@@ -595,6 +633,12 @@ impl Drive {
     fn connection_lost(&mut self, code: u16) {
         // CiA 402-2 6007h: the reaction applies in Operation enabled.
         if self.sm.state() == crate::state_machine::State::OperationEnabled {
+            if self.sm.options().abort_connection() == 1
+                && let Some(a) = self.fault_action(code)
+            {
+                self.take_fault(code, a);
+                return;
+            }
             let out = self.sm.connection_lost(code);
             self.after_transition(out);
         }

@@ -460,7 +460,7 @@ impl Behaviour for Ipos {
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
             0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
             0x608E, 0x2076, 0x2080, 0x2081, 0x2090, 0x2065, 0x2066, 0x2067, 0x2069, 0x2019, 0x2006, 0x2077,
-            0x6040, 0x6060, 0x6066, 0x6068, 0x2070, 0x2071, 0x210B, 0x60FE, 0x60F2,
+            0x6040, 0x6060, 0x6066, 0x6068, 0x2070, 0x2071, 0x210B, 0x60FE, 0x60F2, 0x605E, 0x2113, 0x2114,
         ]
     }
 
@@ -482,6 +482,9 @@ impl Behaviour for Ipos {
             return Err(SdoAbort::LOCAL_CONTROL);
         }
         match (index, sub) {
+            // §4.4.11: −1 "no action" (for the non-fatal errors): stored;
+            // the fault actions (status.rs) carry it out.
+            (0x605E, 0) if le(data) as u16 as i16 == -1 => return Ok(Verdict::Store),
             (0x6066 | 0x6068, 0) if factor::time_factor(od) != (1, 1) => {
                 // §5.1.13: the time in time units; the drive takes ms.
                 let ms = factor::time_iu(od, le(data), u64::from(u16::MAX)) as u16;
@@ -630,6 +633,7 @@ impl Behaviour for Ipos {
             (i, _) if factor::OBJECTS.contains(&i) => self.sync_scaling(cx, od),
             (0x2070 | 0x2071, _) => Self::sync_times(cx, od),
             (0x210B | 0x60F2, 0) => Self::sync_asr2(cx, od),
+            (0x605E | 0x2113 | 0x2114, _) => Self::sync_fault_actions(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
             (0x60B8, 0) => cx.drive.set_limit_switches(od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 == 0),
@@ -671,6 +675,7 @@ impl Behaviour for Ipos {
                 Self::sync_torque_reference(cx, od);
                 Self::sync_times(cx, od);
                 Self::sync_asr2(cx, od);
+                Self::sync_fault_actions(cx, od);
                 self.sync_scaling(cx, od);
                 if self.gear.active {
                     Self::gear_target(cx, od, self.gear.reference);
@@ -690,6 +695,7 @@ impl Behaviour for Ipos {
             Self::sync_jerk(cx, od);
             self.sync_scaling(cx, od);
             Self::sync_asr2(cx, od);
+            Self::sync_fault_actions(cx, od);
             // §4.9.7: 208Ah bit 0 = 1, a save (2076h) may be started; a
             // save completes at once.
             if let Ok(r) = od.find(0x208A, 0) {

@@ -14,6 +14,8 @@ pub const AVAILABLE_OUTPUTS: u32 = 0x000F_0000;
 pub const EMCY_IO_NOT_AVAILABLE: u16 = 0xFF05;
 
 use super::*;
+use drivebus_cia402::drive::FaultAction;
+use drivebus_cia402::state_machine::Reaction;
 
 /// 2000h bits this module keeps (Table 4.4.2): 3 control error, 4
 /// communication error, 5 feedback error, 8 over-current, 10 motor
@@ -26,7 +28,12 @@ const FAULT_BITS: u16 = 1 << 3 | 1 << 4 | 1 << 5 | 1 << 8 | 1 << 10 | 1 << 12 | 
 /// protection is triggered, reset by a Reset Fault command" (Table 4.4.2).
 fn fault_bits(cx: &Context<'_>, error_code: u16) -> u16 {
     let f = cx.drive.model().faults();
-    let mut bits = u16::from(f.over_current) << 8
+    // A protection taken without action (605Eh −1, 2113h) shows while its
+    // condition lasts.
+    let ignored =
+        cx.drive.ignored_fault().and_then(|c| PROTECTIONS.iter().find(|p| p.0 == c)).map_or(0, |p| 1 << p.1);
+    let mut bits = ignored
+        | u16::from(f.over_current) << 8
         | u16::from(f.over_temperature) << 10
         | u16::from(f.over_voltage) << 12
         | u16::from(f.under_voltage) << 13
@@ -163,5 +170,51 @@ impl Ipos {
         od.set_le(r, &new.to_le_bytes());
         let take = if sub == 2 { Self::available_outputs(cx, new) } else { new };
         let _ = cx.drive.on_write(od, 0x60FE, sub, &take.to_le_bytes());
+    }
+}
+
+/// The drive's fault codes by the 2000h bit (and 2113h sub-index) of the
+/// protection they are (§4.4.2, §4.4.13, §4.4.14), and whether §4.4.11
+/// counts them as non-fatal (605Eh decides their reaction).
+const PROTECTIONS: [(u16, u16, u8, bool); 8] = [
+    // (code, 2000h bit, 2113h sub-index, non-fatal)
+    (0x8100, 0, 4, true),
+    (0x8130, 0, 4, true),
+    (0x8611, 3, 3, false),
+    (0x7305, 5, 0, false),
+    (0x2310, 8, 8, false),
+    (0x4310, 10, 10, true),
+    (0x3210, 12, 12, true),
+    (0x3220, 13, 13, true),
+];
+
+/// The action for a fault of a protection (§4.4.11, §4.4.13, §4.4.14):
+/// 2114h's bit set → 2113h's option (0 disable, 2 quick stop, −1 no action
+/// in bits 0–7; bit 15, a TML interrupt, is not emulated); else a
+/// non-fatal error follows 605Eh (−1 no action; 0 and 2 as the drive
+/// does them), a fatal one disables the drive.
+fn action(od: &ObjectDictionary, bit: u16, sub: u8, non_fatal: bool) -> Option<FaultAction> {
+    let overridden = od.get_u32(0x2114, 0).unwrap_or(0x8000) & 1 << bit != 0;
+    if overridden && sub != 0 {
+        match od.get_u32(0x2113, sub).unwrap_or(0) as u8 as i8 {
+            0 => return Some(FaultAction::React(Reaction::DisableDrive)),
+            2 => return Some(FaultAction::React(Reaction::QuickStopRamp)),
+            -1 => return Some(FaultAction::NoAction),
+            _ => {}
+        }
+    }
+    if !non_fatal {
+        return Some(FaultAction::React(Reaction::DisableDrive));
+    }
+    (od.get_i64(0x605E, 0) == Some(-1)).then_some(FaultAction::NoAction)
+}
+
+impl Ipos {
+    /// The fault actions of every protection the model raises, after
+    /// 605Eh, 2113h or 2114h changed (and at power-on / reload).
+    pub(super) fn sync_fault_actions(cx: &mut Context<'_>, od: &ObjectDictionary) {
+        for (code, bit, sub, non_fatal) in PROTECTIONS {
+            cx.drive.set_fault_action(code, action(od, bit, sub, non_fatal));
+        }
     }
 }
