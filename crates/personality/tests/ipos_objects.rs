@@ -599,3 +599,17 @@ fn output_lines_and_unavailable_outputs() {
     r.run_ms(2);
     assert_eq!(r.emcy.len(), 1, "OUT4 through 2090h: FF05h");
 }
+
+/// §4.5.7 / §4.5.8: 2046h and 2047h show the machine's analogue inputs 1
+/// (reference) and 2 (feedback), 0…65520 over 0…5 V.
+#[test]
+fn analogue_inputs() {
+    use drivebus_cia402::model::Injection;
+    let mut r = Rig::new();
+    inject(&mut r, Injection::AnalogInput { channel: 1, volts: 2.5 });
+    inject(&mut r, Injection::AnalogInput { channel: 2, volts: 7.0 });
+    assert_eq!(r.upload(0x2046, 0, 2), 32_760);
+    assert_eq!(r.upload(0x2047, 0, 2) as u16, 65_520, "beyond full scale");
+    inject(&mut r, Injection::AnalogInput { channel: 1, volts: -1.0 });
+    assert_eq!(r.upload(0x2046, 0, 2), 0);
+}

@@ -38,6 +38,8 @@ pub(super) struct Refs {
     pub(super) max_slippage: Option<EntryRef>,
     pub(super) slippage_time: Option<EntryRef>,
     pub(super) velocity_demand: Option<EntryRef>,
+    /// 2046h reference, 2047h feedback analogue inputs.
+    pub(super) analog: [Option<EntryRef>; 2],
 }
 
 impl Refs {
@@ -70,6 +72,7 @@ impl Refs {
             max_slippage: f(0x60F8),
             slippage_time: f(0x2005),
             velocity_demand: f(0x606B),
+            analog: [f(0x2046), f(0x2047)],
         }
     }
 

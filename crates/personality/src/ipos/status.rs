@@ -10,6 +10,11 @@
 /// available", §4.9.5).
 pub const AVAILABLE_OUTPUTS: u32 = 0x000F_0000;
 
+/// Full scale of the analogue inputs \[V\]: 0…65520 IU (§4.5.7, §4.5.8) is
+/// unipolar; the iPOS360x's span is not in the manual, 0…5 V is our
+/// reading (docs/personalities.md).
+pub const ANALOG_FULL_SCALE_V: f64 = 5.0;
+
 /// EMCY FF05h "specified digital I/O line not available" (§4.5.3).
 pub const EMCY_IO_NOT_AVAILABLE: u16 = 0xFF05;
 
@@ -107,6 +112,16 @@ impl Ipos {
             && od.bytes(r).first() != Some(&brake)
         {
             od.set_le(r, &[brake]);
+        }
+        // §4.5.7 / §4.5.8: the reference (machine channel 1) and feedback
+        // (channel 2) analogue inputs, 0…65520 over the input's span.
+        for (k, r) in refs.analog.into_iter().enumerate() {
+            let Some(r) = r else { continue };
+            let v = cx.drive.model().analog_input(k as u8 + 1) / ANALOG_FULL_SCALE_V * 65520.0;
+            let iu = v.round().clamp(0.0, 65520.0) as u16;
+            if u32_at(od, Some(r)) != Some(u32::from(iu)) {
+                od.set_le(r, &iu.to_le_bytes());
+            }
         }
         // §7.2.21: the auxiliary encoder = the second encoder input, where
         // the machine's master encoder is wired (§11.3).
