@@ -379,7 +379,9 @@ impl Behaviour for Ipos {
         }
         // §3.2.6: with 2112h ≠ 0 the TML program has priority: 6060h and
         // 6040h are not written (local control).
-        if matches!(index, 0x6040 | 0x6060) && od.get_u32(0x2112, 0).unwrap_or(0) != 0 {
+        // (A handle: the controlword comes with every cycle's process data.)
+        if matches!(index, 0x6040 | 0x6060) && u32_at(od, self.refs.fresh(od).tml_priority).unwrap_or(0) != 0
+        {
             return Err(SdoAbort::LOCAL_CONTROL);
         }
         if let Some(v) = self.object_write(cx, od, index, sub, le(data)) {

@@ -40,6 +40,7 @@ pub(super) struct Refs {
     pub(super) velocity_demand: Option<EntryRef>,
     /// 2046h reference, 2047h feedback analogue inputs.
     pub(super) analog: [Option<EntryRef>; 2],
+    pub(super) tml_priority: Option<EntryRef>,
 }
 
 impl Refs {
@@ -73,6 +74,7 @@ impl Refs {
             slippage_time: f(0x2005),
             velocity_demand: f(0x606B),
             analog: [f(0x2046), f(0x2047)],
+            tml_priority: f(0x2112),
         }
     }
 
