@@ -573,12 +573,14 @@ impl Behaviour for Ipos {
             self.second_taken = Some(m);
             self.gear_update(cx, od, m);
         }
-        self.show_mode(cx, od, refs);
-        self.enter_pv(cx, od);
-        self.watch_slippage(cx, od, refs);
+        // One snapshot for the rules below (the step is a hot path).
+        let view = cx.drive.view();
+        self.show_mode(cx, od, refs, view);
+        self.enter_pv(cx, od, view);
+        self.watch_slippage(cx, od, refs, view);
         self.gear_step(cx, od, refs);
         self.watch(cx, od, refs);
-        self.publish_status(cx, od, refs);
+        self.publish_status(cx, od, refs, view);
         // §7.1.2 / Table 4.4.2: a command error sets 2000h bit 14, and the
         // S-curve update refused 2002h bit 9, until the fault reset.
         let err = cx.drive.command_error().is_some();

@@ -19,7 +19,7 @@ pub const ANALOG_FULL_SCALE_V: f64 = 5.0;
 pub const EMCY_IO_NOT_AVAILABLE: u16 = 0xFF05;
 
 use super::*;
-use drivebus_cia402::drive::FaultAction;
+use drivebus_cia402::drive::{DriveView, FaultAction};
 use drivebus_cia402::state_machine::Reaction;
 
 /// 2000h bits this module keeps (Table 4.4.2): 3 control error, 4
@@ -31,7 +31,7 @@ const FAULT_BITS: u16 = 1 << 3 | 1 << 4 | 1 << 5 | 1 << 8 | 1 << 10 | 1 << 12 | 
 
 /// The 2000h fault bits of the drive's present faults: "set when the
 /// protection is triggered, reset by a Reset Fault command" (Table 4.4.2).
-fn fault_bits(cx: &Context<'_>, error_code: u16) -> u16 {
+fn fault_bits(cx: &Context<'_>, view: DriveView, error_code: u16) -> u16 {
     let f = cx.drive.model().faults();
     // A protection taken without action (605Eh −1, 2113h) shows while its
     // condition lasts.
@@ -43,7 +43,7 @@ fn fault_bits(cx: &Context<'_>, error_code: u16) -> u16 {
         | u16::from(f.over_voltage) << 12
         | u16::from(f.under_voltage) << 13
         | u16::from(f.encoder) << 5;
-    if matches!(cx.drive.view().state, State::Fault | State::FaultReactionActive) {
+    if matches!(view.state, State::Fault | State::FaultReactionActive) {
         bits |= match error_code {
             // Control error: the following error fault (Table 3.1.3 8611h).
             0x8611 => 1 << 3,
@@ -57,11 +57,17 @@ fn fault_bits(cx: &Context<'_>, error_code: u16) -> u16 {
 
 impl Ipos {
     /// Per step: 2000h fault bits, 2045h, 208Fh.
-    pub(super) fn publish_status(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
+    pub(super) fn publish_status(
+        &mut self,
+        cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        refs: Refs,
+        view: DriveView,
+    ) {
         if let Some(r) = refs.motion_errors {
             let code = u32_at(od, refs.error_code).unwrap_or(0) as u16;
             let mer = u32_at(od, Some(r)).unwrap_or(0) as u16;
-            let n = (mer & !FAULT_BITS) | fault_bits(cx, code);
+            let n = (mer & !FAULT_BITS) | fault_bits(cx, view, code);
             if n != mer {
                 od.set_le(r, &n.to_le_bytes());
             }
@@ -98,7 +104,7 @@ impl Ipos {
         // switches, home, interlock), sub 2 IN0..IN7 (60FDh bits 16-23).
         // §4.5.1: the device profile inputs are mapped on the manufacturer
         // inputs as well: the home switch is IN0 (§6.1).
-        let di = cx.drive.view().digital_inputs;
+        let di = view.digital_inputs;
         let di = di | (di >> 2 & 1) << 16;
         if let Some(r) = refs.inputs
             && u32_at(od, Some(r)) != Some(di)

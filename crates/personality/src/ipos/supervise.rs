@@ -5,6 +5,7 @@
 //! (the factor group, the times, the homing and positioning options).
 
 use super::*;
+use drivebus_cia402::drive::DriveView;
 
 impl Ipos {
     /// The writes §3–§18 give an effect of the iPOS's own; `None` for the
@@ -66,9 +67,15 @@ impl Ipos {
     /// §4.2.4: "if the drive is in an inferior state than Operation enabled
     /// and 6060h is changed, 6061h will take the value of 6060h only after
     /// the drive reached Operation enabled".
-    pub(super) fn show_mode(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
+    pub(super) fn show_mode(
+        &mut self,
+        cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        refs: Refs,
+        view: DriveView,
+    ) {
         let Some(r) = refs.mode_display else { return };
-        if cx.drive.view().state == State::OperationEnabled {
+        if view.state == State::OperationEnabled {
             self.mode_shown = cx.drive.manufacturer_mode().unwrap_or(cx.drive.mode());
         }
         if od.bytes(r).first() != Some(&(self.mode_shown as u8)) {
@@ -80,8 +87,7 @@ impl Ipos {
     /// velocity mode, the motion will not start until a value (even if it
     /// is the same) will be set again in Target Velocity 60FFh": on entry
     /// the drive's target is 0 until the next 60FFh write.
-    pub(super) fn enter_pv(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        let view = cx.drive.view();
+    pub(super) fn enter_pv(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, view: DriveView) {
         let pv = view.mode == 3 && view.state == State::OperationEnabled;
         if pv && !self.in_pv {
             let _ = cx.drive.on_write(od, 0x60FF, 0, &0i32.to_le_bytes());
@@ -94,9 +100,14 @@ impl Ipos {
     /// |606Bh − 606Ch| beyond 60F8h for longer than 2005h (time units)
     /// sets statusword bit 13 "max slippage error" and faults with a
     /// control error (8611h, 2000h bit 3), in pv and csv.
-    pub(super) fn watch_slippage(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, refs: Refs) {
+    pub(super) fn watch_slippage(
+        &mut self,
+        cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        refs: Refs,
+        view: DriveView,
+    ) {
         let max = i64_at(od, refs.max_slippage).unwrap_or(0);
-        let view = cx.drive.view();
         if max <= 0 || !matches!(view.mode, 3 | 9) || view.state != State::OperationEnabled {
             self.slipping_since = None;
             return;
