@@ -613,3 +613,38 @@ fn analogue_inputs() {
     inject(&mut r, Injection::AnalogInput { channel: 1, volts: -1.0 });
     assert_eq!(r.upload(0x2046, 0, 2), 0);
 }
+
+/// §11.1 / §11.1.1: gearing started with controlword bit 5 couples with
+/// the acceleration limited to 6083h: the slave's speed ramps to the
+/// master's (15 increments per 1.5 ms cycle: 10000 increments/s) instead of
+/// jumping to it.
+#[test]
+fn gearing_couples_with_limited_acceleration() {
+    let moved = |cw: u16| {
+        let mut r = Rig::new();
+        map_examples_rpdos(&mut r);
+        r.sdo(0x201D, 0, &1u16.to_le_bytes());
+        r.sdo(0x2012, 0, &0x8000_0001u32.to_le_bytes());
+        // 1/16 IU = 62500 increments/s²: 10000 increments/s after 160 ms.
+        r.sdo(0x6083, 0, &0x1000u32.to_le_bytes());
+        r.start_remote_node();
+        r.modes_of_operation(-1);
+        r.enable();
+        master_to(&mut r, 0, 0);
+        r.controlword(cw);
+        let p0 = r.upload(0x6062, 0, 4);
+        let mut m = 0i32;
+        for _ in 0..100 {
+            m += 15;
+            r.sdo(0x201E, 0, &m.to_le_bytes());
+            r.send(Frame::new(0x080, &[]));
+            r.run_us(500);
+        }
+        r.upload(0x6062, 0, 4) - p0
+    };
+    let free = moved(0x1F);
+    let limited = moved(0x3F);
+    assert!((free - 1500).abs() <= 45, "without bit 5 the slave follows at once: {free}");
+    // ½ · 62500 · 0.15² = 703 increments in the first 150 ms.
+    assert!((limited - 703).abs() <= 60, "with bit 5 it ramps: {limited}");
+}

@@ -22,6 +22,10 @@ pub(super) struct Gear {
     pub(super) mode: i8,
     /// When the master position was last taken \[ns\].
     pub(super) updated_ns: u64,
+    /// Coupling with the acceleration limited (controlword bit 5 at the
+    /// start, §11.1): the slave's reference speed \[increments/s\] ramps to
+    /// the master's × ratio at 6083h; `None` once coupled or unlimited.
+    coupling: Option<f64>,
 }
 
 impl Default for Gear {
@@ -35,6 +39,7 @@ impl Default for Gear {
             active: false,
             mode: -1,
             updated_ns: 0,
+            coupling: None,
         }
     }
 }
@@ -78,10 +83,36 @@ impl Ipos {
                 let Some(r) = self.cam_update(od, d, dt) else { return };
                 self.gear.reference = r;
             } else {
-                self.gear.reference += d as f64 * self.gear.ratio;
+                self.gear.reference += self.gear_increment(cx, od, d as f64 * self.gear.ratio, dt);
             }
             Self::gear_target(cx, od, self.gear.reference);
         }
+    }
+
+    /// The slave reference increment for a master increment × ratio of
+    /// `want`: `want` once coupled; while coupling with the acceleration
+    /// limited (§11.1: "smooth the slave coupling with the master, by
+    /// limiting the maximum acceleration of the slave drive … Controlword.5
+    /// = 1 and the maximum acceleration value in 6083h"), the reference
+    /// speed ramps to the master's at 6083h and the slave is coupled when
+    /// it gets there (the distance lost while ramping stays lost: the
+    /// slave's move is relative, §11.1).
+    fn gear_increment(&mut self, cx: &mut Context<'_>, od: &ObjectDictionary, want: f64, dt: f64) -> f64 {
+        let Some(v) = self.gear.coupling else { return want };
+        if dt <= 0.0 {
+            return 0.0;
+        }
+        let u = cx.drive.units();
+        let acc = u.pos_to_inc_f(u.acc_to_pos(f64::from(od.get_u32(0x6083, 0).unwrap_or(0)))).abs();
+        let target = want / dt;
+        let step = acc * dt;
+        if (target - v).abs() <= step {
+            self.gear.coupling = None;
+            return want;
+        }
+        let v = v + (target - v).clamp(-step, step);
+        self.gear.coupling = Some(v);
+        v * dt
     }
 
     /// The slave reference \[increments\] as 607Ah of the csp stand-in, in
@@ -116,6 +147,10 @@ impl Ipos {
             // "The slave executes a relative move, which starts from its
             // actual position" (§11.1): from the reference it holds.
             self.gear.engaged = true;
+            // §11.1.1: bit 5 limits the acceleration while coupling.
+            self.gear.coupling = (mode == -1 && view.controlword & 0x20 != 0).then_some(0.0);
+            // The master's speed is measured from here on.
+            self.gear.updated_ns = cx.now.as_nanos();
             if mode == -2 {
                 self.cam_engage(od, view.controlword);
             }
