@@ -136,10 +136,11 @@ pub enum Request {
     /// its node-ID (see [`crate::Node::nmt_command`]).
     Nmt(NmtCommand),
     /// Save every parameter group as a 1010h:01 "save all parameters"
-    /// write does (a manufacturer's own save object, e.g. Technosoft iPOS
-    /// 2076h); the stored values come back at the next power-on or reset.
-    /// A storage failure leaves the previous images (the request has no
-    /// answer to carry an abort).
+    /// write does (a manufacturer's own save command, e.g. Kollmorgen
+    /// DRV.NVSAVE, Technosoft iPOS 2076h, whether or not the device has
+    /// 1010h); the stored values come back at the next power-on or reset.
+    /// A store that fails leaves the previous images and is not reported
+    /// (the application's object has no abort left to give).
     StoreParameters,
     /// Put this raw value back into a sub-object after the current call,
     /// and re-read the PDO configuration (used to lift a restriction for

@@ -94,7 +94,7 @@ impl Node {
 
     /// An error with a device-defined register: 1001h is the OR of these
     /// errors' bits, 1003h gets `code | byte 0 << 16`, the EMCY is sent raw.
-    fn raise_defined(&mut self, code: u16, bits: u8, bytes: [u8; 5], now: Instant) {
+    pub(crate) fn raise_defined(&mut self, code: u16, bits: u8, bytes: [u8; 5], now: Instant) {
         if self.app_errors.iter().any(|(c, _)| *c == code) {
             return;
         }
@@ -112,7 +112,7 @@ impl Node {
 
     /// Clears an error raised by [`Self::raise_defined`]; the error-reset
     /// EMCY carries the bits of the errors still active.
-    fn clear_defined(&mut self, code: u16, now: Instant) -> bool {
+    pub(crate) fn clear_defined(&mut self, code: u16, now: Instant) -> bool {
         let before = self.app_errors.len();
         self.app_errors.retain(|(c, _)| *c != code);
         if self.app_errors.len() == before {
