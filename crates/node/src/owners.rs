@@ -118,9 +118,9 @@ pub(crate) struct Services {
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
     /// What the EDS served at 1021h says besides the dictionary: LSS
-    /// slave or not, and the device's own `[DeviceInfo]`.
+    /// slave or not, and the device's own `[DeviceInfo]` and `[FileInfo]`.
     #[cfg(feature = "std")]
-    pub eds_info: (bool, Option<drivebus_eds::DeviceInfo>),
+    pub eds_info: crate::eds_object::Given,
 }
 
 /// The node's side of an application callback, borrowed apart from the
@@ -276,14 +276,8 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
             tag::EMCY => self.s.emcy.check_read(at.index, at.sub),
             #[cfg(feature = "std")]
             tag::EDS => {
-                let (lss, info) = &self.s.eds_info;
-                let text = crate::eds_object::generate(
-                    od,
-                    self.s.nmt.node_id(),
-                    self.s.pdo.config(),
-                    *lss,
-                    info.as_ref(),
-                );
+                let text =
+                    crate::eds_object::generate(od, self.s.nmt.node_id(), self.s.pdo.config(), &self.s.eds_info);
                 od.set_raw(at.r, text.as_bytes());
                 Ok(())
             }
