@@ -276,8 +276,12 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
             tag::EMCY => self.s.emcy.check_read(at.index, at.sub),
             #[cfg(feature = "std")]
             tag::EDS => {
-                let text =
-                    crate::eds_object::generate(od, self.s.nmt.node_id(), self.s.pdo.config(), &self.s.eds_info);
+                let text = crate::eds_object::generate(
+                    od,
+                    self.s.nmt.node_id(),
+                    self.s.pdo.config(),
+                    &self.s.eds_info,
+                );
                 od.set_raw(at.r, text.as_bytes());
                 Ok(())
             }
