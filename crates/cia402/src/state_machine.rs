@@ -474,13 +474,19 @@ impl StateMachine {
     /// With 605Eh = 0, or if the drive function was not enabled, there is
     /// nothing to stop and transition 14 follows at once.
     pub fn fault(&mut self, code: u16) -> Outcome {
+        self.fault_with(code, self.options.fault_reaction_reaction())
+    }
+
+    /// [`StateMachine::fault`] with the reaction `r` in place of 605Eh's: a
+    /// device whose error classes decide the reaction per error (LAM DDS6
+    /// §5: class 4 quick stop, class 6 disable).
+    pub fn fault_with(&mut self, code: u16, r: Reaction) -> Outcome {
         let prev = self.begin();
         if !matches!(self.state, State::FaultReactionActive | State::Fault) {
             self.fault_code = code;
             let powered = !matches!(self.function, DriveFunction::Disabled);
             self.pending = None;
             self.go(13, State::FaultReactionActive);
-            let r = self.options.fault_reaction_reaction();
             if powered && r != Reaction::DisableDrive {
                 self.function = DriveFunction::Stopping(r);
             } else {
@@ -488,6 +494,16 @@ impl StateMachine {
                 self.go(14, State::Fault);
             }
         }
+        self.finish(prev)
+    }
+
+    /// A quick stop the device decides itself (an error whose class stops
+    /// the motor without a fault, LAM DDS6 §5 class 2): the controlword's
+    /// Quick stop command (transition 11 from Operation enabled, then per
+    /// 605Ah).
+    pub fn quick_stop(&mut self) -> Outcome {
+        let prev = self.begin();
+        self.apply(Command::QuickStop);
         self.finish(prev)
     }
 

@@ -77,6 +77,20 @@ impl Drive {
                 self.emcy.push(EmcyRequest::Raise(c));
             }
         }
+        if out.took(4) || out.took(16) {
+            // Enabled again: the errors that only stopped the motor
+            // (ErrorReaction::QuickStop) are over; a new stop reports anew.
+            let reactions = &self.reactions;
+            let stopped = |c: &u16| reactions.iter().any(|&(r, e)| r == *c && e == super::ErrorReaction::QuickStop);
+            let emcy = &mut self.emcy;
+            self.raised.retain(|c| {
+                let keep = !stopped(c);
+                if !keep {
+                    emcy.push(EmcyRequest::Clear(*c));
+                }
+                keep
+            });
+        }
         if self.sm.drive_function() != DriveFunction::Enabled {
             // Target reached / acknowledge belong to the running mode.
             self.status_bits &= !(1 << 10 | 1 << 12);
@@ -103,6 +117,7 @@ impl Drive {
         self.sup.force_following_error = false;
         self.sup.pending_fault = None;
         self.sup.sync_lost = false;
+        self.error_warning = false;
         for c in self.raised.drain(..) {
             self.emcy.push(EmcyRequest::Clear(c));
         }
@@ -707,9 +722,38 @@ impl Drive {
         if let Some(c) = fault
             && !matches!(self.sm.state(), State::Fault | State::FaultReactionActive)
         {
-            let out = self.sm.fault(c);
-            self.after_transition(out);
+            self.raise_error(c);
         }
+    }
+
+    /// Error `c` was detected: a fault per 605Eh, or the reaction
+    /// [`Drive::set_error_reaction`] set for it.
+    fn raise_error(&mut self, c: u16) {
+        use super::ErrorReaction as R;
+        let reaction = self.reactions.iter().find(|(code, _)| *code == c).map(|&(_, r)| r);
+        let out = match reaction {
+            None => self.sm.fault(c),
+            Some(R::Fault(r)) => self.sm.fault_with(c, r),
+            Some(R::Warning | R::QuickStop) => {
+                let stops = reaction == Some(R::QuickStop) && self.sm.state() == State::OperationEnabled;
+                // Each stop it causes is reported; a condition that stays
+                // is reported once (until a fault reset).
+                if stops || !self.raised.contains(&c) {
+                    if !self.raised.contains(&c) {
+                        self.raised.push(c);
+                    }
+                    self.emcy.push(EmcyRequest::Raise(c));
+                }
+                self.error_warning |= reaction == Some(R::Warning);
+                if !stops {
+                    return;
+                }
+                self.sup.fe_timer = 0.0;
+                self.sup.force_following_error = false;
+                self.sm.quick_stop()
+            }
+        };
+        self.after_transition(out);
     }
 
     /// Limit switch reached moving towards it: stop on the quick-stop ramp.
@@ -743,7 +787,8 @@ impl Drive {
     /// The statusword as the drive computes it.
     pub(crate) fn base_statusword(&self) -> u16 {
         let mut sw = self.sm.statusword();
-        sw |= u16::from(self.warning || self.mode_warning || self.command_error.is_some()) << 7;
+        let warned = self.warning || self.mode_warning || self.error_warning;
+        sw |= u16::from(warned || self.command_error.is_some()) << 7;
         sw |= u16::from(self.cfg.remote) << 9;
         if matches!(self.sm.state(), State::OperationEnabled | State::QuickStopActive) {
             sw |= self.status_bits & 0x3C00;

@@ -73,6 +73,23 @@ pub enum Injection {
     ConnectionLost,
 }
 
+/// How the drive reacts to one error code in place of the fault reaction
+/// option 605Eh: a device's own error classes (LAM DDS6 §5: class 0
+/// warning, 2 quick stop, 4 quick stop then fault, 6/8 disable and fault),
+/// set with [`Drive::set_error_reaction`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorReaction {
+    /// EMCY and statusword bit 7 (warning) until a fault reset; the
+    /// motion goes on.
+    Warning,
+    /// EMCY and a quick stop from Operation enabled (605Ah decides where
+    /// it ends), no fault; the error is over when Operation enabled is
+    /// entered again (or at a fault reset).
+    QuickStop,
+    /// Fault (603Fh, EMCY), the drive function stopped by this reaction.
+    Fault(crate::state_machine::Reaction),
+}
+
 /// An EMCY the drive asks for (603Fh codes); [`Drive::flush_emcy`] turns
 /// them into the node's [`Request`]s at the end of every callback.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -180,6 +197,11 @@ pub struct Drive {
     /// [`DriveConfig::scurve_forbids_change_immediately`]: its EMCY code,
     /// latched (statusword bit 7) until a fault reset.
     command_error: Option<u16>,
+    /// Per-code reactions in place of 605Eh ([`Drive::set_error_reaction`]).
+    reactions: Vec<(u16, ErrorReaction)>,
+    /// An error with [`ErrorReaction::Warning`] was raised (statusword bit
+    /// 7 until a fault reset).
+    error_warning: bool,
 }
 
 impl Drive {
@@ -257,6 +279,8 @@ impl Drive {
             mode_emcy: Vec::with_capacity(4),
             jerk: cfg.profile_jerk,
             command_error: None,
+            reactions: Vec::new(),
+            error_warning: false,
             cfg,
         };
         d.reload(node.od_mut());
@@ -368,6 +392,17 @@ impl Drive {
             Injection::FollowingError => self.sup.force_following_error = true,
             Injection::Fault(code) => self.sup.pending_fault = Some(code),
             Injection::ConnectionLost => self.connection_lost(0x8130),
+        }
+    }
+
+    /// Makes the drive react to error `code` (a fault the model, the
+    /// supervision or [`Injection::Fault`] raises) as `reaction` says
+    /// instead of by 605Eh; `None` restores 605Eh. Looked up only when an
+    /// error is raised.
+    pub fn set_error_reaction(&mut self, code: u16, reaction: Option<ErrorReaction>) {
+        self.reactions.retain(|(c, _)| *c != code);
+        if let Some(r) = reaction {
+            self.reactions.push((code, r));
         }
     }
 

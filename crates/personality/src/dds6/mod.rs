@@ -31,8 +31,11 @@
 //! The §4.4 traces replay against this behaviour in
 //! `tests/replay_dds6.rs` / `tests/replay_dds6_ip.rs`.
 
+pub mod classes;
 mod emcy;
 mod facts;
+pub mod io;
+pub mod sync_guard;
 
 pub use facts::INFO;
 
@@ -288,6 +291,47 @@ pub struct Dds6 {
     just_enabled: bool,
     torque_target: i64,
     torque_demand: i64,
+    /// 2480h:01, the class of 8611h.
+    following_error_class: u8,
+    /// 3080h:02, the class of 82B2h.
+    sync_class: u8,
+    /// A class 8 error is in force: fault reset refused until power-on.
+    power_cycle: bool,
+    /// 3230h:01 bits of the outputs configured as General Purpose.
+    general_outputs: u16,
+    /// The limit switches (60FDh bits 0/1) at the last step.
+    limits: u32,
+    /// A movement towards an active limit switch was reported.
+    toward_limit: bool,
+    /// 3080h.
+    guard: sync_guard::SyncGuard,
+    refs: Option<Refs>,
+}
+
+/// Handles of the manufacturer values published every step, resolved once
+/// (again when objects were inserted).
+#[derive(Debug, Clone, Copy)]
+struct Refs {
+    objects: usize,
+    inputs: Option<drivebus_od::EntryRef>,
+    outputs: Option<drivebus_od::EntryRef>,
+}
+
+impl Refs {
+    fn get(refs: &mut Option<Refs>, od: &ObjectDictionary) -> Refs {
+        match *refs {
+            Some(r) if r.objects == od.objects().len() => r,
+            _ => {
+                let r = Refs {
+                    objects: od.objects().len(),
+                    inputs: od.find(0x3210, 1).ok(),
+                    outputs: od.find(0x3230, 1).ok(),
+                };
+                *refs = Some(r);
+                r
+            }
+        }
+    }
 }
 
 /// The closed-loop enable with its "encoder timing" (rotor alignment,
@@ -416,6 +460,91 @@ impl Dds6 {
         Dds6 { axis: Some(axis), ..Self::default() }
     }
 
+    /// The output sources 2830h–2832h:01.
+    fn output_sources(od: &ObjectDictionary) -> [u16; 3] {
+        [0u16, 1, 2].map(|n| od.get_u32(0x2830 + n, 1).unwrap_or(0) as u16)
+    }
+
+    /// Takes the class and Sync Guard settings from the dictionary (boot,
+    /// values restored) and tells the drive the reactions.
+    fn load_settings(&mut self, cx: &mut Context<'_>, od: &ObjectDictionary) {
+        self.following_error_class = od.get_u32(0x2480, 1).unwrap_or(6) as u8;
+        self.sync_class = od.get_u32(0x3080, 2).unwrap_or(2) as u8;
+        classes::install(cx.drive, self.following_error_class, self.sync_class);
+        let g = &mut self.guard;
+        g.expected_us = od.get_u32(0x3080, 4).unwrap_or(1000);
+        g.jitter_us = od.get_u32(0x3080, 5).unwrap_or(200) as u16;
+        g.threshold = od.get_u32(0x3080, 6).unwrap_or(15) as u8;
+        g.write_options(od.get_u32(0x3080, 1).unwrap_or(0) as u8);
+    }
+
+    /// 3080h:03/07/08 as the guard counts.
+    fn publish_guard(&self, od: &mut ObjectDictionary) {
+        let g = &self.guard;
+        for (sub, v) in [(3u8, g.count), (7, u32::from(g.peak)), (8, u32::from(g.out_of_sync))] {
+            if let Ok(r) = od.find(0x3080, sub) {
+                let b = v.to_le_bytes();
+                let n = if sub == 3 { 4 } else { 1 };
+                od.set_le(r, &b[..n]);
+            }
+        }
+    }
+
+    /// Limit switches (§5 8612h, class 2): one becoming active while the
+    /// motor is enabled (0801h positive, 0802h negative), or a movement
+    /// towards an active one (0803h / 0804h). Homing searches them.
+    fn supervise_limits(&mut self, cx: &mut Context<'_>, od: &ObjectDictionary) {
+        let switches = cx.drive.view().digital_inputs & 3;
+        let rising = switches & !self.limits;
+        self.limits = switches;
+        let state = cx.drive.state_machine().state();
+        let mode = cx.drive.mode();
+        if state != State::OperationEnabled || mode == 6 {
+            self.toward_limit = false;
+            return;
+        }
+        // pv: the target velocity (the drive holds a blocked target at 0);
+        // otherwise the demand.
+        let direction = if mode == 3 {
+            od.get_i64(0x60FF, 0).unwrap_or(0).signum()
+        } else {
+            let v = cx.drive.demand_velocity();
+            if v > 0.0 { 1 } else if v < 0.0 { -1 } else { 0 }
+        };
+        let toward = (switches & 2 != 0 && direction > 0) || (switches & 1 != 0 && direction < 0);
+        let sub = if rising & 2 != 0 {
+            Some(0x0801)
+        } else if rising & 1 != 0 {
+            Some(0x0802)
+        } else if toward && !self.toward_limit {
+            Some(if direction > 0 { 0x0803 } else { 0x0804 })
+        } else {
+            None
+        };
+        self.toward_limit = toward;
+        if let Some(sub) = sub {
+            self.last_sub = sub;
+            cx.drive.inject(Injection::Fault(classes::EMCY_LIMIT_SWITCH));
+        }
+    }
+
+    /// 3210h:01 and 3230h:01 from the machine's switches and the output
+    /// sources.
+    fn publish_io(&mut self, cx: &Context<'_>, od: &mut ObjectDictionary) {
+        let refs = Refs::get(&mut self.refs, od);
+        let di = io::inputs(cx.drive.view().digital_inputs, 0);
+        let sw = od.get_u32(0x6041, 0).unwrap_or(0) as u16;
+        let v = cx.drive.demand_velocity();
+        let signals = io::Signals { statusword: sw, brake: false, positive: v > 0.0, negative: v < 0.0 };
+        let out = io::outputs(Self::output_sources(od), self.general_outputs, &signals);
+        if let Some(r) = refs.inputs {
+            od.set_le(r, &di.to_le_bytes());
+        }
+        if let Some(r) = refs.outputs {
+            od.set_le(r, &out.to_le_bytes());
+        }
+    }
+
     fn motor_enabled(sw: u16) -> bool {
         // Operation enabled or Quick stop active (§3.1: "motor enabled").
         sw & 0x6F == 0x27 || sw & 0x6F == 0x07
@@ -475,6 +604,13 @@ impl Behaviour for Dds6 {
         p.velocity_threshold = 60;
         p.velocity_threshold_time = 0;
         cfg.remote = true;
+        // §5 class 2 "stop of the motor but not the transition to FAULT",
+        // class 4 adds "successive motor disabling": a class-2 stop keeps
+        // the motor enabled in Quick stop active (605Ah 6; §6.5.3 bit 5
+        // "quick stop active/concluded"). A life guard / heartbeat loss
+        // (8130h) is class 2: a quick stop (6007h 3).
+        let _ = cfg.options.set_quick_stop(6);
+        let _ = cfg.options.set_abort_connection(3);
         // §4.4.1/§4.4.2 traces: 0637h with the position still 9–10 units
         // short of the target (6067h = 10), the next set-point of a set
         // taken there; pv 0637h at 208 of 300 (606Dh = 100) while ramping.
@@ -497,7 +633,25 @@ impl Behaviour for Dds6 {
         }
     }
 
-    fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, _sub: u8) {
+    fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        match (index, sub) {
+            (0x2480, 1) => {
+                self.following_error_class = od.get_u32(0x2480, 1).unwrap_or(6) as u8;
+                let r = classes::reaction(self.following_error_class);
+                cx.drive.set_error_reaction(classes::EMCY_FOLLOWING_ERROR, r);
+            }
+            (0x3080, 2) => {
+                self.sync_class = od.get_u32(0x3080, 2).unwrap_or(2) as u8;
+                cx.drive.set_error_reaction(classes::EMCY_SYNC_BREACH, classes::reaction(self.sync_class));
+            }
+            (0x3080, 1) => {
+                self.guard.write_options(od.get_u32(0x3080, 1).unwrap_or(0) as u8);
+                self.publish_guard(od);
+            }
+            (0x3080, 4..=6) => self.load_settings(cx, od),
+            (0x3230, 2) => self.publish_io(cx, od),
+            _ => {}
+        }
         if (0x1A00..=0x1A03).contains(&index) {
             let mask = statusword_mask(od, index);
             cx.request(Request::TpdoChangeMask { tpdo: index - 0x1A00, mask: Some(mask) });
@@ -505,7 +659,9 @@ impl Behaviour for Dds6 {
     }
 
     fn hooked_objects(&self) -> &'static [u16] {
-        &[0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03]
+        &[
+            0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230,
+        ]
     }
 
     fn filter_rx(&mut self, od: &ObjectDictionary, node_id: u8, frame: &Frame) -> FilterOutcome {
@@ -535,9 +691,38 @@ impl Behaviour for Dds6 {
         sub: u8,
         data: &[u8],
     ) -> Result<Verdict, SdoAbort> {
+        let value = drivebus_od::le_u64(data) as u32;
+        match (index, sub) {
+            (0x2480, 1) if !classes::following_error_class_valid(value as u8) => {
+                return Err(SdoAbort::INVALID_VALUE);
+            }
+            (0x3080, 2) if !classes::sync_class_valid(value as u8) => return Err(SdoAbort::INVALID_VALUE),
+            (0x3080, _) => match self.guard.check(sub, value) {
+                Err(sync_guard::Refusal::MonitoringEnabled) => return Err(SdoAbort(STORE_REFUSED)),
+                Err(sync_guard::Refusal::JitterTooLarge) => return Err(SdoAbort::INVALID_VALUE),
+                Ok(()) => {}
+            },
+            (0x3230, 1) => {
+                // §6.4.15: only the General Purpose outputs take the bits.
+                let sources = Self::output_sources(od);
+                self.general_outputs = io::write_outputs(sources, self.general_outputs, value as u16);
+                self.publish_io(cx, od);
+                return Ok(Verdict::Handled);
+            }
+            (0x3230, 2) => {
+                let sources = Self::output_sources(od);
+                self.general_outputs = io::set_output(sources, self.general_outputs, value as u8);
+            }
+            _ => {}
+        }
         if index == 0x6040 {
-            let cw =
+            let mut cw =
                 u16::from_le_bytes([data.first().copied().unwrap_or(0), data.get(1).copied().unwrap_or(0)]);
+            if self.power_cycle {
+                // §5 class 8: "can be reset only through a cycle of turning
+                // off and on".
+                cw &= !0x80;
+            }
             let state = cx.drive.state_machine().state();
             let mut to_drive = cw;
             self.enable_at = None;
@@ -579,8 +764,28 @@ impl Behaviour for Dds6 {
         Ok(Verdict::Pass)
     }
 
+    fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        self.load_settings(cx, od);
+    }
+
+    fn on_sync(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        if self.guard.on_sync(cx.now) {
+            cx.drive.inject(Injection::Fault(classes::EMCY_SYNC_BREACH));
+        }
+        self.publish_guard(od);
+    }
+
     fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
-        if let NodeEvent::NmtState { to, .. } = *event {
+        if let NodeEvent::ResetApplication = *event {
+            // A restart of the drive (§4.2: like power-on).
+            self.power_cycle = false;
+            self.general_outputs = 0;
+        }
+        if let NodeEvent::NmtState { from, to } = *event {
+            if from.is_initialisation() {
+                // Restored / stored values are in the dictionary now.
+                self.load_settings(cx, od);
+            }
             self.nmt_operational = to == NmtState::Operational;
             // The drive reloads its parameters at boot: homing takes 6083h.
             if let Some(acc) = od.get_u32(0x6083, 0) {
@@ -594,6 +799,11 @@ impl Behaviour for Dds6 {
             self.last_sub = sub;
             cx.drive.inject(Injection::Fault(EMCY_NMT_WHILE_ENABLED));
         }
+        if matches!(cx.drive.state_machine().state(), State::Fault | State::FaultReactionActive) {
+            let code = cx.drive.state_machine().fault_code();
+            self.power_cycle |= classes::class_of(code, self.following_error_class, self.sync_class) == Some(8);
+        }
+        self.supervise_limits(cx, od);
         if let Some(t) = self.enable_at
             && cx.now >= t
         {
@@ -644,10 +854,11 @@ impl Behaviour for Dds6 {
             self.speed_zero_bit = true;
         }
         self.publish(cx, od);
+        self.publish_io(cx, od);
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
-        let with_sub = matches!(code, EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION);
+        let with_sub = matches!(code, EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION | classes::EMCY_LIMIT_SWITCH);
         let bytes = if with_sub { emcy_sub_code_bytes(self.last_sub) } else { [0; 5] };
         EmcyFrame { code, register: None, bytes }
     }

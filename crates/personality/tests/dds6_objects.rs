@@ -1,0 +1,298 @@
+//! LAM DDS6 objects that act (issue 14), seed004 manual HW 1.00 / FW
+//! 0.22, on the virtual bus:
+//!
+//! * §5 error classes: 0 warning, 2 quick stop without FAULT, 4 quick stop
+//!   then FAULT, 6 disable and FAULT, 8 as 6 until a power cycle; 8611h's
+//!   class is 2480h:01 (§6.4.7);
+//! * §5 8612h "Limit switch activation" with its sub-codes;
+//! * §6.4.12 3080h Sync Guard;
+//! * §6.4.9–6.4.15 digital outputs (2830h–2832h sources, 3230h) and
+//!   inputs (3210h);
+//! * §6.4.3 2360h sub 0 as printed.
+
+mod replay_rig;
+
+use drivebus_can::Frame;
+use drivebus_cia402::drive::Injection;
+use drivebus_cia402::model::AxisParams;
+use drivebus_node::MemoryStorage;
+use drivebus_personality::Profile;
+use drivebus_personality::build::build_with;
+use drivebus_personality::dds6::Dds6;
+use replay_rig::*;
+
+const ID: u8 = 1;
+
+fn rig() -> Rig {
+    Rig::new(Profile::Dds6, ID).0
+}
+
+/// A DDS6 on `axis` (switches wired as 2810h's defaults assign them).
+fn rig_on(axis: AxisParams) -> Rig {
+    let pn = build_with(Profile::Dds6, ID, Box::new(MemoryStorage::new()), Box::new(Dds6::with_axis(axis)));
+    Rig::with(pn.unwrap()).0
+}
+
+fn write(r: &mut Rig, index: u16, sub: u8, data: &[u8]) {
+    Rig::assert_written(r.sdo_write(ID, index, sub, data), ID, index, sub);
+}
+
+fn statusword(r: &mut Rig) -> u16 {
+    r.read_u32(ID, 0x6041, 0) as u16
+}
+
+/// Shutdown, then Enable operation (the DDS6 passes Switched on itself,
+/// 16 ms open loop).
+fn enable(r: &mut Rig) {
+    write(r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(5);
+    write(r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(50);
+    assert_eq!(statusword(r) & 0x6F, 0x27, "operation enabled");
+}
+
+/// The EMCY frames (081h) among `frames`.
+fn emcy(frames: &[Frame]) -> Vec<Frame> {
+    frames.iter().copied().filter(|f| f.std_id() == Some(0x80 + u16::from(ID))).collect()
+}
+
+/// EMCY `code` with sub-code `sub` (bytes 3–4) among `frames`.
+fn has_emcy(frames: &[Frame], code: u16, sub: u16) -> bool {
+    emcy(frames).iter().any(|f| {
+        let d = f.data();
+        d.len() == 8 && d[0..2] == code.to_le_bytes() && d[3..5] == sub.to_le_bytes()
+    })
+}
+
+const QUICK_STOP_ACTIVE: u16 = 0x07;
+const FAULT: u16 = 0x08;
+
+#[test]
+fn heartbeat_loss_is_class_2_a_quick_stop_without_fault() {
+    // §5 8130h "Error Life Guard or Heartbeat", class 2: "stop of the motor
+    // but not the transition to FAULT … Deceleration with Quick Stop".
+    let mut r = rig();
+    write(&mut r, 0x1016, 1, &((5u32 << 16) | 100).to_le_bytes());
+    r.send("705#05");
+    enable(&mut r);
+    r.take();
+    r.run_ms(300);
+    let frames = r.take();
+    assert!(emcy(&frames).iter().any(|f| f.data()[0..2] == [0x30, 0x81]), "EMCY 8130h: {frames:?}");
+    let sw = statusword(&mut r);
+    assert_eq!(sw & 0x6F, QUICK_STOP_ACTIVE, "quick stop active, motor enabled: {sw:04X}h");
+    assert_eq!(sw & 0x08, 0, "no FAULT");
+    // Enable operation again (transition 16): back in operation.
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(20);
+    assert_eq!(statusword(&mut r) & 0x6F, 0x27);
+}
+
+/// Enabled in pp, a following error injected; the frames and the
+/// statusword 100 ms later.
+fn following_error(class: Option<u8>) -> (Vec<Frame>, u16) {
+    let mut r = rig();
+    if let Some(c) = class {
+        write(&mut r, 0x2480, 1, &[c]);
+    }
+    enable(&mut r);
+    r.take();
+    r.pn_mut().app.inject(Injection::FollowingError);
+    r.run_ms(100);
+    let frames = r.take();
+    (frames, statusword(&mut r))
+}
+
+#[test]
+fn following_error_class_is_2480h() {
+    // §6.4.7 2480h:01, default 6: disabling and FAULT.
+    let (frames, sw) = following_error(None);
+    assert!(has_emcy(&frames, 0x8611, 0), "{frames:?}");
+    assert_eq!(sw & 0x4F, FAULT, "{sw:04X}h");
+    // Class 2: quick stop, no FAULT.
+    let (frames, sw) = following_error(Some(2));
+    assert!(has_emcy(&frames, 0x8611, 0), "{frames:?}");
+    assert_eq!(sw & 0x6F, QUICK_STOP_ACTIVE, "{sw:04X}h");
+    // Class 4: FAULT after the quick stop.
+    let (_, sw) = following_error(Some(4));
+    assert_eq!(sw & 0x4F, FAULT, "{sw:04X}h");
+    // Only the classes of the §6.4.7 table.
+    let mut r = rig();
+    Rig::assert_abort(r.sdo_write(ID, 0x2480, 1, &[3]), ID, 0x2480, 1, 0x0609_0030);
+    Rig::assert_abort(r.sdo_write(ID, 0x2480, 1, &[0]), ID, 0x2480, 1, 0x0609_0030);
+}
+
+#[test]
+fn class_8_is_reset_by_a_power_cycle_only() {
+    // §4.4.3 / §5: torque mode without encoder feedback, 63A0h sub-code
+    // 0701h, class 8 ("can be reset only through a cycle of turning off and
+    // on").
+    let mut r = rig();
+    write(&mut r, 0x6060, 0, &[4]);
+    write(&mut r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(5);
+    r.take();
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(50);
+    assert_eq!(statusword(&mut r) & 0x4F, FAULT);
+    for cw in [0x00, 0x80, 0x00, 0x80] {
+        write(&mut r, 0x6040, 0, &[cw, 0]);
+        r.run_ms(5);
+    }
+    assert_eq!(statusword(&mut r) & 0x4F, FAULT, "fault reset refused");
+    // NMT Reset Node restarts the drive (§4.2: as at power-on).
+    r.send("000#81 01");
+    r.run_ms(5);
+    assert_eq!(statusword(&mut r) & 0x4F, 0x40, "switch on disabled");
+}
+
+/// A rotary axis (degrees of the shaft) with the positive limit switch at
+/// +90°.
+fn limited_axis() -> AxisParams {
+    let mut a = AxisParams::rotary_degrees(3.0e-5);
+    a.positive_limit = Some(90.0);
+    a
+}
+
+#[test]
+fn limit_switch_stop_raises_8612h() {
+    // §5 8612h "Limit switch activation", class 2; sub-code 0801h
+    // "Positive limit activation", 0803h "Positive movement with active
+    // positive limit".
+    let mut r = rig_on(limited_axis());
+    write(&mut r, 0x6060, 0, &[3]);
+    enable(&mut r);
+    r.take();
+    write(&mut r, 0x60FF, 0, &600i32.to_le_bytes()); // 60 rpm
+    // 100 (rpm)/s (6083h default): the switch is reached after ~540 ms.
+    r.run_ms(1000);
+    let frames = r.take();
+    assert!(has_emcy(&frames, 0x8612, 0x0801), "{frames:?}");
+    assert_eq!(statusword(&mut r) & 0x6F, QUICK_STOP_ACTIVE);
+    // DI7 (2810h:03 = 0207h) shows the switch.
+    assert_eq!(r.read_u32(ID, 0x3210, 1) & 0x80, 0x80, "DI7");
+    // Enabled again with the target still positive: 0803h, stopped again.
+    r.take();
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(50);
+    let frames = r.take();
+    assert!(has_emcy(&frames, 0x8612, 0x0803), "{frames:?}");
+    assert_eq!(statusword(&mut r) & 0x6F, QUICK_STOP_ACTIVE);
+    // Away from the switch: no error.
+    write(&mut r, 0x60FF, 0, &(-600i32).to_le_bytes());
+    r.take();
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(300);
+    assert!(emcy(&r.take()).iter().all(|f| f.data()[0..2] != [0x12, 0x86]));
+    assert_eq!(statusword(&mut r) & 0x6F, 0x27);
+    assert_eq!(r.read_u32(ID, 0x3210, 1) & 0x80, 0, "DI7 released");
+}
+
+#[test]
+fn inputs_show_the_switches() {
+    // §6.4.14 3210h:01 bits 2..7 = DI2..DI7; the axis stands on its
+    // positive limit switch (DI7) and home switch (DI5) at power-on.
+    let mut a = limited_axis();
+    a.initial_position = 100.0;
+    a.home_switch = Some((95.0, 105.0));
+    let mut r = rig_on(a);
+    r.run_ms(5);
+    assert_eq!(r.read_u32(ID, 0x3210, 1), 0xA0);
+}
+
+#[test]
+fn outputs_follow_their_sources() {
+    // §6.4.9–6.4.11 defaults: DO0 8040h "No Fault", DO1 0041h "Operation
+    // enabled", DO2 006Ah statusword bit 10 (set in pp while disabled,
+    // 2650h).
+    let mut r = rig();
+    r.run_ms(5);
+    assert_eq!(r.read_u32(ID, 0x3230, 1), 0b101);
+    enable(&mut r);
+    assert_eq!(r.read_u32(ID, 0x3230, 1) & 0b011, 0b011);
+}
+
+#[test]
+fn general_purpose_output_takes_set_output() {
+    // §6.4.9: with 0000h "General Purpose" DO0 is bit 0 of 3230h:01;
+    // §6.4.15: 3230h:02 = 00h sets bit 0, 80h clears it.
+    let mut r = rig();
+    write(&mut r, 0x2830, 1, &0u16.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.read_u32(ID, 0x3230, 1) & 1, 0);
+    write(&mut r, 0x3230, 2, &[0x00]);
+    r.run_ms(2);
+    assert_eq!(r.read_u32(ID, 0x3230, 1) & 1, 1);
+    write(&mut r, 0x3230, 2, &[0x80]);
+    r.run_ms(2);
+    assert_eq!(r.read_u32(ID, 0x3230, 1) & 1, 0);
+    // 3230h:01 written: only the General Purpose bit is taken (DO1 stays
+    // "Operation enabled" = 0, DO2 statusword bit 10 = 1).
+    write(&mut r, 0x3230, 1, &0b011u16.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.read_u32(ID, 0x3230, 1), 0b101);
+    // An output with an internal source ignores 3230h:02.
+    write(&mut r, 0x3230, 2, &[0x81]);
+    r.run_ms(2);
+    assert_eq!(r.read_u32(ID, 0x3230, 1), 0b101);
+}
+
+#[test]
+fn sync_guard_counts_and_reports_late_syncs() {
+    // §6.4.12: 10 ms expected, 1 ms jitter, threshold 15, EMCY enabled.
+    let mut r = rig();
+    write(&mut r, 0x3080, 4, &10_000u32.to_le_bytes());
+    write(&mut r, 0x3080, 5, &1000u16.to_le_bytes());
+    write(&mut r, 0x3080, 1, &[0x03]);
+    for _ in 0..5 {
+        r.send("080#");
+        r.run_ms(10);
+    }
+    assert_eq!(r.read_u32(ID, 0x3080, 3), 5, "Sync_Counter_SYGD");
+    assert_eq!(r.read_u32(ID, 0x3080, 8), 0, "Out_Of_Sync_Counter_SYGD");
+    r.take();
+    // 20 ms since the last SYNC, twice.
+    r.run_ms(10);
+    r.send("080#");
+    r.run_ms(20);
+    r.send("080#");
+    r.run_ms(2);
+    // +10 per late SYNC: 20 > 15 raises 82B2h (class 2: the motor is not
+    // enabled, so the EMCY only).
+    assert!(has_emcy(&r.take(), 0x82B2, 0));
+    assert_eq!(r.read_u32(ID, 0x3080, 8), 20);
+    assert_eq!(r.read_u32(ID, 0x3080, 7), 20, "Peak_Out_Of_Sync_SYGD");
+    // "Changeable only with monitoring disabled".
+    Rig::assert_abort(r.sdo_write(ID, 0x3080, 4, &2000u32.to_le_bytes()), ID, 0x3080, 4, 0x0800_0022);
+    // Bit 5 / 7 reset the counters on the write.
+    write(&mut r, 0x3080, 1, &[0xA3]);
+    assert_eq!(r.read_u32(ID, 0x3080, 8), 0);
+    assert_eq!(r.read_u32(ID, 0x3080, 3), 0);
+    assert_eq!(r.read_u32(ID, 0x3080, 7), 20);
+}
+
+#[test]
+fn sync_breach_class_0_is_a_warning() {
+    // 3080h:02 = 0: "Warning … no impediment": statusword bit 7, motion on.
+    let mut r = rig();
+    write(&mut r, 0x3080, 2, &[0]);
+    write(&mut r, 0x3080, 4, &10_000u32.to_le_bytes());
+    write(&mut r, 0x3080, 6, &[5]);
+    write(&mut r, 0x3080, 1, &[0x03]);
+    enable(&mut r);
+    r.send("080#");
+    r.run_ms(25);
+    r.send("080#");
+    r.run_ms(2);
+    let sw = statusword(&mut r);
+    assert_eq!(sw & 0x6F, 0x27, "{sw:04X}h");
+    assert_eq!(sw & 0x80, 0x80, "warning");
+}
+
+#[test]
+fn brake_setup_sub_0_is_as_printed() {
+    // §6.4.3: Number_of_Entries 06h.
+    let mut r = rig();
+    assert_eq!(r.upload(ID, 0x2360, 0), Ok(vec![6]));
+    assert!(r.upload(ID, 0x2360, 6).is_ok());
+}
