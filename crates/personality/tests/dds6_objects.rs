@@ -296,3 +296,204 @@ fn brake_setup_sub_0_is_as_printed() {
     assert_eq!(r.upload(ID, 0x2360, 0), Ok(vec![6]));
     assert!(r.upload(ID, 0x2360, 6).is_ok());
 }
+
+#[test]
+fn error_register_and_history_record_an_error() {
+    // §6.3.2 1001h (bit 0 generic), §6.3.3 1003h:01 the most recent error
+    // (bits 15..0 the code), 603Fh the last error (§6.5.1).
+    let (frames, _) = following_error(Some(2));
+    assert!(has_emcy(&frames, 0x8611, 0));
+    let mut r = rig();
+    enable(&mut r);
+    r.pn_mut().app.inject(Injection::FollowingError);
+    r.run_ms(100);
+    assert_eq!(r.read_u32(ID, 0x1001, 0) & 1, 1);
+    assert_eq!(r.read_u32(ID, 0x1003, 0), 1);
+    assert_eq!(r.read_u32(ID, 0x1003, 1) & 0xFFFF, 0x8611);
+    assert_eq!(r.read_u32(ID, 0x603F, 0), 0x8611);
+    // §6.3.3: writing 0 to sub 0 clears the history.
+    write(&mut r, 0x1003, 0, &[0]);
+    assert_eq!(r.read_u32(ID, 0x1003, 0), 0);
+}
+
+#[test]
+fn producer_heartbeat_1017h() {
+    // §6.3.15: 1017h in ms, 0 = off.
+    let mut r = rig();
+    write(&mut r, 0x1017, 0, &100u16.to_le_bytes());
+    r.take();
+    r.run_ms(350);
+    let beats = r.take().into_iter().filter(|f| *f == fr("701#7F")).count();
+    assert_eq!(beats, 3, "pre-operational heartbeats every 100 ms");
+}
+
+#[test]
+fn error_behaviour_1029h_stops_the_node() {
+    // §6.3.17 1029h:01 = 2: a communication error in Operational changes
+    // to Stopped (0 = Pre-operational, the default).
+    let mut r = rig();
+    write(&mut r, 0x1029, 1, &[2]);
+    write(&mut r, 0x1016, 1, &((5u32 << 16) | 100).to_le_bytes());
+    r.send("000#01 01");
+    r.send("705#05");
+    r.run_ms(300);
+    assert_eq!(r.node().nmt_state(), drivebus_node::NmtState::Stopped);
+    let mut r = rig();
+    write(&mut r, 0x1016, 1, &((5u32 << 16) | 100).to_le_bytes());
+    r.send("000#01 01");
+    r.send("705#05");
+    r.run_ms(300);
+    assert_eq!(r.node().nmt_state(), drivebus_node::NmtState::PreOperational);
+}
+
+#[test]
+fn emcy_inhibit_time_1015h() {
+    // §6.3.13: 1015h in 0.1 ms, the minimum time between two EMCYs.
+    let mut r = rig();
+    write(&mut r, 0x1015, 0, &5000u16.to_le_bytes()); // 500 ms
+    write(&mut r, 0x3080, 4, &10_000u32.to_le_bytes());
+    write(&mut r, 0x3080, 6, &[0]);
+    write(&mut r, 0x3080, 2, &[0]); // a warning: the motor stays enabled
+    write(&mut r, 0x3080, 1, &[0x03]);
+    write(&mut r, 0x2480, 1, &[2]);
+    enable(&mut r);
+    r.take();
+    // 82B2h (a late SYNC, threshold 0) and 8611h close together.
+    r.send("080#");
+    r.run_ms(30);
+    r.send("080#");
+    r.pn_mut().app.inject(Injection::FollowingError);
+    r.run_ms(100);
+    let first = emcy(&r.take());
+    assert_eq!(first.len(), 1, "{first:?}");
+    r.run_ms(500);
+    let later = emcy(&r.take());
+    assert!(has_emcy(&later, 0x8611, 0), "the second EMCY after the inhibit time: {later:?}");
+}
+
+/// The speed after 1 s of profile velocity at `target` (0.1 rpm), from the
+/// travel in 500 ms \[0.1 rpm\].
+fn pv_speed(r: &mut Rig, target: i32) -> f64 {
+    write(r, 0x6083, 0, &5000u32.to_le_bytes());
+    write(r, 0x6060, 0, &[3]);
+    enable(r);
+    write(r, 0x60FF, 0, &target.to_le_bytes());
+    r.run_ms(500);
+    let p0 = r.read_u32(ID, 0x6064, 0) as i32;
+    r.run_ms(500);
+    let p1 = r.read_u32(ID, 0x6064, 0) as i32;
+    // 10 000 units per revolution (§4.4).
+    f64::from(p1 - p0) / 10_000.0 / 0.5 * 600.0
+}
+
+#[test]
+fn max_speed_of_the_motor_data_prevails() {
+    // §6.4.1 2310h:0Bh "can never be exceeded and prevails over any other
+    // setting": 100 rpm against a 60FFh of 300 rpm.
+    let mut r = rig();
+    write(&mut r, 0x2310, 0x0B, &1000u16.to_le_bytes());
+    let v = pv_speed(&mut r, 3000);
+    assert!((v - 1000.0).abs() < 20.0, "{v}");
+    let mut r = rig();
+    let v = pv_speed(&mut r, 3000);
+    assert!((v - 3000.0).abs() < 40.0, "{v}");
+}
+
+#[test]
+fn enable_takes_the_current_ramp() {
+    // §6.4.5 2410h:02 Current_Enable_Ramp_MTNSTP: the time to the rated
+    // current when the motor is enabled (default 10 ms: 16 ms in the
+    // §4.4.2 traces).
+    let mut r = rig();
+    write(&mut r, 0x2410, 2, &200u16.to_le_bytes());
+    write(&mut r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(5);
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(150);
+    assert_eq!(statusword(&mut r) & 0x6F, 0x23, "still switched on");
+    r.run_ms(100);
+    assert_eq!(statusword(&mut r) & 0x6F, 0x27);
+}
+
+/// Enable operation after `setup`: the EMCY frames.
+fn enable_after(setup: &[(u16, u8, &[u8])]) -> (Vec<Frame>, u16) {
+    let mut r = rig();
+    for (i, s, d) in setup {
+        write(&mut r, *i, *s, d);
+    }
+    write(&mut r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(5);
+    r.take();
+    r.send("601#2B 40 60 00 0F 00 00 00");
+    r.run_ms(50);
+    let frames = r.take();
+    (frames, statusword(&mut r))
+}
+
+#[test]
+fn configuration_conflicts_are_class_8() {
+    // §5 63A0h 0704h: encoder feedback (2410h:01 bit 0) without a
+    // configured encoder (2330h, §6.4.2: 0 disables the input).
+    let (frames, sw) = enable_after(&[(0x2410, 1, &[1])]);
+    assert!(has_emcy(&frames, 0x63A0, 0x0704), "{frames:?}");
+    assert_eq!(sw & 0x4F, FAULT);
+    // With the encoder configured the closed loop enables.
+    let enc: [(u16, u8, &[u8]); 3] = [(0x2330, 1, &[0x79]), (0x2330, 2, &[0xE8, 0x03]), (0x2410, 1, &[1])];
+    let (frames, _) = enable_after(&enc);
+    assert!(emcy(&frames).is_empty(), "{frames:?}");
+    // 0702h: load-proportional current (23A0h:01 = 1) in open loop.
+    let (frames, sw) = enable_after(&[(0x23A0, 1, &[1])]);
+    assert!(has_emcy(&frames, 0x63A0, 0x0702), "{frames:?}");
+    assert_eq!(sw & 0x4F, FAULT);
+}
+
+#[test]
+fn home_offset_is_the_homed_position() {
+    // §6.5.22 / §4.4.4: after homing "Position_actual_value := Home_offset";
+    // method 37 homes at the actual position.
+    let mut r = rig();
+    write(&mut r, 0x607C, 0, &1234i32.to_le_bytes());
+    write(&mut r, 0x6098, 0, &[37]);
+    write(&mut r, 0x6060, 0, &[6]);
+    enable(&mut r);
+    write(&mut r, 0x6040, 0, &[0x1F, 0]);
+    r.run_ms(50);
+    assert_eq!(statusword(&mut r) & 0x1400, 0x1400, "homing attained");
+    assert_eq!(r.read_u32(ID, 0x6064, 0) as i32, 1234);
+}
+
+#[test]
+fn software_limits_bound_the_target() {
+    // §6.5.23 607Dh: min / max position limits (both 0 = off).
+    let mut r = rig();
+    write(&mut r, 0x607D, 1, &(-5000i32).to_le_bytes());
+    write(&mut r, 0x607D, 2, &5000i32.to_le_bytes());
+    write(&mut r, 0x6081, 0, &6000u32.to_le_bytes());
+    write(&mut r, 0x6083, 0, &5000u32.to_le_bytes());
+    write(&mut r, 0x6084, 0, &5000u32.to_le_bytes());
+    enable(&mut r);
+    write(&mut r, 0x607A, 0, &20_000i32.to_le_bytes());
+    write(&mut r, 0x6040, 0, &[0x1F, 0]);
+    r.run_ms(1500);
+    let p = r.read_u32(ID, 0x6064, 0) as i32;
+    assert!((p - 5000).abs() <= 10, "stopped at the max limit: {p}");
+}
+
+#[test]
+fn motion_values_follow_the_move() {
+    // §6.5.6 6062h demand, §6.5.12 606Bh velocity demand, §6.5.34 60F4h
+    // following error actual value (6062h − 6064h) while moving in pp.
+    let mut r = rig();
+    write(&mut r, 0x6081, 0, &3000u32.to_le_bytes());
+    enable(&mut r);
+    write(&mut r, 0x607A, 0, &100_000i32.to_le_bytes());
+    write(&mut r, 0x6040, 0, &[0x1F, 0]);
+    r.run_ms(3000);
+    let demand = r.read_u32(ID, 0x6062, 0) as i32;
+    let vdemand = r.read_u32(ID, 0x606B, 0) as i32;
+    let actual = r.read_u32(ID, 0x6064, 0) as i32;
+    let fe = r.read_u32(ID, 0x60F4, 0) as i32;
+    assert!(demand > 10_000 && demand < 100_000, "{demand}");
+    assert_eq!(vdemand, 3000, "at 6081h");
+    assert!((demand - actual - fe).abs() <= 50, "{demand} {actual} {fe}");
+}

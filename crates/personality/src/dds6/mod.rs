@@ -334,6 +334,24 @@ impl Refs {
     }
 }
 
+/// The 63A0h "Conflicts in the configuration" sub-code an Enable operation
+/// meets (§5, class 8): 0704h closed loop (2410h:01 bit 0) without an
+/// encoder (2330h:01 = 0 or 2330h:02 = 0 disable the input, §6.4.2),
+/// 0702h load-proportional current (23A0h:01 = 1) without the closed loop,
+/// 0701h profile torque without it (§4.4.3).
+pub fn configuration_conflict(od: &ObjectDictionary, closed: bool, mode: i8) -> Option<u16> {
+    let encoder = od.get_u32(0x2330, 1).unwrap_or(0) != 0 && od.get_u32(0x2330, 2).unwrap_or(0) != 0;
+    if closed && !encoder {
+        Some(0x0704)
+    } else if !closed && od.get_u32(0x23A0, 1) == Some(1) {
+        Some(0x0702)
+    } else if !closed && mode == 4 {
+        Some(0x0701)
+    } else {
+        None
+    }
+}
+
 /// The closed-loop enable with its "encoder timing" (rotor alignment,
 /// §4.4 / C.14): 000Fh → Operation enabled in ~515 ms (§4.4.3 EX6 517 ms,
 /// EX5 between 480 and 548 ms, §4.4.4 EX8 517 ms).
@@ -355,6 +373,14 @@ pub const VELOCITY_LAG_S: f64 = 0.0018;
 /// §4.4.1 EX1: 2633h polled at 46.6 ms); closed loop see
 /// [`ENCODER_TIMING_MS`].
 pub const ENABLE_DELAY_MS: u64 = 16;
+
+/// 2310h:0Bh Max_Speed_MTRDT "can never be exceeded and prevails over any
+/// other setting, whatever the chosen operating mode" (§6.4.1): the drive's
+/// max motor speed, in the same 0.1 rpm.
+fn max_speed(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    let v = od.get_u32(0x2310, 0x0B).unwrap_or(30_000);
+    let _ = cx.drive.on_write(od, 0x6080, 0, &v.to_le_bytes());
+}
 
 /// The power stage is on this long before Operation enabled: pv shows bit
 /// 10 in Switched on for that last millisecond (§4.4.2 EX4: 3633h at
@@ -467,10 +493,11 @@ impl Dds6 {
 
     /// Takes the class and Sync Guard settings from the dictionary (boot,
     /// values restored) and tells the drive the reactions.
-    fn load_settings(&mut self, cx: &mut Context<'_>, od: &ObjectDictionary) {
+    fn load_settings(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         self.following_error_class = od.get_u32(0x2480, 1).unwrap_or(6) as u8;
         self.sync_class = od.get_u32(0x3080, 2).unwrap_or(2) as u8;
         classes::install(cx.drive, self.following_error_class, self.sync_class);
+        max_speed(cx, od);
         let g = &mut self.guard;
         g.expected_us = od.get_u32(0x3080, 4).unwrap_or(1000);
         g.jitter_us = od.get_u32(0x3080, 5).unwrap_or(200) as u16;
@@ -650,6 +677,7 @@ impl Behaviour for Dds6 {
             }
             (0x3080, 4..=6) => self.load_settings(cx, od),
             (0x3230, 2) => self.publish_io(cx, od),
+            (0x2310, 0x0B) => max_speed(cx, od),
             _ => {}
         }
         if (0x1A00..=0x1A03).contains(&index) {
@@ -660,7 +688,7 @@ impl Behaviour for Dds6 {
 
     fn hooked_objects(&self) -> &'static [u16] {
         &[
-            0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230,
+            0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230, 0x2310,
         ]
     }
 
@@ -731,13 +759,16 @@ impl Behaviour for Dds6 {
                 // motor enabling sequence.
                 to_drive = cw & !0x08;
                 let closed = self.feedback & 1 != 0;
-                if cx.drive.mode() == 4 && !closed {
-                    // §4.4.3: torque needs the encoder loop.
-                    self.last_sub = 0x0701;
+                if let Some(sub) = configuration_conflict(od, closed, cx.drive.mode()) {
+                    self.last_sub = sub;
                     cx.drive.inject(Injection::Fault(EMCY_CONFIGURATION));
                 }
                 let timing = closed && (!self.aligned || self.feedback & 8 != 0);
-                let ms = if timing { ENCODER_TIMING_MS } else { ENABLE_DELAY_MS };
+                // §6.4.5 2410h:02: the current ramp to the rated current,
+                // then the drive's own settling (16 ms with the default
+                // 10 ms ramp, §4.4.2 EX4).
+                let ramp = u64::from(od.get_u32(0x2410, 2).unwrap_or(10) as u16);
+                let ms = if timing { ENCODER_TIMING_MS } else { ramp + ENABLE_DELAY_MS - 10 };
                 self.enable_at = Some(cx.now + drivebus_can::Duration::from_millis(ms));
             }
             cx.drive.on_write(od, index, sub, &to_drive.to_le_bytes())?;
