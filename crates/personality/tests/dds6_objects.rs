@@ -496,4 +496,38 @@ fn motion_values_follow_the_move() {
     assert!(demand > 10_000 && demand < 100_000, "{demand}");
     assert_eq!(vdemand, 3000, "at 6081h");
     assert!((demand - actual - fe).abs() <= 50, "{demand} {actual} {fe}");
+    // §6.5.20 6078h: the motor current (0.1 % of the rated current) while
+    // the motor turns.
+    let current = r.read_u32(ID, 0x6078, 0) as i16;
+    assert!(current > 0, "{current}");
+}
+
+#[test]
+fn following_error_window_raises_8611h() {
+    // §6.5.8 / §6.5.9: the position error beyond 6065h for 6066h ms is a
+    // following error (8611h, class 2480h:01 = 2 here: quick stop).
+    let mut r = rig();
+    write(&mut r, 0x2480, 1, &[2]);
+    write(&mut r, 0x6065, 0, &1u32.to_le_bytes());
+    write(&mut r, 0x6066, 0, &1u16.to_le_bytes());
+    write(&mut r, 0x6081, 0, &3000u32.to_le_bytes());
+    write(&mut r, 0x6083, 0, &5000u32.to_le_bytes());
+    enable(&mut r);
+    r.take();
+    r.send("601#23 7A 60 00 40 0D 03 00");
+    r.send("601#2B 40 60 00 1F 00 00 00");
+    r.run_ms(300);
+    let frames = r.take();
+    assert!(has_emcy(&frames, 0x8611, 0), "{frames:?}");
+    assert_eq!(statusword(&mut r) & 0x6F, QUICK_STOP_ACTIVE);
+    // A wide window: no following error on the same move.
+    let mut r = rig();
+    write(&mut r, 0x6081, 0, &3000u32.to_le_bytes());
+    write(&mut r, 0x6083, 0, &5000u32.to_le_bytes());
+    enable(&mut r);
+    r.take();
+    r.send("601#23 7A 60 00 40 0D 03 00");
+    r.send("601#2B 40 60 00 1F 00 00 00");
+    r.run_ms(300);
+    assert!(!has_emcy(&r.take(), 0x8611, 0));
 }
