@@ -221,3 +221,26 @@ fn served_eds_keeps_nodeid_for_100b() {
     assert_eq!(v.default.as_deref(), Some("$NODEID"));
 }
 
+
+#[test]
+fn configuration_mode_5_ignores_the_controlword() {
+    // §1.4 mode 5: "The control of the DS402 State-machine is being
+    // ignored. 6040h, 6041h control- and statusword are not being
+    // evaluated"; mode 4 (DS402) is the CANopen drive's.
+    let mut r = rig();
+    assert_eq!(r.read_u32(ID, 0x4804, 5), 4);
+    write(&mut r, 0x4804, 5, &[5]);
+    controlword(&mut r, 0x06);
+    assert_eq!(r.read_u32(ID, 0x6041, 0) as u16, 0x0240, "not followed");
+    write(&mut r, 0x4804, 5, &[4]);
+    controlword(&mut r, 0x06);
+    assert_eq!(r.read_u32(ID, 0x6041, 0) as u16, 0x0231);
+}
+
+#[test]
+fn can_node_number_is_the_node_id() {
+    // §13 4804h:01 "CAN node number" (ro, 1..127), like 100Bh (§14.6).
+    let (mut r, _) = Rig::new(Profile::Ssd630, 7);
+    assert_eq!(r.read_u32(7, 0x4804, 1), 7);
+    assert_eq!(r.read_u32(7, 0x100B, 0), 7);
+}

@@ -172,6 +172,8 @@ PROFILES["ssd630"]["overrides"] = {
     (0x1011, 1): ov(default="1", why="read value bit 0 = 1 (restores on command); the 'load' signature bytes are misprinted (73h 61h 61h 64h), 0x64616F6C is what the node accepts", sec="7; 11"),
     (0x60C2, 0): ov(code=9, why="§4: RECORD (2 elements), as CiA 402 defines it", sec="4; 12"),
     (0x60C2, 2): ov(type=U8, default="0xFD", why="ip time index: UNSIGNED8 as §12 prints it (written with 2Fh); the drive reads the byte as the signed exponent of CiA 402 (FDh = 10^-3, the byte §14.13's 1 ms cycle needs). No default given; drivebus's working value FDh (with sub 1 = 1: 1 ms) written", sec="12"),
+    (0x4804, 1): ov(default="$NODEID", why="CAN node number (ro, 1..127): the node-ID the drive runs with (as 100Bh)", sec="1.4; 1.5; 13"),
+    (0x4804, 5): ov(default="4", why="no default given; a drive answering CiA 402 runs configuration mode 4 'CANopen configuration DS402' (§1.4)", sec="1.4; 13"),
     (0x1004, 0): ov(type=U32, default="0x00040004", why="§11 prints sub 0 'Unsigned 32 Number of PDO's' (the DS301 v4.01 1004h: bits 0-15 RPDOs, 16-31 TPDOs); 4 + 4 (§7) written", sec="4; 7; 11"),
     (0x1004, 1): ov(default="0x00040004", why="no value given; every PDO can be synchronous (§7: transmission type 1 on PDO1 in §14.12): 4 RPDOs + 4 TPDOs, coded as sub 0", sec="7; 11; 14.12"),
     (0x1004, 2): ov(default="0x00040004", why="no value given; every PDO can be asynchronous (types 254/255, §7): 4 RPDOs + 4 TPDOs, coded as sub 0", sec="7; 11"),

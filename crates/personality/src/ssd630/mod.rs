@@ -478,6 +478,10 @@ impl Behaviour for Ssd630 {
                 // the value is stored, the state machine does not move.
                 Ok(Verdict::Store)
             }
+            // §1.4 configuration mode 5 (4804h:05) "CANopen configuration
+            // DS301 + PDO mapping": "The control of the DS402 State-machine
+            // is being ignored. 6040h, 6041h … are not being evaluated".
+            0x6040 if od.get_u32(0x4804, 5) == Some(5) => Ok(Verdict::Store),
             0x6040 => {
                 // The drive takes the controlword now; the statusword it
                 // publishes is put in the 630's form before a TPDO samples it.
