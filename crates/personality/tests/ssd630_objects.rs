@@ -244,3 +244,145 @@ fn can_node_number_is_the_node_id() {
     assert_eq!(r.read_u32(7, 0x4804, 1), 7);
     assert_eq!(r.read_u32(7, 0x100B, 0), 7);
 }
+
+/// The EMCY frames (081h) among `frames`.
+fn emcy(frames: &[drivebus_can::Frame]) -> Vec<drivebus_can::Frame> {
+    frames.iter().copied().filter(|f| f.std_id() == Some(0x80 + u16::from(ID))).collect()
+}
+
+#[test]
+fn emcy_inhibit_time_1015h() {
+    // §4 1015h "Inhibit time EMCY" (CiA 301: 100 µs): the "error reset"
+    // EMCY after a fault reset waits until the inhibit time has passed.
+    let mut r = rig();
+    write(&mut r, 0x1015, 0, &5000u16.to_le_bytes()); // 500 ms
+    enable(&mut r);
+    // Past the inhibit time of the boot EMCY.
+    r.run_ms(600);
+    r.take();
+    r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Fault(0x4310));
+    r.run_ms(5);
+    assert_eq!(emcy(&r.take()), frs(&["081#10 43 09 00 00 00 00 00"]));
+    r.send("601#2B 40 60 00 80 00 00 00");
+    r.run_ms(100);
+    assert_eq!(emcy(&r.take()), vec![], "within the inhibit time");
+    r.run_ms(500);
+    assert_eq!(emcy(&r.take()), frs(&["081#00 00 00 00 00 00 00 00"]));
+}
+
+#[test]
+fn velocity_mode_objects() {
+    // §12 vl: 6042h target (min⁻¹), 6046h min / max amount, 6048h delta
+    // speed per delta time, 6043h demand and 6044h effort follow.
+    let mut r = rig();
+    write(&mut r, 0x6046, 2, &200u32.to_le_bytes());
+    write(&mut r, 0x6048, 1, &100u32.to_le_bytes());
+    write(&mut r, 0x6048, 2, &1u16.to_le_bytes());
+    write(&mut r, 0x6060, 0, &[2]);
+    enable(&mut r);
+    write(&mut r, 0x6042, 0, &500i16.to_le_bytes());
+    r.run_ms(1000);
+    let demand = r.read_u32(ID, 0x6043, 0) as i16;
+    assert!((95..=105).contains(&demand), "100 min⁻¹ after 1 s at 100 min⁻¹/s: {demand}");
+    r.run_ms(2000);
+    let demand = r.read_u32(ID, 0x6043, 0) as i16;
+    assert_eq!(demand, 200, "bounded by 6046h:2");
+    // 6044h: the measured speed (4096 counts differentiated per control
+    // period: noisy), on average the demand.
+    let mut sum = 0i32;
+    for _ in 0..50 {
+        r.run_ms(3);
+        sum += i32::from(r.read_u32(ID, 0x6044, 0) as i16);
+    }
+    assert!((sum / 50 - 200).abs() <= 15, "{}", sum / 50);
+}
+
+#[test]
+fn quick_stop_ends_in_switch_on_disabled() {
+    // §12 605Ah (default 2: the quick-stop ramp 6085h, then Switch on
+    // disabled).
+    let mut r = rig();
+    write(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    write(&mut r, 0x6060, 0, &[3]);
+    enable(&mut r);
+    write(&mut r, 0x60FF, 0, &1000i32.to_le_bytes());
+    r.run_ms(300);
+    controlword(&mut r, 0x0B);
+    r.run_ms(200);
+    assert_eq!(r.read_u32(ID, 0x6041, 0) & 0x4F, 0x40, "switch on disabled");
+}
+
+/// The 630 on an axis with an end stop at +100 000 increments (the motor
+/// blocks there), a move to 1 000 000 with 6065h = `window`: the EMCYs.
+fn blocked_move(window: u32) -> Vec<drivebus_can::Frame> {
+    let pn = drivebus_personality::build::build_on_machine(
+        Profile::Ssd630,
+        ID,
+        Box::new(MemoryStorage::new()),
+        |cfg| cfg.params.axis.positive_stop = Some(100_000.0 / 4096.0 * 360.0),
+    )
+    .unwrap();
+    let (mut r, _) = Rig::with(pn);
+    write(&mut r, 0x6065, 0, &window.to_le_bytes());
+    enable(&mut r);
+    r.run_ms(600);
+    r.take();
+    r.send("601#23 7A 60 00 40 42 0F 00");
+    r.send("601#2B 40 60 00 1F 00 00 00");
+    r.run_ms(2000);
+    emcy(&r.take())
+}
+
+#[test]
+fn following_error_window_6065h() {
+    // §12 6065h "following error window": a position error beyond it is
+    // 8611h (§9 Table 1, register 21h); a window wider than the rest of
+    // the move lets the blocked axis be.
+    assert!(blocked_move(4096).contains(&fr("081#11 86 21 00 00 00 00 00")));
+    assert_eq!(blocked_move(2_000_000), vec![]);
+}
+
+#[test]
+fn position_values_during_a_move() {
+    // §12 6062h demand, 6063h/6064h actual (increments, factor 1), 607Fh
+    // bounds 6081h.
+    let mut r = rig();
+    write(&mut r, 0x607F, 0, &500u32.to_le_bytes());
+    enable(&mut r);
+    write(&mut r, 0x607A, 0, &1_000_000i32.to_le_bytes());
+    controlword(&mut r, 0x1F);
+    r.run_ms(2000);
+    let d0 = r.read_u32(ID, 0x6062, 0) as i32;
+    r.run_ms(600);
+    let d1 = r.read_u32(ID, 0x6062, 0) as i32;
+    // 500 min⁻¹ = 4096 · 500 / 60 increments/s.
+    let speed = f64::from(d1 - d0) / 0.6 * 60.0 / 4096.0;
+    assert!((speed - 500.0).abs() < 5.0, "{speed}");
+    let (a, b) = (r.read_u32(ID, 0x6063, 0) as i32, r.read_u32(ID, 0x6064, 0) as i32);
+    assert!((a - b).abs() < 200, "{a} {b}");
+}
+
+
+#[test]
+fn digital_inputs_and_outputs() {
+    // §12 60FDh digital inputs (CiA 402: bit 1 positive limit switch), the
+    // axis standing on its positive limit switch; 60FEh:1 physical outputs
+    // under the bit mask 60FEh:2 (default FFFF0000h: the manufacturer
+    // outputs).
+    let pn = drivebus_personality::build::build_on_machine(
+        Profile::Ssd630,
+        ID,
+        Box::new(MemoryStorage::new()),
+        |cfg| {
+            cfg.params.axis.positive_limit = Some(10.0);
+            cfg.params.axis.initial_position = 20.0;
+        },
+    )
+    .unwrap();
+    let (mut r, _) = Rig::with(pn);
+    r.run_ms(5);
+    assert_eq!(r.read_u32(ID, 0x60FD, 0) & 0b11, 0b10);
+    write(&mut r, 0x60FE, 1, &0x0003_0001u32.to_le_bytes());
+    r.run_ms(5);
+    assert_eq!(r.pn().app.drive.digital_outputs(), 0x0003_0000);
+}
