@@ -531,3 +531,34 @@ fn following_error_window_raises_8611h() {
     r.run_ms(300);
     assert!(!has_emcy(&r.take(), 0x8611, 0));
 }
+
+#[test]
+fn phase_current_follows_the_motor_configuration() {
+    // §6.4.20 static current: Current_Max_MTRCNF (3310h:03, 80 %) while
+    // turning and for Current_Idle_Delay (3310h:04, 500 ms) after,
+    // Current_Min (3310h:02, 40 %) then; of Rated_Current_MTRDT (2310h:08,
+    // 1.00 A); §6.4.21 3312h:01 in 10 mArms, 0 with the motor disabled.
+    let mut r = rig();
+    assert_eq!(r.read_u32(ID, 0x3312, 1) as i16, 0);
+    enable(&mut r);
+    assert_eq!(r.read_u32(ID, 0x3312, 1) as i16, 80);
+    r.run_ms(600);
+    assert_eq!(r.read_u32(ID, 0x3312, 1) as i16, 40, "idle after 500 ms");
+    write(&mut r, 0x3310, 2, &2500u16.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.read_u32(ID, 0x3312, 1) as i16, 25);
+    write(&mut r, 0x607A, 0, &50_000i32.to_le_bytes());
+    write(&mut r, 0x6040, 0, &[0x1F, 0]);
+    r.run_ms(100);
+    assert_eq!(r.read_u32(ID, 0x3312, 1) as i16, 80, "turning");
+}
+
+#[test]
+fn power_voltage_is_the_supply() {
+    // §6.4.13 3140h:03 Power_Voltage_DVSTS in 0.1 V: the machine's supply.
+    let mut r = rig();
+    r.run_ms(5);
+    let v = r.read_u32(ID, 0x3140, 3) as u16;
+    let bus = r.pn().app.drive.model().bus_voltage();
+    assert!(v > 0 && (f64::from(v) - bus * 10.0).abs() <= 1.0, "{v} {bus}");
+}
