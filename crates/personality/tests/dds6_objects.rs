@@ -562,3 +562,55 @@ fn power_voltage_is_the_supply() {
     let bus = r.pn().app.drive.model().bus_voltage();
     assert!(v > 0 && (f64::from(v) - bus * 10.0).abs() <= 1.0, "{v} {bus}");
 }
+
+#[test]
+fn ip_period_is_locked_while_interpolating() {
+    // §6.5.33: 60C2h "can be modified only if the interpolation is not
+    // active (bit ipa in the Statusword set to 0)".
+    let mut r = rig();
+    write(&mut r, 0x6060, 0, &[7]);
+    enable(&mut r);
+    write(&mut r, 0x60C2, 1, &[2]);
+    write(&mut r, 0x6040, 0, &[0x1F, 0]);
+    r.run_ms(5);
+    assert_eq!(statusword(&mut r) & 0x1000, 0x1000, "ipa");
+    Rig::assert_abort(r.sdo_write(ID, 0x60C2, 1, &[5]), ID, 0x60C2, 1, 0x0800_0022);
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(5);
+    write(&mut r, 0x60C2, 1, &[5]);
+}
+
+/// pv at 300 rpm, closed loop or not, on an axis blocked at +30° or free:
+/// statusword bit 13 after 1.5 s.
+fn slippage(closed: bool, blocked: bool) -> u16 {
+    let mut a = AxisParams::rotary_degrees(3.0e-5);
+    if blocked {
+        a.positive_stop = Some(30.0);
+    }
+    let mut r = rig_on(a);
+    if closed {
+        write(&mut r, 0x2330, 1, &[0x79]);
+        write(&mut r, 0x2330, 2, &1000u16.to_le_bytes());
+        write(&mut r, 0x2410, 1, &[1]);
+    }
+    write(&mut r, 0x3450, 1, &50u16.to_le_bytes());
+    write(&mut r, 0x6083, 0, &5000u32.to_le_bytes());
+    write(&mut r, 0x6060, 0, &[3]);
+    write(&mut r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(5);
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(600);
+    write(&mut r, 0x60FF, 0, &3000i32.to_le_bytes());
+    r.run_ms(1500);
+    statusword(&mut r) & 0x2000
+}
+
+#[test]
+fn pv_slippage_sets_bit_13_in_closed_loop() {
+    // §6.4.23 3450h:01 / §6.5.35 60F8h: the speed off the target by more
+    // than 60F8h (100 rpm) for 3450h:01 ms sets "max slippage error"; the
+    // speed is known in closed loop only.
+    assert_eq!(slippage(true, true), 0x2000);
+    assert_eq!(slippage(true, false), 0);
+    assert_eq!(slippage(false, true), 0);
+}

@@ -117,6 +117,10 @@ pub struct Dds6 {
     live: live::Live,
     /// The statusword as last published.
     last_sw: u16,
+    /// Time the pv speed has been off the target by more than 60F8h \[s\].
+    slip_s: f64,
+    /// pv statusword bit 13 "max slippage error" (§6.4.23, §6.5.35).
+    slipping: bool,
 }
 
 /// 2310h:0Bh Max_Speed_MTRDT "can never be exceeded and prevails over any
@@ -138,7 +142,8 @@ impl Dds6 {
         let mut sw = drive_sw;
         match state {
             State::OperationEnabled | State::QuickStopActive if mode == 3 => {
-                sw = (sw & !(1 << 12 | 1 << 10))
+                sw = (sw & !(1 << 13 | 1 << 12 | 1 << 10))
+                    | (u16::from(self.slipping) << 13)
                     | (u16::from(self.speed_zero_bit) << 12)
                     | (u16::from(self.velocity_reached) << 10);
             }
@@ -273,6 +278,25 @@ impl Dds6 {
         }
     }
 
+    /// pv statusword bit 13 "max slippage error": the speed differs from
+    /// 60FFh by more than 60F8h for 3450h:01 ms (§6.4.23: "The drive is
+    /// able to know the actual motor speed only if the motor is provided
+    /// with encoder and the drive is configured in closed loop mode").
+    fn supervise_slippage(&mut self, cx: &Context<'_>, od: &ObjectDictionary, enabled: bool, dt: f64) {
+        if !(enabled && cx.drive.mode() == 3 && self.feedback & 1 != 0) {
+            self.slip_s = 0.0;
+            self.slipping = false;
+            return;
+        }
+        // The encoder's speed in 0.1 rpm.
+        let v = cx.drive.model().velocity_measured() * 600.0 / core::f64::consts::TAU;
+        let target = od.get_i64(0x60FF, 0).unwrap_or(0) as f64;
+        let window = f64::from(od.get_u32(0x60F8, 0).unwrap_or(1000));
+        self.slip_s = if (v - target).abs() > window { self.slip_s + dt } else { 0.0 };
+        let timeout = f64::from(od.get_u32(0x3450, 1).unwrap_or(0) as u16);
+        self.slipping = self.slip_s > 0.0 && self.slip_s * 1000.0 + 1e-9 >= timeout;
+    }
+
     /// The values published every step (`live`).
     fn publish_io(&mut self, cx: &Context<'_>, od: &mut ObjectDictionary) {
         let sw = self.last_sw;
@@ -397,7 +421,7 @@ impl Behaviour for Dds6 {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230, 0x2310,
-            0x2830, 0x2831, 0x2832, 0x3310, 0x23A0,
+            0x2830, 0x2831, 0x2832, 0x3310, 0x23A0, 0x60C2,
         ]
     }
 
@@ -439,6 +463,11 @@ impl Behaviour for Dds6 {
                 Err(sync_guard::Refusal::JitterTooLarge) => return Err(SdoAbort::INVALID_VALUE),
                 Ok(()) => {}
             },
+            // §6.5.33: "can be modified only if the interpolation is not
+            // active (bit ipa in the Statusword set to 0)".
+            (0x60C2, _) if cx.drive.mode() == 7 && self.last_sw & 0x1000 != 0 => {
+                return Err(SdoAbort(STORE_REFUSED));
+            }
             (0x3230, 1) => {
                 // §6.4.15: only the General Purpose outputs take the bits.
                 let l = &mut self.live;
@@ -583,6 +612,7 @@ impl Behaviour for Dds6 {
         let target = od.get_i64(0x60FF, 0).unwrap_or(0) as f64;
         let window = f64::from(od.get_u32(0x606D, 0).unwrap_or(100));
         self.velocity_reached = (self.shown_velocity.round() - target).abs() <= window;
+        self.supervise_slippage(cx, od, enabled, dt);
         if enabled && cx.drive.mode() == 3 {
             // §6.5.3 pv bit 12 "speed is equal 0".
             let v = od.get_i64(0x606C, 0).unwrap_or(0) as f64;
