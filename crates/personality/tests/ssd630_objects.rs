@@ -221,7 +221,6 @@ fn served_eds_keeps_nodeid_for_100b() {
     assert_eq!(v.default.as_deref(), Some("$NODEID"));
 }
 
-
 #[test]
 fn configuration_mode_5_ignores_the_controlword() {
     // §1.4 mode 5: "The control of the DS402 State-machine is being
@@ -361,7 +360,6 @@ fn position_values_during_a_move() {
     let (a, b) = (r.read_u32(ID, 0x6063, 0) as i32, r.read_u32(ID, 0x6064, 0) as i32);
     assert!((a - b).abs() < 200, "{a} {b}");
 }
-
 
 #[test]
 fn digital_inputs_and_outputs() {

@@ -81,7 +81,8 @@ impl Drive {
             // Enabled again: the errors that only stopped the motor
             // (ErrorReaction::QuickStop) are over; a new stop reports anew.
             let reactions = &self.reactions;
-            let stopped = |c: &u16| reactions.iter().any(|&(r, e)| r == *c && e == super::ErrorReaction::QuickStop);
+            let stopped =
+                |c: &u16| reactions.iter().any(|&(r, e)| r == *c && e == super::ErrorReaction::QuickStop);
             let emcy = &mut self.emcy;
             self.raised.retain(|c| {
                 let keep = !stopped(c);

@@ -50,9 +50,7 @@ pub fn outputs(sources: [u16; 3], general: u16, s: &Signals) -> u16 {
 /// bits of outputs configured as General Purpose change (§6.4.15: "any
 /// attempt of that kind will be ignored").
 pub fn write_outputs(sources: [u16; 3], general: u16, value: u16) -> u16 {
-    (0..3).fold(general, |g, n| {
-        if sources[n] == 0 { (g & !(1 << n)) | (value & (1 << n)) } else { g }
-    })
+    (0..3).fold(general, |g, n| if sources[n] == 0 { (g & !(1 << n)) | (value & (1 << n)) } else { g })
 }
 
 /// The general-purpose bits after a write of 3230h:02 (`cmd`): bits 0–3

@@ -259,7 +259,13 @@ impl Dds6 {
             od.get_i64(0x60FF, 0).unwrap_or(0).signum()
         } else {
             let v = cx.drive.demand_velocity();
-            if v > 0.0 { 1 } else if v < 0.0 { -1 } else { 0 }
+            if v > 0.0 {
+                1
+            } else if v < 0.0 {
+                -1
+            } else {
+                0
+            }
         };
         let toward = (switches & 2 != 0 && direction > 0) || (switches & 1 != 0 && direction < 0);
         let sub = if rising & 2 != 0 {
@@ -420,8 +426,8 @@ impl Behaviour for Dds6 {
 
     fn hooked_objects(&self) -> &'static [u16] {
         &[
-            0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230, 0x2310,
-            0x2830, 0x2831, 0x2832, 0x3310, 0x23A0, 0x60C2,
+            0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230,
+            0x2310, 0x2830, 0x2831, 0x2832, 0x3310, 0x23A0, 0x60C2,
         ]
     }
 
@@ -570,7 +576,8 @@ impl Behaviour for Dds6 {
         }
         if matches!(cx.drive.state_machine().state(), State::Fault | State::FaultReactionActive) {
             let code = cx.drive.state_machine().fault_code();
-            self.power_cycle |= classes::class_of(code, self.following_error_class, self.sync_class) == Some(8);
+            self.power_cycle |=
+                classes::class_of(code, self.following_error_class, self.sync_class) == Some(8);
         }
         self.supervise_limits(cx, od);
         if let Some(t) = self.enable_at
@@ -628,7 +635,8 @@ impl Behaviour for Dds6 {
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
-        let with_sub = matches!(code, EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION | classes::EMCY_LIMIT_SWITCH);
+        let with_sub =
+            matches!(code, EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION | classes::EMCY_LIMIT_SWITCH);
         let bytes = if with_sub { emcy_sub_code_bytes(self.last_sub) } else { [0; 5] };
         EmcyFrame { code, register: None, bytes }
     }

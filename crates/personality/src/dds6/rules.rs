@@ -1,10 +1,9 @@
 //! The DDS6's rules as functions and constants of its manual (§4–§6),
 //! apart from the behaviour that applies them (`super::Dds6`).
 
+use drivebus_cia402::homing::{HomingRegistry, StandardMethod};
 use drivebus_cia402::state_machine::State;
 use drivebus_od::ObjectDictionary;
-use drivebus_cia402::homing::{HomingRegistry, StandardMethod};
-
 
 /// The SDO abort for a store/restore the device state forbids.
 pub const STORE_REFUSED: u32 = 0x0800_0022;
@@ -261,4 +260,3 @@ pub fn statusword_mask(od: &ObjectDictionary, mapping: u16) -> [u8; 8] {
     }
     mask
 }
-
