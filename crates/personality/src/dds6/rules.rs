@@ -112,68 +112,6 @@ pub fn homing_registry() -> HomingRegistry {
 /// Fixed units (§4.4): position units per motor revolution.
 pub const POSITION_UNITS_PER_REV: u32 = 10_000;
 
-#[cfg(test)]
-mod facts_tests {
-    use super::*;
-
-    #[test]
-    fn store_refusal() {
-        // §4.2 / §6.3.10.
-        assert_eq!(store_allowed(false, false), Ok(()));
-        assert_eq!(store_allowed(true, false), Err(0x0800_0022));
-        assert_eq!(store_allowed(false, true), Err(0x0800_0022));
-    }
-
-    #[test]
-    fn nmt_sub_codes() {
-        // §5 82C2h sub-codes.
-        assert_eq!(NmtRequest::from_cs(2).map(NmtRequest::sub_code), Some(0x0901));
-        assert_eq!(NmtRequest::from_cs(0x82).map(NmtRequest::sub_code), Some(0x0902));
-        assert_eq!(NmtRequest::from_cs(0x81).map(NmtRequest::sub_code), Some(0x0903));
-        assert_eq!(NmtRequest::from_cs(1), None);
-        assert_eq!(NmtRequest::from_cs(0x80), None);
-        assert_eq!(emcy_sub_code_bytes(0x0903), [0x03, 0x09, 0, 0, 0]);
-    }
-
-    #[test]
-    fn classes() {
-        assert_eq!(error_class(0x82C2), Some(4));
-        assert_eq!(error_class(0x8130), Some(2));
-        assert_eq!(error_class(0x2310), Some(6));
-        assert_eq!(error_class(0x6200), Some(8));
-        for e in crate::Profile::Dds6.info().emcy {
-            if e.code != 0 {
-                assert!(error_class(e.code).is_some(), "{:04X}", e.code);
-            }
-        }
-    }
-
-    #[test]
-    fn speed_zero_needs_threshold_time() {
-        // 606Fh default 60 (6 rpm), 6070h 10 ms, 1 ms periods.
-        let mut s = SpeedZero::default();
-        let mut bit = false;
-        for _ in 0..9 {
-            bit = s.update(0.0, 60, 10, 0.001);
-        }
-        assert!(!bit);
-        assert!(s.update(0.0, 60, 10, 0.001) || s.update(0.0, 60, 10, 0.001));
-        assert!(!s.update(600.0, 60, 10, 0.001));
-        // 6070h = 0 (the DDS6 default): the bit follows the speed at once.
-        let mut s = SpeedZero::default();
-        assert!(!s.update(300.0, 60, 0, 0.001));
-        assert!(s.update(59.0, 60, 0, 0.001));
-        assert!(!s.update(60.0, 60, 0, 0.001));
-    }
-
-    #[test]
-    fn homing_methods() {
-        // §4.4.4: 31 methods, 37 instead of 35.
-        let codes: Vec<i8> = homing_registry().codes().collect();
-        assert_eq!(codes, crate::Profile::Dds6.info().homing_methods);
-    }
-}
-
 /// Mode-specific statusword bits 10/12/13 the DDS6 shows while the drive
 /// function is disabled (inventory G.5, observed in every §4.4 trace:
 /// Switch on disabled 2650h in pp/ip, 3250h in pv, 0650h in hm, 0250h in
@@ -259,4 +197,66 @@ pub fn statusword_mask(od: &ObjectDictionary, mapping: u16) -> [u8; 8] {
         bit += len;
     }
     mask
+}
+
+#[cfg(test)]
+mod facts_tests {
+    use super::*;
+
+    #[test]
+    fn store_refusal() {
+        // §4.2 / §6.3.10.
+        assert_eq!(store_allowed(false, false), Ok(()));
+        assert_eq!(store_allowed(true, false), Err(0x0800_0022));
+        assert_eq!(store_allowed(false, true), Err(0x0800_0022));
+    }
+
+    #[test]
+    fn nmt_sub_codes() {
+        // §5 82C2h sub-codes.
+        assert_eq!(NmtRequest::from_cs(2).map(NmtRequest::sub_code), Some(0x0901));
+        assert_eq!(NmtRequest::from_cs(0x82).map(NmtRequest::sub_code), Some(0x0902));
+        assert_eq!(NmtRequest::from_cs(0x81).map(NmtRequest::sub_code), Some(0x0903));
+        assert_eq!(NmtRequest::from_cs(1), None);
+        assert_eq!(NmtRequest::from_cs(0x80), None);
+        assert_eq!(emcy_sub_code_bytes(0x0903), [0x03, 0x09, 0, 0, 0]);
+    }
+
+    #[test]
+    fn classes() {
+        assert_eq!(error_class(0x82C2), Some(4));
+        assert_eq!(error_class(0x8130), Some(2));
+        assert_eq!(error_class(0x2310), Some(6));
+        assert_eq!(error_class(0x6200), Some(8));
+        for e in crate::Profile::Dds6.info().emcy {
+            if e.code != 0 {
+                assert!(error_class(e.code).is_some(), "{:04X}", e.code);
+            }
+        }
+    }
+
+    #[test]
+    fn speed_zero_needs_threshold_time() {
+        // 606Fh default 60 (6 rpm), 6070h 10 ms, 1 ms periods.
+        let mut s = SpeedZero::default();
+        let mut bit = false;
+        for _ in 0..9 {
+            bit = s.update(0.0, 60, 10, 0.001);
+        }
+        assert!(!bit);
+        assert!(s.update(0.0, 60, 10, 0.001) || s.update(0.0, 60, 10, 0.001));
+        assert!(!s.update(600.0, 60, 10, 0.001));
+        // 6070h = 0 (the DDS6 default): the bit follows the speed at once.
+        let mut s = SpeedZero::default();
+        assert!(!s.update(300.0, 60, 0, 0.001));
+        assert!(s.update(59.0, 60, 0, 0.001));
+        assert!(!s.update(60.0, 60, 0, 0.001));
+    }
+
+    #[test]
+    fn homing_methods() {
+        // §4.4.4: 31 methods, 37 instead of 35.
+        let codes: Vec<i8> = homing_registry().codes().collect();
+        assert_eq!(codes, crate::Profile::Dds6.info().homing_methods);
+    }
 }
