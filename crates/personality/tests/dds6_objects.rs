@@ -614,3 +614,38 @@ fn pv_slippage_sets_bit_13_in_closed_loop() {
     assert_eq!(slippage(true, false), 0);
     assert_eq!(slippage(false, true), 0);
 }
+
+#[test]
+fn homing_error_raises_8613h() {
+    // §5 8613h "Homing error", class 2, sub-code 0602h "Unexpected
+    // clockwise limit": method 34 searches the index clockwise and meets
+    // the positive limit switch (+90°) before the next index (+360°).
+    let mut a = limited_axis();
+    a.initial_position = 10.0;
+    let mut r = rig_on(a);
+    write(&mut r, 0x6098, 0, &[34]);
+    write(&mut r, 0x6060, 0, &[6]);
+    enable(&mut r);
+    r.take();
+    r.send("601#2B 40 60 00 1F 00 00 00");
+    // The index is searched at 6099h:2 (6 rpm): +80° take ~2.2 s.
+    r.run_ms(4000);
+    let frames = r.take();
+    assert!(has_emcy(&frames, 0x8613, 0x0602), "{frames:?}");
+    assert_eq!(statusword(&mut r) & 0x6F, QUICK_STOP_ACTIVE);
+}
+
+#[test]
+fn rated_current_scales_6078h() {
+    // §6.5.20 6078h is in 0.1 % of Rated_Current_MTRDT (2310h:08): twice
+    // the rated current, half the per mille for the same motor current.
+    let mut r = rig();
+    enable(&mut r);
+    r.run_ms(20);
+    let before = i32::from(r.read_u32(ID, 0x6078, 0) as i16);
+    write(&mut r, 0x2310, 0x08, &200u16.to_le_bytes());
+    r.run_ms(2);
+    let after = i32::from(r.read_u32(ID, 0x6078, 0) as i16);
+    assert!(before > 0, "{before}");
+    assert!((after * 2 - before).abs() <= 2, "{before} → {after}");
+}

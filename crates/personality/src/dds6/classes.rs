@@ -22,6 +22,8 @@ use drivebus_cia402::state_machine::Reaction;
 pub const EMCY_FOLLOWING_ERROR: u16 = 0x8611;
 /// EMCY 8612h "Limit switch activation" (class 2).
 pub const EMCY_LIMIT_SWITCH: u16 = 0x8612;
+/// EMCY 8613h "Homing error" (class 2).
+pub const EMCY_HOMING: u16 = 0x8613;
 /// EMCY 82B2h "SYNC period breach" (class 3080h:02).
 pub const EMCY_SYNC_BREACH: u16 = 0x82B2;
 

@@ -121,6 +121,8 @@ pub struct Dds6 {
     slip_s: f64,
     /// pv statusword bit 13 "max slippage error" (§6.4.23, §6.5.35).
     slipping: bool,
+    /// hm statusword bit 13 (homing error) at the last step.
+    homing_failed: bool,
 }
 
 /// 2310h:0Bh Max_Speed_MTRDT "can never be exceeded and prevails over any
@@ -129,6 +131,14 @@ pub struct Dds6 {
 fn max_speed(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
     let v = od.get_u32(0x2310, 0x0B).unwrap_or(30_000);
     let _ = cx.drive.on_write(od, 0x6080, 0, &v.to_le_bytes());
+}
+
+/// 2310h:08 Rated_Current_MTRDT (10 mArms) is what 6078h counts in 0.1 %
+/// of (§6.5.20): the drive's rated current (mA).
+fn rated_values(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    if let Some(v) = od.get_u32(0x2310, 0x08).filter(|v| *v > 0) {
+        let _ = cx.drive.on_write(od, 0x6075, 0, &(v * 10).to_le_bytes());
+    }
 }
 
 impl Dds6 {
@@ -220,6 +230,7 @@ impl Dds6 {
         self.sync_class = od.get_u32(0x3080, 2).unwrap_or(2) as u8;
         classes::install(cx.drive, self.following_error_class, self.sync_class);
         max_speed(cx, od);
+        rated_values(cx, od);
         let g = &mut self.guard;
         g.expected_us = od.get_u32(0x3080, 4).unwrap_or(1000);
         g.jitter_us = od.get_u32(0x3080, 5).unwrap_or(200) as u16;
@@ -282,6 +293,28 @@ impl Dds6 {
             self.last_sub = sub;
             cx.drive.inject(Injection::Fault(classes::EMCY_LIMIT_SWITCH));
         }
+    }
+
+    /// §5 8613h "Homing error" (class 2) when a homing fails (the
+    /// handler's statusword bit 13): sub-code 0602h / 0603h with the
+    /// clockwise / counter-clockwise limit switch active, 0601h "Unfound
+    /// index" otherwise.
+    fn supervise_homing(&mut self, cx: &mut Context<'_>) {
+        let failed = cx.drive.mode() == 6
+            && cx.drive.state_machine().state() == State::OperationEnabled
+            && cx.drive.statusword() & 0x2000 != 0;
+        if failed && !self.homing_failed {
+            let switches = cx.drive.view().digital_inputs;
+            self.last_sub = if switches & 2 != 0 {
+                0x0602
+            } else if switches & 1 != 0 {
+                0x0603
+            } else {
+                0x0601
+            };
+            cx.drive.inject(Injection::Fault(classes::EMCY_HOMING));
+        }
+        self.homing_failed = failed;
     }
 
     /// pv statusword bit 13 "max slippage error": the speed differs from
@@ -415,6 +448,10 @@ impl Behaviour for Dds6 {
             (0x3080, 4..=6) => self.load_settings(cx, od),
             (0x3230, 2) => self.publish_io(cx, od),
             (0x2310, 0x0B) => max_speed(cx, od),
+            (0x2310, 0x08) => {
+                rated_values(cx, od);
+                self.live.load(od);
+            }
             (0x2310 | 0x2830..=0x2832 | 0x3310 | 0x23A0, _) => self.live.load(od),
             _ => {}
         }
@@ -580,6 +617,7 @@ impl Behaviour for Dds6 {
                 classes::class_of(code, self.following_error_class, self.sync_class) == Some(8);
         }
         self.supervise_limits(cx, od);
+        self.supervise_homing(cx);
         if let Some(t) = self.enable_at
             && cx.now >= t
         {
@@ -635,8 +673,10 @@ impl Behaviour for Dds6 {
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
-        let with_sub =
-            matches!(code, EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION | classes::EMCY_LIMIT_SWITCH);
+        let with_sub = matches!(
+            code,
+            EMCY_NMT_WHILE_ENABLED | EMCY_CONFIGURATION | classes::EMCY_LIMIT_SWITCH | classes::EMCY_HOMING
+        );
         let bytes = if with_sub { emcy_sub_code_bytes(self.last_sub) } else { [0; 5] };
         EmcyFrame { code, register: None, bytes }
     }
