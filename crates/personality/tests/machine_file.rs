@@ -368,5 +368,7 @@ fn the_documented_example_file_parses_and_builds() {
     let m = f.machine_for(Profile::Generic, 5).unwrap();
     assert_eq!(m.index_offset, 45.0);
     assert_eq!(m.faults.len(), 2);
+    assert_eq!(m.inputs.len(), 2);
+    assert!(m.brake.is_some() && m.io.wiring[1] == 4);
     assert_eq!(f.machine_for(Profile::Dds6, 2).unwrap().home_switch, None);
 }

@@ -66,6 +66,31 @@ proptest! {
         );
         exercise(&text);
     }
+
+    /// The signals' keys and an input change with arbitrary numbers.
+    #[test]
+    fn any_signal_numbers_never_panic(
+        v in proptest::collection::vec(prop_oneof![
+            Just("nan".to_owned()), Just("inf".to_owned()), Just("-inf".to_owned()),
+            any::<f64>().prop_map(|x| format!("{x:e}")),
+            (-1000i64..1000).prop_map(|x| x.to_string()),
+        ], 10),
+        line in 0u16..300,
+        input in prop_oneof![
+            Just("digital"), Just("analog"), Just("master_velocity"), Just("master_position"),
+            Just("motor_temperature"), Just("brake"),
+        ],
+    ) {
+        let text = format!(
+            "[[node]]\nid = 5\nio = {{ digital_inputs = [{line}], analog_inputs = [{}], wiring = {{ {line} = {line} }} }}\n\
+             master_encoder = {{ position = {}, velocity = {} }}\n\
+             brake = {{ release_delay = {}, apply_delay = {}, holding_torque = {} }}\n\
+             temperature = {{ ambient = {}, motor = {} }}\n\
+             [[node.inputs]]\nat = {}\ninput = \"{input}\"\nline = {line}\nvalue = {}\n",
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9]
+        );
+        exercise(&text);
+    }
 }
 
 #[test]

@@ -142,6 +142,17 @@ pub struct IoConfig {
     /// inputs 3 / 4, manufacturer codes) are refused (0609 0030). `false`: no 60D0h from the drive, selection
     /// 10b captures nothing (personalities keep this unless they opt in).
     pub probe_source_object: bool,
+    /// 60FDh bits 16–31 (manufacturer-specific in CiA 402-2) show the
+    /// machine's digital input lines 1–16
+    /// ([`crate::model::DriveModel::digital_inputs`]).
+    pub input_lines: bool,
+    /// 60FEh:1 bits 16–31 (manufacturer-specific) drive the machine's
+    /// digital output lines 1–16, as far as 60FEh:2 enables them.
+    pub output_lines: bool,
+    /// 60FEh:1 bit 0 is CiA 402-2's "set brake": while set (and enabled in
+    /// 60FEh:2) the holding brake is engaged whatever the drive's brake
+    /// sequence wants.
+    pub set_brake_bit: bool,
 }
 
 impl Default for IoConfig {
@@ -153,6 +164,9 @@ impl Default for IoConfig {
             keep_unmasked_command: false,
             probe_inputs: [ProbeInput::HomeSwitch; 2],
             probe_source_object: true,
+            input_lines: false,
+            output_lines: false,
+            set_brake_bit: false,
         }
     }
 }

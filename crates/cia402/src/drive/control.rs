@@ -232,7 +232,7 @@ impl Drive {
     }
 
     /// Position-frame demand → model command.
-    fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
+    pub(super) fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
         let u = &self.units;
         Command::Position {
             position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset_f()),
@@ -303,22 +303,10 @@ impl Drive {
         self.steps = self.steps.wrapping_add(1);
         self.sync_mode_activity();
         let f = self.sm.drive_function();
-        let cmd = match f {
-            DriveFunction::Disabled => {
-                self.stop = None;
-                self.dem.pos = self.actual_pos_f();
-                self.dem.vel = self.actual_vel_frame();
-                self.dem.acc = 0.0;
-                self.dem.torque = 0.0;
-                self.status_bits = 0;
-                Command::Off
-            }
-            DriveFunction::Enabled => self.mode_step(),
-            DriveFunction::Stopping(r) => self.stop_step(r),
-            DriveFunction::Holding => {
-                self.dem.vel = 0.0;
-                self.position_command(self.dem.pos, 0.0, 0.0)
-            }
+        self.command_brake(f);
+        let cmd = match self.brake_hold(f) {
+            Some(hold) => hold,
+            None => self.function_command(f),
         };
         self.model.set_command(cmd);
         self.model.step(self.dt);
@@ -338,6 +326,27 @@ impl Drive {
             if still && ramp_done {
                 let out = self.sm.motion_stopped();
                 self.after_transition(out);
+            }
+        }
+    }
+
+    /// The power stage's command for the drive function.
+    fn function_command(&mut self, f: DriveFunction) -> Command {
+        match f {
+            DriveFunction::Disabled => {
+                self.stop = None;
+                self.dem.pos = self.actual_pos_f();
+                self.dem.vel = self.actual_vel_frame();
+                self.dem.acc = 0.0;
+                self.dem.torque = 0.0;
+                self.status_bits = 0;
+                Command::Off
+            }
+            DriveFunction::Enabled => self.mode_step(),
+            DriveFunction::Stopping(r) => self.stop_step(r),
+            DriveFunction::Holding => {
+                self.dem.vel = 0.0;
+                self.position_command(self.dem.pos, 0.0, 0.0)
             }
         }
     }
@@ -782,7 +791,7 @@ impl Drive {
 
     /// 60FDh digital inputs as published.
     pub(crate) fn digital_inputs(&self) -> u32 {
-        self.model.switches().digital_inputs() | u32::from(self.interlock) << 3
+        self.model.switches().digital_inputs() | u32::from(self.interlock) << 3 | self.input_lines()
     }
 
     /// The statusword as the drive computes it.

@@ -24,6 +24,7 @@
 //! assert_eq!(dn.app.statusword() & 0x4F, 0x40); // switch on disabled
 //! ```
 
+mod brake;
 mod checks;
 mod config;
 mod control;
@@ -40,6 +41,7 @@ pub mod units;
 #[cfg(test)]
 mod tests;
 
+pub use brake::BrakeControl;
 pub use config::{
     DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk, TargetReached,
     ZeroMeansOff, ZeroRamp, profile_type,
@@ -202,6 +204,10 @@ pub struct Drive {
     /// An error with [`ErrorReaction::Warning`] was raised (statusword bit
     /// 7 until a fault reset).
     error_warning: bool,
+    /// Who commands the holding brake.
+    brake_control: BrakeControl,
+    /// Output lines a personality's objects set.
+    app_outputs: u16,
 }
 
 impl Drive {
@@ -281,6 +287,8 @@ impl Drive {
             command_error: None,
             reactions: Vec::new(),
             error_warning: false,
+            brake_control: BrakeControl::Auto,
+            app_outputs: 0,
             cfg,
         };
         d.reload(node.od_mut());
@@ -406,7 +414,9 @@ impl Drive {
         }
     }
 
-    /// Physical digital outputs as set through 60FEh:1 (masked by 60FEh:2).
+    /// Physical digital outputs as set through 60FEh:1 (masked by 60FEh:2;
+    /// bit 0 "set brake", bits 16–31 the output lines with
+    /// [`IoConfig::output_lines`], see [`Drive::output_lines`]).
     pub fn digital_outputs(&self) -> u32 {
         self.extra.outputs
     }

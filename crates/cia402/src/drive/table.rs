@@ -447,6 +447,7 @@ pub(crate) static PARAMS: &[Param] = &[
                 if let Ok(r) = od.find(0x60FE, 1) {
                     od.set_le(r, &d.extra.outputs.to_le_bytes());
                 }
+                d.sync_outputs();
                 return Ok(WriteOutcome::Handled);
             }
             Ok(WriteOutcome::Store)
@@ -469,6 +470,7 @@ pub(crate) static PARAMS: &[Param] = &[
                     }
                 }
             }
+            d.sync_outputs();
         }),
     v(0x60FF, "Target velocity", INT32, Rww, MAP, |_| 0)
         .apply(|d, _, a| d.params.target_velocity = a.v.i32()),

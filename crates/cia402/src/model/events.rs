@@ -217,7 +217,38 @@ pub enum Injection {
     /// Add a load torque step \[Nm\] (replaces any earlier step; ignored
     /// beyond ±[`super::params::MAX_TORQUE`]).
     LoadTorqueStep(f64),
-    /// Remove all forced conditions (latched flags stay until
-    /// [`super::DriveModel::clear_faults`]).
+    /// Sets digital input `line` (1..=16; others are ignored) to `level`.
+    DigitalInput {
+        /// Input line, 1..=16.
+        line: u8,
+        /// High.
+        level: bool,
+    },
+    /// Sets analog input `channel` (1..=4) to `volts` (ignored if not
+    /// finite or beyond ±[`super::io::MAX_VOLTS`]).
+    AnalogInput {
+        /// Channel, 1..=4.
+        channel: u8,
+        /// Voltage \[V\].
+        volts: f64,
+    },
+    /// The master encoder runs at this speed \[counts/s\] from now on
+    /// (ignored beyond ±[`super::io::MAX_MASTER`]).
+    MasterVelocity(f64),
+    /// The master encoder jumps to this position \[counts\] (ignored
+    /// beyond ±[`super::io::MAX_MASTER`]).
+    MasterPosition(f64),
+    /// Forces the motor temperature reading \[°C\] (`None`: back to the
+    /// power-on reading, [`super::IoParams::motor_temperature`], usually
+    /// the thermal model); above the motor's limit it trips 4310h.
+    MotorTemperature(Option<f64>),
+    /// Forces the holding brake engaged (`Some(true)`: stuck) or released
+    /// (`Some(false)`: a manual release lever, a broken brake) whatever its
+    /// command; `None` gives it back to the command.
+    Brake(Option<bool>),
+    /// Remove all forced conditions: faults, forced switches, the forced
+    /// temperature (back to the power-on reading) and brake (latched flags stay until
+    /// [`super::DriveModel::clear_faults`]; input levels and the master
+    /// encoder are the plant's and stay).
     Clear,
 }

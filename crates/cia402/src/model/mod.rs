@@ -27,10 +27,12 @@
 
 mod detect;
 pub mod events;
+pub mod io;
 pub mod params;
 mod physics;
 
 pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, SwitchInput, Switches};
+pub use io::{ANALOG_INPUTS, BrakeParams, BrakeState, DIGITAL_LINES, IoParams};
 pub use params::{
     AxisKind, AxisParams, BusParams, ControlParams, DriveParams, EncoderParams, LoadTorque, MotorKind,
     MotorParams, ParamError, StepperParams,
@@ -169,6 +171,8 @@ pub struct DriveModel {
     force_bus: Option<f64>,
     encoder_failed: bool,
     load_step: f64,
+    /// Inputs, outputs, master encoder, brake, temperature reading.
+    io: io::Io,
     events: StepEvents,
 }
 
@@ -255,6 +259,7 @@ impl DriveModel {
             force_bus: None,
             encoder_failed: false,
             load_step: 0.0,
+            io: io::Io::new(&params.io),
             events: StepEvents::default(),
         };
         m.counts = m.read_counts(theta);
@@ -342,6 +347,7 @@ impl DriveModel {
         }
         let theta0 = self.theta;
         self.sense(dt);
+        self.io_step(dt);
         match self.p.motor.kind {
             MotorKind::Servo => self.servo_step(dt),
             MotorKind::Stepper(s) => self.stepper_step(dt, s),
@@ -379,7 +385,39 @@ impl DriveModel {
                     self.load_step = t;
                 }
             }
+            Injection::DigitalInput { line, level } => {
+                if (1..=DIGITAL_LINES as u8).contains(&line) {
+                    let bit = 1u16 << (line - 1);
+                    self.io.digital = if level { self.io.digital | bit } else { self.io.digital & !bit };
+                }
+            }
+            Injection::AnalogInput { channel, volts } => {
+                let slot = usize::from(channel).checked_sub(1).and_then(|i| self.io.analog.get_mut(i));
+                if let Some(v) = slot
+                    && volts.is_finite()
+                    && volts.abs() <= io::MAX_VOLTS
+                {
+                    *v = volts;
+                }
+            }
+            Injection::MasterVelocity(v) => {
+                if v.is_finite() && v.abs() <= io::MAX_MASTER {
+                    self.io.master_vel = v;
+                }
+            }
+            Injection::MasterPosition(p) => {
+                if p.is_finite() && p.abs() <= io::MAX_MASTER {
+                    self.io.master_pos = p;
+                }
+            }
+            Injection::MotorTemperature(t) => {
+                let t = t.filter(|t| t.is_finite() && (-273.0..=1e4).contains(t));
+                self.io.temperature = t.or(self.p.io.motor_temperature);
+            }
+            Injection::Brake(b) => self.io.brake_forced = b,
             Injection::Clear => {
+                self.io.temperature = self.p.io.motor_temperature;
+                self.io.brake_forced = None;
                 self.force_oc = false;
                 self.force_ot = false;
                 if self.force_bus.take().is_some() {
@@ -454,9 +492,11 @@ impl DriveModel {
         self.torque
     }
 
-    /// Winding temperature \[°C\].
+    /// Motor (winding) temperature \[°C\]: the thermal model's, or the
+    /// reading forced by [`IoParams::motor_temperature`] /
+    /// [`Injection::MotorTemperature`].
     pub fn temperature(&self) -> f64 {
-        self.temperature
+        self.io.temperature.unwrap_or(self.temperature)
     }
 
     /// DC link voltage \[V\].
@@ -530,11 +570,12 @@ impl DriveModel {
     fn supervise(&mut self) {
         let m = &self.p.motor;
         let b = &self.p.bus;
+        let t = self.io.temperature.unwrap_or(self.temperature);
         let f = &mut self.faults;
         f.over_current |= self.force_oc || self.current.abs() > m.overcurrent_trip;
         f.over_voltage |= self.bus_voltage > b.over_voltage;
         f.under_voltage |= self.bus_voltage < b.under_voltage;
-        f.over_temperature |= self.force_ot || self.temperature > m.max_temperature;
+        f.over_temperature |= self.force_ot || t > m.max_temperature;
         f.encoder |= self.encoder_failed;
     }
 }
@@ -543,5 +584,7 @@ impl DriveModel {
 mod tests;
 #[cfg(test)]
 mod tests_axis;
+#[cfg(test)]
+mod tests_io;
 #[cfg(test)]
 mod tests_prop;

@@ -195,6 +195,9 @@ pub struct DriveParams {
     pub axis: AxisParams,
     /// Control loops.
     pub control: ControlParams,
+    /// Inputs, outputs, master encoder, brake, temperature reading
+    /// ([`super::io`]).
+    pub io: super::IoParams,
 }
 
 /// A parameter that failed validation.
@@ -355,6 +358,7 @@ impl DriveParams {
                 velocity_filter: 1.0e-4,
                 control_rate_hz: 8000.0,
             },
+            io: super::IoParams::default(),
         }
     }
 
@@ -380,6 +384,7 @@ impl DriveParams {
                 velocity_filter: 1.0e-4,
                 control_rate_hz: 8000.0,
             },
+            io: super::IoParams::default(),
         }
     }
 
@@ -406,6 +411,7 @@ impl DriveParams {
                 velocity_filter: 0.0,
                 control_rate_hz: 4000.0,
             },
+            io: super::IoParams::default(),
         }
     }
 
@@ -526,6 +532,7 @@ impl DriveParams {
                 check("axis.positive_stop", p > n, "must exceed negative_stop")?;
             }
         }
+        self.io.validate()?;
         let c = &self.control;
         range("control.position_kp", c.position_kp, 0.0, 1e9)?;
         range("control.position_ki", c.position_ki, 0.0, 1e12)?;

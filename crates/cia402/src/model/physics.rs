@@ -181,6 +181,10 @@ impl DriveModel {
         let j = self.d.inertia;
         let b = m.viscous_friction;
         let t_drive = t_motor + self.load_torque(self.theta);
+        // An engaged brake adds to the friction: it holds up to its torque
+        // and slips against the motion beyond.
+        let brake = self.brake_torque();
+        let (t_static, t_coulomb) = (m.static_friction + brake, m.coulomb_friction + brake);
         let w0 = self.omega;
         let integrate = |w: f64, t: f64| {
             if b > 0.0 {
@@ -191,16 +195,16 @@ impl DriveModel {
             }
         };
         let w1 = if w0 == 0.0 {
-            if t_drive.abs() <= m.static_friction {
+            if t_drive.abs() <= t_static {
                 0.0
             } else {
                 let dir = t_drive.signum();
-                let w = integrate(0.0, t_drive - m.coulomb_friction * dir);
+                let w = integrate(0.0, t_drive - t_coulomb * dir);
                 if w * dir > 0.0 { w } else { 0.0 }
             }
         } else {
             let dir = w0.signum();
-            let w = integrate(w0, t_drive - m.coulomb_friction * dir);
+            let w = integrate(w0, t_drive - t_coulomb * dir);
             // Friction alone cannot reverse the motion: stop at zero, and
             // let the stiction test decide about the next step.
             if w * dir < 0.0 { 0.0 } else { w }

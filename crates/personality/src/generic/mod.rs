@@ -21,6 +21,7 @@ pub const EDS: &str = include_str!("../../eds/generic.eds");
 
 use crate::Profile;
 use crate::build::{Behaviour, Context, Verdict};
+use drivebus_cia402::drive::DriveConfig;
 use drivebus_node::NodeConfig;
 use drivebus_od::{ObjectDictionary, SdoAbort};
 
@@ -74,6 +75,15 @@ fn set_ident(od: &mut ObjectDictionary) {
 impl Behaviour for Generic {
     fn profile(&self) -> Profile {
         Profile::Generic
+    }
+
+    /// CiA 402-2 digital I/O towards the machine: 60FDh bits 16–31 show
+    /// input lines 1–16, 60FEh:1 bits 16–31 drive output lines 1–16 and
+    /// bit 0 sets the brake (each as far as 60FEh:2 enables it).
+    fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
+        cfg.io.input_lines = true;
+        cfg.io.output_lines = true;
+        cfg.io.set_brake_bit = true;
     }
 
     fn adjust_node_config(&self, cfg: &mut NodeConfig) {

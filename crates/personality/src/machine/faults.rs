@@ -1,15 +1,17 @@
 //! Faults of the machine applied at run time: a limit switch that trips,
 //! a broken switch wire, an encoder or motor fault, each at a time after
-//! the drive started and, optionally, for a while.
+//! the drive started and, optionally, for a while — and, on the same
+//! schedule, the machine's input changes ([`super::InputChange`]).
 //!
 //! The schedule runs inside the drive's own poll ([`FaultSchedule::run`]),
 //! so it works the same under `serve`, `slcan-pty`, `--sim`, the demo and
 //! on the deterministic virtual bus of a test.
 
+use super::io::{Input, InputChange};
 use super::{MachineError, Polarity};
 use drivebus_can::Instant;
 use drivebus_cia402::drive::{Drive, Injection};
-use drivebus_cia402::model::{Injection as ModelInjection, SwitchInput};
+use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES, Injection as ModelInjection, SwitchInput};
 
 /// One of the three switches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,21 +66,42 @@ pub struct Fault {
     pub duration: Option<f64>,
 }
 
+/// Checks a schedule entry's start and duration.
+pub(super) fn check_time(at: f64, duration: Option<f64>) -> Result<(), MachineError> {
+    let bad = |key: &str, reason: &str| MachineError { key: key.into(), reason: reason.into(), other: None };
+    if !(at.is_finite() && (0.0..=1e9).contains(&at)) {
+        return Err(bad("at", "must be a time in seconds, 0 or more"));
+    }
+    if let Some(d) = duration
+        && !(d.is_finite() && d > 0.0 && d <= 1e9)
+    {
+        return Err(bad("duration", "must be a time in seconds above 0"));
+    }
+    Ok(())
+}
+
 impl Fault {
     pub(super) fn check(&self) -> Result<(), MachineError> {
-        let bad =
-            |key: &str, reason: &str| MachineError { key: key.into(), reason: reason.into(), other: None };
-        if !(self.at.is_finite() && (0.0..=1e9).contains(&self.at)) {
-            return Err(bad("at", "must be a time in seconds, 0 or more"));
-        }
-        if let Some(d) = self.duration
-            && !(d.is_finite() && d > 0.0 && d <= 1e9)
-        {
-            return Err(bad("duration", "must be a time in seconds above 0"));
-        }
-        Ok(())
+        check_time(self.at, self.duration)
     }
+}
 
+/// What a schedule entry does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum What {
+    Fault(FaultKind),
+    Input(Input),
+}
+
+/// One entry of the schedule: a fault or an input change.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Entry {
+    at: f64,
+    duration: Option<f64>,
+    what: What,
+}
+
+impl Entry {
     fn start_ns(&self) -> u64 {
         (self.at * 1e9) as u64
     }
@@ -88,6 +111,18 @@ impl Fault {
     }
 }
 
+/// The machine's own input values, which an input change with a duration
+/// returns to.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InputBase {
+    /// Digital input lines high (bit `n − 1`: line `n`).
+    pub digital_inputs: u16,
+    /// Analog inputs \[V\].
+    pub analog_inputs: [f64; ANALOG_INPUTS],
+    /// Master encoder speed \[counts/s\].
+    pub master_velocity: f64,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
     Pending,
@@ -95,12 +130,15 @@ enum Phase {
     Over,
 }
 
-/// The faults of one machine, applied to its drive as time passes.
+/// The faults and input changes of one machine, applied to its drive as
+/// time passes.
 #[derive(Debug, Clone)]
 pub struct FaultSchedule {
-    faults: Vec<(Fault, Phase)>,
+    /// In the order they start (a later change of an input wins).
+    faults: Vec<(Entry, Phase)>,
     limits: Polarity,
     home: Polarity,
+    base: InputBase,
     /// When the drive started; the schedule's time origin.
     t0: Option<Instant>,
 }
@@ -109,12 +147,25 @@ impl FaultSchedule {
     /// `faults` for a machine whose limit switches and home switch are
     /// wired with the given polarities.
     pub fn new(faults: Vec<Fault>, limits: Polarity, home: Polarity) -> Self {
-        FaultSchedule {
-            faults: faults.into_iter().map(|f| (f, Phase::Pending)).collect(),
-            limits,
-            home,
-            t0: None,
-        }
+        Self::with_inputs(faults, Vec::new(), InputBase::default(), limits, home)
+    }
+
+    /// `faults` and `inputs` on one schedule; an input change that ends
+    /// returns its input to `base` (the machine's value).
+    pub fn with_inputs(
+        faults: Vec<Fault>,
+        inputs: Vec<InputChange>,
+        base: InputBase,
+        limits: Polarity,
+        home: Polarity,
+    ) -> Self {
+        let faults =
+            faults.into_iter().map(|f| Entry { at: f.at, duration: f.duration, what: What::Fault(f.kind) });
+        let inputs =
+            inputs.into_iter().map(|c| Entry { at: c.at, duration: c.duration, what: What::Input(c.input) });
+        let mut entries: Vec<(Entry, Phase)> = faults.chain(inputs).map(|e| (e, Phase::Pending)).collect();
+        entries.sort_by(|a, b| a.0.at.total_cmp(&b.0.at));
+        FaultSchedule { faults: entries, limits, home, base, t0: None }
     }
 
     /// Whether there is nothing to apply.
@@ -131,8 +182,12 @@ impl FaultSchedule {
         if s == Switch::Home { self.home } else { self.limits }
     }
 
-    fn injection(&self, kind: FaultKind) -> Injection {
+    fn injection(&self, what: What) -> Injection {
         use ModelInjection as M;
+        let kind = match what {
+            What::Fault(k) => k,
+            What::Input(i) => return Injection::Model(i.injection()),
+        };
         Injection::Model(match kind {
             FaultKind::Trip(s) => M::ForceSwitch(s.input(), Some(true)),
             FaultKind::WireBreak(s) => {
@@ -146,6 +201,29 @@ impl FaultSchedule {
         })
     }
 
+    /// The inputs a change may have touched, back at the machine's values.
+    fn restore_inputs(&self, drive: &mut Drive) {
+        use ModelInjection as M;
+        let touched = |f: fn(&Input) -> bool| {
+            self.faults.iter().any(|(e, p)| *p != Phase::Pending && matches!(&e.what, What::Input(i) if f(i)))
+        };
+        let b = &self.base;
+        if touched(|i| matches!(i, Input::Digital { .. })) {
+            for line in 1..=DIGITAL_LINES as u8 {
+                let level = b.digital_inputs & (1 << (line - 1)) != 0;
+                drive.inject(Injection::Model(M::DigitalInput { line, level }));
+            }
+        }
+        if touched(|i| matches!(i, Input::Analog { .. })) {
+            for (k, &volts) in b.analog_inputs.iter().enumerate() {
+                drive.inject(Injection::Model(M::AnalogInput { channel: k as u8 + 1, volts }));
+            }
+        }
+        if touched(|i| matches!(i, Input::MasterVelocity(_))) {
+            drive.inject(Injection::Model(M::MasterVelocity(b.master_velocity)));
+        }
+    }
+
     /// Applies what is due at `now` to `drive` (it shows at the drive's
     /// next control period) and returns when the next change is due.
     pub fn run(&mut self, now: Instant, drive: &mut Drive) -> Option<Instant> {
@@ -156,7 +234,7 @@ impl FaultSchedule {
             let (f, phase) = self.faults[i];
             if phase == Phase::Pending && t >= f.start_ns() {
                 self.faults[i].1 = Phase::Active;
-                drive.inject(self.injection(f.kind));
+                drive.inject(self.injection(f.what));
             }
             if self.faults[i].1 == Phase::Active && f.end_ns().is_some_and(|e| t >= e) {
                 self.faults[i].1 = Phase::Over;
@@ -164,11 +242,16 @@ impl FaultSchedule {
             }
         }
         if ended {
-            // The model clears its forced conditions all at once; the
-            // faults still on are put back.
+            // The model clears its forced conditions all at once and the
+            // inputs go back to the machine's values; the faults and
+            // changes still on are put back (a jump of the master encoder
+            // is not repeated).
             drive.inject(Injection::Model(ModelInjection::Clear));
+            self.restore_inputs(drive);
             for (f, _) in self.faults.iter().filter(|(_, p)| *p == Phase::Active) {
-                drive.inject(self.injection(f.kind));
+                if !matches!(f.what, What::Input(Input::MasterPosition(_))) {
+                    drive.inject(self.injection(f.what));
+                }
             }
         }
         let next = self

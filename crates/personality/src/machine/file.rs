@@ -17,8 +17,10 @@
 //! column (1-based) it was found at: TOML syntax, an unknown key, a wrong
 //! type, a value out of range or in the wrong order.
 
+use super::io::{Brake, Input, InputChange};
 use super::{Fault, FaultKind, HardStops, HomeSwitch, Limits, Machine, MachineError, Polarity, Switch};
 use crate::Profile;
+use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -91,8 +93,66 @@ struct NodePatch {
     hard_stops: Option<StopsPatch>,
     index: Option<IndexPatch>,
     load: Option<LoadPatch>,
+    io: Option<IoPatch>,
+    master_encoder: Option<MasterPatch>,
+    brake: Option<BrakePatch>,
+    temperature: Option<TemperaturePatch>,
     #[serde(default)]
     faults: Vec<Spanned<FaultSpec>>,
+    #[serde(default)]
+    inputs: Vec<Spanned<InputSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IoPatch {
+    digital_inputs: Option<Vec<Spanned<u8>>>,
+    analog_inputs: Option<Spanned<Vec<f64>>>,
+    wiring: Option<BTreeMap<String, Spanned<u8>>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MasterPatch {
+    position: S<f64>,
+    velocity: S<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BrakePatch {
+    enabled: S<bool>,
+    release_delay: S<f64>,
+    apply_delay: S<f64>,
+    holding_torque: S<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TemperaturePatch {
+    ambient: S<f64>,
+    motor: S<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum InputName {
+    Digital,
+    Analog,
+    MasterVelocity,
+    MasterPosition,
+    MotorTemperature,
+    Brake,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InputSpec {
+    at: Spanned<f64>,
+    input: Spanned<InputName>,
+    line: S<u8>,
+    value: Spanned<f64>,
+    duration: S<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -396,7 +456,148 @@ impl MachineFile {
                 duration: f.duration.as_ref().map(|d| *d.get_ref()),
             });
         }
+        self.signals(node, p, &mut m, &mut sp).map_err(|e| match e {
+            Placed::At(e) => e,
+            Placed::Key(e) => place(&sp, e),
+        })?;
         m.check().map_err(|e| place(&sp, e))?;
         Ok(m)
     }
+
+    fn error_at(&self, node: u8, at: usize, message: String) -> MachineFileError {
+        let (line, column) = line_col(&self.text, at);
+        MachineFileError { line, column, message: format!("node {node}: {message}") }
+    }
+
+    /// The signals' keys: `io`, `master_encoder`, `brake`, `temperature`
+    /// and the `[[node.inputs]]` schedule.
+    fn signals(&self, node: u8, p: &NodePatch, m: &mut Machine, sp: &mut Spans) -> Result<(), Placed> {
+        let at = |span: Range<usize>, msg: String| Placed::At(self.error_at(node, span.start, msg));
+        if let Some(io) = &p.io {
+            if let Some(lines) = &io.digital_inputs {
+                m.io.digital_inputs = 0;
+                for l in lines {
+                    let n = *l.get_ref();
+                    if !(1..=DIGITAL_LINES as u8).contains(&n) {
+                        return Err(at(l.span(), format!("io.digital_inputs: {n} is not a line in 1..=16")));
+                    }
+                    m.io.digital_inputs |= 1 << (n - 1);
+                }
+            }
+            if let Some(a) = &io.analog_inputs {
+                sp.0.insert("io.analog_inputs".into(), a.span());
+                if a.get_ref().len() > ANALOG_INPUTS {
+                    return Err(at(a.span(), "io.analog_inputs: at most 4 channels".into()));
+                }
+                m.io.analog_inputs = [0.0; ANALOG_INPUTS];
+                m.io.analog_inputs[..a.get_ref().len()].copy_from_slice(a.get_ref());
+            }
+            for (out, to) in io.wiring.iter().flatten() {
+                let bad = |what: &str| at(to.span(), format!("io.wiring: {what} is not a line in 1..=16"));
+                let k = out.parse::<u8>().ok().filter(|k| (1..=DIGITAL_LINES as u8).contains(k));
+                let Some(k) = k else { return Err(bad(&format!("output {out}"))) };
+                let n = *to.get_ref();
+                if !(1..=DIGITAL_LINES as u8).contains(&n) {
+                    return Err(bad(&format!("input {n}")));
+                }
+                m.io.wiring[usize::from(k - 1)] = n;
+            }
+        }
+        if let Some(e) = &p.master_encoder {
+            if let Some(v) = sp.take("master_encoder.position", &e.position) {
+                m.master_encoder.position = v;
+            }
+            if let Some(v) = sp.take("master_encoder.velocity", &e.velocity) {
+                m.master_encoder.velocity = v;
+            }
+        }
+        if let Some(b) = &p.brake {
+            let enabled = sp.take("brake.enabled", &b.enabled);
+            let release = sp.take("brake.release_delay", &b.release_delay);
+            let apply = sp.take("brake.apply_delay", &b.apply_delay);
+            let torque = sp.take("brake.holding_torque", &b.holding_torque);
+            if enabled == Some(false) {
+                m.brake = None;
+            } else {
+                let base = m.brake;
+                // Placed at the brake's key the table has.
+                let given = if release.is_some() { "brake.release_delay" } else { "brake.apply_delay" };
+                let need = |v: Option<f64>, b: Option<f64>, key: &str| {
+                    v.or(b).ok_or_else(|| {
+                        Placed::Key(MachineError {
+                            other: Some(given.into()),
+                            ..super::err(key, "missing (no default to keep)")
+                        })
+                    })
+                };
+                m.brake = Some(Brake {
+                    release_delay: need(release, base.map(|b| b.release_delay), "brake.release_delay")?,
+                    apply_delay: need(apply, base.map(|b| b.apply_delay), "brake.apply_delay")?,
+                    holding_torque: torque.or(base.and_then(|b| b.holding_torque)),
+                });
+            }
+        }
+        if let Some(t) = &p.temperature {
+            if let Some(v) = sp.take("temperature.ambient", &t.ambient) {
+                m.temperature.ambient = Some(v);
+            }
+            if let Some(v) = sp.take("temperature.motor", &t.motor) {
+                m.temperature.motor = Some(v);
+            }
+        }
+        for (i, c) in p.inputs.iter().enumerate() {
+            let c = c.get_ref();
+            let key = |k: &str| format!("inputs[{i}].{k}");
+            sp.0.insert(key("at"), c.at.span());
+            sp.0.insert(key("input"), c.input.span());
+            sp.0.insert(key("value"), c.value.span());
+            if let Some(d) = &c.duration {
+                sp.0.insert(key("duration"), d.span());
+            }
+            if let Some(l) = &c.line {
+                sp.0.insert(key("line"), l.span());
+            }
+            let name = *c.input.get_ref();
+            let takes_line = matches!(name, InputName::Digital | InputName::Analog);
+            let line = match (&c.line, takes_line) {
+                (Some(l), true) => *l.get_ref(),
+                (None, true) => {
+                    return Err(at(c.input.span(), format!("{}: needs `line`", key("input"))));
+                }
+                (Some(l), false) => {
+                    let why = "only `digital` and `analog` take a line";
+                    return Err(at(l.span(), format!("{}: {why}", key("line"))));
+                }
+                (None, false) => 0,
+            };
+            let v = *c.value.get_ref();
+            let level = || {
+                if v == 0.0 || v == 1.0 {
+                    Ok(v == 1.0)
+                } else {
+                    Err(at(c.value.span(), format!("{}: {v} is not a level (0 or 1)", key("value"))))
+                }
+            };
+            let input = match name {
+                InputName::Digital => Input::Digital { line, level: level()? },
+                InputName::Analog => Input::Analog { channel: line, volts: v },
+                InputName::MasterVelocity => Input::MasterVelocity(v),
+                InputName::MasterPosition => Input::MasterPosition(v),
+                InputName::MotorTemperature => Input::MotorTemperature(v),
+                InputName::Brake => Input::Brake(level()?),
+            };
+            m.inputs.push(InputChange {
+                at: *c.at.get_ref(),
+                input,
+                duration: c.duration.as_ref().map(|d| *d.get_ref()),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// An error of the signals' keys: placed already, or at its key.
+enum Placed {
+    At(MachineFileError),
+    Key(MachineError),
 }

@@ -1,6 +1,8 @@
 //! The machine around a drive: the axis it moves and what is mounted on
 //! it — travel, limit switches, home switch, hard stops, the encoder's
-//! index pulse, load and gear — and faults a test schedules on it.
+//! index pulse, load and gear — its signals (digital and analog inputs,
+//! a master encoder, a holding brake, the motor temperature: [`mod@io`])
+//! and faults and input changes a test schedules on it.
 //!
 //! A drive on its own has no switches (`drivebus_cia402::model::AxisParams`
 //! defaults to a bare shaft), so a master that starts a limit-switch
@@ -21,9 +23,11 @@
 
 pub mod faults;
 pub mod file;
+pub mod io;
 
-pub use faults::{Fault, FaultKind, FaultSchedule, Switch};
+pub use faults::{Fault, FaultKind, FaultSchedule, InputBase, Switch};
 pub use file::{MachineFile, MachineFileError};
+pub use io::{Brake, Input, InputChange, Io, MasterEncoder, Temperature};
 
 use crate::Profile;
 use core::f64::consts::PI;
@@ -115,8 +119,18 @@ pub struct Machine {
     pub index_offset: f64,
     /// The load.
     pub load: Load,
+    /// Digital and analog inputs, outputs wired back.
+    pub io: Io,
+    /// The master encoder input.
+    pub master_encoder: MasterEncoder,
+    /// The holding brake (`None`: none fitted).
+    pub brake: Option<Brake>,
+    /// Ambient and motor temperature.
+    pub temperature: Temperature,
     /// Faults applied at run time.
     pub faults: Vec<Fault>,
+    /// Input changes at run time (on the faults' schedule).
+    pub inputs: Vec<InputChange>,
 }
 
 /// A machine that does not make sense: the key (as in the file) and why.
@@ -190,7 +204,12 @@ fn layout(feed: f64, gear_ratio: f64, (neg, pos): (f64, f64), inertia: f64, coul
         hard_stops: Some(HardStops { negative: -(neg + 1.5) * r, positive: (pos + 1.5) * r }),
         index_offset: 0.0,
         load: Load { inertia, viscous_friction: 0.0, coulomb_friction: coulomb, torque: 0.0 },
+        io: Io::default(),
+        master_encoder: MasterEncoder::default(),
+        brake: None,
+        temperature: Temperature::default(),
         faults: Vec::new(),
+        inputs: Vec::new(),
     }
 }
 
@@ -311,12 +330,12 @@ impl Machine {
         for (i, f) in self.faults.iter().enumerate() {
             f.check().map_err(|e| err(&format!("faults[{i}].{}", e.key), e.reason))?;
         }
-        Ok(())
+        self.check_io()
     }
 
     /// Puts the machine into a drive configuration (after the personality
     /// chose its motor and units): axis, switches, stops, index angle,
-    /// load reflected to the motor shaft.
+    /// load reflected to the motor shaft, inputs, brake, temperatures.
     pub fn apply(&self, cfg: &mut DriveConfig) {
         let i = self.gear_ratio;
         let p = &mut cfg.params;
@@ -342,12 +361,19 @@ impl Machine {
         m.coulomb_friction += self.load.coulomb_friction / i;
         // Break-away at least the sliding friction (the model requires it).
         m.static_friction += self.load.coulomb_friction / i;
+        self.apply_io(cfg);
     }
 
-    /// The run-time schedule of [`Machine::faults`].
+    /// The run-time schedule of [`Machine::faults`] and [`Machine::inputs`].
     pub fn fault_schedule(&self) -> FaultSchedule {
-        FaultSchedule::new(
+        FaultSchedule::with_inputs(
             self.faults.clone(),
+            self.inputs.clone(),
+            InputBase {
+                digital_inputs: self.io.digital_inputs,
+                analog_inputs: self.io.analog_inputs,
+                master_velocity: self.master_encoder.velocity,
+            },
             self.limits.map_or(Polarity::default(), |l| l.polarity),
             self.home_switch.map_or(Polarity::NormallyOpen, |h| h.polarity),
         )
