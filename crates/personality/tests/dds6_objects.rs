@@ -649,3 +649,117 @@ fn rated_current_scales_6078h() {
     assert!(before > 0, "{before}");
     assert!((after * 2 - before).abs() <= 2, "{before} → {after}");
 }
+
+/// A DDS6 on a machine with a holding brake (50 ms to release / apply)
+/// and its I/O.
+fn rig_with_brake() -> Rig {
+    use drivebus_cia402::model::BrakeParams;
+    let pn = drivebus_personality::build::build_custom(
+        Profile::Dds6,
+        ID,
+        Box::new(MemoryStorage::new()),
+        Box::new(Dds6::new()),
+        |cfg| {
+            cfg.params.io.brake =
+                Some(BrakeParams { release_delay: 0.05, apply_delay: 0.05, holding_torque: 10.0 })
+        },
+    );
+    Rig::with(pn.unwrap()).0
+}
+
+fn brake_engaged(r: &Rig) -> bool {
+    r.pn().app.drive.model().brake().engaged
+}
+
+#[test]
+fn handled_brake_releases_before_operation() {
+    // §4.3 / §6.4.3: with 2360h:01 bit 0 the drive activates the brake
+    // output at the enable and enters the operating state after
+    // Release_Time_HBRKS (200 ms); on disable it engages the brake.
+    // §6.4.22 3360h:02: bit 0 output active, bit 1 released, bit 2 engaged.
+    let mut r = rig_with_brake();
+    assert_eq!(r.read_u32(ID, 0x3360, 2), 0b100, "engaged at power-on");
+    write(&mut r, 0x2360, 1, &1u16.to_le_bytes());
+    write(&mut r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(5);
+    write(&mut r, 0x6040, 0, &[0x0F, 0]);
+    r.run_ms(100);
+    assert_eq!(r.read_u32(ID, 0x3360, 2), 0b001, "output active, release time running");
+    assert_eq!(statusword(&mut r) & 0x6F, 0x23, "not yet operating");
+    assert!(!brake_engaged(&r), "the machine's brake (50 ms) is free");
+    r.run_ms(150);
+    assert_eq!(r.read_u32(ID, 0x3360, 2), 0b011);
+    assert_eq!(statusword(&mut r) & 0x6F, 0x27);
+    write(&mut r, 0x6040, 0, &[0x06, 0]);
+    r.run_ms(100);
+    assert_eq!(r.read_u32(ID, 0x3360, 2), 0b000);
+    assert!(brake_engaged(&r));
+    r.run_ms(150);
+    assert_eq!(r.read_u32(ID, 0x3360, 2), 0b100, "application time passed");
+}
+
+#[test]
+fn unhandled_brake_stays_engaged() {
+    // 2360h:01 = 0 (default): "the holding brake is not handled through
+    // the drive": its output stays inactive, the brake engaged.
+    let mut r = rig_with_brake();
+    enable(&mut r);
+    assert!(brake_engaged(&r));
+    assert_eq!(r.read_u32(ID, 0x3360, 2) & 1, 0);
+}
+
+#[test]
+fn manual_brake_control_and_brake_output_source() {
+    // §6.4.3 bit 1 manual: only Control_HBRKC bit 0 (3360h:01) or the
+    // 2810h:0Ah input commands the brake; §6.4.9 source 0044h "Holding
+    // Brake" puts the brake output on DO0 (machine output line 1).
+    let mut r = rig_with_brake();
+    write(&mut r, 0x2830, 1, &0x0044u16.to_le_bytes());
+    write(&mut r, 0x2360, 1, &3u16.to_le_bytes());
+    write(&mut r, 0x3360, 1, &[1]);
+    r.run_ms(100);
+    assert!(!brake_engaged(&r), "released by hand, motor disabled");
+    assert_eq!(r.read_u32(ID, 0x3230, 1) & 1, 1);
+    assert_eq!(r.pn().app.drive.output_lines() & 1, 1);
+    // The input: DI4 active (2810h:0Ah = 0204h) instead of the bit.
+    write(&mut r, 0x3360, 1, &[0]);
+    write(&mut r, 0x2810, 0x0A, &0x0204u16.to_le_bytes());
+    r.run_ms(100);
+    assert!(brake_engaged(&r));
+    r.pn_mut()
+        .app
+        .inject(Injection::Model(drivebus_cia402::model::Injection::DigitalInput { line: 4, level: true }));
+    r.run_ms(100);
+    assert!(!brake_engaged(&r));
+}
+
+#[test]
+fn machine_inputs_reach_3210h_and_3250h() {
+    // §6.4.14 DI2..DI7 = the machine's lines 2..7; §6.4.16 AI0 in mV.
+    use drivebus_cia402::model::Injection as Plant;
+    let mut r = rig();
+    r.pn_mut().app.inject(Injection::Model(Plant::DigitalInput { line: 3, level: true }));
+    r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: 2.5 }));
+    r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 2, volts: -1.25 }));
+    r.run_ms(5);
+    assert_eq!(r.read_u32(ID, 0x3210, 1), 1 << 3);
+    assert_eq!(r.read_u32(ID, 0x3250, 1) as i16, 2500);
+    assert_eq!(r.read_u32(ID, 0x3251, 1) as i16, -1250);
+}
+
+#[test]
+fn fault_reset_input_di2() {
+    // §6.4.8 2810h:02 default 0502h: a falling edge of DI2 resets a fault.
+    use drivebus_cia402::model::Injection as Plant;
+    let mut r = rig();
+    enable(&mut r);
+    r.pn_mut().app.inject(Injection::FollowingError);
+    r.run_ms(50);
+    assert_eq!(statusword(&mut r) & 0x4F, FAULT);
+    r.pn_mut().app.inject(Injection::Model(Plant::DigitalInput { line: 2, level: true }));
+    r.run_ms(10);
+    assert_eq!(statusword(&mut r) & 0x4F, FAULT, "rising edge: nothing");
+    r.pn_mut().app.inject(Injection::Model(Plant::DigitalInput { line: 2, level: false }));
+    r.run_ms(10);
+    assert_eq!(statusword(&mut r) & 0x4F, 0x40, "switch on disabled");
+}

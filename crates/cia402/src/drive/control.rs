@@ -345,6 +345,9 @@ impl Drive {
             DriveFunction::Enabled => self.mode_step(),
             DriveFunction::Stopping(r) => self.stop_step(r),
             DriveFunction::Holding => {
+                // CiA 402-2 statusword bit 10: with quick stop option codes
+                // 5–8 "target reached" is set once the drive has stopped.
+                self.status_bits |= 1 << 10;
                 self.dem.vel = 0.0;
                 self.position_command(self.dem.pos, 0.0, 0.0)
             }

@@ -31,6 +31,7 @@
 //! The §4.4 traces replay against this behaviour in
 //! `tests/replay_dds6.rs` / `tests/replay_dds6_ip.rs`.
 
+pub mod brake;
 pub mod classes;
 mod emcy;
 mod facts;
@@ -337,9 +338,10 @@ impl Dds6 {
     }
 
     /// The values published every step (`live`).
-    fn publish_io(&mut self, cx: &Context<'_>, od: &mut ObjectDictionary) {
-        let sw = self.last_sw;
-        self.live.publish(cx.drive, sw, od, cx.drive.control_period());
+    fn publish_io(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let (sw, enabling) = (self.last_sw, self.enable_at.is_some());
+        let dt = cx.drive.control_period();
+        self.live.publish(cx.drive, sw, enabling, od, dt);
     }
 
     fn motor_enabled(sw: u16) -> bool {
@@ -452,7 +454,7 @@ impl Behaviour for Dds6 {
                 rated_values(cx, od);
                 self.live.load(od);
             }
-            (0x2310 | 0x2830..=0x2832 | 0x3310 | 0x23A0, _) => self.live.load(od),
+            (0x2310 | 0x2830..=0x2832 | 0x3310 | 0x23A0 | 0x2360 | 0x3360 | 0x2810, _) => self.live.load(od),
             _ => {}
         }
         if (0x1A00..=0x1A03).contains(&index) {
@@ -464,7 +466,7 @@ impl Behaviour for Dds6 {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x1010, 0x1011, 0x2410, 0x6040, 0x6083, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x2480, 0x3080, 0x3230,
-            0x2310, 0x2830, 0x2831, 0x2832, 0x3310, 0x23A0, 0x60C2,
+            0x2310, 0x2830, 0x2831, 0x2832, 0x3310, 0x23A0, 0x60C2, 0x2360, 0x3360, 0x2810,
         ]
     }
 
@@ -549,7 +551,13 @@ impl Behaviour for Dds6 {
                 // then the drive's own settling (16 ms with the default
                 // 10 ms ramp, §4.4.2 EX4).
                 let ramp = u64::from(od.get_u32(0x2410, 2).unwrap_or(10) as u16);
-                let ms = if timing { ENCODER_TIMING_MS } else { ramp + ENABLE_DELAY_MS - 10 };
+                let mut ms = if timing { ENCODER_TIMING_MS } else { ramp + ENABLE_DELAY_MS - 10 };
+                if self.live.brake.automatic() {
+                    // §4.3: "The transition to the operating state is
+                    // delayed by the time the brake requires to completely
+                    // disengage" (2360h:03).
+                    ms = ms.max(u64::from(self.live.brake.release_ms));
+                }
                 self.enable_at = Some(cx.now + drivebus_can::Duration::from_millis(ms));
             }
             cx.drive.on_write(od, index, sub, &to_drive.to_le_bytes())?;
@@ -618,6 +626,14 @@ impl Behaviour for Dds6 {
         }
         self.supervise_limits(cx, od);
         self.supervise_homing(cx);
+        if self.live.take_fault_reset() && !self.power_cycle {
+            // §6.4.8 2810h:02: the input's edge resets a fault like
+            // controlword bit 7 (a class 8 error excepted, §5).
+            let cw = od.get_u32(0x6040, 0).unwrap_or(0) as u16 & !0x80;
+            for c in [cw, cw | 0x80, cw] {
+                let _ = cx.drive.on_write(od, 0x6040, 0, &c.to_le_bytes());
+            }
+        }
         if let Some(t) = self.enable_at
             && cx.now >= t
         {
