@@ -16,7 +16,12 @@
 //! * EMCY bytes 3–7 carry a 16-bit sub-code (§5; byte position not given:
 //!   bytes 3–4, little-endian like every CANopen number);
 //! * error classes decide the reaction (§5): 0 warning, 2 quick stop,
-//!   4 quick stop then fault, 6 disable then fault, 8 fault until power cycle;
+//!   4 quick stop then fault, 6 disable then fault, 8 fault until power
+//!   cycle (`classes`; 8611h by 2480h:01, 82B2h by 3080h:02); limit
+//!   switches raise 8612h, a failed homing 8613h, with sub-codes;
+//! * the Sync Guard 3080h (`sync_guard`), the digital / analog I/O and the
+//!   holding brake on the machine's lines and brake (`io`, `brake`,
+//!   `live`); the behaviour ledger is `ledger.tsv`;
 //! * homing methods 1–14, 17–30, 33, 34, 37 (no 35, no manufacturer methods,
 //!   §4.4.4) on the 6083h ramps; modes pp, pv, tq, hm, ip (§6.5.4; no
 //!   csp/csv/cst in FW 0.22);

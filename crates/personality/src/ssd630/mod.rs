@@ -3,8 +3,9 @@
 //! What a master sees that differs from a plain CiA 301/402 device:
 //!
 //! * an unknown index is answered `0601 0000h`, not `0602 0000h` (§14.1);
-//! * after initialisation an EMCY 0000h "no error" carries the firmware
-//!   version as ASCII "Vxxxx" in bytes 3–7 (§9 transition 0, Table 1);
+//! * after initialisation (power-on and NMT reset node) an EMCY 0000h "no
+//!   error" carries the firmware version as ASCII "Vxxxx" in bytes 3–7 (§9
+//!   transition 0, Table 1);
 //! * the state machine follows the controlword only while the "Controller
 //!   Active" input X10.7 is at 24 V: statusword bit 9 "remote" shows it and
 //!   Shutdown is not accepted without it (§10.2); dropping the input goes
@@ -20,6 +21,9 @@
 //! * EMCY error register per code as in §9 Table 1 (03h, 05h, 09h, 21h, 81h);
 //! * 60FFh must be 0 before leaving profile velocity (§14.15 note): a mode
 //!   change with 60FFh ≠ 0 while in pv is refused with `0800 0022h`;
+//! * with transmission type 254 only the bits the masks 2014h–2017h select
+//!   trigger a TPDO (§7, §11); configuration mode 5 (4804h:05) ignores the
+//!   controlword (§1.4); the behaviour ledger is `ledger.tsv`;
 //! * 2018h = 1 "NMT state (operational after power on)" (§11): after the
 //!   boot-up message the drive goes operational by itself (value as
 //!   loaded from storage at power-on). NMT Reset Node, which CiA 301
