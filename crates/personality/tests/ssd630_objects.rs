@@ -384,3 +384,20 @@ fn digital_inputs_and_outputs() {
     r.run_ms(5);
     assert_eq!(r.pn().app.drive.digital_outputs(), 0x0003_0000);
 }
+
+#[test]
+fn drive_information_reads_the_machine() {
+    // §13 4803h "Drive information": 05h motor temperature (°C), 06h Ucc
+    // (V), 07h analog input X10 (mV); units are not given (our choice).
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let mut r = rig();
+    r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: -2.5 }));
+    r.run_ms(5);
+    let m = r.pn().app.drive.model();
+    let (temp, ucc) = (m.temperature().round() as u32, m.bus_voltage().round() as u32);
+    assert!(ucc > 0);
+    assert_eq!(r.read_u32(ID, 0x4803, 5), temp);
+    assert_eq!(r.read_u32(ID, 0x4803, 6), ucc);
+    assert_eq!(r.read_u32(ID, 0x4803, 7) as u16 as i16, -2500);
+}

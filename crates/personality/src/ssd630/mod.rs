@@ -394,7 +394,7 @@ impl Behaviour for Ssd630 {
         &[
             0x100C, 0x100D, 0x1400, 0x1401, 0x1402, 0x1403, 0x1600, 0x1601, 0x1602, 0x1603, 0x1800, 0x1801,
             0x1802, 0x1803, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6040, 0x6099, 0x1006, 0x6080, 0x2014, 0x2015,
-            0x2016, 0x2017, 0x6060, 0x6048,
+            0x2016, 0x2017, 0x6060, 0x6048, 0x4803,
         ]
     }
 
@@ -578,6 +578,29 @@ impl Behaviour for Ssd630 {
             }
         }
         self.publish(cx, od);
+    }
+
+    fn on_read(
+        &mut self,
+        cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+    ) -> Result<(), SdoAbort> {
+        // §13 4803h "Drive information" (units not given): 05h motor
+        // temperature in °C, 06h the DC link Ucc in V, 07h the analog input
+        // X10 in mV (two's complement), from the machine.
+        let m = cx.drive.model();
+        let v = match (index, sub) {
+            (0x4803, 5) => m.temperature().round().clamp(0.0, 65535.0) as u16,
+            (0x4803, 6) => m.bus_voltage().round().clamp(0.0, 65535.0) as u16,
+            (0x4803, 7) => (m.analog_input(1) * 1000.0).round().clamp(-32768.0, 32767.0) as i16 as u16,
+            _ => return Ok(()),
+        };
+        if let Ok(r) = od.find(index, sub) {
+            od.set_le(r, &v.to_le_bytes());
+        }
+        Ok(())
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
