@@ -233,3 +233,37 @@ fn digital_outputs_follow_the_mask() {
     r.write(0x60FE, 1, &0x1234_5678u32.to_le_bytes());
     assert_eq!(r.read(0x60FE, 1), 0x1234_5678);
 }
+
+/// A follower for csp (mode 8): the position is the machine's master
+/// encoder, one count per position unit (the plainest electronic gearing).
+struct Follower;
+
+impl ModeHandler for Follower {
+    fn supported_modes(&self) -> u32 {
+        op::supported_bit(op::CSP)
+    }
+    fn enter(&mut self, _mode: i8, _io: &ModeIo<'_>) {}
+    fn step(&mut self, _mode: i8, io: &ModeIo<'_>, _dt: f64) -> ModeOutput {
+        let cmd = ModeCommand::Position {
+            position: io.master_position as f64,
+            velocity: io.master_velocity,
+            acceleration: 0.0,
+        };
+        ModeOutput::new(cmd, 1 << 12)
+    }
+}
+
+/// Mode handlers see the machine's master encoder (position and speed).
+#[test]
+fn mode_handlers_see_the_master_encoder() {
+    let mut p = DriveParams::servo_small();
+    p.io.master_velocity = 36_000.0; // counts/s: 36°/s as followed here
+    let dn = generic_drive_with(ID, DriveConfig::servo(p), vec![Box::new(Follower)]);
+    let mut r = Rig::with(dn);
+    r.write(0x6060, 0, &[8]);
+    r.enable();
+    r.run_ms(500.0);
+    let (master, pos) = (r.drive().model().master_position(), r.read(0x6064, 0) as i32);
+    assert!((i64::from(pos) - master).abs() <= 200, "following the master: {pos} vs {master}");
+    assert!(master > 17_000, "the master ran: {master}");
+}

@@ -84,3 +84,25 @@ fn max_motor_speed_zero_is_no_limit_when_the_drive_says_so() {
     let v = pv_speed(DriveConfig::default(), 0, 360_000);
     assert!(v.abs() < 20_000, "6080h = 0 limits to 0, {v}");
 }
+
+/// 6073h max current 0 limits nothing where the drive says so
+/// (Kollmorgen), and blocks the torque where it does not.
+#[test]
+fn max_current_zero_is_no_limit_when_the_drive_says_so() {
+    let demand = |zero_off: bool| {
+        let cfg = DriveConfig {
+            zero_means_off: ZeroMeansOff { max_current: zero_off, ..ZeroMeansOff::default() },
+            ..DriveConfig::default()
+        };
+        let mut r = Rig::with_config(cfg);
+        r.write(0x6060, 0, &[4]);
+        r.write(0x6073, 0, &0u16.to_le_bytes());
+        r.write(0x6087, 0, &100_000u32.to_le_bytes());
+        r.enable();
+        r.write(0x6071, 0, &100i16.to_le_bytes());
+        r.run_ms(5.0);
+        r.read(0x6074, 0) as i16
+    };
+    assert_eq!(demand(true), 100);
+    assert_eq!(demand(false), 0);
+}

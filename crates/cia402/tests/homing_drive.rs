@@ -101,3 +101,29 @@ fn limit_switch_is_a_reference_while_homing() {
     assert!(done.is_some(), "homing did not complete: {:04X}", rig.statusword());
     assert!(on_switch, "the search reached the switch");
 }
+
+/// 6099h:1 is the speed of the switch search, 6099h:2 the speed that
+/// leaves the switch, 609Ah the acceleration of both (method 17: the
+/// negative limit switch).
+#[test]
+fn homing_speeds_and_acceleration_follow_6099h_and_609ah() {
+    let mut rig = rig(|p| {
+        p.axis.negative_limit = Some(-1000.0);
+        p.axis.positive_limit = Some(1000.0);
+        p.axis.negative_stop = Some(-1200.0);
+        p.axis.positive_stop = Some(1200.0);
+    });
+    rig.write(0x6098, 0, &[17]);
+    rig.controlword(0x1F);
+    // 1800°/s at 36 000°/s² takes 50 ms: 720°/s after 20 ms.
+    rig.run_ms(20.0);
+    let v = rig.read(0x606B, 0) as i32;
+    assert!((v + 720_000).abs() < 20_000, "accelerating at 609Ah: {v}");
+    rig.run_ms(100.0);
+    assert_eq!(rig.read(0x606B, 0) as i32, -1_800_000, "searching at 6099h:1");
+    // On the switch: back out at 6099h:2.
+    let t = rig.run_until(125, 2000.0, |r| r.drive().demand_velocity() > 0.0);
+    assert!(t.is_some(), "reversed at the switch");
+    rig.run_ms(50.0);
+    assert_eq!(rig.read(0x606B, 0) as i32, 180_000, "leaving the switch at 6099h:2");
+}

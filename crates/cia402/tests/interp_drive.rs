@@ -66,3 +66,20 @@ fn ip_linear_consumes_60c1_at_sync() {
     let pos = rig.read(0x6064, 0) as i32;
     assert!((29_750..=30_010).contains(&pos), "6064h {pos}");
 }
+
+/// 60C2h: the linear interpolation spreads each 60C1h step over the
+/// interpolation period (4 ms here), not over one control period.
+#[test]
+fn ip_interpolates_over_the_60c2_period() {
+    let mut rig = rig(7);
+    rig.write(0x60C2, 1, &[4]); // 4 × 10^-3 s
+    rig.controlword(0x1F);
+    rig.write(0x60C1, 1, &4000i32.to_le_bytes());
+    rig.send(Frame::new(0x080, &[]));
+    rig.run_us(2000);
+    let half = rig.drive().demand_position();
+    assert!((half - 2000.0).abs() < 300.0, "half-way after 2 of 4 ms: {half}");
+    rig.run_us(1990);
+    let end = rig.drive().demand_position();
+    assert!((end - 4000.0).abs() <= 125.0, "at the point after 4 ms (one control period): {end}");
+}

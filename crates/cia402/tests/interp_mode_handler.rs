@@ -25,6 +25,8 @@ fn io<'a>(
         demand_velocity: 0.0,
         events,
         switches: Default::default(),
+        master_position: 0,
+        master_velocity: 0.0,
         params,
         units,
         dt: DT,

@@ -6,9 +6,10 @@
 //! is enabled; the drive waits for its delays as the manuals' brake
 //! sequences do (Kollmorgen KC1 §7.2.2.15, AKD §6.2.2.19, LAM DDS6 §4.3):
 //!
-//! * **enable** (Operation enabled): the power stage holds the axis where
-//!   it stands and releases the brake; the operating mode runs only once
-//!   the release delay has passed (no motion into a closed brake);
+//! * **enable** (Operation enabled, reached at once as on the iPOS, §4.5.6
+//!   2102h): the power stage holds the axis where it stands and releases
+//!   the brake; the operating mode runs only once the release delay has
+//!   passed (no motion into a closed brake);
 //! * **disable** (Operation enabled left by a controlword, 605Ah/605Bh/
 //!   605Ch with their ramps first): the brake is applied and the power
 //!   stage keeps holding the axis through the apply delay, then goes off

@@ -46,6 +46,10 @@ pub struct ZeroMeansOff {
     /// "the speed limitation is activated when setting a value different
     /// from zero").
     pub max_motor_speed: bool,
+    /// 6073h max current 0 = no current limit besides 6072h (Kollmorgen
+    /// KC1 §7.7.2.4 / AKD §6.7.2.4: power-on value 0 on a drive that moves
+    /// in tq).
+    pub max_current: bool,
 }
 
 impl ZeroMeansOff {

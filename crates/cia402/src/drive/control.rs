@@ -132,6 +132,12 @@ impl Drive {
         self.units.inc_to_pos_f(self.units.rad_to_inc(self.model.velocity_measured()))
     }
 
+    /// The torque demand's limit \[‰\]: 6072h max torque and 6073h max
+    /// current (‰ of rated current, the torque's share of it).
+    fn torque_limit(&self) -> f64 {
+        f64::from(self.params.max_torque.min(self.extra.max_current))
+    }
+
     fn torque_per_mille(&self, nm: f64) -> f64 {
         nm / (f64::from(self.extra.rated_torque) / 1000.0) * 1000.0
     }
@@ -185,6 +191,8 @@ impl Drive {
             demand_velocity: self.dem.vel,
             events: &self.events,
             switches: self.model.switches(),
+            master_position: self.model.master_position(),
+            master_velocity: self.model.master_velocity(),
             params: &self.params,
             units: &self.units,
             dt: self.dt,
@@ -465,7 +473,7 @@ impl Drive {
             }
             op::TQ => {
                 let p = &self.params;
-                let lim = f64::from(p.max_torque);
+                let lim = self.torque_limit();
                 // A zero 6087h refuses torque motion (as a zero ramp does in
                 // pp/pv): the demand is 0.
                 let refused = self.extra.torque_slope == 0;
@@ -600,7 +608,7 @@ impl Drive {
                 c
             }
             ModeCommand::Torque(t) => {
-                let lim = f64::from(self.params.max_torque.min(self.extra.max_current));
+                let lim = self.torque_limit();
                 let t = if t.is_finite() { t.clamp(-lim, lim) } else { 0.0 };
                 self.dem.torque = t;
                 self.dem.pos = self.actual_pos_f();

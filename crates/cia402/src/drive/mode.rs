@@ -165,6 +165,12 @@ pub struct ModeIo<'a> {
     pub events: &'a StepEvents,
     /// Limit and home switch levels after the last period.
     pub switches: Switches,
+    /// The machine's master encoder (pulse/direction) input \[counts\]
+    /// that gearing and camming follow
+    /// ([`crate::model::DriveModel::master_position`]).
+    pub master_position: i64,
+    /// Its speed \[counts/s\].
+    pub master_velocity: f64,
     /// The mode parameters.
     pub params: &'a ModeParams,
     /// Factor group conversions.

@@ -212,8 +212,10 @@ pub(crate) static PARAMS: &[Param] = &[
     v(0x6071, "Target torque", INT16, Rww, MAP, |_| 0).apply(|d, _, a| d.params.target_torque = a.v.i16()),
     v(0x6072, "Max torque", UNS16, Rw, MAP, |c| c.max_torque_per_mille().into())
         .apply(|d, _, a| d.params.max_torque = a.v.u16()),
-    v(0x6073, "Max current", UNS16, Rw, NO_MAP, |c| c.max_torque_per_mille().into())
-        .apply(|d, _, a| d.extra.max_current = a.v.u16()),
+    v(0x6073, "Max current", UNS16, Rw, NO_MAP, |c| c.max_torque_per_mille().into()).apply(|d, _, a| {
+        let off = d.cfg.zero_means_off.max_current && a.v.u16() == 0;
+        d.extra.max_current = if off { u16::MAX } else { a.v.u16() };
+    }),
     live(0x6074, "Torque demand", INT16),
     v(0x6075, "Motor rated current", UNS32, Rw, NO_MAP, |c| c.rated_current_ma().into())
         .check(positive)

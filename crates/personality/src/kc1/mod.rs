@@ -146,9 +146,9 @@ impl Behaviour for Kollmorgen {
             node.set_tpdo_change_mask(index - 0x2014, mask);
         }
         let od = node.od_mut();
-        // KC1 §7.7.2.4 / AKD §6.7.2.4: 6073h default 0. It limits only the
-        // torque of the stack's cyclic torque commands (cst), which neither
-        // drive offers; tq and the manufacturer modes use 6072h.
+        // KC1 §7.7.2.4 / AKD §6.7.2.4: 6073h default 0, no limit besides
+        // 6072h (`zero_means_off.max_current`); a value written limits the
+        // torque-creating current as the manual words it.
         set_default(od, 0x6073, 0, &Value::U16(0));
         // KC1 §7.9.2.4 / AKD §6.9.2.4: 60C4h:5 default 1 (records), 60C4h:6
         // default 0. Both are write-only commands: the buffer itself starts
@@ -442,6 +442,8 @@ fn kollmorgen_power_on(cfg: &mut DriveConfig) {
     // AKD §6.8.2.3).
     cfg.zero_means_off.following_error_window = true;
     cfg.profile.following_error_window = 0;
+    // 6073h default 0 (§7.7.2.4 / §6.7.2.4) with the drive moving in tq.
+    cfg.zero_means_off.max_current = true;
     // 60FEh:2 bit mask default 0 (KC1 §7.2.3.9, AKD §6.2.3.9): no output
     // follows sub 1 until the master sets the mask.
     cfg.io.output_mask = 0;
