@@ -437,11 +437,9 @@ fn object(r: &mut Reader, sec: &Section, index: u16) -> Option<EdsObject> {
 /// the room for it: 1003h (number of errors, §7.5.2.5) and the PDO mapping
 /// records (number of mapped objects, §7.5.2.36/38; a default mapping
 /// uses fewer entries than the record has), and the EtherCAT sync manager
-/// PDO assignments 1C10h–1C2Fh (number of assigned PDOs, ETG.1000.6),
-/// and 1004h of DS301 up to v4.01 (sub 0: the UNSIGNED32 number of PDOs
-/// supported).
+/// PDO assignments 1C10h–1C2Fh (number of assigned PDOs, ETG.1000.6).
 fn sub0_is_highest(index: u16) -> bool {
-    !matches!(index, 0x1003 | 0x1004 | 0x1600..=0x17FF | 0x1A00..=0x1BFF | 0x1C10..=0x1C2F)
+    !matches!(index, 0x1003 | 0x1600..=0x17FF | 0x1A00..=0x1BFF | 0x1C10..=0x1C2F)
 }
 
 /// Expand compact objects and check sub-index 0 against the sub-objects.
@@ -480,8 +478,7 @@ fn finish_object(r: &mut Reader, o: &mut EdsObject) {
         }
         Some(s0) => {
             let v = s0.default.as_deref().and_then(parse_int);
-            // 1004h (DS301 up to v4.01): sub 0 is UNSIGNED32.
-            if s0.data_type != DataType::Unsigned8 as u16 && o.index != 0x1004 {
+            if s0.data_type != DataType::Unsigned8 as u16 {
                 r.warn(s0.line, format!("object {:04X} sub 0 is not UNSIGNED8", o.index));
             } else if sub0_is_highest(o.index) && v.is_some_and(|v| v < highest as i128) {
                 r.warn(

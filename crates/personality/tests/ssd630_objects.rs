@@ -171,11 +171,13 @@ fn no_error_emcy_after_reset_node() {
 }
 
 #[test]
-fn number_of_pdos_is_unsigned32() {
-    // §11 1004h: sub 0 "Unsigned 32 Number of PDO's", sub 1/2 synchronous /
-    // asynchronous (UNSIGNED32): 4 RPDOs (bits 0–15) and 4 TPDOs (16–31).
+fn number_of_pdos() {
+    // §11 1004h: sub 1/2 the synchronous / asynchronous PDOs (UNSIGNED32,
+    // one direction per 16 bits as DS301 v4.01 codes 1004h): 4 + 4. Sub 0
+    // is UNSIGNED8, the highest sub-index: an EDS cannot describe the
+    // printed UNSIGNED32 (CiA 306; docs/personalities.md).
     let mut r = rig();
-    assert_eq!(r.upload(ID, 0x1004, 0), Ok(0x0004_0004u32.to_le_bytes().to_vec()));
+    assert_eq!(r.upload(ID, 0x1004, 0), Ok(vec![2]));
     assert_eq!(r.upload(ID, 0x1004, 1), Ok(0x0004_0004u32.to_le_bytes().to_vec()));
     assert_eq!(r.upload(ID, 0x1004, 2), Ok(0x0004_0004u32.to_le_bytes().to_vec()));
 }

@@ -428,9 +428,7 @@ def build(name, cfg):
             s0["access"] = "ro"
         if s0["default"] is None:
             s0["default"] = "0" if index == 0x1003 else str(max(subs))
-        # 1004h (DS301 up to v4.01): sub 0 is the UNSIGNED32 "number of
-        # PDOs supported", not a count of sub-indices.
-        if s0["type"] != U8 and index != 0x1004:
+        if s0["type"] != U8:
             log(index, 0, f"sub 0 type {TYPE_NAME.get(s0['type'])} in the table; UNSIGNED8 (CiA 301 §7.4.3) written", s0["sec"])
             s0["type"] = U8
             s0["low"] = s0["high"] = None
