@@ -474,12 +474,12 @@ impl StateMachine {
     /// With 605Eh = 0, or if the drive function was not enabled, there is
     /// nothing to stop and transition 14 follows at once.
     pub fn fault(&mut self, code: u16) -> Outcome {
-        self.fault_with(code, self.options.fault_reaction_reaction())
+        let r = self.options.fault_reaction_reaction();
+        self.fault_with(code, r)
     }
 
-    /// [`StateMachine::fault`] with the reaction `r` in place of 605Eh's: a
-    /// device whose error classes decide the reaction per error (LAM DDS6
-    /// §5: class 4 quick stop, class 6 disable).
+    /// A fault with the reaction `r` instead of 605Eh's (a manufacturer's
+    /// per-error option code).
     pub fn fault_with(&mut self, code: u16, r: Reaction) -> Outcome {
         let prev = self.begin();
         if !matches!(self.state, State::FaultReactionActive | State::Fault) {

@@ -442,11 +442,11 @@ impl Behaviour for Dds6 {
             (0x2480, 1) => {
                 self.following_error_class = od.get_u32(0x2480, 1).unwrap_or(6) as u8;
                 let r = classes::reaction(self.following_error_class);
-                cx.drive.set_error_reaction(classes::EMCY_FOLLOWING_ERROR, r);
+                cx.drive.set_fault_action(classes::EMCY_FOLLOWING_ERROR, r);
             }
             (0x3080, 2) => {
                 self.sync_class = od.get_u32(0x3080, 2).unwrap_or(2) as u8;
-                cx.drive.set_error_reaction(classes::EMCY_SYNC_BREACH, classes::reaction(self.sync_class));
+                cx.drive.set_fault_action(classes::EMCY_SYNC_BREACH, classes::reaction(self.sync_class));
             }
             (0x3080, 1) => {
                 self.guard.write_options(od.get_u32(0x3080, 1).unwrap_or(0) as u8);
