@@ -63,7 +63,9 @@ fn names_find_entries() {
 /// what the manuals document otherwise: 60C1h records are "mode
 /// dependent" (CiA 402-2 leaves the type to the device; KC1/AKD/iPOS use
 /// UNSIGNED32 for PVT records), the SSD 630 manual types 607Dh as
-/// UNSIGNED32 and 6080h as UNSIGNED8. An EDS, when given, wins.
+/// UNSIGNED32, 6080h and 60C2h:02 as UNSIGNED8 and 6049h as a VAR
+/// UNSIGNED32 (docs/personalities.md, SSD 630 choices). An EDS, when
+/// given, wins.
 #[test]
 fn the_personality_eds_files_agree_on_types() {
     let mut checked = 0;
@@ -79,7 +81,8 @@ fn the_personality_eds_files_agree_on_types() {
                 let Some(e) = entry(*index, sub) else { continue };
                 checked += 1;
                 let documented = *index == 0x60C1
-                    || (*p == drivebus_personality::Profile::Ssd630 && matches!(*index, 0x607D | 0x6080));
+                    || (*p == drivebus_personality::Profile::Ssd630
+                        && matches!((*index, sub), (0x607D | 0x6080 | 0x6049, _) | (0x60C2, 2)));
                 if DataType::from_index(v.data_type) != Some(e.data_type) && !documented {
                     wrong.push(alloc::format!(
                         "{p:?} {index:04X}:{sub:02X} EDS {:#06x}, table {:?}",
