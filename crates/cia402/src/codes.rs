@@ -250,6 +250,15 @@ pub mod mode {
         }
     }
 
+    /// Whether 6061h is to show a mode written to 6060h now, by the
+    /// statusword: in Operation enabled it is. Before it a drive may take
+    /// the new mode only once enabled (iPOS manual §4.2.4), so a master
+    /// checks 6061h after enabling instead ([`super::ModeNotShown`] if it
+    /// does not show the mode then).
+    pub const fn shown_at_once(statusword: u16) -> bool {
+        matches!(super::State::from_statusword(statusword), Some(super::State::OperationEnabled))
+    }
+
     /// The short name CLI options use (`pp`, `csp`, …); `None` for codes
     /// without one.
     pub const fn short(mode: i8) -> Option<&'static str> {
@@ -268,6 +277,36 @@ pub mod mode {
     }
 }
 
+/// 6061h (modes of operation display) did not come to show the mode a
+/// master wrote to 6060h: waited for in Operation enabled
+/// ([`mode::shown_at_once`]), else once enabling reached it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeNotShown {
+    /// The mode written to 6060h.
+    pub mode: i8,
+    /// What 6061h showed last.
+    pub display: i8,
+    /// The statusword then.
+    pub statusword: u16,
+}
+
+impl core::fmt::Display for ModeNotShown {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let (m, d, sw) = (self.mode, self.display, self.statusword);
+        write!(
+            f,
+            "6061h shows mode {d} ({}), not mode {m} ({}) written to 6060h (statusword {sw:04X}h",
+            mode::name(d),
+            mode::name(m)
+        )?;
+        match State::from_statusword(sw) {
+            Some(State::OperationEnabled) => f.write_str(", operation enabled)"),
+            Some(s) => write!(f, ", {s}): a drive may take a new mode only in operation enabled"),
+            None => f.write_str(")"),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -282,6 +321,22 @@ mod tests {
         }
         assert_eq!(State::from_statusword(0x0001), None);
         assert_eq!(State::Fault.to_string(), "fault");
+    }
+
+    #[test]
+    fn mode_shown_at_once_only_in_operation_enabled() {
+        for s in State::ALL {
+            let (_, v) = s.statusword_pattern();
+            assert_eq!(mode::shown_at_once(v), s == State::OperationEnabled, "{s}");
+        }
+        let e = ModeNotShown { mode: mode::HM, display: 0, statusword: 0x0231 };
+        assert_eq!(
+            e.to_string(),
+            "6061h shows mode 0 (none), not mode 6 (homing) written to 6060h (statusword 0231h, \
+             ready to switch on): a drive may take a new mode only in operation enabled"
+        );
+        let e = ModeNotShown { mode: mode::PP, display: mode::PV, statusword: 0x1237 };
+        assert!(e.to_string().ends_with("(statusword 1237h, operation enabled)"), "{e}");
     }
 
     #[test]

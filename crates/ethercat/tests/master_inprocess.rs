@@ -121,3 +121,26 @@ fn drive_in_free_run_on_the_generic_servo() {
         d.stop().await.unwrap();
     });
 }
+
+/// The iPOS shows a new mode in 6061h only once in Operation enabled (its
+/// manual §4.2.4): homing and a move from a drive not enabled set the mode,
+/// enable, and start once 6061h shows the mode.
+#[test]
+fn ipos_modes_set_before_enabling() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        assert_eq!(d.fb.state(), Some(drivebus_cia402::codes::State::SwitchOnDisabled));
+        let at = d.home(35, Duration::from_secs(10), |_| {}).await.unwrap();
+        assert_eq!(at, 0, "method 35: the current position is 0");
+        assert_eq!(d.read(0x6061, 0).await.unwrap(), 6);
+        d.disable(Duration::from_secs(2)).await.unwrap();
+        let pos = d.move_to(3000, false, Some(200_000), Duration::from_secs(20), |_| {}).await.unwrap();
+        assert!((pos - 3000).abs() <= 10, "{pos}");
+        assert_eq!(d.read(0x6061, 0).await.unwrap(), 1);
+        assert_eq!(d.bad_wkc, 0);
+        d.stop().await.unwrap();
+    });
+}

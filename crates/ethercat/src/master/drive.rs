@@ -13,7 +13,7 @@ use super::{
 };
 use super::{MAX_PDI, MAX_SUBDEVICES};
 use drivebus_can::Duration;
-use drivebus_cia402::codes::{State, cw, mode, sw};
+use drivebus_cia402::codes::{ModeNotShown, State, cw, mode, sw};
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op, PreOpPdi};
 use ethercrab::{DcSync, DefaultLock, RegisterAddress, SubDeviceGroup};
 use std::fmt;
@@ -62,6 +62,13 @@ pub enum DriveError {
         statusword: u16,
         /// What the master did.
         stopped: Option<Stop>,
+    },
+    /// 6061h did not come to show the mode written to 6060h.
+    Mode {
+        /// The slave's position.
+        slave: usize,
+        /// The mode, what 6061h showed, the statusword.
+        not_shown: ModeNotShown,
     },
     /// The process data lost the line (working counter wrong for 100 cycles).
     Lost {
@@ -113,6 +120,7 @@ impl fmt::Display for DriveError {
             DriveError::Homing { statusword, stopped: s } => {
                 write!(f, "homing error (statusword {statusword:04X}h bit 13){}", stopped(s))
             }
+            DriveError::Mode { slave, not_shown } => write!(f, "slave {slave}: {not_shown}"),
             DriveError::Lost { cycles } => write!(
                 f,
                 "the process data stopped coming back ({cycles} cycles with a wrong working counter): the line left OP"
@@ -210,6 +218,8 @@ pub struct DriveLine<'m> {
     controlword: u16,
     target: i32,
     mode_out: i8,
+    /// A mode written to 6060h that 6061h has not been seen to show.
+    mode_pending: Option<i8>,
     stop: Option<&'m AtomicBool>,
 }
 
@@ -302,6 +312,7 @@ impl<'m> DriveLine<'m> {
             controlword: 0,
             target: 0,
             mode_out: 0,
+            mode_pending: None,
             stop,
         };
         d.read_inputs();
@@ -488,25 +499,37 @@ impl<'m> DriveLine<'m> {
     }
 
     /// Sets the mode of operation (6060h: in the image when mapped, else
-    /// over CoE) and waits for 6061h to show it.
+    /// over CoE). In Operation enabled, waits for 6061h to show it; before
+    /// it a drive may take the mode only once enabled (iPOS §4.2.4), so
+    /// [`enable`](Self::enable) waits for 6061h instead.
     pub async fn set_mode(&mut self, m: i8) -> Result<(), DriveError> {
         if self.layout.mode.is_some() {
             self.mode_out = m;
         } else {
             self.write(0x6060, 0, &[m as u8]).await?;
         }
+        self.mode_pending = Some(m);
+        if mode::shown_at_once(self.fb.statusword) {
+            self.confirm_mode().await?;
+        }
+        Ok(())
+    }
+
+    /// Waits up to 200 cycles for 6061h to show the mode
+    /// [`set_mode`](Self::set_mode) wrote, unless it was seen already.
+    async fn confirm_mode(&mut self) -> Result<(), DriveError> {
+        let Some(m) = self.mode_pending else { return Ok(()) };
+        let mut display = 0;
         for _ in 0..200 {
             self.cycle().await?;
-            if self.read(0x6061, 0).await? == i64::from(m) {
+            display = self.read(0x6061, 0).await? as i8;
+            if display == m {
+                self.mode_pending = None;
                 return Ok(());
             }
         }
-        Err(MasterError::Unsupported(format!(
-            "slave {}: 6061h does not show mode {m} ({}) after writing 6060h",
-            self.position,
-            mode::name(m)
-        ))
-        .into())
+        let not_shown = ModeNotShown { mode: m, display, statusword: self.fb.statusword };
+        Err(DriveError::Mode { slave: self.position, not_shown })
     }
 
     async fn fault(&self, what: &str) -> DriveError {
@@ -518,7 +541,8 @@ impl<'m> DriveLine<'m> {
     }
 
     /// Brings the drive to operation enabled (a fault is reset first),
-    /// holding the present position as the target.
+    /// holding the present position as the target; then waits for 6061h
+    /// to show a mode [`set_mode`](Self::set_mode) wrote before.
     pub async fn enable(&mut self, timeout: Duration) -> Result<(), DriveError> {
         let limit = (timeout.as_nanos() / self.cycle.as_nanos().max(1)).max(1) as u64;
         let mut reset_tried = false;
@@ -529,7 +553,7 @@ impl<'m> DriveLine<'m> {
             let state = self.fb.state();
             self.target = self.fb.position;
             let c = match state {
-                Some(State::OperationEnabled) => return Ok(()),
+                Some(State::OperationEnabled) => return self.confirm_mode().await,
                 Some(State::Fault) => {
                     reset_tried = true;
                     // A rising edge of bit 7 resets the fault.

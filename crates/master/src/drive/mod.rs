@@ -16,6 +16,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use drivebus_cia402::codes::State;
+pub use drivebus_cia402::codes::ModeNotShown;
 use drivebus_nmt::RemoteState;
 use tokio::sync::Notify;
 
@@ -154,6 +155,8 @@ pub enum DriveError {
     /// a software limit, a following or homing error, a fault, a quick
     /// stop, a halt. The report says where and why.
     Stopped(Box<MotionReport>),
+    /// 6061h did not come to show the mode written to 6060h.
+    Mode(ModeNotShown),
     /// Streaming needs the master's SYNC producer ([`Master::start_sync`]).
     NoSync,
     /// The bus failed.
@@ -176,6 +179,7 @@ impl fmt::Display for DriveError {
                     DriveState::from_statusword(r.statusword)
                 )
             }
+            DriveError::Mode(e) => write!(f, "{e}"),
             DriveError::NoSync => f.write_str("no SYNC producer running"),
             DriveError::Transport(s) => write!(f, "bus error: {s}"),
         }
@@ -247,6 +251,8 @@ pub struct Drive {
     progress: Option<ProgressFn>,
     progress_every: Duration,
     last_progress: Mutex<Option<drivebus_can::Instant>>,
+    /// A mode written to 6060h that 6061h has not been seen to show.
+    mode_pending: Mutex<Option<i8>>,
 }
 
 impl Drop for Drive {
@@ -337,6 +343,7 @@ impl Master {
             progress: None,
             progress_every: Duration::from_millis(200),
             last_progress: Mutex::new(None),
+            mode_pending: Mutex::new(None),
         })
     }
 }
@@ -543,12 +550,13 @@ impl Drive {
 
     /// Walks the state machine to Operation enabled: fault reset if
     /// faulted, shutdown → switch on → enable operation, waiting for each
-    /// state.
+    /// state; then waits for 6061h to show a mode
+    /// [`set_mode`](Self::set_mode) wrote before.
     pub async fn enable(&self) -> Result<(), DriveError> {
         for _ in 0..8 {
             let sw = self.statusword().await?;
             match DriveState::from_statusword(sw) {
-                DriveState::OperationEnabled => return Ok(()),
+                DriveState::OperationEnabled => return self.confirm_mode().await,
                 DriveState::Fault | DriveState::FaultReactionActive => {
                     self.fault_reset().await?;
                 }
@@ -597,23 +605,41 @@ impl Drive {
         .map(|_| ())
     }
 
-    /// Writes 6060h and waits for 6061h to show `mode`.
+    /// Writes 6060h. In Operation enabled, waits for 6061h to show
+    /// `mode`; before it a drive may take the mode only once enabled (iPOS
+    /// §4.2.4), so [`enable`](Self::enable), and every motion command
+    /// before it starts, waits for 6061h instead.
     pub async fn set_mode(&self, mode: i8) -> Result<(), DriveError> {
         self.write_raw(MODES_OF_OPERATION, 0, &mode.to_le_bytes()).await?;
+        *self.mode_pending.lock().unwrap_or_else(|e| e.into_inner()) = Some(mode);
+        if drivebus_cia402::codes::mode::shown_at_once(self.statusword().await?) {
+            self.confirm_mode().await?;
+        }
+        Ok(())
+    }
+
+    /// Waits for 6061h to show the mode [`set_mode`](Self::set_mode)
+    /// wrote, unless it was seen already.
+    pub(crate) async fn confirm_mode(&self) -> Result<(), DriveError> {
+        let Some(want) = *self.mode_pending.lock().unwrap_or_else(|e| e.into_inner()) else {
+            return Ok(());
+        };
         let deadline = self.master.now() + self.timeout;
         loop {
             // By SDO: a mode change need not trigger an event TPDO, so a
             // TPDO copy of 6061h may be stale.
-            let v = self.sdo.upload(MODES_DISPLAY, 0).await?;
-            if v.first().map(|b| *b as i8) == Some(mode) {
+            let shown = self.sdo.upload(MODES_DISPLAY, 0).await?.first().map(|b| *b as i8);
+            if shown == Some(want) {
+                let mut p = self.mode_pending.lock().unwrap_or_else(|e| e.into_inner());
+                if *p == Some(want) {
+                    *p = None;
+                }
                 return Ok(());
             }
             if self.master.now() >= deadline {
-                let sw = self.statusword().await.unwrap_or(0);
-                return Err(DriveError::Timeout {
-                    waiting_for: "modes of operation display",
-                    statusword: sw,
-                });
+                let statusword = self.statusword().await.unwrap_or(0);
+                let display = shown.unwrap_or(0);
+                return Err(DriveError::Mode(ModeNotShown { mode: want, display, statusword }));
             }
             self.master.sleep(self.poll).await;
         }

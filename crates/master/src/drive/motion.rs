@@ -194,6 +194,16 @@ impl Drive {
         }
     }
 
+    /// A target starts a motion only in Operation enabled: then 6061h
+    /// must show the mode first; before it [`Drive::enable`] waits for it.
+    async fn confirm_mode_if_enabled(&self) -> Result<(), DriveError> {
+        let pending = self.mode_pending.lock().unwrap_or_else(|e| e.into_inner()).is_some();
+        if pending && self.state().await? == DriveState::OperationEnabled {
+            self.confirm_mode().await?;
+        }
+        Ok(())
+    }
+
     /// Reports progress now (see [`Drive::on_progress`]), whatever the
     /// interval.
     pub(super) async fn report(&self, waiting_for: &'static str, statusword: u16) {
@@ -228,6 +238,9 @@ impl Drive {
         timeout: Duration,
     ) -> Result<MotionReport, DriveError> {
         let started = self.master.now();
+        // No set-point before 6061h shows the mode (set_mode outside
+        // Operation enabled left it to be seen).
+        self.confirm_mode().await?;
         if let Some(p) = profile {
             self.sdo.write(0x6081, 0, p.velocity).await?;
             self.sdo.write(0x6083, 0, p.acceleration).await?;
@@ -258,11 +271,13 @@ impl Drive {
 
     /// Target velocity 60FFh (profile velocity / CSV).
     pub async fn velocity(&self, v: i32) -> Result<(), DriveError> {
+        self.confirm_mode_if_enabled().await?;
         self.write_raw(0x60FF, 0, &v.to_le_bytes()).await
     }
 
     /// Target torque 6071h (profile torque / CST).
     pub async fn torque(&self, t: i16) -> Result<(), DriveError> {
+        self.confirm_mode_if_enabled().await?;
         self.write_raw(0x6071, 0, &t.to_le_bytes()).await
     }
 
@@ -284,6 +299,8 @@ impl Drive {
         self.sdo.write(0x6098, 0, method).await?;
         self.set_mode(mode::HM).await?;
         self.controlword(CW_ENABLED).await?;
+        // A drive enabled just now shows homing in 6061h only then.
+        self.confirm_mode().await?;
         let stale = self.statusword().await? & SW_BIT12 != 0;
         let instant = matches!(method, 35 | 37);
         let offset = if instant && stale { self.read_i32(0x607C, 0).await } else { None };
@@ -395,6 +412,7 @@ impl Drive {
         if !self.master.sync_running() {
             return Err(DriveError::NoSync);
         }
+        self.confirm_mode().await?;
         let mut ticks = self.master.subscribe_sync();
         let mut n = 0;
         for v in values {
