@@ -8,6 +8,7 @@
 pub mod demo;
 mod drive;
 mod line;
+mod read;
 mod serve;
 
 use clap::{Args, Subcommand};
@@ -286,7 +287,7 @@ pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
     match cmd {
         EthercatCmd::Serve(a) => serve::run(a).await.map(|()| 0),
         EthercatCmd::Scan(a) => line::scan(g, &a.line).await.map(|()| 0),
-        EthercatCmd::Sdo(EcatSdoCmd::Read(a)) => line::sdo_read(g, a).await.map(|()| 0),
+        EthercatCmd::Sdo(EcatSdoCmd::Read(a)) => read::sdo_read(g, a).await.map(|()| 0),
         EthercatCmd::Sdo(EcatSdoCmd::Write(a)) => line::sdo_write(g, a).await.map(|()| 0),
         EthercatCmd::State(a) => line::state(g, a).await.map(|()| 0),
         EthercatCmd::Pdo(EcatPdoCmd::Show(a)) => line::pdo_show(g, a).await.map(|()| 0),

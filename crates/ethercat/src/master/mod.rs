@@ -11,6 +11,9 @@
 //! serve --state-dir` names them, `ecat-1-ipos`).
 
 pub mod drive;
+mod objects;
+
+pub use objects::{Described, Entry, EntryInfo, ObjectInfo, ObjectRead, coe_details, read_entries};
 
 /// Runs a master future to completion on this thread (ethercrab's timers
 /// are async-io's).
