@@ -136,17 +136,27 @@ fn master_commands_against_served_drives_over_veth() {
     ];
     assert_eq!(text.lines().collect::<Vec<_>>(), want, "{text}");
     let j = line.json(&["sdo", "read", "--slave", "1", "1C13"]);
-    assert_eq!((j["names_from"].as_str(), j["complete_access"].as_bool()), (Some("sdo_info"), Some(true)), "{j}");
+    assert_eq!(
+        (j["names_from"].as_str(), j["complete_access"].as_bool()),
+        (Some("sdo_info"), Some(true)),
+        "{j}"
+    );
     assert_eq!((j["object_code"].as_str(), j["slave"].as_u64()), (Some("ARRAY"), Some(1)), "{j}");
     let e = &j["entries"][2];
-    assert_eq!((e["sub"].as_u64(), e["value"].as_u64(), e["type"].as_str()), (Some(2), Some(0x1A01), Some("UNSIGNED16")));
+    assert_eq!(
+        (e["sub"].as_u64(), e["value"].as_u64(), e["type"].as_str()),
+        (Some(2), Some(0x1A01), Some("UNSIGNED16"))
+    );
     assert_eq!((e["access"].as_str(), e["bits"].as_u64()), (Some("rw"), Some(16)), "{j}");
     // A record: the identity, names from the slave.
     let j = line.json(&["sdo", "read", "--slave", "2", "1018"]);
     assert_eq!(j["object_code"], "RECORD", "{j}");
     let e = j["entries"].as_array().unwrap();
     assert_eq!(e.len(), 5, "{j}");
-    assert_eq!((e[4]["name"].as_str(), e[4]["value"].as_u64()), (Some("Identity object / Serial number"), Some(2)));
+    assert_eq!(
+        (e[4]["name"].as_str(), e[4]["value"].as_u64()),
+        (Some("Identity object / Serial number"), Some(2))
+    );
     assert_eq!(e[4]["access"], "ro");
     line.ok(&["sdo", "write", "--slave", "2", "6081h", "123456"]);
     assert_eq!(line.json(&["sdo", "read", "--slave", "2", "profile velocity"])["value"], 123456);

@@ -8,12 +8,12 @@
 //! and without either service.
 
 use drivebus_can::{Duration, Instant};
+use drivebus_esi::CoeDetails;
 use drivebus_ethercat::drive::DriveLine as Line;
-use drivebus_ethercat::master::drive::DriveLine;
 use drivebus_ethercat::drive::DriveSpec;
+use drivebus_ethercat::master::drive::DriveLine;
 use drivebus_ethercat::master::{self, AlState, Described, Master, MasterError, Storage, coe_details};
 use drivebus_ethercat::{BoxDevice, Clock, Host};
-use drivebus_esi::CoeDetails;
 use drivebus_personality::Profile;
 
 fn line() -> Host {
@@ -150,7 +150,10 @@ fn whole_objects_by_sdo_information_and_complete_access() {
         // slave, entries 1.. in one complete-access upload (§2.3 default).
         let r = m.read_object(&sd, 1, 0x1C13).await.unwrap();
         let Described::SdoInfo(o) = &r.described else { panic!("{r:?}") };
-        assert_eq!((o.name.as_str(), o.object_code, o.data_type), ("Sync Manager Channel 3 (Process Data Input)", 8, 6));
+        assert_eq!(
+            (o.name.as_str(), o.object_code, o.data_type),
+            ("Sync Manager Channel 3 (Process Data Input)", 8, 6)
+        );
         assert!(r.complete_access && r.read_complete, "{r:?}");
         let subs: Vec<_> = r.entries.iter().map(|e| (e.sub, e.data.clone())).collect();
         assert_eq!(subs, [(0, vec![2]), (1, vec![0x00, 0x1A]), (2, vec![0x01, 0x1A])]);
@@ -164,7 +167,10 @@ fn whole_objects_by_sdo_information_and_complete_access() {
         assert_eq!((o.name.as_str(), o.object_code), ("Identity Object", 9));
         assert!(r.read_complete);
         let names: Vec<_> = r.entries.iter().map(|e| e.info.as_ref().unwrap().name.as_str()).collect();
-        assert_eq!(names, ["Number of entries", "Vendor ID", "Product Code", "Revision number", "Serial number"]);
+        assert_eq!(
+            names,
+            ["Number of entries", "Vendor ID", "Product Code", "Revision number", "Serial number"]
+        );
         assert_eq!(r.entries[1].data, 0x1A3u32.to_le_bytes());
         assert_eq!(r.entries[4].info.as_ref().unwrap().access_text(), "ro");
         // A VAR: sub 0 with its type.
@@ -188,10 +194,14 @@ fn whole_objects_without_sdo_information_or_complete_access() {
         let g = m.init().await.unwrap();
         let sd = m.slave(&g, 1).unwrap();
         let r = m.read_object(&sd, 1, 0x1C13).await.unwrap();
-        assert_eq!(r.described, Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into()));
+        assert_eq!(
+            r.described,
+            Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into())
+        );
         assert!(!r.complete_access && r.entries.is_empty(), "{r:?}");
         // The caller's layout, one upload per entry.
-        let (e, by_ca) = master::read_entries(&sd, 1, 0x1C13, &[(1, Some(16)), (2, Some(16))], false).await.unwrap();
+        let (e, by_ca) =
+            master::read_entries(&sd, 1, 0x1C13, &[(1, Some(16)), (2, Some(16))], false).await.unwrap();
         assert!(!by_ca);
         assert_eq!(e, [(1, vec![0x00, 0x1A]), (2, vec![0x01, 0x1A])]);
         // The slave really refuses both services (the SII tells the truth).

@@ -62,11 +62,14 @@ Examples:
   drivebus ethercat sdo read --iface ecat1 --slave 1 1018 1
   drivebus ethercat sdo read --iface ecat1 --slave 1 statusword --json
   drivebus ethercat sdo read --iface ecat1 --slave 2 1C13          (the whole array)
+  drivebus ethercat sdo read --iface ecat1 --slave 2 1018 --json   (the whole record)
   drivebus ethercat sdo write --iface ecat1 --slave 1 6060 0 8
   drivebus ethercat sdo write --iface ecat1 --slave 1 0x6081 200000 --type u32
 
 Indices and sub-indices are hex (6041, 0x6041, 6041h, 6041:00); CiA 301/402 objects go by name and
-type. An abort is reported with its code and meaning (exit 1). ethercrab 0.7.1 writes 1 to 4
+type. An array or record without SUB is read whole: names and types from the slave's SDO
+Information, one complete-access upload where the slave offers it; without SDO Information from
+the CiA 301/402 and ETG.1000.6 tables, else by size, with a note. An abort is reported with its code and meaning (exit 1). ethercrab 0.7.1 writes 1 to 4
 bytes (expedited download); reads of any length work.";
 
 const STATE_EXAMPLES: &str = "\

@@ -4,7 +4,7 @@
 //! (`drivebus_ethercat::master::Master::read_object`); without SDO
 //! Information, by the CiA 301/402 and ETG.1000.6 tables, else by size.
 
-use drivebus_ethercat::master::{self, Described, Entry, Master, ObjectRead};
+use drivebus_ethercat::master::{self, Described, Entry, Master, ObjectInfo, ObjectRead};
 use drivebus_master::DataType;
 
 use super::EcatSdoRead;
@@ -128,6 +128,38 @@ fn by_size(d: &[u8]) -> Option<DataType> {
     }
 }
 
+/// An entry as a row: named and typed by `--type`, then the slave's SDO
+/// Information (`object`, the entry's description), then the CiA 301/402
+/// dictionary and ETG.1000.6, else by size.
+fn row(dict: &Dict, forced: Option<DataType>, index: u16, object: Option<&ObjectInfo>, e: &Entry) -> Row {
+    let info = e.info.as_ref();
+    let name = match (object, info) {
+        (Some(o), Some(i)) if o.compound() => Some(format!("{} / {}", o.name, i.name)),
+        (Some(o), _) if !o.compound() => Some(o.name.clone()),
+        _ => None,
+    };
+    let etg = etg_array(index, e.sub);
+    let name = name
+        .or_else(|| dict.name(index, e.sub))
+        .or_else(|| etg.as_ref().map(|(o, n, _)| format!("{o} / {n}")));
+    let dt = forced
+        .or_else(|| info.and_then(|i| DataType::from_index(i.data_type)))
+        .or_else(|| dict.data_type(index, e.sub))
+        .or_else(|| etg.map(|(_, _, t)| t))
+        .or_else(|| by_size(&e.data));
+    (e.sub, name, dt, e.data.clone())
+}
+
+/// What to tell the user when the names and types are not the slave's.
+fn note(pos: usize, read: &ObjectRead) -> Option<String> {
+    match &read.described {
+        Described::NoSdoInfo(why) => Some(format!(
+            "slave {pos} has no SDO Information ({why}): names and types from CiA 301/402 and ETG.1000.6 where known, else by size"
+        )),
+        Described::SdoInfo(_) => None,
+    }
+}
+
 fn print(
     g: &Global,
     dict: &Dict,
@@ -140,30 +172,8 @@ fn print(
         Some(Described::SdoInfo(o)) => Some(o),
         _ => None,
     };
-    let row = |e: &Entry| -> Row {
-        let info = e.info.as_ref();
-        let name = match (object, info) {
-            (Some(o), Some(i)) if o.compound() => Some(format!("{} / {}", o.name, i.name)),
-            (Some(o), _) => Some(o.name.clone()),
-            _ => None,
-        };
-        let etg = etg_array(index, e.sub);
-        let name = name
-            .or_else(|| dict.name(index, e.sub))
-            .or_else(|| etg.as_ref().map(|(o, n, _)| format!("{o} / {n}")));
-        let dt = forced
-            .or_else(|| info.and_then(|i| DataType::from_index(i.data_type)))
-            .or_else(|| dict.data_type(index, e.sub))
-            .or_else(|| etg.map(|(_, _, t)| t))
-            .or_else(|| by_size(&e.data));
-        (e.sub, name, dt, e.data.clone())
-    };
-    let note = match read.as_ref().map(|r| &r.described) {
-        Some(Described::NoSdoInfo(why)) => Some(format!(
-            "slave {pos} has no SDO Information ({why}): names and types from CiA 301/402 and ETG.1000.6 where known, else by size"
-        )),
-        _ => None,
-    };
+    let row = |e: &Entry| row(dict, forced, index, object, e);
+    let note = read.as_ref().and_then(|r| note(pos, r));
     if g.json {
         let items: Vec<serde_json::Value> = entries
             .iter()
@@ -211,4 +221,68 @@ fn slave_json(slave: usize, mut j: serde_json::Value) -> serde_json::Value {
         o.insert("slave".into(), slave.into());
     }
     j
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drivebus_ethercat::master::EntryInfo;
+
+    fn entry(sub: u8, info: Option<(&str, u16, u16)>, data: &[u8]) -> Entry {
+        let info = info.map(|(name, data_type, bit_length)| EntryInfo {
+            data_type,
+            bit_length,
+            access: 0x3F,
+            name: name.into(),
+        });
+        Entry { sub, info, data: data.to_vec() }
+    }
+
+    #[test]
+    fn names_and_types_come_from_the_slave_first() {
+        let dict = Dict::default();
+        let o = ObjectInfo { object_code: 8, data_type: 6, max_sub: 4, name: "TxPDO assign".into() };
+        let e = entry(1, Some(("PDO 1st", 7, 32)), &[0x00, 0x1A, 0, 0]);
+        let r = row(&dict, None, 0x1C13, Some(&o), &e);
+        assert_eq!(r.1.as_deref(), Some("TxPDO assign / PDO 1st"));
+        assert_eq!(r.2, Some(DataType::Unsigned32), "the slave's type, not the table's");
+        // --type wins; an entry the slave did not describe takes the table's name.
+        let r = row(&dict, Some(DataType::Integer32), 0x1C13, Some(&o), &entry(2, None, &[1, 0x1A]));
+        assert_eq!(
+            (r.1.as_deref(), r.2),
+            (Some("Sync manager 3 PDO assignment / PDO 2"), Some(DataType::Integer32))
+        );
+        // A VAR is named after its object.
+        let v = ObjectInfo { object_code: 7, data_type: 9, max_sub: 0, name: "Name".into() };
+        let r = row(&dict, None, 0x2000, Some(&v), &entry(0, Some(("x", 9, 32)), b"iPOS"));
+        assert_eq!((r.1.as_deref(), r.2), (Some("Name"), Some(DataType::VisibleString)));
+    }
+
+    #[test]
+    fn without_sdo_information_the_tables_name_and_it_is_said() {
+        let dict = Dict::default();
+        let read = ObjectRead {
+            index: 0x1C13,
+            described: Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into()),
+            complete_access: false,
+            read_complete: false,
+            entries: Vec::new(),
+        };
+        let r = row(&dict, None, 0x1C13, None, &entry(1, None, &[0x00, 0x1A]));
+        assert_eq!(
+            (r.1.as_deref(), r.2),
+            (Some("Sync manager 3 PDO assignment / PDO 1"), Some(DataType::Unsigned16))
+        );
+        let r = row(&dict, None, 0x2345, None, &entry(3, None, &[1, 2, 3, 4]));
+        assert_eq!((r.1, r.2), (None, Some(DataType::Unsigned32)), "by size");
+        assert_eq!(
+            note(2, &read).unwrap(),
+            "slave 2 has no SDO Information (its SII announces no SDO Information (CoE details)): names and types from CiA 301/402 and ETG.1000.6 where known, else by size"
+        );
+        let t = Tables::new(&dict, 0x1C13);
+        assert_eq!(t.subs(&[2]), (vec![1, 2], true));
+        assert_eq!((t.bits[0], t.bits[1]), (Some(8), Some(16)));
+        assert_eq!(Tables::new(&dict, 0x1018).subs(&[4]), (vec![1, 2, 3, 4], false));
+        assert_eq!(Tables::new(&dict, 0x2345).subs(&[1, 2, 3, 4]), (vec![], false), "a VAR");
+    }
 }

@@ -84,8 +84,8 @@ const fn entry_start(end: usize, bits: usize) -> usize {
     if bits < 8 { end } else { end.next_multiple_of(8) }
 }
 
-/// Cuts a complete-access image (a master's upload from `start_sub`, 0 or
-/// 1) into its entries. `entries` are the sub-indices 1.. present in the
+/// Cuts a complete-access image (a master's upload from `start_sub`, which
+/// is 0 or 1) into its entries. `entries` are the sub-indices from 1 present in the
 /// image (gaps of a RECORD left out) with their bit lengths, in order, as
 /// the slave's SDO Information gives them. Starting at 0, sub 0 comes first
 /// as 16 bits. An entry shorter than a byte comes back as one byte holding

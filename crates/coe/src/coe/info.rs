@@ -8,10 +8,10 @@
 //! produced one at a time, when the server is asked for its next response.
 
 use super::Out;
-use crate::access::{ObjectAccess, access_bits};
 use super::info_codec::{
     EntryDescription, HEADER_LEN, InfoRequest, ObjectDescription, opcode, put_header, put_text, value_info,
 };
+use crate::access::{ObjectAccess, access_bits};
 use crate::mailbox::{HEADER_LEN as MBX_HEADER_LEN, MailboxErrorCode, MailboxType, Put};
 use alloc::vec::Vec;
 use drivebus_od::{Object, ObjectCode, SdoAbort, SubObject};

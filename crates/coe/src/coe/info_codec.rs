@@ -313,7 +313,13 @@ mod tests {
     #[test]
     fn descriptions_decode_what_the_server_encodes() {
         let mut w = Vec::new();
-        let o = ObjectDescription { index: 0x1C13, data_type: 6, max_sub: 4, object_code: 8, name: b"TxPDO assign" };
+        let o = ObjectDescription {
+            index: 0x1C13,
+            data_type: 6,
+            max_sub: 4,
+            object_code: 8,
+            name: b"TxPDO assign",
+        };
         o.encode(&mut w, 64);
         assert_eq!(InfoResponse::decode(&w), Some(InfoResponse::ObjectDescription(o)));
         // The name is cut to the mailbox.

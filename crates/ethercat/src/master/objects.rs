@@ -178,16 +178,25 @@ impl Master {
     }
 
     /// Where sync manager `n`'s register block is and what it holds.
-    async fn sm<S: Deref<Target = SubDevice>>(&self, sd: &SubDeviceRef<'_, S>, n: u16) -> Result<(Sm, u8), Error> {
+    async fn sm<S: Deref<Target = SubDevice>>(
+        &self,
+        sd: &SubDeviceRef<'_, S>,
+        n: u16,
+    ) -> Result<(Sm, u8), Error> {
         let register = 0x0800 + 8 * n;
         let r: [u8; 8] = sd.register_read(register).await?;
-        let sm = Sm { register, start: u16::from_le_bytes([r[0], r[1]]), len: u16::from_le_bytes([r[2], r[3]]) };
+        let sm =
+            Sm { register, start: u16::from_le_bytes([r[0], r[1]]), len: u16::from_le_bytes([r[2], r[3]]) };
         // Control: mailbox mode (bits 0-1 = 2), direction in bits 2-3; enabled in bit 0 of 0x0806.
         let enabled = r[6] & 1 != 0 && r[4] & 0x03 == 0x02 && sm.len >= 8;
         Ok((sm, if enabled { (r[4] >> 2) & 0x03 } else { 0xFF }))
     }
 
-    async fn sm_full<S: Deref<Target = SubDevice>>(&self, sd: &SubDeviceRef<'_, S>, sm: Sm) -> Result<bool, Error> {
+    async fn sm_full<S: Deref<Target = SubDevice>>(
+        &self,
+        sd: &SubDeviceRef<'_, S>,
+        sm: Sm,
+    ) -> Result<bool, Error> {
         let status: u8 = sd.register_read(sm.register + 5).await?;
         Ok(status & 0x08 != 0)
     }
@@ -225,16 +234,27 @@ impl Master {
         }
         self.poll(sd, write, false).await.map_err(e("waiting for the write mailbox"))?;
         let len = u16::try_from(body.len()).unwrap_or(u16::MAX);
-        let header =
-            MailboxHeader { length: len, address: 0, channel: 0, priority: 0, mailbox_type: MailboxType::Coe, counter: 0 };
+        let header = MailboxHeader {
+            length: len,
+            address: 0,
+            channel: 0,
+            priority: 0,
+            mailbox_type: MailboxType::Coe,
+            counter: 0,
+        };
         let mut frame = header.encode().to_vec();
         frame.extend_from_slice(body);
         if frame.len() > usize::from(write.len) {
-            return Err(MasterError::Unsupported(format!("slave {position}: its mailbox is too small for the request")));
+            return Err(MasterError::Unsupported(format!(
+                "slave {position}: its mailbox is too small for the request"
+            )));
         }
         // The whole mailbox is written: the last byte hands it to the slave.
         frame.resize(usize::from(write.len), 0);
-        Command::fpwr(addr, write.start).send(&self.md, frame.as_slice()).await.map_err(e("writing the request"))?;
+        Command::fpwr(addr, write.start)
+            .send(&self.md, frame.as_slice())
+            .await
+            .map_err(e("writing the request"))?;
         loop {
             self.poll(sd, read, true).await.map_err(e("waiting for the answer"))?;
             let got = Command::fprd(addr, read.start)
@@ -288,7 +308,8 @@ impl Master {
         match self.exchange(sd, position, &body).await? {
             Answer::Coe(b) => Ok(Some(b)),
             Answer::MailboxError(c)
-                if c == MailboxErrorCode::SERVICE_NOT_SUPPORTED.0 || c == MailboxErrorCode::UNSUPPORTED_PROTOCOL.0 =>
+                if c == MailboxErrorCode::SERVICE_NOT_SUPPORTED.0
+                    || c == MailboxErrorCode::UNSUPPORTED_PROTOCOL.0 =>
             {
                 Ok(None)
             }
@@ -317,7 +338,9 @@ impl Master {
                 max_sub: d.max_sub,
                 name: text(d.name),
             })),
-            Some(InfoResponse::Error(code)) => Err(MasterError::Abort { position, index, sub: 0, write: false, code }),
+            Some(InfoResponse::Error(code)) => {
+                Err(MasterError::Abort { position, index, sub: 0, write: false, code })
+            }
             _ => Err(bad_answer(position, index, 0, &b)),
         }
     }
@@ -336,13 +359,17 @@ impl Master {
             return Ok(None);
         };
         match InfoResponse::decode(&b) {
-            Some(InfoResponse::EntryDescription(d)) if d.index == index && d.sub == sub => Ok(Some(EntryInfo {
-                data_type: d.data_type,
-                bit_length: d.bit_length,
-                access: d.access,
-                name: text(d.name),
-            })),
-            Some(InfoResponse::Error(code)) => Err(MasterError::Abort { position, index, sub, write: false, code }),
+            Some(InfoResponse::EntryDescription(d)) if d.index == index && d.sub == sub => {
+                Ok(Some(EntryInfo {
+                    data_type: d.data_type,
+                    bit_length: d.bit_length,
+                    access: d.access,
+                    name: text(d.name),
+                }))
+            }
+            Some(InfoResponse::Error(code)) => {
+                Err(MasterError::Abort { position, index, sub, write: false, code })
+            }
             _ => Err(bad_answer(position, index, sub, &b)),
         }
     }
@@ -369,7 +396,8 @@ impl Master {
             entries: Vec::new(),
         };
         if details & coe_details::SDO_INFO == 0 {
-            read.described = Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into());
+            read.described =
+                Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into());
             return Ok(read);
         }
         let Some(object) = self.object_description(sd, position, index).await? else {
@@ -459,4 +487,3 @@ fn bad_answer(position: usize, index: u16, sub: u8, b: &[u8]) -> MasterError {
         &b[..b.len().min(12)]
     ))
 }
-
