@@ -225,3 +225,22 @@ fn whole_objects_without_sdo_information_or_complete_access() {
         assert_eq!(e.len(), 3);
     });
 }
+
+/// The iPOS shows a new mode in 6061h only once in operation enabled
+/// (§4.2.4): homing straight from switch on disabled (as `drivebus
+/// ethercat drive home` does after the line fell back to SAFE-OP) must
+/// enable before it waits for the mode.
+#[test]
+fn homing_from_switch_on_disabled_on_the_ipos() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        assert_ne!(d.fb.state(), Some(drivebus_cia402::codes::State::OperationEnabled));
+        let at = d.home(35, Duration::from_secs(10), |_| {}).await.unwrap();
+        assert_eq!(at, 0);
+        assert_eq!(d.read(0x6061, 0).await.unwrap(), 6);
+        d.stop().await.unwrap();
+    });
+}

@@ -488,13 +488,17 @@ impl<'m> DriveLine<'m> {
     }
 
     /// Sets the mode of operation (6060h: in the image when mapped, else
-    /// over CoE) and waits for 6061h to show it.
-    pub async fn set_mode(&mut self, m: i8) -> Result<(), DriveError> {
+    /// over CoE), brings the drive to operation enabled ([`Self::enable`])
+    /// and waits for 6061h to show the mode there: a drive may take a new
+    /// mode only once in operation enabled (iPOS §4.2.4).
+    pub async fn enable_in_mode(&mut self, m: i8, timeout: Duration) -> Result<(), DriveError> {
         if self.layout.mode.is_some() {
             self.mode_out = m;
         } else {
             self.write(0x6060, 0, &[m as u8]).await?;
         }
+        self.enable(timeout).await?;
+        self.controlword = cw::ENABLE_OPERATION;
         for _ in 0..200 {
             self.cycle().await?;
             if self.read(0x6061, 0).await? == i64::from(m) {
@@ -502,7 +506,7 @@ impl<'m> DriveLine<'m> {
             }
         }
         Err(MasterError::Unsupported(format!(
-            "slave {}: 6061h does not show mode {m} ({}) after writing 6060h",
+            "slave {}: 6061h does not show mode {m} ({}) after writing 6060h and enabling",
             self.position,
             mode::name(m)
         ))
@@ -606,11 +610,8 @@ impl<'m> DriveLine<'m> {
         timeout: Duration,
         mut progress: impl FnMut(&Feedback),
     ) -> Result<i32, DriveError> {
-        self.set_mode(mode::HM).await?;
         self.write(0x6098, 0, &[method as u8]).await?;
-        self.enable(Duration::from_secs(2)).await?;
-        self.controlword = cw::ENABLE_OPERATION;
-        self.cycle().await?;
+        self.enable_in_mode(mode::HM, Duration::from_secs(2)).await?;
         // Bit 4 starts homing (CiA 402-2 §6.6).
         self.controlword = cw::ENABLE_OPERATION | cw::NEW_SET_POINT;
         let limit = (timeout.as_nanos() / self.cycle.as_nanos().max(1)).max(1) as u64;
@@ -663,8 +664,7 @@ impl<'m> DriveLine<'m> {
             ))
             .into());
         }
-        self.set_mode(mode::PP).await?;
-        self.enable(Duration::from_secs(2)).await?;
+        self.enable_in_mode(mode::PP, Duration::from_secs(2)).await?;
         let goal = if relative { self.fb.position.saturating_add(target) } else { target };
         if self.layout.target.is_some() {
             self.target = target;
@@ -716,9 +716,7 @@ impl<'m> DriveLine<'m> {
         mut sample: impl FnMut(i32, &Feedback),
     ) -> Result<u64, DriveError> {
         self.target = self.fb.position;
-        self.set_mode(mode::CSP).await?;
-        self.enable(Duration::from_secs(2)).await?;
-        self.controlword = cw::ENABLE_OPERATION;
+        self.enable_in_mode(mode::CSP, Duration::from_secs(2)).await?;
         let mut n = 0;
         for t in targets {
             if self.interrupted() {
