@@ -124,13 +124,40 @@ fn master_commands_against_served_drives_over_veth() {
     assert_eq!(text.trim(), "1018h:02 Identity object / Product code = 28002021 (0x01AB46E5) [UNSIGNED32]");
     let text = line.ok(&["sdo", "read", "--slave", "1", "1008"]);
     assert_eq!(text.trim(), "1008h:00 Manufacturer device name = iPOS [VISIBLE_STRING]");
-    // Issue 15: the whole PDO assignment array, named and typed (sub 0 alone before).
+    // Issue 15: the whole PDO assignment array, every entry named and
+    // typed by the slave's SDO Information, read by complete access.
     let text = line.ok(&["sdo", "read", "--slave", "1", "1C13"]);
-    assert!(text.starts_with("1C13h:00 Sync manager 3 PDO assignment / Number of entries = "), "{text}");
-    assert!(
-        text.contains("1C13h:01 Sync manager 3 PDO assignment / PDO 1 = ") && text.contains("[UNSIGNED16]"),
-        "{text}"
+    let a = "1C13h:0{} Sync Manager Channel 3 (Process Data Input) / ";
+    let b = "Sync Manager Channel 3: PDO Mapping object index of assigned TxPDO";
+    let want = [
+        format!("{}Number of entries = 2 (0x02) [UNSIGNED8]", a.replace("{}", "0")),
+        format!("{}{b} (1st) = 6656 (0x1A00) [UNSIGNED16]", a.replace("{}", "1")),
+        format!("{}{b} (2nd) = 6657 (0x1A01) [UNSIGNED16]", a.replace("{}", "2")),
+    ];
+    assert_eq!(text.lines().collect::<Vec<_>>(), want, "{text}");
+    let j = line.json(&["sdo", "read", "--slave", "1", "1C13"]);
+    assert_eq!(
+        (j["names_from"].as_str(), j["complete_access"].as_bool()),
+        (Some("sdo_info"), Some(true)),
+        "{j}"
     );
+    assert_eq!((j["object_code"].as_str(), j["slave"].as_u64()), (Some("ARRAY"), Some(1)), "{j}");
+    let e = &j["entries"][2];
+    assert_eq!(
+        (e["sub"].as_u64(), e["value"].as_u64(), e["type"].as_str()),
+        (Some(2), Some(0x1A01), Some("UNSIGNED16"))
+    );
+    assert_eq!((e["access"].as_str(), e["bits"].as_u64()), (Some("rw"), Some(16)), "{j}");
+    // A record: the identity, names from the slave.
+    let j = line.json(&["sdo", "read", "--slave", "2", "1018"]);
+    assert_eq!(j["object_code"], "RECORD", "{j}");
+    let e = j["entries"].as_array().unwrap();
+    assert_eq!(e.len(), 5, "{j}");
+    assert_eq!(
+        (e[4]["name"].as_str(), e[4]["value"].as_u64()),
+        (Some("Identity object / Serial number"), Some(2))
+    );
+    assert_eq!(e[4]["access"], "ro");
     line.ok(&["sdo", "write", "--slave", "2", "6081h", "123456"]);
     assert_eq!(line.json(&["sdo", "read", "--slave", "2", "profile velocity"])["value"], 123456);
     let (_, err) = line.fails(&["sdo", "read", "--slave", "1", "5FFF"]);

@@ -3,13 +3,17 @@
 //! count, AL status, scan (SII and 1018h), CoE read, abort, a refused AL
 //! state with its code, the PDO assignment, and the drive over process
 //! data with DC: enable, homing, a profile-position move checked against
-//! the position, a csp sine followed within the following error window.
+//! the position, a csp sine followed within the following error window;
+//! whole objects named by SDO Information and read by complete access,
+//! and without either service.
 
 use drivebus_can::{Duration, Instant};
+use drivebus_esi::CoeDetails;
 use drivebus_ethercat::drive::DriveLine as Line;
+use drivebus_ethercat::drive::DriveSpec;
 use drivebus_ethercat::master::drive::DriveLine;
-use drivebus_ethercat::master::{self, AlState, Master, MasterError, Storage};
-use drivebus_ethercat::{Clock, Host};
+use drivebus_ethercat::master::{self, AlState, Described, Master, MasterError, Storage, coe_details};
+use drivebus_ethercat::{BoxDevice, Clock, Host};
 use drivebus_personality::Profile;
 
 fn line() -> Host {
@@ -121,6 +125,111 @@ fn drive_in_free_run_on_the_generic_servo() {
         d.stop().await.unwrap();
     });
 }
+
+/// A line of one iPOS offering the CoE services `coe` (`None`: its own).
+fn ipos_offering(coe: Option<CoeDetails>) -> Host {
+    let spec = DriveSpec { coe, ..DriveSpec::new(Profile::Ipos, 1) };
+    let d: BoxDevice = Box::new(drivebus_ethercat::drive::slave(&spec).unwrap());
+    Host::line(vec![d], Clock::simulated(Instant::from_millis(1)))
+}
+
+fn coe(sdo_info: bool, complete_access: bool) -> Option<CoeDetails> {
+    Some(CoeDetails { sdo_info, pdo_assign: true, pdo_config: true, pdo_upload: false, complete_access })
+}
+
+#[test]
+fn whole_objects_by_sdo_information_and_complete_access() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, line()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let sd = m.slave(&g, 1).unwrap();
+        let details = m.coe_details(&sd, 1).await.unwrap();
+        assert_eq!(details & (coe_details::SDO_INFO | coe_details::COMPLETE_ACCESS), 0x22, "{details:#04x}");
+        // The TxPDO assignment: an ARRAY, every entry named and typed by the
+        // slave, entries 1.. in one complete-access upload (§2.3 default).
+        let r = m.read_object(&sd, 1, 0x1C13).await.unwrap();
+        let Described::SdoInfo(o) = &r.described else { panic!("{r:?}") };
+        assert_eq!(
+            (o.name.as_str(), o.object_code, o.data_type),
+            ("Sync Manager Channel 3 (Process Data Input)", 8, 6)
+        );
+        assert!(r.complete_access && r.read_complete, "{r:?}");
+        let subs: Vec<_> = r.entries.iter().map(|e| (e.sub, e.data.clone())).collect();
+        assert_eq!(subs, [(0, vec![2]), (1, vec![0x00, 0x1A]), (2, vec![0x01, 0x1A])]);
+        let i = r.entries[1].info.as_ref().unwrap();
+        assert_eq!((i.data_type, i.bit_length, i.access_text()), (6, 16, "rw"));
+        assert_eq!(i.name, "Sync Manager Channel 3: PDO Mapping object index of assigned TxPDO (1st)");
+        assert_eq!(r.entries[0].info.as_ref().unwrap().name, "Number of entries");
+        // A RECORD: the identity, read only.
+        let r = m.read_object(&sd, 1, 0x1018).await.unwrap();
+        let Described::SdoInfo(o) = &r.described else { panic!("{r:?}") };
+        assert_eq!((o.name.as_str(), o.object_code), ("Identity Object", 9));
+        assert!(r.read_complete);
+        let names: Vec<_> = r.entries.iter().map(|e| e.info.as_ref().unwrap().name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["Number of entries", "Vendor ID", "Product Code", "Revision number", "Serial number"]
+        );
+        assert_eq!(r.entries[1].data, 0x1A3u32.to_le_bytes());
+        assert_eq!(r.entries[4].info.as_ref().unwrap().access_text(), "ro");
+        // A VAR: sub 0 with its type.
+        let r = m.read_object(&sd, 1, 0x1008).await.unwrap();
+        assert_eq!(r.entries.len(), 1);
+        assert_eq!(r.entries[0].data, b"iPOS");
+        assert_eq!(r.entries[0].info.as_ref().unwrap().data_type, 9, "VISIBLE_STRING");
+        // No such object: the slave's SDO Info error, as an abort.
+        match m.read_object(&sd, 1, 0x5FFF).await {
+            Err(MasterError::Abort { index: 0x5FFF, sub: 0, code: 0x0602_0000, .. }) => {}
+            other => panic!("{other:?}"),
+        }
+    });
+}
+
+#[test]
+fn whole_objects_without_sdo_information_or_complete_access() {
+    static S: Storage = Storage::new();
+    let m = Master::on_host(&S, ipos_offering(coe(false, false))).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let sd = m.slave(&g, 1).unwrap();
+        let r = m.read_object(&sd, 1, 0x1C13).await.unwrap();
+        assert_eq!(
+            r.described,
+            Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into())
+        );
+        assert!(!r.complete_access && r.entries.is_empty(), "{r:?}");
+        // The caller's layout, one upload per entry.
+        let (e, by_ca) =
+            master::read_entries(&sd, 1, 0x1C13, &[(1, Some(16)), (2, Some(16))], false).await.unwrap();
+        assert!(!by_ca);
+        assert_eq!(e, [(1, vec![0x00, 0x1A]), (2, vec![0x01, 0x1A])]);
+        // The slave really refuses both services (the SII tells the truth).
+        assert_eq!(m.object_description(&sd, 1, 0x1C13).await.unwrap(), None);
+    });
+    static T: Storage = Storage::new();
+    let m = Master::on_host(&T, ipos_offering(coe(false, true))).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let sd = m.slave(&g, 1).unwrap();
+        let r = m.read_object(&sd, 1, 0x1018).await.unwrap();
+        assert!(matches!(r.described, Described::NoSdoInfo(_)) && r.complete_access, "{r:?}");
+        // Complete access with the caller's layout; a layout that does not
+        // fit the image falls back to one upload per entry.
+        let layout = [(1, Some(32)), (2, Some(32)), (3, Some(32)), (4, Some(32))];
+        let (e, by_ca) = master::read_entries(&sd, 1, 0x1018, &layout, true).await.unwrap();
+        assert!(by_ca);
+        assert_eq!(e[3], (4, 1u32.to_le_bytes().to_vec()));
+        let (e, by_ca) = master::read_entries(&sd, 1, 0x1018, &layout[..3], true).await.unwrap();
+        assert!(!by_ca);
+        assert_eq!(e.len(), 3);
+    });
+}
+
+/// The iPOS shows a new mode in 6061h only once in operation enabled
+/// (§4.2.4): homing straight from switch on disabled (as `drivebus
+/// ethercat drive home` does after the line fell back to SAFE-OP) must
+/// enable before it waits for the mode.
 
 /// The iPOS shows a new mode in 6061h only once in Operation enabled (its
 /// manual §4.2.4): homing and a move from a drive not enabled set the mode,

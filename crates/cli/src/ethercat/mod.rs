@@ -8,6 +8,7 @@
 pub mod demo;
 mod drive;
 mod line;
+mod read;
 mod serve;
 
 use clap::{Args, Subcommand};
@@ -61,11 +62,14 @@ Examples:
   drivebus ethercat sdo read --iface ecat1 --slave 1 1018 1
   drivebus ethercat sdo read --iface ecat1 --slave 1 statusword --json
   drivebus ethercat sdo read --iface ecat1 --slave 2 1C13          (the whole array)
+  drivebus ethercat sdo read --iface ecat1 --slave 2 1018 --json   (the whole record)
   drivebus ethercat sdo write --iface ecat1 --slave 1 6060 0 8
   drivebus ethercat sdo write --iface ecat1 --slave 1 0x6081 200000 --type u32
 
 Indices and sub-indices are hex (6041, 0x6041, 6041h, 6041:00); CiA 301/402 objects go by name and
-type. An abort is reported with its code and meaning (exit 1). ethercrab 0.7.1 writes 1 to 4
+type. An array or record without SUB is read whole: names and types from the slave's SDO
+Information, one complete-access upload where the slave offers it; without SDO Information from
+the CiA 301/402 and ETG.1000.6 tables, else by size, with a note. An abort is reported with its code and meaning (exit 1). ethercrab 0.7.1 writes 1 to 4
 bytes (expedited download); reads of any length work.";
 
 const STATE_EXAMPLES: &str = "\
@@ -286,7 +290,7 @@ pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
     match cmd {
         EthercatCmd::Serve(a) => serve::run(a).await.map(|()| 0),
         EthercatCmd::Scan(a) => line::scan(g, &a.line).await.map(|()| 0),
-        EthercatCmd::Sdo(EcatSdoCmd::Read(a)) => line::sdo_read(g, a).await.map(|()| 0),
+        EthercatCmd::Sdo(EcatSdoCmd::Read(a)) => read::sdo_read(g, a).await.map(|()| 0),
         EthercatCmd::Sdo(EcatSdoCmd::Write(a)) => line::sdo_write(g, a).await.map(|()| 0),
         EthercatCmd::State(a) => line::state(g, a).await.map(|()| 0),
         EthercatCmd::Pdo(EcatPdoCmd::Show(a)) => line::pdo_show(g, a).await.map(|()| 0),

@@ -72,12 +72,54 @@ fn image_bits<A: ObjectAccess + ?Sized>(
     let mut bits: usize = if start_sub == 0 { 16 } else { 0 };
     for s in obj.subs().iter().filter(|s| (1..=n).contains(&s.sub)) {
         let b = entry_bits(s.data_type)?;
-        if b != 1 {
-            bits = bits.next_multiple_of(8);
-        }
-        bits += b;
+        bits = entry_start(bits, b) + b;
     }
     Ok(bits)
+}
+
+/// Where an entry of `bits` bits starts in an image whose entries so far
+/// end at bit `end`: entries shorter than a byte (BOOLEAN) are packed,
+/// every other entry starts on a byte boundary.
+const fn entry_start(end: usize, bits: usize) -> usize {
+    if bits < 8 { end } else { end.next_multiple_of(8) }
+}
+
+/// Cuts a complete-access image (a master's upload from `start_sub`, which
+/// is 0 or 1) into its entries. `entries` are the sub-indices from 1 present in the
+/// image (gaps of a RECORD left out) with their bit lengths, in order, as
+/// the slave's SDO Information gives them. Starting at 0, sub 0 comes first
+/// as 16 bits. An entry shorter than a byte comes back as one byte holding
+/// its bits. `None` when the image is not exactly as long as the layout or
+/// an entry has no length.
+pub fn split_image(image: &[u8], start_sub: u8, entries: &[(u8, u16)]) -> Option<Vec<(u8, Vec<u8>)>> {
+    let mut out = Vec::with_capacity(entries.len() + 1);
+    let mut end = match start_sub {
+        0 => {
+            out.push((0, alloc::vec![*image.first()?]));
+            16
+        }
+        1 => 0,
+        _ => return None,
+    };
+    for &(sub, bits) in entries {
+        let bits = usize::from(bits);
+        if bits == 0 {
+            return None;
+        }
+        let at = entry_start(end, bits);
+        let value = if bits < 8 {
+            let v = (*image.get(at / 8)? >> (at % 8)) & ((1u8 << bits) - 1);
+            if at % 8 + bits > 8 {
+                return None;
+            }
+            alloc::vec![v]
+        } else {
+            image.get(at / 8..(at + bits).div_ceil(8))?.to_vec()
+        };
+        out.push((sub, value));
+        end = at + bits;
+    }
+    (image.len() == end.div_ceil(8)).then_some(out)
 }
 
 /// The current value of sub 0 (the number of entries).
@@ -293,6 +335,24 @@ mod tests {
         assert_eq!(out, [5, 0, 0, 0]);
         assert_eq!(upload(&mut d, 0x2201, 1, &mut out), Err(SdoAbort::NO_SUB_INDEX));
         assert_eq!(upload(&mut d, 0x3000, 0, &mut out), Err(SdoAbort::NO_OBJECT));
+    }
+
+    #[test]
+    fn a_master_splits_what_upload_builds() {
+        let mut d = dev();
+        let mut img = Vec::new();
+        upload(&mut d, 0x2100, 0, &mut img).unwrap();
+        let layout = [(1, 8), (2, 1), (3, 1), (4, 32), (6, 16)];
+        let e = split_image(&img, 0, &layout).unwrap();
+        assert_eq!(e[0], (0, vec![6]));
+        assert_eq!(e[1..4], [(1, vec![0x11]), (2, vec![1]), (3, vec![0])]);
+        assert_eq!(e[4], (4, vec![0xD4, 0xC3, 0xB2, 0xA1]));
+        upload(&mut d, 0x2100, 1, &mut img).unwrap();
+        assert_eq!(split_image(&img, 1, &layout).unwrap()[3], (4, vec![0xD4, 0xC3, 0xB2, 0xA1]));
+        // A layout that does not match the image is refused, not guessed.
+        assert_eq!(split_image(&img, 1, &layout[..4]), None);
+        assert_eq!(split_image(&img, 1, &[(1, 0)]), None);
+        assert_eq!(split_image(&img, 2, &layout), None);
     }
 
     #[test]

@@ -1,40 +1,20 @@
 //! SDO Information (ETG.1000.6 §5.6.3): object lists, object and entry
 //! descriptions, and the SDO Info error.
 //!
-//! Every SDO Information mailbox is the CoE header (service 8), a 4-byte
-//! info header (opcode bits 0-6, "incomplete" bit 7, a reserved byte,
-//! "fragments left" as UNSIGNED16; §5.6.3.2) and the service data. An OD
-//! list longer than the mailbox is sent in fragments: the list type and
-//! the indices are one byte stream cut at even offsets, the first fragment
-//! carrying the list type (as SOEM's `ecx_readODlist` reads it). Fragments
-//! after the first are produced one at a time, when the server is asked
-//! for its next response.
+//! The wire format is `info_codec.rs`. An OD list longer than the mailbox
+//! is sent in fragments: the list type and the indices are one byte
+//! stream cut at even offsets, the first fragment carrying the list type
+//! (as SOEM's `ecx_readODlist` reads it). Fragments after the first are
+//! produced one at a time, when the server is asked for its next response.
 
 use super::Out;
+use super::info_codec::{
+    EntryDescription, HEADER_LEN, InfoRequest, ObjectDescription, opcode, put_header, put_text, value_info,
+};
 use crate::access::{ObjectAccess, access_bits};
 use crate::mailbox::{HEADER_LEN as MBX_HEADER_LEN, MailboxErrorCode, MailboxType, Put};
 use alloc::vec::Vec;
 use drivebus_od::{Object, ObjectCode, SdoAbort, SubObject};
-
-/// CoE header plus info header, in front of every service's data.
-pub(crate) const HEADER_LEN: usize = 6;
-
-/// CoE header of SDO Information (service 8).
-const COE_SDO_INFO: [u8; 2] = [0x00, 0x80];
-
-/// Opcodes (§5.6.3.2).
-mod op {
-    pub const OD_LIST_REQ: u8 = 0x01;
-    pub const OD_LIST_RES: u8 = 0x02;
-    pub const OBJ_DESC_REQ: u8 = 0x03;
-    pub const OBJ_DESC_RES: u8 = 0x04;
-    pub const ENTRY_DESC_REQ: u8 = 0x05;
-    pub const ENTRY_DESC_RES: u8 = 0x06;
-    pub const INFO_ERROR: u8 = 0x07;
-}
-
-/// The "more fragments follow" bit of the opcode byte.
-const INCOMPLETE: u8 = 0x80;
 
 /// OD list types of Get OD List (§5.6.3.3.1).
 pub mod list_type {
@@ -50,17 +30,6 @@ pub mod list_type {
     pub const BACKUP: u16 = 4;
     /// Objects usable as startup parameters.
     pub const SETTINGS: u16 = 5;
-}
-
-/// Value-info bits of Get Entry Description: which optional fields follow
-/// the fixed ones (§5.6.3, Get Entry Description). Bit 3 (unit type) is never given: the
-/// dictionary holds no units.
-mod value_info {
-    pub const DEFAULT: u8 = 0x10;
-    pub const MINIMUM: u8 = 0x20;
-    pub const MAXIMUM: u8 = 0x40;
-    /// Bits 0-2 carry no field in the response; echoed as requested.
-    pub const ECHO: u8 = 0x07;
 }
 
 /// Remaining fragments of an OD list answer.
@@ -93,10 +62,7 @@ impl Fragments {
         let remaining = rest.len() - k;
         let left = u16::try_from(remaining.div_ceil(chunk)).unwrap_or(u16::MAX);
         let w = out.q.begin();
-        w.extend_from_slice(&COE_SDO_INFO);
-        w.push(op::OD_LIST_RES | if remaining > 0 { INCOMPLETE } else { 0 });
-        w.push(0);
-        w.put_u16(left);
+        put_header(w, opcode::OD_LIST_RES, remaining > 0, left);
         w.extend_from_slice(&rest[..k]);
         out.q.commit(MailboxType::Coe);
         self.pos += k;
@@ -106,24 +72,19 @@ impl Fragments {
 
     /// One SDO Information request (`body.len() >= HEADER_LEN`).
     pub(crate) fn handle<A: ObjectAccess + ?Sized>(&mut self, body: &[u8], objects: &A, out: &mut Out<'_>) {
-        let need = match body[2] & 0x7F {
-            op::OD_LIST_REQ | op::OBJ_DESC_REQ => HEADER_LEN + 2,
-            op::ENTRY_DESC_REQ => HEADER_LEN + 4,
-            _ => HEADER_LEN,
-        };
-        if body.len() < need {
-            out.q.push_error(MailboxErrorCode::SIZE_TOO_SHORT);
-            return;
-        }
-        let arg = u16::from_le_bytes([body.get(6).copied().unwrap_or(0), body.get(7).copied().unwrap_or(0)]);
-        match body[2] & 0x7F {
-            op::OD_LIST_REQ => self.od_list(arg, objects, out),
-            op::OBJ_DESC_REQ => object_description(arg, objects, out),
-            op::ENTRY_DESC_REQ => entry_description(arg, body[8], body[9], objects, out),
+        match InfoRequest::decode(body) {
+            None => {
+                out.q.push_error(MailboxErrorCode::SIZE_TOO_SHORT);
+            }
+            Some(InfoRequest::OdList(list)) => self.od_list(list, objects, out),
+            Some(InfoRequest::ObjectDescription(index)) => object_description(index, objects, out),
+            Some(InfoRequest::EntryDescription { index, sub, value_info }) => {
+                entry_description(index, sub, value_info, objects, out)
+            }
             // The master ends a fragmented answer with an Info error request;
             // the caller has already cancelled it. Nothing is answered.
-            op::INFO_ERROR => {}
-            _ => info_error(out, SdoAbort::INVALID_COMMAND),
+            Some(InfoRequest::Error) => {}
+            Some(InfoRequest::Other(_)) => info_error(out, SdoAbort::INVALID_COMMAND),
         }
     }
 
@@ -171,8 +132,7 @@ fn in_list<A: ObjectAccess + ?Sized>(list: u16, o: &Object, objects: &A) -> bool
 /// Answer with an SDO Info error request carrying an abort code (§5.6.3).
 fn info_error(out: &mut Out<'_>, code: SdoAbort) {
     let w = out.q.begin();
-    w.extend_from_slice(&COE_SDO_INFO);
-    w.extend_from_slice(&[op::INFO_ERROR, 0, 0, 0]);
+    put_header(w, opcode::INFO_ERROR, false, 0);
     w.put_u32(code.0);
     out.q.commit(MailboxType::Coe);
 }
@@ -206,13 +166,6 @@ fn object_data_type(o: &Object) -> u16 {
     }
 }
 
-/// Append `text`, cut to the room left in the mailbox.
-fn put_text(w: &mut Vec<u8>, text: &str, limit: usize) {
-    let room = limit.saturating_sub(w.len());
-    let b = text.as_bytes();
-    w.extend_from_slice(&b[..b.len().min(room)]);
-}
-
 /// Get Object Description: index, data type, highest sub-index, object
 /// code, name (§5.6.3, Get Object Description).
 fn object_description<A: ObjectAccess + ?Sized>(index: u16, objects: &A, out: &mut Out<'_>) {
@@ -226,13 +179,14 @@ fn object_description<A: ObjectAccess + ?Sized>(index: u16, objects: &A, out: &m
         _ => 0,
     };
     let limit = MBX_HEADER_LEN + out.cap;
-    let w = out.q.begin();
-    w.extend_from_slice(&COE_SDO_INFO);
-    w.extend_from_slice(&[op::OBJ_DESC_RES, 0, 0, 0]);
-    w.put_u16(index);
-    w.put_u16(object_data_type(o));
-    w.extend_from_slice(&[max_sub, object_code(o)]);
-    put_text(w, &o.name, limit);
+    let d = ObjectDescription {
+        index,
+        data_type: object_data_type(o),
+        max_sub,
+        object_code: object_code(o),
+        name: o.name.as_bytes(),
+    };
+    d.encode(out.q.begin(), limit);
     out.q.commit(MailboxType::Coe);
 }
 
@@ -261,15 +215,19 @@ fn entry_description<A: ObjectAccess + ?Sized>(
     let access = objects.object_access(index, sub);
     let limit = MBX_HEADER_LEN + out.cap;
     let w = out.q.begin();
-    w.extend_from_slice(&COE_SDO_INFO);
-    w.extend_from_slice(&[op::ENTRY_DESC_RES, 0, 0, 0]);
-    w.put_u16(index);
-    w.push(sub);
-    let vi_at = w.len();
-    w.push(0);
-    w.put_u16(s.data_type as u16);
-    w.put_u16(bit_length(s));
-    w.put_u16(access);
+    // The value-info byte, set once the fields that fit are known.
+    let vi_at = w.len() + HEADER_LEN + 3;
+    let head = EntryDescription {
+        index,
+        sub,
+        value_info: 0,
+        data_type: s.data_type as u16,
+        bit_length: bit_length(s),
+        access,
+        values: &[],
+        name: &[],
+    };
+    head.encode_head(w);
     let mut given = asked & value_info::ECHO;
     let fields = [
         (value_info::DEFAULT, Some(s.default.as_slice())),
@@ -286,7 +244,7 @@ fn entry_description<A: ObjectAccess + ?Sized>(
         }
     }
     w[vi_at] = given;
-    put_text(w, &s.name, limit);
+    put_text(w, s.name.as_bytes(), limit);
     out.q.commit(MailboxType::Coe);
 }
 

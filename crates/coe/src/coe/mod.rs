@@ -2,7 +2,8 @@
 //!
 //! The SDO server (`sdo_server.rs`: initiate, expedited and normal
 //! transfers, aborts; `segmented.rs`: segments), complete access
-//! (`complete.rs`), SDO Information (`info.rs`) and emergencies
+//! (`complete.rs`), SDO Information (`info.rs`, its wire format in
+//! `info_codec.rs`, which a master uses too) and emergencies
 //! (`emergency.rs`). The CoE header is 2 bytes: a 9-bit number (0 for every
 //! service used here), 3 reserved bits and the service in bits 12-15
 //! (ETG.1000.6 §5.6.1 Table 29).
@@ -22,6 +23,7 @@
 mod complete;
 pub(crate) mod emergency;
 mod info;
+pub mod info_codec;
 mod sdo_server;
 mod segmented;
 
@@ -30,6 +32,7 @@ use crate::mailbox::{MailboxErrorCode, ResponseQueue};
 use alloc::vec::Vec;
 use drivebus_can::{Duration, Instant};
 
+pub use complete::split_image;
 pub use info::list_type;
 
 /// CoE services (ETG.1000.6 §5.6.1 Table 29).
@@ -197,7 +200,7 @@ impl CoeServer {
             service::SDO_INFO if !self.cfg.sdo_info => {
                 out.q.push_error(MailboxErrorCode::SERVICE_NOT_SUPPORTED);
             }
-            service::SDO_INFO if body.len() < info::HEADER_LEN => {
+            service::SDO_INFO if body.len() < info_codec::HEADER_LEN => {
                 out.q.push_error(MailboxErrorCode::SIZE_TOO_SHORT);
             }
             service::SDO_INFO => self.info.handle(body, objects, out),

@@ -55,7 +55,7 @@ use drivebus_coe::{MailboxConfig, MailboxServer};
 use drivebus_esc::sii::SiiImage;
 use drivebus_esc::slave::{Slave, SlaveConfig};
 use drivebus_esc::{ClockConfig, Esc, EscConfig};
-use drivebus_esi::SlaveDescription;
+use drivebus_esi::{CoeDetails, SlaveDescription};
 use drivebus_node::{FileStorage, MemoryStorage, Storage};
 use drivebus_od::Value;
 use drivebus_personality::{BuildError, Profile, ecat};
@@ -108,12 +108,15 @@ pub struct DriveSpec {
     pub state_dir: Option<PathBuf>,
     /// Its ESC's local clock (offset, drift).
     pub clock: ClockConfig,
+    /// The CoE services it offers (SII CoE details and its mailbox
+    /// server alike); `None`: the profile's (SDO Information, complete access).
+    pub coe: Option<CoeDetails>,
 }
 
 impl DriveSpec {
     /// `profile` with serial number `serial`, no state directory.
     pub fn new(profile: Profile, serial: u32) -> DriveSpec {
-        DriveSpec { profile, serial, state_dir: None, clock: ClockConfig::default() }
+        DriveSpec { profile, serial, state_dir: None, clock: ClockConfig::default(), coe: None }
     }
 }
 
@@ -126,9 +129,16 @@ pub fn slave(spec: &DriveSpec) -> Result<DriveSlave, DriveError> {
     };
     let mut dev = ecat::build(spec.profile, storage).map_err(DriveError::Build)?;
     drivebus_personality::build::set_default(dev.node.od_mut(), 0x1018, 4, &Value::U32(spec.serial));
-    let desc = describe(spec.profile, dev.node.od());
+    let mut desc = describe(spec.profile, dev.node.od());
+    if let (Some(c), Some(m)) = (spec.coe, desc.mailbox.as_mut()) {
+        m.coe = Some(c);
+    }
     let (rx, tx) = mailbox_sizes(&desc);
-    let mbx = MailboxServer::new(MailboxConfig::with_sizes(rx, tx)).map_err(DriveError::Mailbox)?;
+    let mut cfg = MailboxConfig::with_sizes(rx, tx);
+    if let Some(c) = desc.mailbox.as_ref().and_then(|m| m.coe) {
+        (cfg.sdo_info, cfg.complete_access) = (c.sdo_info, c.complete_access);
+    }
+    let mbx = MailboxServer::new(cfg).map_err(DriveError::Mailbox)?;
     let files = ecat::files(spec.profile, spec.state_dir.as_ref().map(|d| d.join("foe")));
     let app = DriveApp::new(dev, spec.profile, facts, mbx, files);
     let esc = Esc::new(EscConfig { clock: spec.clock, ..EscConfig::with_sii(SiiImage::from(&desc)) });

@@ -1,8 +1,9 @@
 //! An EtherCAT master for tools, on ethercrab 0.7.1: open a line (a named
 //! interface through ethercrab's raw socket, or a [`Host`] through the
 //! in-process [`link`](crate::link)), find the slaves, read their AL
-//! state, request a state, read and write CoE objects, read the PDO
-//! assignment and mapping, and run a CiA 402 drive over the process data
+//! state, request a state, read and write CoE objects (whole arrays and
+//! records by the slave's SDO Information and complete access:
+//! [`Master::read_object`]), read the PDO assignment and mapping, and run a CiA 402 drive over the process data
 //! ([`drive`]). `drivebus ethercat scan|sdo|state|pdo|drive` and
 //! `drivebus demo --ethercat` are this module; nothing else in the tool
 //! talks to ethercrab.
@@ -11,6 +12,9 @@
 //! serve --state-dir` names them, `ecat-1-ipos`).
 
 pub mod drive;
+mod objects;
+
+pub use objects::{Described, Entry, EntryInfo, ObjectInfo, ObjectRead, coe_details, read_entries};
 
 /// Runs a master future to completion on this thread (ethercrab's timers
 /// are async-io's).
