@@ -36,6 +36,7 @@ mod pp;
 pub mod profile;
 mod supervise;
 mod table;
+mod tuning;
 pub mod units;
 
 #[cfg(test)]

@@ -30,9 +30,11 @@ pub mod events;
 pub mod io;
 pub mod params;
 mod physics;
+pub mod tuning;
 
 pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, SwitchInput, Switches};
 pub use io::{ANALOG_INPUTS, BrakeParams, BrakeState, DIGITAL_LINES, IoParams};
+pub use tuning::FoldbackParams;
 pub use params::{
     AxisKind, AxisParams, BusParams, ControlParams, DriveParams, EncoderParams, LoadTorque, MotorKind,
     MotorParams, ParamError, StepperParams,
@@ -173,6 +175,8 @@ pub struct DriveModel {
     load_step: f64,
     /// Inputs, outputs, master encoder, brake, temperature reading.
     io: io::Io,
+    /// Run-time current and speed limits, foldback.
+    limits: tuning::Limits,
     events: StepEvents,
 }
 
@@ -260,6 +264,7 @@ impl DriveModel {
             encoder_failed: false,
             load_step: 0.0,
             io: io::Io::new(&params.io),
+            limits: tuning::Limits::none(),
             events: StepEvents::default(),
         };
         m.counts = m.read_counts(theta);
@@ -352,6 +357,7 @@ impl DriveModel {
             MotorKind::Servo => self.servo_step(dt),
             MotorKind::Stepper(s) => self.stepper_step(dt, s),
         }
+        self.foldback_step(dt);
         self.thermal_step();
         self.bus_step(dt);
         self.detect(theta0);
@@ -588,3 +594,5 @@ mod tests_axis;
 mod tests_io;
 #[cfg(test)]
 mod tests_prop;
+#[cfg(test)]
+mod tests_tuning;

@@ -43,9 +43,10 @@ impl DriveModel {
         let m = &self.p.motor;
         let v = self.bus_voltage.max(0.0);
         let emf = m.ke * w;
-        let imax = m.max_current;
-        let hi = ((v - emf) / m.resistance).clamp(-imax, imax);
-        let lo = ((-v - emf) / m.resistance).clamp(-imax, imax);
+        let imax = self.current_cap();
+        let (ip, in_) = (imax.min(self.limits.current[0]), imax.min(self.limits.current[1]));
+        let hi = ((v - emf) / m.resistance).clamp(-in_, ip);
+        let lo = ((-v - emf) / m.resistance).clamp(-in_, ip);
         (lo, hi.max(lo))
     }
 
@@ -55,7 +56,8 @@ impl DriveModel {
     fn velocity_loop(&mut self, v_ref: f64, acc_ff: f64, lo: f64, hi: f64, dt: f64) -> f64 {
         let c = &self.p.control;
         let m = &self.p.motor;
-        let v_ref = v_ref.clamp(-m.max_speed, m.max_speed);
+        let (vlo, vhi) = self.velocity_window();
+        let v_ref = v_ref.clamp(vlo, vhi);
         let e = v_ref - self.vel_meas;
         let ff = acc_ff * self.d.inertia / m.kt;
         let u = c.velocity_kp * e + self.int_vel + ff;
@@ -72,9 +74,10 @@ impl DriveModel {
     fn position_loop(&mut self, p_ref: f64, v_ff: f64, dt: f64) -> f64 {
         let c = &self.p.control;
         let vmax = self.p.motor.max_speed;
+        let (vlo, vhi) = self.velocity_window();
         let e = p_ref - self.position_measured();
-        let u = v_ff + c.position_kp * e + self.int_pos;
-        let y = u.clamp(-vmax, vmax);
+        let u = c.velocity_feedforward * v_ff + c.position_kp * e + self.int_pos;
+        let y = u.clamp(vlo, vhi);
         if c.position_ki > 0.0 && y == u && !self.vel_saturated {
             self.int_pos = (self.int_pos + c.position_ki * e * dt).clamp(-vmax, vmax);
         }
@@ -102,7 +105,10 @@ impl DriveModel {
         self.torque = t_motor;
         self.mechanics(t_motor, dt, false);
         // Blocked rotor: at the current limit without moving for 50 ms.
-        let blocked = self.current.abs() >= 0.95 * m.max_current && self.omega.abs() < 0.01 * m.max_speed;
+        // At the limit in force (a lowered limit, the foldback) counts too.
+        let (ip, in_) = self.current_limits();
+        let limit = if self.current >= 0.0 { ip } else { in_ };
+        let blocked = limit > 0.0 && self.current.abs() >= 0.95 * limit && self.omega.abs() < 0.01 * m.max_speed;
         self.stall_timer = if blocked { self.stall_timer + dt } else { 0.0 };
         let pushing = self.contact != 0 && t_motor * f64::from(self.contact) > m.coulomb_friction;
         self.set_stalled(pushing || self.stall_timer >= 0.05);
