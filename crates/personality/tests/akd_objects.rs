@@ -5,6 +5,7 @@
 mod replay_rig;
 use drivebus_personality::Profile;
 use replay_rig::kc_objects::{self as k, emcy};
+use replay_rig::kc_tuning as t;
 
 const P: Profile = Profile::Akd;
 
@@ -390,4 +391,70 @@ fn warning_reset_emcy_after_bit11_set() {
     // The error-reset EMCY: code 0000h, register 00h, bytes 3–7 zero.
     assert_eq!(e, vec![drivebus_can::Frame::new(0x83, &[0; 8])], "reset EMCY");
     assert_eq!(k::getu(&mut r, 0x1001, 0), 0);
+}
+
+/// §7.1.4: PL.KP 3542h.
+#[test]
+fn position_loop_gain() {
+    t::position_gain(P);
+}
+
+/// §7.1.4: VL.KVFF 354Bh, 3407h:2.
+#[test]
+fn velocity_feedforward_share() {
+    t::velocity_feedforward(P);
+}
+
+/// §7.1.4: VL.KP 3548h.
+#[test]
+fn velocity_loop_gain() {
+    t::velocity_gain(P);
+}
+
+/// §7.1.4: VL.KI 354Dh.
+#[test]
+fn velocity_loop_integral() {
+    t::velocity_integral(P);
+}
+
+/// §7.1.4: MOTOR.INERTIA 35ABh, LOAD.INERTIA 525Fh.
+#[test]
+fn motor_and_load_inertia() {
+    t::inertia(P);
+}
+
+/// §7.1.4: MOTOR.KT 3593h.
+#[test]
+fn motor_torque_constant() {
+    t::torque_constant(P);
+}
+
+/// §7.1.4: MOTOR.R 3456h.
+#[test]
+fn motor_winding_resistance() {
+    t::winding_resistance(P);
+}
+
+/// §7.1.4: MOTOR.KE 5260h.
+#[test]
+fn motor_back_emf_constant() {
+    t::back_emf(P);
+}
+
+/// §7.1.4: IL.LIMITP 356Eh, IL.LIMITN 356Fh, 60E0h/60E1h (§6.7.2.7/8).
+#[test]
+fn current_limits_per_direction() {
+    t::current_limits(P);
+}
+
+/// §7.1.4: VL.LIMITP 3622h, VL.LIMITN 3623h.
+#[test]
+fn velocity_limits_per_direction() {
+    t::velocity_limits(P);
+}
+
+/// §7.1.4: MOTOR.CTF0, IL.IFOLD, IL.MIFOLD, IL.MI2T, IL.FOLDWTHRESH (n304), IL.FOLDFTHRESHU (F304); §6.1 F304/n304.
+#[test]
+fn motor_foldback() {
+    t::foldback(P);
 }

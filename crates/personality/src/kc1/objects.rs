@@ -5,7 +5,7 @@
 //! forwarded to the drive, the latches, inputs, brake, save and motion
 //! tasks. The CiA 301 quirks stay in `Kollmorgen::on_write`.
 
-use super::{Kollmorgen, ascii, params, status, timing};
+use super::{Kollmorgen, ascii, params, status, timing, tuning};
 use crate::build::{Context, Verdict};
 use drivebus_node::Request;
 use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
@@ -87,6 +87,25 @@ impl Kollmorgen {
                     Ok(Verdict::Pass)
                 }
             },
+            // The tuning, motor and limit parameters on the model.
+            _ if tuning::is_tuned(index, sub) => {
+                tuning::apply(cx, od, Some((index, sub, data)))?;
+                if index == 0x3593 {
+                    // MOTOR.KT: the rated torque follows (with KT stored
+                    // first: the forward sets the model from the objects).
+                    if let Ok(r) = od.find(index, sub) {
+                        od.set_raw(r, data);
+                    }
+                    let icont = od.get_u32(0x358E, 0).unwrap_or(0);
+                    self.forward(cx, od, 0x358E, 0, &icont.to_le_bytes())?;
+                }
+                Ok(Verdict::Store)
+            }
+            // MOTOR.IPEAK: the foldback's peak current.
+            0x358F => {
+                tuning::apply(cx, od, Some((index, sub, data)))?;
+                Ok(Verdict::Store)
+            }
             i if params::FORWARDED.contains(&i) => {
                 self.forward(cx, od, index, sub, data)?;
                 Ok(Verdict::Store)
