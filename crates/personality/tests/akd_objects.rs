@@ -5,6 +5,7 @@
 mod replay_rig;
 use drivebus_personality::Profile;
 use replay_rig::kc_objects::{self as k, emcy};
+use replay_rig::kc_outputs as o;
 use replay_rig::kc_tuning as t;
 
 const P: Profile = Profile::Akd;
@@ -457,4 +458,10 @@ fn velocity_limits_per_direction() {
 #[test]
 fn motor_foldback() {
     t::foldback(P);
+}
+
+/// §7.1.4: PLS.P/WIDTH/T/EN/MODE/RESET/STATE 34A0h–34A3h.
+#[test]
+fn position_limit_switches() {
+    o::position_limit_switches(P);
 }

@@ -26,6 +26,7 @@ mod latch;
 mod monitor;
 mod objects;
 mod params;
+mod pls;
 pub mod status;
 mod timing;
 mod tuning;
@@ -95,6 +96,8 @@ pub struct Kollmorgen {
     inputs: io::Inputs,
     /// The foldback readings and supervision.
     foldback: tuning::Foldback,
+    /// The position limit switches.
+    pls: pls::Pls,
 }
 
 impl Kollmorgen {
@@ -119,6 +122,7 @@ impl Kollmorgen {
             brake: brake::Brake::default(),
             inputs: io::Inputs::default(),
             foldback: tuning::Foldback::default(),
+            pls: pls::Pls::default(),
         }
     }
 
@@ -135,7 +139,7 @@ impl Kollmorgen {
         0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
         0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450, 0x20B8, 0x3542, 0x3480, 0x3548,
         0x354D, 0x354B, 0x3407, 0x3593, 0x35AB, 0x525F, 0x3456, 0x5260, 0x3454, 0x356E, 0x356F, 0x3622,
-        0x3623, 0x358F,
+        0x3623, 0x358F, 0x34A3,
     ];
 }
 
@@ -198,6 +202,7 @@ impl Behaviour for Kollmorgen {
             self.status.reset();
             self.period.reset();
             self.brake = brake::Brake::default();
+            self.pls = pls::Pls::default();
         }
         // §7.2.2.15: "when fieldbus communication is lost, the drive will
         // regain control of the brake".
@@ -481,6 +486,7 @@ impl Kollmorgen {
         self.monitor.update(cx, od, &mut self.status);
         self.latch.update(od);
         self.brake.update(cx, od);
+        self.pls.update(cx, od);
     }
 }
 

@@ -101,6 +101,11 @@ impl Kollmorgen {
                 }
                 Ok(Verdict::Store)
             }
+            // PLS.RESET re-arms single-shot switches.
+            0x34A3 if sub == 2 => {
+                self.pls.reset(le_u64(data) as u16);
+                Ok(Verdict::Store)
+            }
             // MOTOR.IPEAK: the foldback's peak current.
             0x358F => {
                 tuning::apply(cx, od, Some((index, sub, data)))?;

@@ -1,0 +1,65 @@
+//! The bodies of the Kollmorgen output tests (KC1 §8.1.3, AKD §7.1.4
+//! object tables): the position limit switches, the drive-side brake
+//! delays and the speed readings.
+
+use super::Rig;
+use super::kc_objects::{enable, operational, put};
+use drivebus_personality::Profile;
+
+/// 6064h and PLS.STATE 34A3h:4 as the drive published them last.
+fn sample(r: &Rig) -> (i64, u16) {
+    let od = r.node().od();
+    (od.get_i64(0x6064, 0).unwrap(), od.get_u32(0x34A3, 4).unwrap() as u16)
+}
+
+/// A pp move to `target` at 1 revolution/s; every millisecond's sample.
+fn move_to(r: &mut Rig, target: i32) -> Vec<(i64, u16)> {
+    put(r, 0x607A, 0, &target.to_le_bytes());
+    put(r, 0x6040, 0, &0x0Fu16.to_le_bytes());
+    r.run_ms(2);
+    put(r, 0x6040, 0, &0x1Fu16.to_le_bytes());
+    let mut out = Vec::new();
+    for _ in 0..2600 {
+        r.run_ms(1);
+        out.push(sample(r));
+    }
+    assert!((r.position() - target).abs() < 20, "arrived: {}", r.position());
+    out
+}
+
+/// PLS (34A0h–34A3h): switch 1 is active exactly inside [PLS.P1, PLS.P1
+/// + PLS.WIDTH1]; switch 2 (PLS.MODE single-shot) triggers once until
+/// PLS.RESET; switch 3 (PLS.T3 = 100 ms) stays active 100 ms from
+/// entering its window; a switch not in PLS.EN stays off.
+pub fn position_limit_switches(profile: Profile) {
+    let mut r = operational(profile);
+    for (sub, p, w) in [(1u8, 20_000i32, 10_000i32), (2, 40_000, 1_000), (3, 10_000, 100), (4, 0, 100_000)] {
+        put(&mut r, 0x34A0, sub, &p.to_le_bytes());
+        put(&mut r, 0x34A1, sub, &w.to_le_bytes());
+    }
+    put(&mut r, 0x34A2, 3, &100u16.to_le_bytes());
+    put(&mut r, 0x34A3, 3, &0b10u16.to_le_bytes());
+    put(&mut r, 0x34A3, 1, &0b111u16.to_le_bytes());
+    put(&mut r, 0x6081, 0, &36_000u32.to_le_bytes());
+    put(&mut r, 0x6083, 0, &360_000u32.to_le_bytes());
+    put(&mut r, 0x6084, 0, &360_000u32.to_le_bytes());
+    enable(&mut r, 1);
+    let forth = move_to(&mut r, 72_000);
+    for &(pos, state) in &forth {
+        assert_eq!(state & 1 != 0, (20_000..=30_000).contains(&pos), "switch 1 at {pos}: {state:03b}");
+        assert_eq!(state & 0b1000, 0, "switch 4 is not enabled");
+    }
+    let on = |s: &[(i64, u16)], bit: u16| s.iter().filter(|x| x.1 & bit != 0).map(|x| x.0).collect::<Vec<_>>();
+    let two = on(&forth, 2);
+    assert!(!two.is_empty() && two.iter().all(|p| (40_000..=41_000).contains(p)), "switch 2: {two:?}");
+    // Timed: from 10000 on for 100 ms at 36000 units/s (≈ 3600 units).
+    let three = on(&forth, 4);
+    let (first, last) = (three[0], *three.last().unwrap());
+    assert!((10_000..10_100).contains(&first) && (13_000..14_200).contains(&last), "switch 3: {first}..{last}");
+    let back = move_to(&mut r, 0);
+    assert!(on(&back, 2).is_empty(), "single-shot: no second trigger");
+    assert!(!on(&back, 1).is_empty(), "continuous switch 1 again");
+    put(&mut r, 0x34A3, 2, &0b10u16.to_le_bytes());
+    let again = move_to(&mut r, 72_000);
+    assert!(!on(&again, 2).is_empty(), "re-armed by PLS.RESET");
+}
