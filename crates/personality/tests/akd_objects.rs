@@ -465,3 +465,9 @@ fn motor_foldback() {
 fn position_limit_switches() {
     o::position_limit_switches(P);
 }
+
+/// §7.1.4: MOTOR.TBRAKERLS 366Fh, MOTOR.TBRAKEAPP 366Eh.
+#[test]
+fn brake_times() {
+    o::brake_times(P);
+}

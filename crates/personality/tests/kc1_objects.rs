@@ -276,3 +276,9 @@ fn motor_foldback() {
 fn position_limit_switches() {
     o::position_limit_switches(P);
 }
+
+/// §8.1.3: MOTOR.TBRAKERLS 366Fh, MOTOR.TBRAKEAPP 366Eh.
+#[test]
+fn brake_times() {
+    o::brake_times(P);
+}

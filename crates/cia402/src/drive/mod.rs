@@ -44,7 +44,7 @@ mod tests;
 
 pub use brake::BrakeControl;
 pub use config::{
-    DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk, TargetReached,
+    BrakeDelays, DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk, TargetReached,
     ZeroMeansOff, ZeroRamp, profile_type,
 };
 pub use generic::{default_pdo_mapping, generic_drive, generic_drive_with};

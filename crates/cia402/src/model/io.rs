@@ -104,6 +104,8 @@ pub(super) struct Io {
     pub brake_natural: bool,
     /// Time the command has differed from `brake_natural` \[s\].
     pub brake_timer: f64,
+    /// Time since the command last changed \[s\] (infinite: never).
+    pub brake_age: f64,
     /// Forced brake (stuck engaged, held released).
     pub brake_forced: Option<bool>,
     pub temperature: Option<f64>,
@@ -121,6 +123,7 @@ impl Io {
             brake_cmd: true,
             brake_natural: true,
             brake_timer: 0.0,
+            brake_age: f64::INFINITY,
             brake_forced: None,
             temperature: p.motor_temperature,
         }
@@ -220,7 +223,14 @@ impl DriveModel {
         if engage != self.io.brake_cmd {
             self.io.brake_cmd = engage;
             self.io.brake_timer = 0.0;
+            self.io.brake_age = 0.0;
         }
+    }
+
+    /// Seconds since the drive last changed its brake command (infinite
+    /// before the first change).
+    pub fn brake_command_age(&self) -> f64 {
+        self.io.brake_age
     }
 
     /// The holding brake: fitted, commanded, engaged, delay pending.
@@ -254,6 +264,7 @@ impl DriveModel {
     pub(super) fn io_step(&mut self, dt: f64) {
         let io = &mut self.io;
         io.master_pos = (io.master_pos + io.master_vel * dt).clamp(-2.0 * MAX_MASTER, 2.0 * MAX_MASTER);
+        io.brake_age += dt;
         if let Some(b) = self.p.io.brake
             && io.brake_cmd != io.brake_natural
         {

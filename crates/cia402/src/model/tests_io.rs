@@ -186,3 +186,16 @@ fn thermal_model_without_a_forced_reading() {
     m.inject(Injection::MotorTemperature(None));
     assert_eq!(m.temperature(), 25.0, "back to the thermal model");
 }
+
+#[test]
+fn brake_command_age_counts_from_the_last_change() {
+    let mut m = hanging(true);
+    assert_eq!(m.brake_command_age(), f64::INFINITY, "never commanded");
+    m.set_brake(false);
+    run(&mut m, 0.1);
+    assert!((m.brake_command_age() - 0.1).abs() < 1e-6, "{}", m.brake_command_age());
+    m.set_brake(false);
+    assert!(m.brake_command_age() > 0.09, "the same command again changes nothing");
+    m.set_brake(true);
+    assert_eq!(m.brake_command_age(), 0.0);
+}

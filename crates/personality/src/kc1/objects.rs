@@ -101,6 +101,11 @@ impl Kollmorgen {
                 }
                 Ok(Verdict::Store)
             }
+            // MOTOR.TBRAKEAPP / MOTOR.TBRAKERLS: the drive's brake times.
+            0x366E | 0x366F => {
+                super::brake::set_delays(cx, od, Some((index, le_u64(data) as u32)))?;
+                Ok(Verdict::Store)
+            }
             // PLS.RESET re-arms single-shot switches.
             0x34A3 if sub == 2 => {
                 self.pls.reset(le_u64(data) as u16);

@@ -134,5 +134,6 @@ impl Kollmorgen {
             }
         }
         let _ = super::tuning::apply(cx, od, None);
+        let _ = super::brake::set_delays(cx, od, None);
     }
 }

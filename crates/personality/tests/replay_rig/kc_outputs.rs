@@ -63,3 +63,45 @@ pub fn position_limit_switches(profile: Profile) {
     let again = move_to(&mut r, 72_000);
     assert!(!on(&again, 2).is_empty(), "re-armed by PLS.RESET");
 }
+
+/// MOTOR.TBRAKERLS 366Fh / MOTOR.TBRAKEAPP 366Eh (ms) on a machine whose
+/// brake releases in 50 ms and applies in 40 ms: the drive waits its own
+/// times instead (the mode starts TBRAKERLS after the enable, the power
+/// stage holds TBRAKEAPP after a disable); 0 waits for the brake.
+pub fn brake_times(profile: Profile) {
+    use drivebus_cia402::model::Command;
+    let run = |times: &[(u16, i32)]| {
+        let mut r = super::kc_objects::with_brake(profile);
+        for &(i, v) in times {
+            put(&mut r, i, 0, &v.to_le_bytes());
+        }
+        put(&mut r, 0x6083, 0, &36_000_000u32.to_le_bytes());
+        put(&mut r, 0x6084, 0, &36_000_000u32.to_le_bytes());
+        enable(&mut r, 3);
+        put(&mut r, 0x60FF, 0, &600_000i32.to_le_bytes());
+        let mut moved = None;
+        for ms in 0..400 {
+            r.run_ms(1);
+            if moved.is_none() && r.pn().app.drive.model().velocity().abs() > 1.0 {
+                moved = Some(ms);
+            }
+        }
+        put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+        r.run_ms(100);
+        put(&mut r, 0x6040, 0, &0x07u16.to_le_bytes());
+        let mut held = 0;
+        for _ in 0..400 {
+            r.run_ms(1);
+            if matches!(r.pn().app.drive.model().command(), Command::Position { .. }) {
+                held += 1;
+            }
+        }
+        (moved.expect("the axis moved"), held)
+    };
+    let (moved, held) = run(&[]);
+    assert!((48..=60).contains(&moved), "the brake's 50 ms: {moved}");
+    assert!((38..=45).contains(&held), "the brake's 40 ms: {held}");
+    let (moved, held) = run(&[(0x366F, 200), (0x366E, 150)]);
+    assert!((198..=210).contains(&moved), "TBRAKERLS 200 ms: {moved}");
+    assert!((148..=155).contains(&held), "TBRAKEAPP 150 ms: {held}");
+}
