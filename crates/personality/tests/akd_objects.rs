@@ -471,3 +471,9 @@ fn position_limit_switches() {
 fn brake_times() {
     o::brake_times(P);
 }
+
+/// §7.1.4: VL.FBFILTER 3407h:1.
+#[test]
+fn filtered_speed() {
+    o::filtered_speed(P);
+}

@@ -282,3 +282,9 @@ fn position_limit_switches() {
 fn brake_times() {
     o::brake_times(P);
 }
+
+/// §8.1.3: VL.FBFILTER 3407h:1.
+#[test]
+fn filtered_speed() {
+    o::filtered_speed(P);
+}

@@ -1,7 +1,8 @@
 //! The parameter mirrors of the drive's measurements and their limits
 //! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
 //! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h,
-//! AIN.VALUE 3509h/3470h:4 (analog input 1), DRV.HANDWHEEL 2050h and AKD
+//! AIN.VALUE 3509h/3470h:4 (analog input 1), VL.FBFILTER 3407h:1 (the
+//! speed through a 10 Hz low-pass), DRV.HANDWHEEL 2050h and AKD
 //! 60E4h:1 (the master encoder as secondary feedback), DRV.TEMPERATURES
 //! 3610h (the ambient) read
 //! what the model measures; VL.THRESH 3627h (overspeed, F302),
@@ -42,12 +43,15 @@ struct Refs {
     factors: [Option<EntryRef>; 5],
     current: Option<EntryRef>,
     velocity: Option<EntryRef>,
+    fb_filter: Option<EntryRef>,
 }
 
 /// The measurement mirrors and their limits.
 #[derive(Debug, Clone, Default)]
 pub struct Monitor {
     refs: Refs,
+    /// VL.FBFILTER's state \[rpm\] and the time of the last update \[ns\].
+    fb_filter: (f64, u64),
 }
 
 fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
@@ -89,6 +93,7 @@ impl Monitor {
             ],
             current: f(0x2077),
             velocity: f(0x606C),
+            fb_filter: od.find(0x3407, 1).ok(),
         }
     }
 
@@ -106,6 +111,15 @@ impl Monitor {
         let bus_mv = model.bus_voltage() * 1000.0;
         put(od, r.pl_err, (drive.demand_position() - drive.position() as f64).round() as i64);
         put(od, r.vl_fb, velocity);
+        // VL.FBFILTER 3407h:1 (rpm × 1000): the speed through a 10 Hz
+        // first-order low-pass.
+        let now = cx.now.as_nanos();
+        let dt = now.saturating_sub(self.fb_filter.1) as f64 * 1e-9;
+        self.fb_filter.1 = now;
+        let rpm = model.velocity_measured() * 30.0 / core::f64::consts::PI;
+        let k = -(-2.0 * core::f64::consts::PI * 10.0 * dt.min(1.0)).exp_m1();
+        self.fb_filter.0 += (rpm - self.fb_filter.0) * k;
+        put(od, r.fb_filter, (self.fb_filter.0 * 1000.0).round().clamp(-2e9, 2e9) as i64);
         put(od, r.vbus, model.bus_voltage().round() as i64);
         put(od, r.temp, temp.round() as i64);
         put(od, r.il_fb, i64::from(word(od, r.current) as u32 as i32));

@@ -105,3 +105,23 @@ pub fn brake_times(profile: Profile) {
     assert!((198..=210).contains(&moved), "TBRAKERLS 200 ms: {moved}");
     assert!((148..=155).contains(&held), "TBRAKEAPP 150 ms: {held}");
 }
+
+/// VL.FBFILTER 3407h:1 (rpm × 1000): the speed through a 10 Hz low-pass:
+/// at a steady speed the speed, after a quick stop still most of it
+/// (τ = 1/(2π·10 Hz) ≈ 16 ms).
+pub fn filtered_speed(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x6083, 0, &36_000_000u32.to_le_bytes());
+    put(&mut r, 0x6084, 0, &360_000_000u32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &600_000i32.to_le_bytes());
+    r.run_ms(500);
+    let rpm = r.pn().app.drive.model().velocity_measured() * 30.0 / core::f64::consts::PI;
+    let f = |r: &Rig| r.node().od().get_i64(0x3407, 1).unwrap() as f64 / 1000.0;
+    assert!((f(&r) - rpm).abs() < rpm * 0.01, "steady: {} vs {rpm} rpm", f(&r));
+    put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    r.run_ms(10);
+    let now = r.pn().app.drive.model().velocity_measured().abs() * 30.0 / core::f64::consts::PI;
+    assert!(now < rpm * 0.2, "stopped: {now} rpm");
+    assert!(f(&r) > rpm * 0.45 && f(&r) < rpm * 0.8, "filtered: {} of {rpm} rpm", f(&r));
+}
