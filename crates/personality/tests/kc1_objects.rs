@@ -288,3 +288,15 @@ fn brake_times() {
 fn filtered_speed() {
     o::filtered_speed(P);
 }
+
+/// §8.1.3: IL.OFFSET 3423h, IL.FRICTION 3422h.
+#[test]
+fn current_feedforward() {
+    t::current_feedforward(P);
+}
+
+/// §8.1.3: IL.KP 3598h, MOTOR.LQLL 3455h.
+#[test]
+fn current_loop_gain() {
+    t::current_loop_gain(P);
+}

@@ -31,4 +31,10 @@ impl Drive {
     pub fn set_foldback(&mut self, p: Option<FoldbackParams>) -> Result<(), ParamError> {
         self.model.set_foldback(p)
     }
+
+    /// A constant current offset and a friction compensation current \[A\]
+    /// ([`crate::model::DriveModel::set_current_feedforward`]).
+    pub fn set_current_feedforward(&mut self, offset: f64, friction: f64) -> Result<(), ParamError> {
+        self.model.set_current_feedforward(offset, friction)
+    }
 }

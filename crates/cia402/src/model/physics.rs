@@ -53,13 +53,13 @@ impl DriveModel {
     /// Velocity PI with conditional-integration anti-windup: the integrator
     /// only moves when the output is not saturated or the error drives it
     /// back out of saturation.
-    fn velocity_loop(&mut self, v_ref: f64, acc_ff: f64, lo: f64, hi: f64, dt: f64) -> f64 {
+    fn velocity_loop(&mut self, v_ref: f64, acc_ff: f64, i_ff: f64, lo: f64, hi: f64, dt: f64) -> f64 {
         let c = &self.p.control;
         let m = &self.p.motor;
         let (vlo, vhi) = self.velocity_window();
         let v_ref = v_ref.clamp(vlo, vhi);
         let e = v_ref - self.vel_meas;
-        let ff = acc_ff * self.d.inertia / m.kt;
+        let ff = acc_ff * self.d.inertia / m.kt + i_ff;
         let u = c.velocity_kp * e + self.int_vel + ff;
         let y = u.clamp(lo, hi);
         let sat = y != u;
@@ -88,16 +88,17 @@ impl DriveModel {
         let m = self.p.motor;
         let w = self.omega;
         let (lo, hi) = self.current_window(w);
+        let ff = self.current_feedforward();
         let i_ref = match self.cmd {
             Command::Off => 0.0,
             Command::ShortCircuit => (-m.ke * w / m.resistance).clamp(-m.max_current, m.max_current),
-            Command::Torque(t) => (t / m.kt).clamp(lo, hi),
+            Command::Torque(t) => (t / m.kt + ff).clamp(lo, hi),
             Command::Velocity { velocity, acceleration } => {
-                self.velocity_loop(velocity, acceleration, lo, hi, dt)
+                self.velocity_loop(velocity, acceleration, ff, lo, hi, dt)
             }
             Command::Position { position, velocity, acceleration } => {
                 let v = self.position_loop(position, velocity, dt);
-                self.velocity_loop(v, acceleration, lo, hi, dt)
+                self.velocity_loop(v, acceleration, ff, lo, hi, dt)
             }
         };
         self.current += (i_ref - self.current) * self.k.current;

@@ -156,3 +156,19 @@ fn foldback_brings_a_blocked_motor_down_to_its_continuous_current() {
     m.set_foldback(None).unwrap();
     assert_eq!(m.foldback_current(), None);
 }
+
+#[test]
+fn current_feedforward_adds_an_offset_and_friction_compensation() {
+    let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
+    m.set_current_feedforward(0.5, 0.0).unwrap();
+    m.set_command(Command::Torque(0.0));
+    run(&mut m, 0.005);
+    assert!((m.current() - 0.5).abs() < 1e-3, "offset: {}", m.current());
+    // Friction compensation pushes the way the motor turns.
+    m.set_current_feedforward(0.0, 0.3).unwrap();
+    m.set_motion(0.0, -10.0);
+    run(&mut m, 0.002);
+    assert!((m.current() + 0.3).abs() < 0.01, "friction, turning negative: {}", m.current());
+    assert!(m.set_current_feedforward(0.0, -1.0).is_err());
+    assert!(m.set_current_feedforward(f64::NAN, 0.0).is_err());
+}

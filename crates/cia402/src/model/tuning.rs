@@ -35,7 +35,8 @@ pub(super) struct Foldback {
     pub k: (f64, f64),
 }
 
-/// Run-time limits of the power stage and the loops.
+/// Run-time limits of the power stage and the loops, and the current
+/// feed-forwards.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Limits {
     /// Current limit in the positive / negative direction \[A\] (magnitudes).
@@ -43,11 +44,22 @@ pub(super) struct Limits {
     /// Speed limit in the positive / negative direction \[rad/s\].
     pub velocity: [f64; 2],
     pub foldback: Option<Foldback>,
+    /// Constant current added to the command \[A\] (gravity compensation).
+    pub current_offset: f64,
+    /// Current added in the direction of motion \[A\] (friction
+    /// compensation).
+    pub friction: f64,
 }
 
 impl Limits {
     pub(super) fn none() -> Limits {
-        Limits { current: [f64::INFINITY; 2], velocity: [f64::INFINITY; 2], foldback: None }
+        Limits {
+            current: [f64::INFINITY; 2],
+            velocity: [f64::INFINITY; 2],
+            foldback: None,
+            current_offset: 0.0,
+            friction: 0.0,
+        }
     }
 }
 
@@ -147,6 +159,28 @@ impl DriveModel {
         };
         self.limits.foldback = Some(Foldback { p, i2t, current, k: (0.0, 0.0) });
         Ok(())
+    }
+
+    /// Adds `offset` A to the current command (a constant load such as
+    /// gravity carried without the loops' error) and `friction` A in the
+    /// direction the motor turns (above 0.1 % of its maximum speed), in
+    /// every mode with the power stage on; within the current limits.
+    pub fn set_current_feedforward(&mut self, offset: f64, friction: f64) -> Result<(), ParamError> {
+        let ok = |v: f64| v.is_finite() && v.abs() <= 1e5;
+        if !(ok(offset) && ok(friction) && friction >= 0.0) {
+            return Err(ParamError { field: "current_feedforward", reason: "out of range (friction >= 0)" });
+        }
+        self.limits.current_offset = offset;
+        self.limits.friction = friction;
+        Ok(())
+    }
+
+    /// The current feed-forward for the present speed \[A\].
+    pub(super) fn current_feedforward(&self) -> f64 {
+        let l = &self.limits;
+        let w = self.omega;
+        let moving = w.abs() > 1e-3 * self.p.motor.max_speed;
+        l.current_offset + if moving { l.friction * w.signum() } else { 0.0 }
     }
 
     /// The foldback current \[A\] (`None`: no foldback): what the power

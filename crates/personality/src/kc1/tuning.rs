@@ -20,6 +20,9 @@
 //! | 3454h | MOTOR.CTF0 | mHz | foldback time constant 1/(2π·CTF0) |
 //! | 356Eh/356Fh | IL.LIMITP/N | A | current limit per direction |
 //! | 3622h/3623h | VL.LIMITP/N | rpm (1:1) | speed limit per direction |
+//! | 3598h, 3455h | IL.KP, MOTOR.LQLL | V/A, mH | current loop time constant LQLL/IL.KP (both set) |
+//! | 3423h | IL.OFFSET | A | current added to the command (gravity) |
+//! | 3422h | IL.FRICTION | A | current added in the direction of motion |
 //!
 //! 0, the tables' default, stands for the machine's own value (as
 //! MOTOR.VMAX and MOTOR.ICONT): the drive starts with the machine's tuning.
@@ -43,8 +46,9 @@ use drivebus_cia402::model::{DriveParams, FoldbackParams};
 use drivebus_cia402::state_machine::State;
 use drivebus_od::{DataType, EntryRef, ObjectDictionary, SdoAbort, le_u64};
 
-/// The objects whose writes retune the model.
-pub const TUNED: [(u16, u8); 16] = [
+/// The objects whose writes retune the model (IL.OFFSET and IL.FRICTION
+/// are 0 = none: a current offset of 0 is no offset).
+pub const TUNED: [(u16, u8); 20] = [
     (0x3542, 0),
     (0x3480, 0),
     (0x3548, 0),
@@ -61,6 +65,10 @@ pub const TUNED: [(u16, u8); 16] = [
     (0x356F, 0),
     (0x3622, 0),
     (0x3623, 0),
+    (0x3422, 0),
+    (0x3423, 0),
+    (0x3598, 0),
+    (0x3455, 0),
 ];
 
 /// KC1 §7.1 / AKD §6.1: F304 motor foldback.
@@ -150,6 +158,14 @@ fn params(base: &DriveParams, od: &ObjectDictionary, pending: Pending<'_>) -> Re
     if v(0x525F) > 0 {
         p.axis.load_inertia = v(0x525F) as f64 * 1e-4;
     }
+    // IL.KP (V/A) on the winding's inductance MOTOR.LQLL (mH): the
+    // current loop's time constant L / IL.KP, when both are set.
+    if v(0x3598) < 0 {
+        return Err(SdoAbort::VALUE_TOO_LOW);
+    }
+    if v(0x3598) > 0 && v(0x3455) > 0 {
+        p.motor.current_time_constant = milli(0x3455) * 1e-3 / milli(0x3598);
+    }
     p.validate().map_err(|_| SdoAbort::VALUE_TOO_HIGH)?;
     Ok(p)
 }
@@ -176,6 +192,10 @@ pub fn apply(cx: &mut Context<'_>, od: &mut ObjectDictionary, pending: Pending<'
     let vn = limit(od, 0x3623, pending, RPM);
     cx.drive.set_velocity_limits(vp, vn).map_err(|_| SdoAbort::INVALID_VALUE)?;
     cx.drive.set_foldback(Some(foldback(cx, od, pending))).map_err(|_| SdoAbort::INVALID_VALUE)?;
+    // IL.OFFSET (A × 1000, signed) and IL.FRICTION (A × 1000).
+    let offset = value(od, 0x3423, 0, pending) as f64 / 1000.0;
+    let friction = value(od, 0x3422, 0, pending) as f64 / 1000.0;
+    cx.drive.set_current_feedforward(offset, friction).map_err(|_| SdoAbort::VALUE_TOO_HIGH)?;
     if let Some((i @ (0x354B | 0x3407), s, d)) = pending {
         // Keep both VL.KVFF objects equal.
         let other = if (i, s) == (0x354B, 0) { (0x3407, 2) } else { (0x354B, 0) };

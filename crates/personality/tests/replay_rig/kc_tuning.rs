@@ -288,3 +288,54 @@ pub fn foldback(profile: Profile) {
     assert!(e.contains(&emcy(0x8311, 0x80)), "F304: {e:?}");
     assert_eq!(getu(&mut r, 0x2001, 1), 304, "2001h:1");
 }
+
+/// IL.OFFSET 3423h (A × 1000): a constant current added to the command
+/// (tq 0 on a blocked rotor drives it); IL.FRICTION 3422h (A × 1000): a
+/// current in the direction the motor turns.
+pub fn current_feedforward(profile: Profile) {
+    let mut r = braked(profile);
+    put(&mut r, 0x3423, 0, &(-500i32).to_le_bytes());
+    enable(&mut r, 4);
+    put(&mut r, 0x6071, 0, &0i16.to_le_bytes());
+    r.run_ms(20);
+    let i = r.pn().app.drive.model().current();
+    assert!((i + 0.5).abs() < 0.01, "IL.OFFSET −0.5 A: {i} A");
+    // Spinning at 1000 rpm, then tq 0: friction compensation only.
+    let spin = |friction: u32| {
+        let mut r = operational(profile);
+        put(&mut r, 0x3422, 0, &friction.to_le_bytes());
+        put(&mut r, 0x6083, 0, &36_000_000u32.to_le_bytes());
+        enable(&mut r, 3);
+        put(&mut r, 0x60FF, 0, &(-1_000_000i32).to_le_bytes());
+        r.run_ms(300);
+        put(&mut r, 0x6071, 0, &0i16.to_le_bytes());
+        put(&mut r, 0x6060, 0, &[4]);
+        r.run_ms(50);
+        r.pn().app.drive.model().current()
+    };
+    let (none, comp) = (spin(0), spin(300));
+    assert!(none.abs() < 0.02 && (comp + 0.3).abs() < 0.02, "IL.FRICTION 0.3 A turning negative: {comp} (none {none})");
+}
+
+/// IL.KP 3598h (V/A × 1000) with MOTOR.LQLL 3455h (mH × 1000): the
+/// current loop's time constant LQLL / IL.KP (5 ms here): the current of
+/// a blocked rotor rises that slowly.
+pub fn current_loop_gain(profile: Profile) {
+    let rise = |setup: &[(u16, u32)]| {
+        let mut r = braked(profile);
+        for &(i, v) in setup {
+            put(&mut r, i, 0, &v.to_le_bytes());
+        }
+        put(&mut r, 0x6083, 0, &3_600_000_000u32.to_le_bytes());
+        enable(&mut r, 3);
+        put(&mut r, 0x60FF, 0, &1_000_000i32.to_le_bytes());
+        r.run_ms(2);
+        r.pn().app.drive.model().current()
+    };
+    let peak = operational(profile).pn().app.drive.config().params.motor.max_current;
+    let (fast, slow) = (rise(&[]), rise(&[(0x3455, 50_000), (0x3598, 10_000)]));
+    assert!(fast > 0.95 * peak, "the machine's loop: {fast} A");
+    assert!(slow < 0.5 * peak && slow > 0.1 * peak, "τ = 5 ms: {slow} A of {peak}");
+    let only_kp = rise(&[(0x3598, 10_000)]);
+    assert!(only_kp > 0.95 * peak, "IL.KP without MOTOR.LQLL: the machine's loop ({only_kp} A)");
+}
