@@ -489,3 +489,9 @@ fn current_feedforward() {
 fn current_loop_gain() {
     t::current_loop_gain(P);
 }
+
+/// §7.1.4: AOUT.VALUEU 3470h:3, AOUT.VALUE 3470h:2.
+#[test]
+fn analog_output() {
+    o::analog_output(P);
+}

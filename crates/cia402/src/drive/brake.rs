@@ -68,6 +68,12 @@ impl Drive {
         self.sync_outputs();
     }
 
+    /// Sets the drive's analog output \[V\]
+    /// ([`crate::model::DriveModel::analog_output`]).
+    pub fn set_analog_output(&mut self, volts: f64) {
+        self.model.set_analog_output(volts);
+    }
+
     /// The output lines the machine sees: the personality's
     /// ([`Drive::set_output_lines`]) and 60FEh:1 bits 16–31 with
     /// [`super::IoConfig::output_lines`].

@@ -1,5 +1,5 @@
 //! The plant's signals besides the axis: general-purpose digital inputs
-//! and outputs, analog inputs, a master encoder (pulse/direction) input, a
+//! and outputs, analog inputs, an analog output, a master encoder (pulse/direction) input, a
 //! holding brake and the motor temperature reading.
 //!
 //! Their power-on values are [`IoParams`] (a machine file sets them); at
@@ -109,6 +109,8 @@ pub(super) struct Io {
     /// Forced brake (stuck engaged, held released).
     pub brake_forced: Option<bool>,
     pub temperature: Option<f64>,
+    /// The drive's analog output \[V\].
+    pub analog_out: f64,
 }
 
 impl Io {
@@ -126,6 +128,7 @@ impl Io {
             brake_age: f64::INFINITY,
             brake_forced: None,
             temperature: p.motor_temperature,
+            analog_out: 0.0,
         }
     }
 }
@@ -225,6 +228,19 @@ impl DriveModel {
             self.io.brake_timer = 0.0;
             self.io.brake_age = 0.0;
         }
+    }
+
+    /// Sets the drive's analog output \[V\] (a non-finite value or one
+    /// beyond ±1000 V is ignored).
+    pub fn set_analog_output(&mut self, volts: f64) {
+        if volts.is_finite() && volts.abs() <= MAX_VOLTS {
+            self.io.analog_out = volts;
+        }
+    }
+
+    /// The drive's analog output \[V\] as the machine sees it.
+    pub fn analog_output(&self) -> f64 {
+        self.io.analog_out
     }
 
     /// Seconds since the drive last changed its brake command (infinite

@@ -199,3 +199,14 @@ fn brake_command_age_counts_from_the_last_change() {
     m.set_brake(true);
     assert_eq!(m.brake_command_age(), 0.0);
 }
+
+#[test]
+fn analog_output_is_what_the_drive_sets() {
+    let mut m = hanging(false);
+    assert_eq!(m.analog_output(), 0.0);
+    m.set_analog_output(-2.5);
+    assert_eq!(m.analog_output(), -2.5);
+    m.set_analog_output(f64::NAN);
+    m.set_analog_output(1e9);
+    assert_eq!(m.analog_output(), -2.5, "refused values change nothing");
+}

@@ -1,7 +1,8 @@
 //! The parameter mirrors of the drive's measurements and their limits
 //! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
 //! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h,
-//! AIN.VALUE 3509h/3470h:4 (analog input 1), VL.FBFILTER 3407h:1 (the
+//! AIN.VALUE 3509h/3470h:4 (analog input 1), AOUT.VALUE 3470h:2 (the
+//! analog output AOUT.VALUEU 3470h:3 sets), VL.FBFILTER 3407h:1 (the
 //! speed through a 10 Hz low-pass), DRV.HANDWHEEL 2050h and AKD
 //! 60E4h:1 (the master encoder as secondary feedback), DRV.TEMPERATURES
 //! 3610h (the ambient) read
@@ -44,6 +45,7 @@ struct Refs {
     current: Option<EntryRef>,
     velocity: Option<EntryRef>,
     fb_filter: Option<EntryRef>,
+    aout: Option<EntryRef>,
 }
 
 /// The measurement mirrors and their limits.
@@ -94,6 +96,7 @@ impl Monitor {
             current: f(0x2077),
             velocity: f(0x606C),
             fb_filter: od.find(0x3407, 1).ok(),
+            aout: od.find(0x3470, 2).ok(),
         }
     }
 
@@ -130,6 +133,8 @@ impl Monitor {
         for a in r.ain {
             put(od, a, mv);
         }
+        // AOUT.VALUE (mV): the analog output the machine sees.
+        put(od, r.aout, (model.analog_output() * 1000.0).round().clamp(-32768.0, 32767.0) as i64);
         // DRV.HANDWHEEL: the secondary feedback, the machine's master
         // encoder (counts); AKD 60E4h:1 its position in user units, as
         // 6064h through the factors 60E8h/60EDh (gear) and 60E9h/60EEh

@@ -106,6 +106,11 @@ impl Kollmorgen {
                 super::brake::set_delays(cx, od, Some((index, le_u64(data) as u32)))?;
                 Ok(Verdict::Store)
             }
+            // AOUT.VALUEU (V × 1000): the analog output's user value.
+            0x3470 if sub == 3 => {
+                cx.drive.set_analog_output(f64::from(le_u64(data) as u16 as i16) / 1000.0);
+                Ok(Verdict::Store)
+            }
             // PLS.RESET re-arms single-shot switches.
             0x34A3 if sub == 2 => {
                 self.pls.reset(le_u64(data) as u16);

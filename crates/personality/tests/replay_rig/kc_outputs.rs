@@ -125,3 +125,13 @@ pub fn filtered_speed(profile: Profile) {
     assert!(now < rpm * 0.2, "stopped: {now} rpm");
     assert!(f(&r) > rpm * 0.45 && f(&r) < rpm * 0.8, "filtered: {} of {rpm} rpm", f(&r));
 }
+
+/// AOUT.VALUEU 3470h:3 (V × 1000) sets the drive's analog output, which
+/// the machine sees and AOUT.VALUE 3470h:2 reads (mV).
+pub fn analog_output(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x3470, 3, &(-2500i16).to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.pn().app.drive.model().analog_output(), -2.5);
+    assert_eq!(super::kc_objects::get(&mut r, 0x3470, 2), -2500);
+}
