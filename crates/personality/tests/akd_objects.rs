@@ -495,3 +495,30 @@ fn current_loop_gain() {
 fn analog_output() {
     o::analog_output(P);
 }
+
+/// §7.1.4: AIN.CUTOFF 5000h.
+#[test]
+fn analog_input_cutoff() {
+    o::analog_input_cutoff(P);
+}
+
+/// §7.1.4 AIN.CUTOFF 5000h in mode −1: the current set-point follows the
+/// filtered analog input (2 V × 250 mA/V, 1 Hz: τ ≈ 159 ms, a fifth of
+/// the way after 35 ms) where without the filter it is there at once.
+#[test]
+fn mode_minus_1_follows_the_filtered_input() {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let current = |cutoff: u32| {
+        let mut r = with_inputs(0.0, 0.0);
+        k::put(&mut r, 0x5002, 0, &250u32.to_le_bytes());
+        k::put(&mut r, 0x5000, 0, &cutoff.to_le_bytes());
+        k::enable(&mut r, -1);
+        r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: 2.0 }));
+        r.run_ms(35);
+        k::get(&mut r, 0x2077, 0)
+    };
+    let (raw, filtered) = (current(0), current(1));
+    assert!((raw - 500).abs() < 60, "unfiltered: {raw} mA");
+    assert!((60..=140).contains(&filtered), "1 Hz: {filtered} mA");
+}

@@ -306,3 +306,9 @@ fn current_loop_gain() {
 fn analog_output() {
     o::analog_output(P);
 }
+
+/// §8.1.3: AIN.CUTOFF 5000h.
+#[test]
+fn analog_input_cutoff() {
+    o::analog_input_cutoff(P);
+}

@@ -1,7 +1,8 @@
 //! The parameter mirrors of the drive's measurements and their limits
 //! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
 //! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h,
-//! AIN.VALUE 3509h/3470h:4 (analog input 1), AOUT.VALUE 3470h:2 (the
+//! AIN.VALUE 3509h/3470h:4 (analog input 1, through the AIN.CUTOFF 5000h
+//! low-pass), AOUT.VALUE 3470h:2 (the
 //! analog output AOUT.VALUEU 3470h:3 sets), VL.FBFILTER 3407h:1 (the
 //! speed through a 10 Hz low-pass), DRV.HANDWHEEL 2050h and AKD
 //! 60E4h:1 (the master encoder as secondary feedback), DRV.TEMPERATURES
@@ -46,6 +47,7 @@ struct Refs {
     velocity: Option<EntryRef>,
     fb_filter: Option<EntryRef>,
     aout: Option<EntryRef>,
+    ain_cutoff: Option<EntryRef>,
 }
 
 /// The measurement mirrors and their limits.
@@ -54,6 +56,8 @@ pub struct Monitor {
     refs: Refs,
     /// VL.FBFILTER's state \[rpm\] and the time of the last update \[ns\].
     fb_filter: (f64, u64),
+    /// The analog input 1 through AIN.CUTOFF \[V\].
+    ain: f64,
 }
 
 fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
@@ -97,6 +101,7 @@ impl Monitor {
             velocity: f(0x606C),
             fb_filter: od.find(0x3407, 1).ok(),
             aout: od.find(0x3470, 2).ok(),
+            ain_cutoff: f(0x5000),
         }
     }
 
@@ -128,8 +133,17 @@ impl Monitor {
         put(od, r.il_fb, i64::from(word(od, r.current) as u32 as i32));
         let per_rev = i64::from(drive.config().params.encoder.counts_per_rev).max(1);
         put(od, r.mechpos, drive.position_increments().rem_euclid(per_rev));
-        // AIN.VALUE (mV, float scale 1000:1): the machine's analog input 1.
-        let mv = (model.analog_input(1) * 1000.0).round().clamp(-32768.0, 32767.0) as i64;
+        // AIN.VALUE (mV, float scale 1000:1): the machine's analog input 1,
+        // through a first-order low-pass at AIN.CUTOFF 5000h (Hz; 0: none).
+        let cutoff = word(od, r.ain_cutoff) as u32;
+        let raw = model.analog_input(1);
+        self.ain = if cutoff == 0 {
+            raw
+        } else {
+            let k = -(-2.0 * core::f64::consts::PI * f64::from(cutoff) * dt.min(1.0)).exp_m1();
+            self.ain + (raw - self.ain) * k
+        };
+        let mv = (self.ain * 1000.0).round().clamp(-32768.0, 32767.0) as i64;
         for a in r.ain {
             put(od, a, mv);
         }

@@ -135,3 +135,25 @@ pub fn analog_output(profile: Profile) {
     assert_eq!(r.pn().app.drive.model().analog_output(), -2.5);
     assert_eq!(super::kc_objects::get(&mut r, 0x3470, 2), -2500);
 }
+
+/// AIN.CUTOFF 5000h (Hz): AIN.VALUE 3509h reads the analog input through
+/// a first-order low-pass; 0 reads it as it is.
+pub fn analog_input_cutoff(profile: Profile) {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let step = |cutoff: u32| {
+        let mut r = operational(profile);
+        put(&mut r, 0x5000, 0, &cutoff.to_le_bytes());
+        r.run_ms(5);
+        r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: 5.0 }));
+        r.run_ms(16);
+        let at_tau = super::kc_objects::get(&mut r, 0x3509, 0);
+        r.run_ms(200);
+        (at_tau, super::kc_objects::get(&mut r, 0x3509, 0))
+    };
+    assert_eq!(step(0), (5000, 5000), "no filter");
+    // τ = 1/(2π·10 Hz) ≈ 15.9 ms: 63 % after 16 ms.
+    let (at_tau, settled) = step(10);
+    assert!((3000..=3400).contains(&at_tau), "10 Hz after 16 ms: {at_tau} mV");
+    assert_eq!(settled, 5000);
+}
