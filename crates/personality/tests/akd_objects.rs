@@ -522,3 +522,15 @@ fn mode_minus_1_follows_the_filtered_input() {
     assert!((raw - 500).abs() < 60, "unfiltered: {raw} mA");
     assert!((60..=140).contains(&filtered), "1 Hz: {filtered} mA");
 }
+
+/// §7.1.4: MOTOR.VOLTMAX 3452h.
+#[test]
+fn motor_voltage() {
+    t::motor_voltage(P);
+}
+
+/// §7.1.4: REGEN.POWER 3416h.
+#[test]
+fn regen_power() {
+    t::regen_power(P);
+}

@@ -312,3 +312,15 @@ fn analog_output() {
 fn analog_input_cutoff() {
     o::analog_input_cutoff(P);
 }
+
+/// §8.1.3: MOTOR.VOLTMAX 3452h.
+#[test]
+fn motor_voltage() {
+    t::motor_voltage(P);
+}
+
+/// §8.1.3: REGEN.POWER 3416h.
+#[test]
+fn regen_power() {
+    t::regen_power(P);
+}

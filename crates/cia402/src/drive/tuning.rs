@@ -37,4 +37,10 @@ impl Drive {
     pub fn set_current_feedforward(&mut self, offset: f64, friction: f64) -> Result<(), ParamError> {
         self.model.set_current_feedforward(offset, friction)
     }
+
+    /// The largest voltage applied to the motor \[V\]
+    /// ([`crate::model::DriveModel::set_voltage_limit`]).
+    pub fn set_voltage_limit(&mut self, volts: f64) -> Result<(), ParamError> {
+        self.model.set_voltage_limit(volts)
+    }
 }

@@ -143,6 +143,8 @@ pub struct DriveModel {
     torque: f64,
     temperature: f64,
     bus_voltage: f64,
+    /// Power the braking resistor dissipated in the last step \[W\].
+    regen_power: f64,
     // sensing
     counts: i64,
     prev_counts: i64,
@@ -242,6 +244,7 @@ impl DriveModel {
             torque: 0.0,
             temperature: params.motor.ambient_temperature,
             bus_voltage: params.bus.nominal_voltage,
+            regen_power: 0.0,
             counts: 0,
             prev_counts: 0,
             vel_meas: 0.0,
@@ -508,6 +511,12 @@ impl DriveModel {
     /// DC link voltage \[V\].
     pub fn bus_voltage(&self) -> f64 {
         self.bus_voltage
+    }
+
+    /// Power the braking resistor (the DC link's chopper) dissipates
+    /// \[W\], averaged over the last step; 0 while it is off.
+    pub fn regen_power(&self) -> f64 {
+        self.regen_power
     }
 
     /// Switch levels.

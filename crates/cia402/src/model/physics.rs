@@ -41,7 +41,7 @@ impl DriveModel {
     /// `|R·i + kₑ·ω| ≤ V_bus`, intersected with `±i_max`.
     fn current_window(&self, w: f64) -> (f64, f64) {
         let m = &self.p.motor;
-        let v = self.bus_voltage.max(0.0);
+        let v = self.bus_voltage.max(0.0).min(self.limits.voltage);
         let emf = m.ke * w;
         let imax = self.current_cap();
         let (ip, in_) = (imax.min(self.limits.current[0]), imax.min(self.limits.current[1]));
@@ -253,6 +253,7 @@ impl DriveModel {
 
     pub(super) fn bus_step(&mut self, dt: f64) {
         let b = self.p.bus;
+        self.regen_power = 0.0;
         if let Some(v) = self.force_bus {
             self.bus_voltage = v;
             return;
@@ -274,7 +275,10 @@ impl DriveModel {
         if let Some(on) = b.brake_on_voltage {
             let on2 = on * on;
             if v2 > on2 {
-                v2 = (v2 * self.k.brake).max(on2);
+                let after = (v2 * self.k.brake).max(on2);
+                // The energy the braking resistor took this step.
+                self.regen_power = (v2 - after) * c / (2.0 * dt);
+                v2 = after;
             }
         }
         let v = libm::sqrt(v2.max(0.0));

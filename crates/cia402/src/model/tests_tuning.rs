@@ -172,3 +172,37 @@ fn current_feedforward_adds_an_offset_and_friction_compensation() {
     assert!(m.set_current_feedforward(0.0, -1.0).is_err());
     assert!(m.set_current_feedforward(f64::NAN, 0.0).is_err());
 }
+
+#[test]
+fn voltage_limit_caps_the_speed_at_the_back_emf() {
+    let top = |limit: f64| {
+        let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
+        m.set_voltage_limit(limit).unwrap();
+        m.set_command(Command::Velocity { velocity: 600.0, acceleration: 0.0 });
+        run(&mut m, 0.5);
+        m.velocity()
+    };
+    let (free, capped) = (top(f64::INFINITY), top(100.0));
+    // kₑ = 0.4 V·s/rad: 100 V hold at most 250 rad/s.
+    assert!(free > 590.0, "{free}");
+    assert!(capped < 250.0 && capped > 200.0, "{capped}");
+}
+
+#[test]
+fn regen_power_while_braking_into_the_chopper() {
+    let mut p = DriveParams::servo_small();
+    p.axis.load_inertia = 1e-3;
+    let mut m = DriveModel::new(p).unwrap();
+    m.set_command(Command::Velocity { velocity: 300.0, acceleration: 0.0 });
+    run(&mut m, 0.5);
+    assert_eq!(m.regen_power(), 0.0, "motoring");
+    m.set_command(Command::Velocity { velocity: 0.0, acceleration: 0.0 });
+    let dt = m.params().control_period();
+    let mut peak: f64 = 0.0;
+    for _ in 0..2000 {
+        m.step(dt);
+        peak = peak.max(m.regen_power());
+    }
+    // Braking at 2.56 N·m from 300 rad/s returns up to ~770 W.
+    assert!(peak > 100.0 && peak < 1000.0, "{peak} W");
+}

@@ -49,6 +49,8 @@ pub(super) struct Limits {
     /// Current added in the direction of motion \[A\] (friction
     /// compensation).
     pub friction: f64,
+    /// Largest voltage the power stage applies to the motor \[V\].
+    pub voltage: f64,
 }
 
 impl Limits {
@@ -59,6 +61,7 @@ impl Limits {
             foldback: None,
             current_offset: 0.0,
             friction: 0.0,
+            voltage: f64::INFINITY,
         }
     }
 }
@@ -172,6 +175,14 @@ impl DriveModel {
         }
         self.limits.current_offset = offset;
         self.limits.friction = friction;
+        Ok(())
+    }
+
+    /// Limits the voltage the power stage applies to the motor to `volts`
+    /// (the motor's rating, below the DC bus); `f64::INFINITY`: the bus
+    /// alone limits.
+    pub fn set_voltage_limit(&mut self, volts: f64) -> Result<(), ParamError> {
+        self.limits.voltage = magnitude("voltage_limit", volts)?;
         Ok(())
     }
 

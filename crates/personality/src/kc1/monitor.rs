@@ -6,7 +6,8 @@
 //! analog output AOUT.VALUEU 3470h:3 sets), VL.FBFILTER 3407h:1 (the
 //! speed through a 10 Hz low-pass), DRV.HANDWHEEL 2050h and AKD
 //! 60E4h:1 (the master encoder as secondary feedback), DRV.TEMPERATURES
-//! 3610h (the ambient) read
+//! 3610h (the ambient), REGEN.POWER 3416h (the braking resistor's power)
+//! read
 //! what the model measures; VL.THRESH 3627h (overspeed, F302),
 //! MOTOR.TEMPWARN 3453h (n301) and MOTOR.TEMPFAULT 3586h (F301) act on
 //! them, VBUS.UVFTHRESH 361Dh (F502) on the DC bus (0 = off).
@@ -48,6 +49,7 @@ struct Refs {
     fb_filter: Option<EntryRef>,
     aout: Option<EntryRef>,
     ain_cutoff: Option<EntryRef>,
+    regen: Option<EntryRef>,
 }
 
 /// The measurement mirrors and their limits.
@@ -102,6 +104,7 @@ impl Monitor {
             fb_filter: od.find(0x3407, 1).ok(),
             aout: od.find(0x3470, 2).ok(),
             ain_cutoff: f(0x5000),
+            regen: f(0x3416),
         }
     }
 
@@ -163,6 +166,8 @@ impl Monitor {
             put(od, r.additional, pos.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i64);
         }
         put(od, r.ambient, model.params().motor.ambient_temperature.round() as i64);
+        // REGEN.POWER (W): what the braking resistor dissipates.
+        put(od, r.regen, model.regen_power().round().clamp(0.0, 2e9) as i64);
         let state = drive.state_machine().state();
         let faulted = matches!(state, State::Fault | State::FaultReactionActive);
         let over = word(od, r.overspeed) as u32 as i32;

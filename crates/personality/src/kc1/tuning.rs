@@ -22,6 +22,7 @@
 //! | 3622h/3623h | VL.LIMITP/N | rpm (1:1) | speed limit per direction |
 //! | 3598h, 3455h | IL.KP, MOTOR.LQLL | V/A, mH | current loop time constant LQLL/IL.KP (both set) |
 //! | 3423h | IL.OFFSET | A | current added to the command (gravity) |
+//! | 3452h | MOTOR.VOLTMAX | V (1:1) | voltage applied to the motor |
 //! | 3422h | IL.FRICTION | A | current added in the direction of motion |
 //!
 //! 0, the tables' default, stands for the machine's own value (as
@@ -48,7 +49,7 @@ use drivebus_od::{DataType, EntryRef, ObjectDictionary, SdoAbort, le_u64};
 
 /// The objects whose writes retune the model (IL.OFFSET and IL.FRICTION
 /// are 0 = none: a current offset of 0 is no offset).
-pub const TUNED: [(u16, u8); 20] = [
+pub const TUNED: [(u16, u8); 21] = [
     (0x3542, 0),
     (0x3480, 0),
     (0x3548, 0),
@@ -69,6 +70,7 @@ pub const TUNED: [(u16, u8); 20] = [
     (0x3423, 0),
     (0x3598, 0),
     (0x3455, 0),
+    (0x3452, 0),
 ];
 
 /// KC1 §7.1 / AKD §6.1: F304 motor foldback.
@@ -191,6 +193,7 @@ pub fn apply(cx: &mut Context<'_>, od: &mut ObjectDictionary, pending: Pending<'
     let vp = limit(od, 0x3622, pending, RPM);
     let vn = limit(od, 0x3623, pending, RPM);
     cx.drive.set_velocity_limits(vp, vn).map_err(|_| SdoAbort::INVALID_VALUE)?;
+    cx.drive.set_voltage_limit(limit(od, 0x3452, pending, 1.0)).map_err(|_| SdoAbort::INVALID_VALUE)?;
     cx.drive.set_foldback(Some(foldback(cx, od, pending))).map_err(|_| SdoAbort::INVALID_VALUE)?;
     // IL.OFFSET (A × 1000, signed) and IL.FRICTION (A × 1000).
     let offset = value(od, 0x3423, 0, pending) as f64 / 1000.0;

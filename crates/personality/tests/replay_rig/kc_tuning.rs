@@ -339,3 +339,38 @@ pub fn current_loop_gain(profile: Profile) {
     let only_kp = rise(&[(0x3598, 10_000)]);
     assert!(only_kp > 0.95 * peak, "IL.KP without MOTOR.LQLL: the machine's loop ({only_kp} A)");
 }
+
+/// MOTOR.VOLTMAX 3452h (V): the voltage the motor gets, so its speed ends
+/// at VOLTMAX / kₑ.
+pub fn motor_voltage(profile: Profile) {
+    let mut r = operational(profile);
+    let ke = r.pn().app.drive.config().params.motor.ke;
+    put(&mut r, 0x3452, 0, &100u16.to_le_bytes());
+    put(&mut r, 0x6083, 0, &36_000_000u32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &100_000_000i32.to_le_bytes());
+    r.run_ms(500);
+    let v = speed(&r);
+    assert!(v < 100.0 / ke && v > 0.8 * 100.0 / ke, "{v} rad/s, 100 V / {ke}");
+}
+
+/// REGEN.POWER 3416h (W): braking a large inertia (LOAD.INERTIA 10
+/// kg·cm²) from 3000 rpm charges the DC bus into the braking resistor,
+/// whose power it reads; motoring it reads 0.
+pub fn regen_power(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x525F, 0, &10u32.to_le_bytes());
+    put(&mut r, 0x6083, 0, &3_600_000_000u32.to_le_bytes());
+    put(&mut r, 0x6084, 0, &3_600_000_000u32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &3_000_000i32.to_le_bytes());
+    r.run_ms(600);
+    assert_eq!(getu(&mut r, 0x3416, 0), 0, "motoring");
+    put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    let mut peak = 0;
+    for _ in 0..300 {
+        r.run_ms(1);
+        peak = peak.max(r.node().od().get_u32(0x3416, 0).unwrap());
+    }
+    assert!(peak > 50, "braking into the resistor: {peak} W");
+}
