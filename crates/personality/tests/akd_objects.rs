@@ -534,3 +534,9 @@ fn motor_voltage() {
 fn regen_power() {
     t::regen_power(P);
 }
+
+/// §7.1.4, §6.2.1.3: HOME.SET 35F0h.
+#[test]
+fn home_set() {
+    o::home_set(P);
+}

@@ -111,6 +111,15 @@ impl Kollmorgen {
                 cx.drive.set_analog_output(f64::from(le_u64(data) as u16 as i16) / 1000.0);
                 Ok(Verdict::Store)
             }
+            // HOME.SET: the axis is homed where it stands, its position the
+            // home offset 607Ch (HOME.P), as homing method 35/37 would.
+            0x35F0 => {
+                let home = od.get_i64(0x607C, 0).unwrap_or(0);
+                let inc = cx.drive.units().pos_to_inc(home);
+                cx.drive.set_position_increments(inc);
+                self.status.set_homed();
+                Ok(Verdict::Handled)
+            }
             // PLS.RESET re-arms single-shot switches.
             0x34A3 if sub == 2 => {
                 self.pls.reset(le_u64(data) as u16);

@@ -190,6 +190,11 @@ impl Status {
         }
     }
 
+    /// The axis was homed outside the homing mode (HOME.SET): 1002h bit 1.
+    pub fn set_homed(&mut self) {
+        self.homed = true;
+    }
+
     /// Whether `w` is active.
     pub fn has(&self, w: Warning) -> bool {
         self.warnings.contains(&Some(w))

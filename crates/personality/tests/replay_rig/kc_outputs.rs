@@ -157,3 +157,26 @@ pub fn analog_input_cutoff(profile: Profile) {
     assert!((3000..=3400).contains(&at_tau), "10 Hz after 16 ms: {at_tau} mV");
     assert_eq!(settled, 5000);
 }
+
+/// HOME.SET 35F0h: the axis is homed where it stands: 6064h reads the
+/// home offset 607Ch (HOME.P) and 1002h bit 1 (homed) is set; nothing
+/// moves.
+pub fn home_set(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x6083, 0, &3_600_000u32.to_le_bytes());
+    put(&mut r, 0x6084, 0, &3_600_000u32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &600_000i32.to_le_bytes());
+    r.run_ms(100);
+    put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    r.run_ms(300);
+    let angle = r.pn().app.drive.model().position();
+    assert!(r.position() > 1000, "moved: {}", r.position());
+    assert_eq!(super::kc_objects::getu(&mut r, 0x1002, 0) & 2, 0, "not homed");
+    put(&mut r, 0x607C, 0, &1234i32.to_le_bytes());
+    put(&mut r, 0x35F0, 0, &0i32.to_le_bytes());
+    r.run_ms(2);
+    assert_eq!(r.position(), 1234, "6064h = HOME.P");
+    assert_ne!(super::kc_objects::getu(&mut r, 0x1002, 0) & 2, 0, "1002h bit 1 homed");
+    assert!((r.pn().app.drive.model().position() - angle).abs() < 1e-3, "nothing moved");
+}
