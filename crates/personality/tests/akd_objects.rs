@@ -540,3 +540,9 @@ fn regen_power() {
 fn home_set() {
     o::home_set(P);
 }
+
+/// §7.1.4: FB1.OFFSET 3490h.
+#[test]
+fn position_offset() {
+    o::position_offset(P);
+}

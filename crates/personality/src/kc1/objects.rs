@@ -120,6 +120,11 @@ impl Kollmorgen {
                 self.status.set_homed();
                 Ok(Verdict::Handled)
             }
+            // FB1.OFFSET: an offset on the position actual value.
+            0x3490 => {
+                self.position_offset(cx, i64::from(le_u64(data) as u32 as i32));
+                Ok(Verdict::Store)
+            }
             // PLS.RESET re-arms single-shot switches.
             0x34A3 if sub == 2 => {
                 self.pls.reset(le_u64(data) as u16);
@@ -180,5 +185,20 @@ impl Kollmorgen {
             _ => return Ok(None),
         };
         verdict.map(Some)
+    }
+}
+
+impl Kollmorgen {
+    /// FB1.OFFSET 3490h (position units): the position actual value reads
+    /// `offset` more than the feedback; the reference shifts by the change
+    /// (kept across an NMT reset, as the drive's reference is; homing sets
+    /// the reference anew).
+    pub(crate) fn position_offset(&mut self, cx: &mut Context<'_>, offset: i64) {
+        let delta = offset.saturating_sub(self.fb_offset);
+        if delta != 0 {
+            let inc = cx.drive.position_increments().saturating_add(cx.drive.units().pos_to_inc(delta));
+            cx.drive.set_position_increments(inc);
+            self.fb_offset = offset;
+        }
     }
 }

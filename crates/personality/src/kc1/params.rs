@@ -135,5 +135,8 @@ impl Kollmorgen {
         }
         let _ = super::tuning::apply(cx, od, None);
         let _ = super::brake::set_delays(cx, od, None);
+        // A stored FB1.OFFSET at power-on.
+        let offset = od.get_i64(0x3490, 0).unwrap_or(0);
+        self.position_offset(cx, offset);
     }
 }

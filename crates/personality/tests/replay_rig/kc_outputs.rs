@@ -180,3 +180,24 @@ pub fn home_set(profile: Profile) {
     assert_ne!(super::kc_objects::getu(&mut r, 0x1002, 0) & 2, 0, "1002h bit 1 homed");
     assert!((r.pn().app.drive.model().position() - angle).abs() < 1e-3, "nothing moved");
 }
+
+/// FB1.OFFSET 3490h (position units): 6064h reads the feedback plus the
+/// offset; a new offset replaces the old one; nothing moves.
+pub fn position_offset(profile: Profile) {
+    let mut r = operational(profile);
+    put(&mut r, 0x6083, 0, &3_600_000u32.to_le_bytes());
+    put(&mut r, 0x6084, 0, &3_600_000u32.to_le_bytes());
+    enable(&mut r, 3);
+    put(&mut r, 0x60FF, 0, &600_000i32.to_le_bytes());
+    r.run_ms(100);
+    put(&mut r, 0x60FF, 0, &0i32.to_le_bytes());
+    r.run_ms(300);
+    let p = r.position();
+    put(&mut r, 0x3490, 0, &5000i32.to_le_bytes());
+    r.run_ms(2);
+    assert!((r.position() - (p + 5000)).abs() <= 1, "{} vs {p} + 5000", r.position());
+    put(&mut r, 0x3490, 0, &(-2000i32).to_le_bytes());
+    r.run_ms(2);
+    assert!((r.position() - (p - 2000)).abs() <= 1, "{} vs {p} − 2000", r.position());
+    assert_eq!(r.pn().app.drive.model().velocity(), 0.0, "nothing moves");
+}
