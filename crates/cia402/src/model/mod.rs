@@ -34,11 +34,11 @@ pub mod tuning;
 
 pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, SwitchInput, Switches};
 pub use io::{ANALOG_INPUTS, BrakeParams, BrakeState, DIGITAL_LINES, IoParams};
-pub use tuning::FoldbackParams;
 pub use params::{
     AxisKind, AxisParams, BusParams, ControlParams, DriveParams, EncoderParams, LoadTorque, MotorKind,
     MotorParams, ParamError, StepperParams,
 };
+pub use tuning::FoldbackParams;
 
 use core::f64::consts::PI;
 

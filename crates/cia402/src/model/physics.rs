@@ -109,7 +109,8 @@ impl DriveModel {
         // At the limit in force (a lowered limit, the foldback) counts too.
         let (ip, in_) = self.current_limits();
         let limit = if self.current >= 0.0 { ip } else { in_ };
-        let blocked = limit > 0.0 && self.current.abs() >= 0.95 * limit && self.omega.abs() < 0.01 * m.max_speed;
+        let blocked =
+            limit > 0.0 && self.current.abs() >= 0.95 * limit && self.omega.abs() < 0.01 * m.max_speed;
         self.stall_timer = if blocked { self.stall_timer + dt } else { 0.0 };
         let pushing = self.contact != 0 && t_motor * f64::from(self.contact) > m.coulomb_friction;
         self.set_stalled(pushing || self.stall_timer >= 0.05);

@@ -87,7 +87,10 @@ impl DriveModel {
             if same { Ok(()) } else { Err(ParamError { field, reason: "fixed by the machine" }) }
         };
         let (a, b) = (&self.p.axis, &p.axis);
-        fixed("motor.kind", core::mem::discriminant(&self.p.motor.kind) == core::mem::discriminant(&p.motor.kind))?;
+        fixed(
+            "motor.kind",
+            core::mem::discriminant(&self.p.motor.kind) == core::mem::discriminant(&p.motor.kind),
+        )?;
         fixed("encoder", self.p.encoder == p.encoder)?;
         fixed(
             "axis",
@@ -136,8 +139,10 @@ impl DriveModel {
     /// direction, within the motor's maximum speed; `f64::INFINITY` lifts a
     /// limit.
     pub fn set_velocity_limits(&mut self, positive: f64, negative: f64) -> Result<(), ParamError> {
-        self.limits.velocity =
-            [magnitude("velocity_limit.positive", positive)?, magnitude("velocity_limit.negative", negative)?];
+        self.limits.velocity = [
+            magnitude("velocity_limit.positive", positive)?,
+            magnitude("velocity_limit.negative", negative)?,
+        ];
         Ok(())
     }
 

@@ -87,7 +87,11 @@ impl Brake {
 /// The drive's brake times from MOTOR.TBRAKERLS 366Fh / MOTOR.TBRAKEAPP
 /// 366Eh (ms; `pending` a write in progress); 0 in both: the drive waits
 /// for the brake itself, 0 in one: the machine's delay for that one.
-pub fn set_delays(cx: &mut Context<'_>, od: &ObjectDictionary, pending: Option<(u16, u32)>) -> Result<(), SdoAbort> {
+pub fn set_delays(
+    cx: &mut Context<'_>,
+    od: &ObjectDictionary,
+    pending: Option<(u16, u32)>,
+) -> Result<(), SdoAbort> {
     let get = |i: u16| match pending {
         Some((p, v)) if p == i => v as i32,
         _ => od.get_i64(i, 0).unwrap_or(0) as i32,
@@ -100,7 +104,9 @@ pub fn set_delays(cx: &mut Context<'_>, od: &ObjectDictionary, pending: Option<(
     let own = |v: i32, m: f64| if v > 0 { v as u32 } else { (m * 1000.0).round() as u32 };
     let d = match (rls, app, machine) {
         (0, 0, _) => None,
-        (_, _, Some(b)) => Some(BrakeDelays { release_ms: own(rls, b.release_delay), apply_ms: own(app, b.apply_delay) }),
+        (_, _, Some(b)) => {
+            Some(BrakeDelays { release_ms: own(rls, b.release_delay), apply_ms: own(app, b.apply_delay) })
+        }
         (_, _, None) => Some(BrakeDelays { release_ms: own(rls, 0.0), apply_ms: own(app, 0.0) }),
     };
     cx.drive.set_brake_delays(d);

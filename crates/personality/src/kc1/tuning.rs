@@ -92,9 +92,9 @@ fn value(od: &ObjectDictionary, index: u16, sub: u8, pending: Pending<'_>) -> i6
     let n = src.len().min(stored.len()).min(8);
     b[..n].copy_from_slice(&src[..n]);
     let raw = le_u64(&b[..n.max(1)]);
-    let signed = od
-        .get(index, sub)
-        .is_some_and(|e| matches!(e.data_type, DataType::Integer8 | DataType::Integer16 | DataType::Integer32));
+    let signed = od.get(index, sub).is_some_and(|e| {
+        matches!(e.data_type, DataType::Integer8 | DataType::Integer16 | DataType::Integer32)
+    });
     if signed && n > 0 && n < 8 {
         let shift = 64 - 8 * n as u32;
         ((raw << shift) as i64) >> shift
@@ -290,7 +290,8 @@ impl Foldback {
         }
         let warn_ma = word(od, self.warn) as u32 as i32;
         let warn_pct = word(od, self.mi2t_warn) as u32;
-        let warning = (warn_ma > 0 && i64::from(ma) < i64::from(warn_ma)) || (warn_pct > 0 && load >= warn_pct);
+        let warning =
+            (warn_ma > 0 && i64::from(ma) < i64::from(warn_ma)) || (warn_pct > 0 && load >= warn_pct);
         status.set(cx, od, Warning::MotorFoldback, warning);
         let fault = match word(od, self.fault_user) as u32 {
             0 => word(od, self.fault) as u32,

@@ -27,8 +27,8 @@ fn move_to(r: &mut Rig, target: i32) -> Vec<(i64, u16)> {
     out
 }
 
-/// PLS (34A0h–34A3h): switch 1 is active exactly inside [PLS.P1, PLS.P1
-/// + PLS.WIDTH1]; switch 2 (PLS.MODE single-shot) triggers once until
+/// PLS (34A0h–34A3h): switch 1 is active exactly inside the window from
+/// PLS.P1 to PLS.P1 + PLS.WIDTH1; switch 2 (PLS.MODE single-shot) triggers once until
 /// PLS.RESET; switch 3 (PLS.T3 = 100 ms) stays active 100 ms from
 /// entering its window; a switch not in PLS.EN stays off.
 pub fn position_limit_switches(profile: Profile) {
@@ -49,13 +49,17 @@ pub fn position_limit_switches(profile: Profile) {
         assert_eq!(state & 1 != 0, (20_000..=30_000).contains(&pos), "switch 1 at {pos}: {state:03b}");
         assert_eq!(state & 0b1000, 0, "switch 4 is not enabled");
     }
-    let on = |s: &[(i64, u16)], bit: u16| s.iter().filter(|x| x.1 & bit != 0).map(|x| x.0).collect::<Vec<_>>();
+    let on =
+        |s: &[(i64, u16)], bit: u16| s.iter().filter(|x| x.1 & bit != 0).map(|x| x.0).collect::<Vec<_>>();
     let two = on(&forth, 2);
     assert!(!two.is_empty() && two.iter().all(|p| (40_000..=41_000).contains(p)), "switch 2: {two:?}");
     // Timed: from 10000 on for 100 ms at 36000 units/s (≈ 3600 units).
     let three = on(&forth, 4);
     let (first, last) = (three[0], *three.last().unwrap());
-    assert!((10_000..10_100).contains(&first) && (13_000..14_200).contains(&last), "switch 3: {first}..{last}");
+    assert!(
+        (10_000..10_100).contains(&first) && (13_000..14_200).contains(&last),
+        "switch 3: {first}..{last}"
+    );
     let back = move_to(&mut r, 0);
     assert!(on(&back, 2).is_empty(), "single-shot: no second trigger");
     assert!(!on(&back, 1).is_empty(), "continuous switch 1 again");

@@ -12,7 +12,8 @@ use drivebus_personality::Profile;
 /// `profile` on a machine with a holding brake of 20 N·m, applied by
 /// MOTOR.BRAKERLS 3450h = 2 whatever the drive does: the rotor is blocked.
 fn braked(profile: Profile) -> Rig {
-    let text = "[[node]]\nid = 3\n[node.brake]\nrelease_delay = 0.0\napply_delay = 0.0\nholding_torque = 20.0\n";
+    let text =
+        "[[node]]\nid = 3\n[node.brake]\nrelease_delay = 0.0\napply_delay = 0.0\nholding_torque = 20.0\n";
     let file = drivebus_personality::machine::MachineFile::parse(text).unwrap();
     let m = file.machine_for(profile, ID).unwrap();
     let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
@@ -205,7 +206,10 @@ pub fn back_emf(profile: Profile) {
     let (r, _) = torque_run(profile, &[], 0);
     let bus = r.pn().app.drive.model().bus_voltage();
     let limit = bus / (100.0 / (1000.0 * core::f64::consts::PI / 30.0));
-    assert!(strong < limit * 1.02 && strong < own * 0.8, "KE 100 V/krpm: {strong} rad/s (≤ {limit}), own {own}");
+    assert!(
+        strong < limit * 1.02 && strong < own * 0.8,
+        "KE 100 V/krpm: {strong} rad/s (≤ {limit}), own {own}"
+    );
 }
 
 /// IL.LIMITP 356Eh / IL.LIMITN 356Fh (A × 1000): the current per
@@ -269,7 +273,11 @@ pub fn foldback(profile: Profile) {
     let mut r = held(0);
     r.run_ms(500);
     let peak = r.pn().app.drive.config().params.motor.max_current;
-    assert_eq!(getu(&mut r, 0x3425, 0), (peak * 1000.0).round() as u64, "the machine's coil: no foldback yet");
+    assert_eq!(
+        getu(&mut r, 0x3425, 0),
+        (peak * 1000.0).round() as u64,
+        "the machine's coil: no foldback yet"
+    );
     let mut r = held(CTF0);
     put(&mut r, 0x355A, 0, &3000i32.to_le_bytes());
     let e = emcys_after(&mut r, 1000);
@@ -314,7 +322,10 @@ pub fn current_feedforward(profile: Profile) {
         r.pn().app.drive.model().current()
     };
     let (none, comp) = (spin(0), spin(300));
-    assert!(none.abs() < 0.02 && (comp + 0.3).abs() < 0.02, "IL.FRICTION 0.3 A turning negative: {comp} (none {none})");
+    assert!(
+        none.abs() < 0.02 && (comp + 0.3).abs() < 0.02,
+        "IL.FRICTION 0.3 A turning negative: {comp} (none {none})"
+    );
 }
 
 /// IL.KP 3598h (V/A × 1000) with MOTOR.LQLL 3455h (mH × 1000): the
