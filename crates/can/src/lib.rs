@@ -11,6 +11,8 @@ extern crate alloc;
 pub mod cob;
 mod device;
 mod frame;
+#[cfg(feature = "pcap")]
+pub mod pcap;
 mod time;
 
 pub use device::{Device, LinkState};

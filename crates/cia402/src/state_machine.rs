@@ -497,6 +497,16 @@ impl StateMachine {
         self.finish(prev)
     }
 
+    /// A quick stop the device decides itself (an error whose class stops
+    /// the motor without a fault, LAM DDS6 §5 class 2): the controlword's
+    /// Quick stop command (transition 11 from Operation enabled, then per
+    /// 605Ah).
+    pub fn quick_stop(&mut self) -> Outcome {
+        let prev = self.begin();
+        self.apply(Command::QuickStop);
+        self.finish(prev)
+    }
+
     /// The connection to the master was lost (heartbeat / node guarding
     /// timeout, bus-off): executes the 6007h abort connection option
     /// (0 none, 1 fault with `code`, 2 disable voltage, 3 quick stop;

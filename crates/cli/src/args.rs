@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
+pub use crate::args_bus::*;
 pub use crate::args_node::*;
 
 /// Default socketcand port and address of `drivebus serve`.
@@ -122,6 +123,15 @@ pub enum Command {
     /// Send raw frames (cansend syntax: 601#40.00.10.00, 123#R, 1ABCDEF0#11).
     #[command(after_help = SEND_EXAMPLES)]
     Send(SendArgs),
+    /// Produce SYNC, heartbeat and TIME from this tool (cyclic, until Ctrl-C or --seconds).
+    #[command(after_help = PRODUCE_EXAMPLES)]
+    Produce(ProduceArgs),
+    /// Load generator: random or counting frames at a given gap (cangen).
+    #[command(after_help = GEN_EXAMPLES)]
+    Gen(GenArgs),
+    /// Bus statistics: load, frames per second per COB-ID, error frames and counters.
+    #[command(after_help = STATS_EXAMPLES)]
+    Stats(StatsArgs),
     /// Replay a candump log with its timing (canplayer).
     #[command(after_help = REPLAY_EXAMPLES)]
     Replay(ReplayArgs),
@@ -287,7 +297,19 @@ Examples:
   drivebus --bus socketcand://127.0.0.1:29536/can0 dump
   drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 dump --pdo   (node 1's frames, PDOs decoded)
   drivebus --bus socketcand://127.0.0.1:29536/can0 dump --id 0x180-0x1FF --seconds 10
-  drivebus dump --candump > bus.log";
+  drivebus --bus socketcand://127.0.0.1:29536/can0 dump --filter 181:7FF,080:7FF   (candump filters)
+  drivebus --bus socketcand://127.0.0.1:29536/can0 dump --filter 080~7FF -t delta  (all but SYNC, delta times)
+  drivebus --bus socketcand://127.0.0.1:29536/can0 dump --pcap bus.pcapng --seconds 10   (Wireshark)
+  drivebus --bus socketcand://127.0.0.1:29536/can0 --node 1 dump --pdo --csv > pdo.csv  (spreadsheets)
+  drivebus dump --candump > bus.log
+
+Filters (candump): ID:MASK passes a frame when id & MASK == ID & MASK, ID~MASK when not; hex;
+several (comma-separated or repeated) pass a frame any of them passes, `j` among them: all must.
+The id carries SocketCAN's flags (80000000 extended, 40000000 remote): 40000000:40000000 passes RTRs.
+Timestamps (-t): zero (since the first frame shown, the default), delta (since the previous one),
+absolute (Unix time); --candump lines always carry absolute times (candump -l, `replay` reads them).
+Remote (RTR) frames are shown where the transport carries them; socketcand carries none, and dump
+says so when it starts.";
 
 /// `drivebus dump`.
 #[derive(Args, Debug)]
@@ -308,6 +330,20 @@ pub struct DumpArgs {
     /// (with --eds: the EDS default mapping instead).
     #[arg(long)]
     pub pdo: bool,
+    /// candump filters (repeatable, or comma-separated): ID:MASK, ID~MASK (inverted), j (join).
+    #[arg(long = "filter", value_name = "ID:MASK")]
+    pub filters: Vec<String>,
+    /// Timestamps: zero (since the first frame shown), delta (since the previous one), absolute
+    /// (Unix time) [default: zero; absolute with --candump].
+    #[arg(long, short = 't', value_enum, value_name = "MODE")]
+    pub timestamp: Option<TimestampMode>,
+    /// Also write the frames shown as pcapng (SocketCAN link type) for Wireshark; `-` writes it to
+    /// stdout instead of the trace (`| wireshark -k -i -`).
+    #[arg(long, value_name = "FILE")]
+    pub pcap: Option<PathBuf>,
+    /// With --pdo: CSV, one row per PDO and a column per mapped object (spreadsheets, plotting).
+    #[arg(long, requires = "pdo", conflicts_with = "candump")]
+    pub csv: bool,
 }
 
 const MONITOR_EXAMPLES: &str = "\
@@ -315,6 +351,7 @@ Examples:
   drivebus --bus socketcand://127.0.0.1:29536/can0 monitor
   drivebus --bus socketcand://127.0.0.1:29536/can0 monitor --watch statusword --watch 6064 --period 200
   drivebus --bus socketcand://127.0.0.1:29536/can0 --json monitor --seconds 5   (JSON lines)
+  drivebus --bus socketcand://127.0.0.1:29536/can0 monitor --watch 6064 --csv > nodes.csv
 
 On a terminal the table is redrawn in place; otherwise one line per change is printed.";
 
@@ -334,6 +371,9 @@ pub struct MonitorArgs {
     /// Scan for nodes at start (SDO 1000h sweep) instead of only listening.
     #[arg(long)]
     pub scan: bool,
+    /// CSV: a header, then a row per change (time, node, state, EMCY, watched values as numbers).
+    #[arg(long)]
+    pub csv: bool,
 }
 
 const SEND_EXAMPLES: &str = "\
@@ -342,7 +382,12 @@ Examples:
   drivebus send 000#0100                        NMT start all nodes
   drivebus send 701#R1                          node guarding request (RTR, DLC 1)
   drivebus send 18FF50E5#0102                   extended (29-bit) identifier
-  drivebus send 080# 080# 080#                  three SYNCs (several frames in order)";
+  drivebus send 080# 080# 080#                  three SYNCs (several frames in order)
+  drivebus send 201#0F00 --period 10            RPDO1 every 10 ms until Ctrl-C (cyclic transmit)
+  drivebus send 080# 181#01 --period 1 --count 500   both frames every ms, 500 times
+
+With --period the frames go out again every period (as a group, in order), --count times or until
+Ctrl-C; a period the transport could not keep is reported.";
 
 /// `drivebus send`.
 #[derive(Args, Debug)]
@@ -351,6 +396,12 @@ pub struct SendArgs {
     /// data bytes in hex with optional '.', ID#R[LEN] for a remote frame.
     #[arg(required = true, value_name = "FRAME")]
     pub frames: Vec<String>,
+    /// Send the frames again every MS milliseconds (fractions allowed) until --count or Ctrl-C.
+    #[arg(long, value_name = "MS")]
+    pub period: Option<f64>,
+    /// How many times to send the frames (with --period).
+    #[arg(long, requires = "period")]
+    pub count: Option<u64>,
 }
 
 const REPLAY_EXAMPLES: &str = "\

@@ -70,6 +70,44 @@ fn pdo(f: &Frame, dict: &Dict, (label, mapping): &(String, Vec<PdoMapEntry>)) ->
     format!("{label}: {}", parts.join(", "))
 }
 
+/// The mapped objects of a PDO (dummy entries left out) with their column
+/// names, `LABEL INDEXh:SUB NAME`.
+pub fn pdo_columns(dict: &Dict, (label, mapping): &(String, Vec<PdoMapEntry>)) -> Vec<String> {
+    mapping
+        .iter()
+        .filter(|m| m.index >= 0x1000)
+        .map(|m| {
+            let what = dict.name(m.index, m.sub).unwrap_or_default();
+            let what = what.rsplit(" / ").next().unwrap_or(&what).to_owned();
+            format!("{label} {:04X}h:{:02X} {what}", m.index, m.sub).trim_end().to_owned()
+        })
+        .collect()
+}
+
+/// The values of a PDO's mapped objects as plain numbers (signed where the
+/// type is; dummy entries left out), in [`pdo_columns`] order; `None` for
+/// an entry past the end of a short frame.
+pub fn pdo_numbers(f: &Frame, dict: &Dict, mapping: &[PdoMapEntry]) -> Vec<Option<String>> {
+    let mut out = Vec::new();
+    let mut at = 0usize;
+    for m in mapping {
+        let bits = usize::from(m.bits);
+        let raw = bits_at(f.data(), at, bits);
+        at += bits;
+        if m.index < 0x1000 {
+            continue;
+        }
+        out.push(raw.map(|raw| match dict.data_type(m.index, m.sub) {
+            Some(dt) if bits.is_multiple_of(8) => match Value::decode(dt, &raw.to_le_bytes()[..bits / 8]) {
+                Ok(v) => v.to_string(),
+                Err(_) => raw.to_string(),
+            },
+            _ => raw.to_string(),
+        }));
+    }
+    out
+}
+
 fn name(dict: &Dict, index: u16, sub: u8) -> String {
     match dict.name(index, sub) {
         Some(n) => format!("{index:04X}h:{sub:02X} ({n})"),
@@ -269,5 +307,14 @@ mod tests {
         );
         let s = decode(&Frame::new(0x190, &[0x03]), &Dict::default(), &maps);
         assert_eq!(s, "x: 2000h:00 = 1, 2001h:00 = 1");
+        // Plain numbers for CSV, one column per mapped object.
+        let m = &maps[&0x185];
+        assert_eq!(
+            pdo_columns(&Dict::default(), m),
+            ["TPDO1 node 5 6041h:00 Statusword", "TPDO1 node 5 6064h:00 Position actual value"]
+        );
+        let f = Frame::new(0x185, &[0x37, 0x02, 0xFE, 0xFF, 0xFF, 0xFF]);
+        assert_eq!(pdo_numbers(&f, &Dict::default(), &m.1), [Some("567".into()), Some("-2".into())]);
+        assert_eq!(pdo_numbers(&Frame::new(0x185, &[0x37, 0x02]), &Dict::default(), &m.1)[1], None);
     }
 }

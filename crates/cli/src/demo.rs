@@ -147,9 +147,13 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path
         let t = trace.lock().unwrap_or_else(|e| e.into_inner());
         t.t0.map_or(0.0, |t0| m.now().saturating_duration_since(t0).as_nanos() as f64 / 1e9)
     };
-    let h0 = t_plot(&trace);
-    r.homing = sim.block_on(home_both(&m, &d1, &d2))??;
-    r.phases.push(Phase { name: "homing", start: h0, end: t_plot(&trace) });
+    let (homing, h0) = sim.block_on(home_both(&m, &d1, &d2))??;
+    r.homing = homing;
+    // Each node's own homing: node 2's may end long before node 1's.
+    let h0 = t_plot(&trace) - secs(&m, h0);
+    for &(node, _, t) in &r.homing {
+        r.phases.push(Phase { name: "homing", node, start: h0, end: h0 + t });
+    }
     tick(&pb, &m);
     // 5. Profile-position move: node 1 one turn (0.001° units), node 2
     // 20000 of its own position units.
@@ -157,14 +161,16 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path
     let m0 = t_plot(&trace);
     let i0 = trace.lock().unwrap_or_else(|e| e.into_inner()).samples.len();
     let start_pos = trace.lock().unwrap_or_else(|e| e.into_inner()).cur.position;
-    r.move_time = sim.block_on(move_both(&m, &d1, &d2))??;
+    let (t1, t2) = sim.block_on(move_both(&m, &d1, &d2))??;
+    r.move_time = t1;
+    r.phases.push(Phase { name: "move", node: 2, start: m0, end: m0 + t2 });
     {
         let t = trace.lock().unwrap_or_else(|e| e.into_inner());
         r.move_distance = t.cur.position - start_pos;
         r.move_ferr_max = t.samples[i0..].iter().map(|s| s.following.abs()).fold(0.0, f64::max);
     }
     sim.run_for(Duration::from_millis(100));
-    r.phases.push(Phase { name: "move", start: m0, end: t_plot(&trace) });
+    r.phases.push(Phase { name: "move", node: 1, start: m0, end: t_plot(&trace) });
     tick(&pb, &m);
     // 6. CSP sine on node 1, one target per SYNC (RPDO2).
     pb.set_message("CSP sine at 1 kHz SYNC");
@@ -204,7 +210,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path
     }
     let busy = sim.bus().stats().busy.as_nanos().saturating_sub(busy0.as_nanos()) as f64;
     r.csp_bus_load = busy / sim.now().saturating_duration_since(c0).as_nanos().max(1) as f64;
-    r.phases.push(Phase { name: "CSP sine", start: s0, end: t_plot(&trace) });
+    r.phases.push(Phase { name: "CSP sine", node: 1, start: s0, end: t_plot(&trace) });
     // 7. Hold a moment, then stop: NMT pre-operational.
     sim.run_for(Duration::from_millis(100));
     m.stop_sync();
@@ -367,7 +373,8 @@ async fn prepare_homing(m: &Master, node: u8) -> anyhow::Result<i8> {
     Ok(method)
 }
 
-async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<Vec<(u8, i8, f64)>> {
+/// Homes both nodes at once: (node, method, seconds) each, and when they started.
+async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(Vec<(u8, i8, f64)>, Instant)> {
     let k1 = prepare_homing(m, 1).await?;
     let k2 = prepare_homing(m, 2).await?;
     let h0 = m.now();
@@ -375,10 +382,11 @@ async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<Vec<(u8
         tokio::join!(async { d1.home(k1, Duration::from_secs(30)).await.map(|_| secs(m, h0)) }, async {
             d2.home(k2, Duration::from_secs(30)).await.map(|_| secs(m, h0))
         });
-    Ok(vec![(1, k1, a.context("node 1 homing")?), (2, k2, b.context("node 2 homing")?)])
+    Ok((vec![(1, k1, a.context("node 1 homing")?), (2, k2, b.context("node 2 homing")?)], h0))
 }
 
-async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<f64> {
+/// Moves both nodes at once: the seconds each took to reach its target.
+async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(f64, f64)> {
     d1.set_mode(mode::PP).await?;
     d2.set_mode(mode::PP).await?;
     let profile =
@@ -387,9 +395,9 @@ async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<f64> {
     let one = async {
         d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|_| secs(m, t0))
     };
-    let (a, b) = tokio::join!(one, d2.move_to(20_000, false, None, Duration::from_secs(20)));
-    b.context("node 2 move")?;
-    a.context("node 1 move")
+    let two = async { d2.move_to(20_000, false, None, Duration::from_secs(20)).await.map(|_| secs(m, t0)) };
+    let (a, b) = tokio::join!(one, two);
+    Ok((a.context("node 1 move")?, b.context("node 2 move")?))
 }
 
 fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
@@ -437,4 +445,28 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
     outln!("  {:<40} {:.3} s", "simulated time", r.sim_seconds);
     outln!();
     outln!("plot: {} ({} samples from TPDOs)", out.display(), r.samples.len());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each node's panel shades that node's phases: node 2 homes on its
+    /// own schedule (its index pulse is elsewhere), not in node 1's span.
+    #[test]
+    fn every_node_has_its_own_phases() {
+        let r = simulate(false, 0.2, false, None).unwrap();
+        let of = |node: u8, name: &str| -> Vec<Phase> {
+            r.phases.iter().filter(|p| p.node == node && p.name == name).copied().collect()
+        };
+        let (h1, h2) = (of(1, "homing"), of(2, "homing"));
+        assert_eq!((h1.len(), h2.len()), (1, 1), "{:?}", r.phases);
+        for (node, h) in [(1, h1[0]), (2, h2[0])] {
+            let took = r.homing.iter().find(|x| x.0 == node).unwrap().2;
+            assert!((h.end - h.start - took).abs() < 1e-6, "node {node}: {h:?} vs {took} s");
+        }
+        assert!((h1[0].end - h2[0].end).abs() > 0.1, "the two homings end apart: {h1:?} {h2:?}");
+        assert_eq!((of(1, "move").len(), of(2, "move").len()), (1, 1));
+        assert_eq!((of(1, "CSP sine").len(), of(2, "CSP sine").len()), (1, 0), "the sine is node 1's");
+    }
 }

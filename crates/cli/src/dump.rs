@@ -1,19 +1,24 @@
-//! `drivebus dump`: a live decoded trace, or candump log lines; filters by
-//! node and CAN-ID; PDOs decoded by the mapping read from the devices (or
-//! from the EDS).
+//! `drivebus dump`: a live decoded trace, candump log lines, CSV of the
+//! PDOs or a pcapng capture; filters by node, CAN-ID range and candump
+//! filter; PDOs decoded by the mapping read from the devices (or from the
+//! EDS).
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::ops::RangeInclusive;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use anyhow::anyhow;
+use anyhow::{Context, anyhow, bail};
+use drivebus_can::pcap::{Capture, Direction, LinkType};
 use drivebus_master::{Frame, PdoDir, PdoMapEntry, candump};
 use tokio::sync::broadcast;
 
-use crate::args::{DumpArgs, Global};
+use crate::args::{DumpArgs, Global, TimestampMode};
+use crate::canfilter::Filters;
 use crate::conn::Conn;
-use crate::decode::{PdoMaps, decode};
+use crate::decode::{PdoMaps, decode, pdo_columns, pdo_numbers};
 use crate::error::coded;
+use crate::output::outln;
 
 /// Parses `0x181`, `181`, `0x180-0x1FF` (CAN-IDs are hex).
 pub fn id_range(s: &str) -> anyhow::Result<RangeInclusive<u32>> {
@@ -99,10 +104,91 @@ fn eds_maps(eds: &drivebus_eds::Eds, node: u8) -> PdoMaps {
     maps
 }
 
+/// Line times per `-t` (candump's zero, delta and absolute).
+struct Stamps {
+    mode: TimestampMode,
+    first: Option<f64>,
+    prev: Option<f64>,
+}
+
+impl Stamps {
+    /// The stamp of a frame received at `t` seconds (master time) and
+    /// `unix` seconds (Unix time).
+    fn stamp(&mut self, t: f64, unix: f64) -> f64 {
+        let first = *self.first.get_or_insert(t);
+        let prev = self.prev.replace(t).unwrap_or(t);
+        match self.mode {
+            TimestampMode::Zero => t - first,
+            TimestampMode::Delta => t - prev,
+            TimestampMode::Absolute => unix,
+        }
+    }
+}
+
+fn unix_now() -> std::time::Duration {
+    SystemTime::now().duration_since(UNIX_EPOCH).unwrap_or_default()
+}
+
+/// The CSV columns of `dump --pdo --csv`: every mapped object of every
+/// PDO, in COB-ID order; the offset of each PDO's first column.
+fn csv_layout(pdos: &PdoMaps, dict: &crate::dict::Dict) -> (Vec<String>, HashMap<u16, usize>) {
+    let mut ids: Vec<&u16> = pdos.keys().collect();
+    ids.sort();
+    let mut header = vec!["time_s".to_owned(), "cob_id".to_owned(), "pdo".to_owned()];
+    let mut at = HashMap::new();
+    for id in ids {
+        at.insert(*id, header.len());
+        header.extend(pdo_columns(dict, &pdos[id]));
+    }
+    (header, at)
+}
+
 /// Runs the trace until `--count`, `--seconds`, SIGINT/SIGTERM or the bus closes.
 pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
     let ranges = a.ids.iter().map(|s| id_range(s)).collect::<anyhow::Result<Vec<_>>>()?;
+    let filters = Filters::parse(&a.filters)?;
+    if a.candump && a.timestamp.is_some_and(|m| m != TimestampMode::Absolute) {
+        bail!(coded(
+            "usage",
+            anyhow!("--candump lines carry absolute times (candump -l; `replay` reads them): leave -t out")
+        ));
+    }
+    let to_stdout = a.pcap.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    if to_stdout && (a.candump || a.csv || g.json) {
+        bail!(coded(
+            "usage",
+            anyhow!("--pcap - writes the capture to stdout: no --candump, --csv or --json with it")
+        ));
+    }
+    let mut capture = match &a.pcap {
+        None => None,
+        Some(p) => {
+            let w: Box<dyn Write + Send> = if to_stdout {
+                Box::new(std::io::stdout())
+            } else {
+                Box::new(std::io::BufWriter::new(
+                    std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
+                ))
+            };
+            let iface = match drivebus_transport::BusUrl::parse(&g.bus) {
+                Ok(drivebus_transport::BusUrl::Socketcand { channel, .. }) => channel,
+                Ok(drivebus_transport::BusUrl::SocketCan { interface }) => interface,
+                _ => "can0".to_owned(),
+            };
+            Some(Capture::new(w, &iface, LinkType::SocketCan).context("writing the pcapng header")?)
+        }
+    };
+    let mut stamps = Stamps {
+        mode: a.timestamp.unwrap_or(if a.candump { TimestampMode::Absolute } else { TimestampMode::Zero }),
+        first: None,
+        prev: None,
+    };
     let conn = Conn::open(g).await?;
+    if !conn.master.carries_rtr() && !g.json {
+        eprintln!(
+            "dump: this transport (socketcand) carries no remote (RTR) frames: node-guarding requests and other RTR frames on the bus are not shown"
+        );
+    }
     let pdos = if !a.pdo {
         PdoMaps::new()
     } else if let (Some(eds), Some(node)) = (&conn.dict.eds, g.node) {
@@ -117,9 +203,18 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
         };
         read_maps(&conn, &nodes).await
     };
+    let (header, columns) = csv_layout(&pdos, &conn.dict);
+    if a.csv {
+        if pdos.is_empty() {
+            bail!(coded(
+                "no_pdo",
+                anyhow!("--csv: no valid PDO mapping found to make columns of (are the nodes there?)")
+            ));
+        }
+        outln!("{}", crate::csv::line(&header));
+    }
     // From here on: not the answers to the mapping reads above.
     let mut frames = conn.master.subscribe_frames();
-    let start = conn.master.now();
     let end = a.seconds.map(|s| crate::error::seconds("--seconds", s)).transpose()?;
     let stop = crate::serve::wait_for_signal();
     tokio::pin!(stop);
@@ -151,18 +246,42 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
         if !ranges.is_empty() && !ranges.iter().any(|r| r.contains(&f.id().raw())) {
             continue;
         }
+        if !filters.pass(&f) {
+            continue;
+        }
         if let Some(node) = g.node
             && !of_node(&f, node, &pdos)
         {
             continue;
         }
+        let pdo = f.std_id().and_then(|id| pdos.get(&id).map(|p| (id, p)));
+        if a.csv && pdo.is_none() {
+            continue;
+        }
         n += 1;
-        let t = conn.master.now().saturating_duration_since(start).as_secs_f64();
+        let unix = unix_now();
+        let t = stamps.stamp(conn.master.now().as_nanos() as f64 / 1e9, unix.as_secs_f64());
+        if let Some(c) = &mut capture {
+            c.write_can(&f, unix.as_nanos() as u64, Direction::Inbound).context("writing --pcap")?;
+            if to_stdout {
+                c.flush().context("writing --pcap")?;
+                continue;
+            }
+        }
         let line = if a.candump {
-            let us = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_micros() as u64);
+            let us = unix.as_micros() as u64;
             let mut s = format!("({}.{:06}) can0 ", us / 1_000_000, us % 1_000_000);
             let _ = candump::write_frame(&mut s, &f);
             s
+        } else if let (true, Some((id, (label, mapping)))) = (a.csv, pdo) {
+            let mut row = vec![String::new(); header.len()];
+            row[0] = format!("{t:.6}");
+            row[1] = format!("{id:03X}");
+            row[2] = label.clone();
+            for (k, v) in pdo_numbers(&f, &conn.dict, mapping).into_iter().enumerate() {
+                row[columns[&id] + k] = v.unwrap_or_default();
+            }
+            crate::csv::line(&row)
         } else if g.json {
             serde_json::json!({"t": t, "id": f.id().raw(), "extended": f.id().is_extended(), "rtr": f.is_rtr(),
                 "data": crate::sdo_cmd::hex(f.data()), "decoded": decode(&f, &conn.dict, &pdos)})
@@ -170,7 +289,12 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
         } else {
             let mut raw = String::new();
             let _ = candump::write_frame(&mut raw, &f);
-            format!("{t:>10.6}  {raw:<24} {}", decode(&f, &conn.dict, &pdos))
+            let t = if stamps.mode == TimestampMode::Absolute {
+                format!("{t:>17.6}")
+            } else {
+                format!("{t:>10.6}")
+            };
+            format!("{t}  {raw:<24} {}", decode(&f, &conn.dict, &pdos))
         };
         // A closed pipe (`| head`) ends the trace quietly.
         if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
@@ -178,12 +302,27 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
         }
     }
     drop(out);
+    if let Some(c) = &mut capture {
+        c.flush().context("writing --pcap")?;
+    }
     conn.close().await
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn timestamp_modes() {
+        let mut z = Stamps { mode: TimestampMode::Zero, first: None, prev: None };
+        let mut d = Stamps { mode: TimestampMode::Delta, first: None, prev: None };
+        let mut a = Stamps { mode: TimestampMode::Absolute, first: None, prev: None };
+        let got: Vec<_> = [(5.0, 100.0), (5.25, 100.25), (6.0, 101.0)]
+            .iter()
+            .map(|&(t, u)| (z.stamp(t, u), d.stamp(t, u), a.stamp(t, u)))
+            .collect();
+        assert_eq!(got, [(0.0, 0.0, 100.0), (0.25, 0.25, 100.25), (1.0, 0.75, 101.0)]);
+    }
 
     #[test]
     fn id_ranges_and_node_filter() {

@@ -7,8 +7,12 @@
 //! on stdout), and the exit status is 1 (2 for usage errors).
 
 mod args;
+mod args_bus;
 mod args_node;
+mod canfilter;
 mod conn;
+mod csv;
+mod cyclic;
 mod decode;
 mod demo;
 mod dict;
@@ -29,6 +33,7 @@ mod replay;
 mod sdo_cmd;
 mod serve;
 mod slcan_pty;
+mod stats_cmd;
 mod vdrive;
 
 use clap::parser::ValueSource;
@@ -71,7 +76,7 @@ fn uses(path: &[&str]) -> &'static [Opt] {
         ["sdo" | "pdo", ..] => NODE_SDO,
         ["nmt", ..] | ["drive", ..] => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
         ["dump", ..] | ["monitor", ..] => NODE_SDO,
-        ["send" | "replay", ..] => &[Bus, Json, Sim, Machine],
+        ["send" | "replay" | "produce" | "gen" | "stats", ..] => &[Bus, Json, Sim, Machine],
         ["gateway", ..] => &[Bus, Node, Timeout, Retries, Sim, Machine],
         ["eds", "check", ..] => &[Json],
         ["eds", "show", ..] => &[Eds, Json],
@@ -246,6 +251,9 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Monitor(a) => monitor::run(g, a).await.map(|()| 0),
         Command::Send(a) => replay::send(g, a).await.map(|()| 0),
         Command::Replay(a) => replay::run(g, a).await.map(|()| 0),
+        Command::Produce(a) => cyclic::produce(g, a).await.map(|()| 0),
+        Command::Gen(a) => cyclic::gen_frames(g, a).await.map(|()| 0),
+        Command::Stats(a) => stats_cmd::run(g, a).await.map(|()| 0),
         Command::Gateway(a) => gateway::run(g, a).await.map(|()| 0),
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),

@@ -27,6 +27,8 @@ struct Row {
     state: Option<String>,
     emcy: Option<String>,
     values: BTreeMap<usize, String>,
+    /// The same values as plain numbers (CSV).
+    numbers: BTreeMap<usize, String>,
 }
 
 type Latest = Arc<Mutex<HashMap<(u8, usize), Vec<u8>>>>;
@@ -39,6 +41,32 @@ fn state_name(s: RemoteState) -> &'static str {
         RemoteState::PreOperational => "pre-operational",
         _ => "unknown",
     }
+}
+
+/// A value as a plain number (a spreadsheet cell), hex bytes for non-numbers.
+fn plain_value(dt: Option<DataType>, data: &[u8]) -> String {
+    match dt.and_then(|t| Value::decode(t, data).ok()) {
+        Some(v) if v.as_i128().is_some() || matches!(v, Value::F32(_) | Value::F64(_)) => v.to_string(),
+        _ => crate::sdo_cmd::hex(data),
+    }
+}
+
+/// The `monitor --csv` header.
+fn csv_header(labels: &[String]) -> String {
+    let fixed = ["time_s", "node", "state", "emcy"].map(String::from);
+    crate::csv::line(fixed.iter().chain(labels))
+}
+
+/// One `monitor --csv` row: `t` seconds since the start.
+fn csv_row(t: f64, node: u8, row: &Row, n: usize) -> String {
+    let mut cells = vec![
+        format!("{t:.3}"),
+        node.to_string(),
+        row.state.clone().unwrap_or_default(),
+        row.emcy.clone().unwrap_or_default(),
+    ];
+    cells.extend((0..n).map(|k| row.numbers.get(&k).cloned().unwrap_or_default()));
+    crate::csv::line(&cells)
 }
 
 fn format_value(w: Watch, dt: Option<DataType>, data: &[u8]) -> String {
@@ -90,7 +118,14 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
         by_pdo.insert(n, ks);
         callbacks.extend(cbs);
     }
-    let tty = std::io::stdout().is_terminal() && !g.json;
+    let tty = std::io::stdout().is_terminal() && !g.json && !a.csv;
+    if a.csv && g.json {
+        anyhow::bail!(crate::error::coded("usage", anyhow::anyhow!("--csv and --json: choose one")));
+    }
+    let t0 = tokio::time::Instant::now();
+    if a.csv {
+        outln!("{}", csv_header(&labels));
+    }
     let end = a.seconds.map(|s| crate::error::seconds("--seconds", s)).transpose()?;
     let end = end.map(|d| tokio::time::Instant::now() + d);
     let stop = crate::serve::wait_for_signal();
@@ -146,7 +181,9 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
                             None => m.sdo(node).upload(w.index, w.sub).await.ok(),
                         };
                         if let Some(d) = data {
-                            row.values.insert(k, format_value(*w, conn.dict.data_type(w.index, w.sub), &d));
+                            let dt = conn.dict.data_type(w.index, w.sub);
+                            row.values.insert(k, format_value(*w, dt, &d));
+                            row.numbers.insert(k, plain_value(dt, &d));
                         }
                     }
                 }
@@ -160,7 +197,11 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
         if !tty {
             for (node, row) in &rows {
                 if shown.get(node) != Some(row) {
-                    print_change(g.json, *node, row, shown.get(node), &labels);
+                    if a.csv {
+                        outln!("{}", csv_row(t0.elapsed().as_secs_f64(), *node, row, labels.len()));
+                    } else {
+                        print_change(g.json, *node, row, shown.get(node), &labels);
+                    }
                     shown.insert(*node, row.clone());
                 }
             }
@@ -265,5 +306,22 @@ fn print_change(json: bool, node: u8, row: &Row, before: Option<&Row>, labels: &
     }
     if !parts.is_empty() {
         outln!("node {node}: {}", parts.join(", "));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_rows_hold_numbers() {
+        let labels = vec!["Statusword".to_owned(), "Position actual value".to_owned()];
+        assert_eq!(csv_header(&labels), "time_s,node,state,emcy,Statusword,Position actual value");
+        let mut row = Row { state: Some("operational".into()), ..Row::default() };
+        row.numbers.insert(0, plain_value(Some(DataType::Unsigned16), &[0x37, 0x02]));
+        row.numbers.insert(1, plain_value(Some(DataType::Integer32), &[0xFE, 0xFF, 0xFF, 0xFF]));
+        assert_eq!(csv_row(1.5, 3, &row, 2), "1.500,3,operational,,567,-2");
+        row.emcy = Some("8611h Following error, too high (register 80h)".into());
+        assert!(csv_row(2.0, 3, &row, 2).contains(",\"8611h Following error, too high (register 80h)\","));
     }
 }

@@ -30,9 +30,15 @@ fn frame(text: &str) -> anyhow::Result<Frame> {
 pub async fn send(g: &Global, a: &SendArgs) -> anyhow::Result<()> {
     let frames = a.frames.iter().map(|s| frame(s)).collect::<anyhow::Result<Vec<_>>>()?;
     let conn = Conn::open(g).await?;
-    for f in &frames {
-        conn.master.send(*f).await.with_context(|| format!("sending {f}"))?;
-    }
+    let cyclic = match a.period {
+        Some(ms) => Some(crate::cyclic::send_cyclic(&conn, &frames, ms, a.count).await?),
+        None => {
+            for f in &frames {
+                conn.master.send(*f).await.with_context(|| format!("sending {f}"))?;
+            }
+            None
+        }
+    };
     conn.close().await?;
     let text: Vec<String> = frames
         .iter()
@@ -42,6 +48,26 @@ pub async fn send(g: &Global, a: &SendArgs) -> anyhow::Result<()> {
             s
         })
         .collect();
+    if let (Some(c), Some(ms)) = (cyclic, a.period) {
+        crate::output::emit(
+            g.json,
+            serde_json::json!({"sent": text, "rounds": c.rounds, "period_ms": ms, "late": c.late}),
+            || {
+                let late = if c.late > 0 {
+                    format!(" ({} late by a period or more)", c.late)
+                } else {
+                    String::new()
+                };
+                format!(
+                    "sent {} frame(s) {} time(s) every {ms} ms{late}: {}",
+                    text.len(),
+                    c.rounds,
+                    text.join(" ")
+                )
+            },
+        );
+        return Ok(());
+    }
     crate::output::emit(g.json, serde_json::json!({"sent": text}), || {
         format!("sent {} frame(s): {}", text.len(), text.join(" "))
     });

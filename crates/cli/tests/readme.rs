@@ -161,6 +161,9 @@ fn the_install_section_and_the_command_table_match_the_tool() {
         "demo",
         "serve",
         "slcan-pty",
+        "produce",
+        "gen",
+        "stats",
     ] {
         assert!(text.contains(&format!("`{cmd}")), "README table lists {cmd}");
         assert!(help.contains(&format!("  {cmd} ")), "`drivebus --help` lists {cmd}");
@@ -168,4 +171,26 @@ fn the_install_section_and_the_command_table_match_the_tool() {
     // The minimum Rust version the README names is the workspace's.
     let cargo = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../Cargo.toml")).unwrap();
     assert!(cargo.contains("rust-version = \"1.88\"") && text.contains("Rust 1.88"));
+}
+
+/// "Watching and loading a bus": filters, timestamps, capture, CSV,
+/// cyclic send, producers, generator and statistics, as written; the
+/// capture it writes is a pcapng of the SocketCAN link type.
+#[test]
+fn the_bus_traffic_section_runs_as_written() {
+    let text = readme();
+    let dir = tempfile::tempdir().unwrap();
+    let lines = block(&text, "## Watching and loading a bus");
+    for want in ["--filter", "-t delta", "--pcap", "--csv", "--period", "produce", "gen ", "stats"] {
+        assert!(lines.iter().any(|l| l.contains(want)), "the block shows {want}");
+    }
+    let ran = run_block(lines, common::free_port(), dir.path(), false);
+    assert_eq!(ran, 11);
+    let pcap = std::fs::read(dir.path().join("bus.pcapng")).unwrap();
+    // Section header block, then an interface description with link type 227.
+    assert_eq!(&pcap[..4], &[0x0A, 0x0D, 0x0D, 0x0A]);
+    let shb_len = u32::from_le_bytes([pcap[4], pcap[5], pcap[6], pcap[7]]) as usize;
+    assert_eq!(&pcap[shb_len..shb_len + 4], &[1, 0, 0, 0], "interface description block");
+    assert_eq!(u16::from_le_bytes([pcap[shb_len + 8], pcap[shb_len + 9]]), 227, "LINKTYPE_CAN_SOCKETCAN");
+    assert!(pcap.len() > shb_len + 100, "frames captured");
 }

@@ -93,7 +93,8 @@ fn sub_to_var(s: &SubObject, node_id: u8, with_value: bool) -> EdsVar {
     let mut v = EdsVar::new(s.name.to_string(), dt as u16, s.access);
     v.default = Some(if s.node_id_relative && dt.num_kind().is_some() {
         let base = drivebus_od::le_u64(&s.default).wrapping_sub(node_id as u64);
-        format!("$NODEID+0x{base:X}")
+        // The node-ID itself (100Bh) as a shipped EDS writes it.
+        if base == 0 { "$NODEID".into() } else { format!("$NODEID+0x{base:X}") }
     } else {
         format(dt, &s.default)
     });

@@ -6,7 +6,7 @@
 //! moves the clock to when the reply is back (plus a configurable master
 //! turnaround), so a run depends only on the frames sent.
 
-use crate::capture::{Capture, Direction};
+use crate::capture::{Capture, Direction, LinkType};
 use crate::clock::Clock;
 use drivebus_can::{Duration, Instant, earliest};
 use drivebus_esc::segment::{Device, Segment, SegmentConfig, SegmentReport};
@@ -94,7 +94,7 @@ impl Host {
 
     /// Records every frame in and out as pcapng into `w`.
     pub fn set_capture(&self, w: Box<dyn Write + Send>, interface: &str) -> std::io::Result<()> {
-        self.lock().capture = Some(Capture::new(w, interface)?);
+        self.lock().capture = Some(Capture::new(w, interface, LinkType::Ethernet)?);
         Ok(())
     }
 

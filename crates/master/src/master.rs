@@ -384,6 +384,26 @@ impl Master {
         })
     }
 
+    /// False when the transport cannot carry remote (RTR) frames
+    /// (socketcand): [`send`](Self::send) refuses them and none are ever
+    /// received.
+    pub fn carries_rtr(&self) -> bool {
+        match &self.inner.driver {
+            Driver::Sim { .. } => true,
+            Driver::Tokio { tx, .. } => tx.carries_rtr(),
+        }
+    }
+
+    /// The error frames and error counters the transport reports
+    /// (SocketCAN); `None` where it reports none (socketcand, slcan, the
+    /// virtual bus).
+    pub fn bus_errors(&self) -> Option<drivebus_transport::BusErrors> {
+        match &self.inner.driver {
+            Driver::Sim { .. } => None,
+            Driver::Tokio { tx, .. } => tx.bus_errors(),
+        }
+    }
+
     /// Waits until every frame queued so far has been written by the
     /// transport (see `CanTx::flush`): after this, a program may report
     /// success and exit.
@@ -606,6 +626,30 @@ impl Master {
     /// True while the SYNC producer runs.
     pub fn sync_running(&self) -> bool {
         self.inner.core().sync_running()
+    }
+
+    /// Produces this master's own heartbeat (`700h + node`, `[state]`, e.g.
+    /// 05h operational) every `period_ms`, the first one period from now
+    /// (CiA 301 §7.2.8.3.2.2); 0 stops it.
+    pub fn start_heartbeat(&self, node: u8, state: RemoteState, period_ms: u16) {
+        self.inner.with_core(|c| c.start_heartbeat(node & 0x7F, state.code(), period_ms));
+    }
+
+    /// Stops the heartbeat of [`start_heartbeat`](Self::start_heartbeat).
+    pub fn stop_heartbeat(&self) {
+        self.inner.with_core(|c| c.start_heartbeat(0, 0, 0));
+    }
+
+    /// Produces a TIME stamp (100h) every `period`, the first at once;
+    /// `unix_ms` is the Unix time (ms) now, the stamps follow the master's
+    /// clock from there (CiA 301 §7.2.6).
+    pub fn start_time(&self, period: Duration, unix_ms: u64) {
+        self.inner.with_core(|c| c.start_time(period, unix_ms));
+    }
+
+    /// Stops the TIME producer.
+    pub fn stop_time(&self) {
+        self.inner.with_core(|c| c.stop_time());
     }
 
     /// Sends a TIME stamp (100h) for `unix_ms` milliseconds since the Unix

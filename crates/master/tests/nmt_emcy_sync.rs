@@ -190,3 +190,47 @@ async fn time_stamp_frame() {
     })
     .await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn own_heartbeat_producer() {
+    bounded(async {
+        let hub = Hub::default();
+        let m = master(&hub);
+        let mut spy = hub.attach();
+        m.start_heartbeat(0x7E, RemoteState::Operational, 10);
+        let frames = collect(&mut spy, 0x77E, Duration::from_millis(200)).await;
+        assert!((5..=25).contains(&frames.len()), "{} heartbeats in 200 ms at 10 ms", frames.len());
+        assert!(frames.iter().all(|f| f.data() == [0x05]), "{frames:?}");
+        m.stop_heartbeat();
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        assert!(collect(&mut spy, 0x77E, Duration::from_millis(50)).await.is_empty());
+    })
+    .await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn time_producer_follows_the_master_clock() {
+    bounded(async {
+        let hub = Hub::default();
+        let m = master(&hub);
+        let mut spy = hub.attach();
+        let ms = 1_700_000_000_000u64;
+        m.start_time(Duration::from_millis(20), ms);
+        let frames = collect(&mut spy, 0x100, Duration::from_millis(200)).await;
+        assert!((4..=12).contains(&frames.len()), "{} TIME stamps in 200 ms at 20 ms", frames.len());
+        let stamps: Vec<u64> = frames
+            .iter()
+            .map(|f| drivebus_sync::TimeOfDay::from_bytes(f.data()).unwrap().to_unix_ms())
+            .collect();
+        assert!(stamps[0] >= ms && stamps[0] < ms + 50, "{stamps:?}");
+        // Each stamp is the time it was sent: rising, 20 ms apart on average
+        // (a late poll sends late, the next one is on schedule again).
+        assert!(stamps.windows(2).all(|w| w[1] > w[0]), "{stamps:?}");
+        let mean = (stamps[stamps.len() - 1] - stamps[0]) / (stamps.len() as u64 - 1);
+        assert!((18..=30).contains(&mean), "{mean} ms apart: {stamps:?}");
+        m.stop_time();
+        tokio::time::sleep(Duration::from_millis(30)).await;
+        assert!(collect(&mut spy, 0x100, Duration::from_millis(60)).await.is_empty());
+    })
+    .await;
+}

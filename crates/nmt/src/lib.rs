@@ -69,4 +69,5 @@ pub use consumer::ConsumerEntry;
 pub use error_behaviour::{ErrorAction, ErrorClass};
 pub use events::{EVENT_QUEUE_LEN, NmtEvent};
 pub use nmt::Nmt;
+pub use producer::HeartbeatProducer;
 pub use state::{CommandSet, InitSubState, NmtCommand, NmtState, RemoteState, Service};

@@ -8,7 +8,7 @@ use crate::consumer::{self, Consumer, ConsumerEntry};
 use crate::error_behaviour::{self, ErrorAction, ErrorBehaviour, ErrorClass};
 use crate::events::{EventQueue, NmtEvent};
 use crate::guarding::Guarding;
-use crate::producer::Producer;
+use crate::producer::HeartbeatProducer;
 use crate::state::{InitSubState, NmtCommand, NmtState, RemoteState};
 use drivebus_can::{Frame, Instant, TxSink, earliest};
 use drivebus_od::{ObjectDictionary, SdoAbort};
@@ -28,7 +28,7 @@ pub struct Nmt {
     config: NmtConfig,
     node_id: u8,
     state: NmtState,
-    producer: Producer,
+    producer: HeartbeatProducer,
     consumer: Consumer,
     guarding: Guarding,
     errors: ErrorBehaviour,
@@ -42,7 +42,7 @@ impl Nmt {
             node_id: config.node_id,
             config,
             state: NmtState::Initialisation(InitSubState::ResetApplication),
-            producer: Producer::default(),
+            producer: HeartbeatProducer::default(),
             consumer: Consumer::default(),
             guarding: Guarding::default(),
             errors: ErrorBehaviour::default(),

@@ -2,7 +2,8 @@
 
 use drivebus_can::{Duration, Frame, Instant, TxSink};
 
-/// Sends `700h + node-ID, [state]` every 1017h milliseconds.
+/// Sends `700h + node-ID, [state]` every 1017h milliseconds (a device's
+/// [`Nmt`](crate::Nmt), and a master or tool that produces a heartbeat).
 ///
 /// Timing decisions (CiA 301 leaves them open):
 /// - the first heartbeat goes one period after the boot-up message, and one
@@ -14,41 +15,40 @@ use drivebus_can::{Duration, Frame, Instant, TxSink};
 /// - a state change does not send an extra heartbeat: the next periodic one
 ///   carries the new state.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Producer {
+pub struct HeartbeatProducer {
     period_ms: u16,
     next: Option<Instant>,
 }
 
-impl Producer {
+impl HeartbeatProducer {
     /// The configured period (0 = off).
-    pub(crate) fn period_ms(&self) -> u16 {
+    pub fn period_ms(&self) -> u16 {
         self.period_ms
     }
 
     /// Take a new 1017h value; if `running`, restart the timer at `now`.
-    pub(crate) fn set_period(&mut self, ms: u16, now: Instant, running: bool) {
+    pub fn set_period(&mut self, ms: u16, now: Instant, running: bool) {
         self.period_ms = ms;
         self.next = if running && ms != 0 { Some(now + Duration::from_millis(ms.into())) } else { None };
     }
 
+    /// The next heartbeat's time, when running.
+    pub fn next(&self) -> Option<Instant> {
+        self.next
+    }
+
     /// Start after the boot-up message sent at `now`.
-    pub(crate) fn start(&mut self, now: Instant) {
+    pub fn start(&mut self, now: Instant) {
         self.set_period(self.period_ms, now, true);
     }
 
     /// Stop (entering Initialisation).
-    pub(crate) fn stop(&mut self) {
+    pub fn stop(&mut self) {
         self.next = None;
     }
 
     /// Send the heartbeat if due; returns the next deadline.
-    pub(crate) fn poll(
-        &mut self,
-        now: Instant,
-        id: u16,
-        state: u8,
-        out: &mut impl TxSink,
-    ) -> Option<Instant> {
+    pub fn poll(&mut self, now: Instant, id: u16, state: u8, out: &mut impl TxSink) -> Option<Instant> {
         let due = self.next?;
         if now < due {
             return Some(due);
@@ -70,7 +70,7 @@ mod tests {
 
     #[test]
     fn late_poll_does_not_burst() {
-        let mut p = Producer::default();
+        let mut p = HeartbeatProducer::default();
         let mut out = Vec::new();
         p.set_period(10, Instant::ZERO, true);
         assert_eq!(p.poll(Instant::from_millis(9), 0x701, 5, &mut out), Some(Instant::from_millis(10)));

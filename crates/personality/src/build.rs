@@ -284,6 +284,13 @@ pub trait Behaviour: Send {
         let _ = (cx, od, event);
     }
 
+    /// A SYNC was received (after the drive took its cyclic set-points):
+    /// `cx.now` is its reception time (a SYNC supervision of the device's
+    /// own, LAM DDS6 3080h).
+    fn on_sync(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let _ = (cx, od);
+    }
+
     /// After the drive stepped and published: patch live values (statusword
     /// bits 8, 9, 14, 15; 6061h of a manufacturer mode).
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
@@ -432,6 +439,26 @@ pub fn set_default(od: &mut ObjectDictionary, index: u16, sub: u8, v: &Value) {
         let bytes = od.bytes(r).to_vec();
         if let Some(s) = od.get_mut(index, sub) {
             s.default = bytes;
+        }
+    }
+}
+
+/// The objects `hooked` reach the behaviour (build step 7): a plain one
+/// becomes the behaviour's; one a service or the drive owns is watched
+/// (veto first); their reads reach it too.
+fn hook(od: &mut ObjectDictionary, hooked: &[u16]) {
+    for &index in hooked {
+        let Some(o) = od.object(index) else { continue };
+        let subs: Vec<u8> = o.subs().iter().map(|s| s.sub).collect();
+        for s in subs {
+            if let Some(e) = od.get_mut(index, s) {
+                if e.owner == Owner::NONE {
+                    e.owner = BEHAVIOUR;
+                } else if !e.owner.is_app() {
+                    e.watched = true;
+                }
+                e.live = true;
+            }
         }
     }
 }
@@ -631,27 +658,13 @@ pub fn build_full(
             apply_pdo(od, &pdo_cfg, PdoKind::Tpdo, n as u16, d, node_id)
                 .map_err(|a| BuildError::Pdo(PdoKind::Tpdo, n as u16, a))?;
         }
-        for &index in behaviour.hooked_objects() {
-            if let Some(o) = od.object(index) {
-                let subs: Vec<u8> = o.subs().iter().map(|s| s.sub).collect();
-                for s in subs {
-                    if let Some(e) = od.get_mut(index, s) {
-                        // A plain object becomes the behaviour's; one a
-                        // service or the drive owns is watched (veto first).
-                        if e.owner == Owner::NONE {
-                            e.owner = BEHAVIOUR;
-                        } else if !e.owner.is_app() {
-                            e.watched = true;
-                        }
-                        e.live = true;
-                    }
-                }
-            }
-        }
     }
     behaviour.finish(&mut node);
     let keep: &[u16] = if node.config().eds_object { &[0x1021, 0x1022] } else { &[] };
     conform::conform(node.od_mut(), &mut drive, &described, keep);
+    // After `conform`: an object it replaced by the EDS's (SSD 630 6080h,
+    // 6049h) is hooked too.
+    hook(node.od_mut(), behaviour.hooked_objects());
     // Re-resolve every service's handles after the edits above.
     if let Some(o) = node.od().object(0x1000).cloned() {
         node.insert_object(o);

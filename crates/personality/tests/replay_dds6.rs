@@ -95,6 +95,11 @@ fn ex4_profile_velocity_by_pdo() {
 /// captured on an axis already homed (its first statuswords show 1633h),
 /// still takes the ~515 ms.
 fn closed_loop(r: &mut Rig) {
+    // §6.4.5: "besides activating the Encoder feedback, you must also
+    // configure the features of the encoder" (2330h:01 index + supply +
+    // 1 µs filter, 2330h:02 1000 pulses/rev); without it 63A0h/0704h.
+    r.ex("60D#2F 30 23 01 79 00 00 00", &["58D#60 30 23 01 00 00 00 00"]);
+    r.ex("60D#2B 30 23 02 E8 03 00 00", &["58D#60 30 23 02 00 00 00 00"]);
     r.ex("60D#2F 10 24 01 09 00 00 00", &["58D#60 10 24 01 00 00 00 00"]);
 }
 

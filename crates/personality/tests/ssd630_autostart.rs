@@ -98,14 +98,15 @@ fn unsaved_2018h_is_lost_at_power_on() {
 fn reset_node_applies_the_stored_value() {
     let (mut r, _) = power_on(configured(1, true));
     r.take();
-    r.exchange("000#81 01", &["701#00", "181#40 02", "281#40 02 01"]);
+    // §9 transition 0: the "no error" EMCY after the initialisation.
+    r.exchange("000#81 01", &["701#00", "081#00 00 00 56 38 31 39 64", "181#40 02", "281#40 02 01"]);
     assert_operational(&mut r);
     r.exchange("000#82 01", &["701#00"]);
     assert_pre_operational(&mut r);
     // Written but not saved: Reset Node reloads the stored value.
     let (mut r, _) = Rig::new(Profile::Ssd630, 1);
     r.exchange("601#2B 18 20 00 01 00 00 00", &["581#60 18 20 00 00 00 00 00"]);
-    r.exchange("000#81 01", &["701#00"]);
+    r.exchange("000#81 01", &["701#00", "081#00 00 00 56 38 31 39 64"]);
     assert_eq!(r.read_u32(1, 0x2018, 0), 0);
     assert_pre_operational(&mut r);
 }

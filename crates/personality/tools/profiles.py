@@ -174,7 +174,13 @@ PROFILES["ssd630"]["overrides"] = {
     (0x1008, 0): ov(default="631_402", why="device name of a 631 from the segmented-upload example", sec="14.7"),
     (0x1010, 1): ov(default="1", why="read value bit 0 = 1 (saves on command)", sec="7; 11"),
     (0x1011, 1): ov(default="1", why="read value bit 0 = 1 (restores on command); the 'load' signature bytes are misprinted (73h 61h 61h 64h), 0x64616F6C is what the node accepts", sec="7; 11"),
-    (0x60C2, 2): ov(type=I8, default="-3", why="ip time index: table gives UNSIGNED8; CiA 402 defines INTEGER8 (negative exponents); INTEGER8 chosen. No default given; drivebus's working value -3 (with sub 1 = 1: 1 ms) written", sec="12"),
+    (0x60C2, 0): ov(code=9, why="§4: RECORD (2 elements), as CiA 402 defines it", sec="4; 12"),
+    (0x60C2, 2): ov(type=U8, default="0xFD", why="ip time index: UNSIGNED8 as §12 prints it (written with 2Fh); the drive reads the byte as the signed exponent of CiA 402 (FDh = 10^-3, the byte §14.13's 1 ms cycle needs). No default given; drivebus's working value FDh (with sub 1 = 1: 1 ms) written", sec="12"),
+    (0x4804, 1): ov(default="$NODEID", why="CAN node number (ro, 1..127): the node-ID the drive runs with (as 100Bh)", sec="1.4; 1.5; 13"),
+    (0x4804, 5): ov(default="4", why="no default given; a drive answering CiA 402 runs configuration mode 4 'CANopen configuration DS402' (§1.4)", sec="1.4; 13"),
+    (0x1004, 0): ov(default="2", why="§11 prints sub 0 'Unsigned 32 Number of PDO's' (DS301 up to v4.01); an EDS cannot say so (CiA 306: sub 0 of an ARRAY is UNSIGNED8, Lely's dcfchk refuses anything else): UNSIGNED8, the highest sub-index 2; the counts are in subs 1 and 2", sec="4; 11"),
+    (0x1004, 1): ov(default="0x00040004", why="no value given; every PDO can be synchronous (§7: transmission type 1 on PDO1 in §14.12): 4 RPDOs + 4 TPDOs, coded as DS301 v4.01 codes 1004h (one direction per 16 bits)", sec="7; 11; 14.12"),
+    (0x1004, 2): ov(default="0x00040004", why="no value given; every PDO can be asynchronous (types 254/255, §7): 4 RPDOs + 4 TPDOs, coded as sub 1", sec="7; 11"),
     (0x6502, 0): ov(default="0x00000067", why="value not given; derived from the evidenced modes pp, vl (6042h-6048h), pv, hm, ip = bits 0,1,2,5,6", sec="4; 12; 14"),
     (0x100B, 0): ov(default="$NODEID", why="node-ID: the drive reads its own node-ID (§14.6 reads 4 on node 4; the table's 1 is the lowest), $NODEID written", sec="4; 11; 14.6"),
     (0x6080, 1): ov(default="3000", why="no default given; the drive's power-on limit, 3000 min^-1 (= 607Fh), for both directions", sec="12"),
@@ -203,13 +209,11 @@ for (i, s_), v, what in (
         ((0x60FE, 2), "0xFFFF0000", "digital outputs bit mask: the manufacturer outputs (bits 16-31) may be set"),
 ):
     PROFILES["ssd630"]["overrides"][(i, s_)] = ov(default=v, why=f"no default given; drivebus's working value {v}: {what}", sec="4; 12")
-# 6049h: printed as a second "6048h" in §4, no own entry in §12, which says
-# deceleration = acceleration in velocity mode: a record like 6048h.
+# 6049h: printed as a second "6048h" in §4 (VAR unsigned 32), no own entry
+# in §12, which says deceleration = acceleration in velocity mode.
 PROFILES["ssd630"]["overrides"].update({
-    (0x6049, 0): ov(name="number of entries", type=U8, access="ro", default="2", code=9, obj_name="vl velocity deceleration",
-                    why="§4 prints 6049h as a second '6048h' (VAR); §12: deceleration = acceleration in velocity mode, so a record like 6048h (sub 0 = 2)", sec="4; 12"),
-    (0x6049, 1): ov(name="delta speed", type=U32, access="rw", default="6000", why="no default given; drivebus's working value 6000 min^-1 (as 6048h:1)", sec="4; 12"),
-    (0x6049, 2): ov(name="delta time", type=U16, access="rw", default="1", why="no default given; drivebus's working value 1 s (as 6048h:2)", sec="4; 12"),
+    (0x6049, 0): ov(name="vl velocity deceleration", type=U32, access="rw", default="6000", code=7, obj_name="vl velocity deceleration",
+                    why="§4 prints 6049h as a second '6048h' VAR unsigned 32 (rw like 6048h); §12: deceleration = acceleration in velocity mode (6048h decides). No default given; drivebus's working value 6000 (as 6048h:1)", sec="4; 12"),
 })
 for i in range(0x2014, 0x2018):
     for s in (1, 2):
@@ -235,7 +239,8 @@ for i in (0x1010, 0x1011):
         PROFILES["dds6"]["overrides"][(i, s)] = ov(default="1", why="no read value given; 1 (= acts on command, CiA 301 §7.5.2.13/14) written", sec="6.3.10; 6.3.11")
 for i in (0x3210, 0x3230, 0x3260, 0x3261, 0x3450, 0x3470):
     PROFILES["dds6"]["overrides"][(i, 0)] = ov(type=U8, access="const", why="sub 0 type/access lost; UNSIGNED8 const", sec="6.4")
-PROFILES["dds6"]["overrides"][(0x2360, 0)] = ov(default="5", why="sub 0 printed 06h but five sub-indices are described; 5 written", sec="6.4.3")
+PROFILES["dds6"]["overrides"][(0x2360, 0)] = ov(default="6", why="sub 0 printed 06h with sub-indices 01h-05h described (04h/05h 'Reserved, do not use'); 6 as printed, with a reserved 06h like 04h/05h", sec="6.4.3")
+PROFILES["dds6"]["overrides"][(0x2360, 6)] = ov(name="Reserved", type=U32, access="rw", default="0", why="not described; the highest sub-index 06h of sub 0 as printed, reserved like 04h/05h (u32 rw)", sec="6.4.3")
 PROFILES["dds6"]["overrides"][(0x2810, 0)] = ov(default="13", why="sub 0 printed 08h but sub-indices up to 0Dh are described; 13 written", sec="6.4.8")
 PROFILES["dds6"]["overrides"][(0x6061, 0)] = ov(default="1", why="no default given; the display of the power-on mode 6060h = 1 (pp, §6.5.4)", sec="6.5.4; 6.5.5")
 PROFILES["dds6"]["overrides"][(0x6087, 0)] = ov(default="10000", why="no default given; 10000 (1000 %/s) written, a 0 would never ramp", sec="6.5.29")

@@ -8,6 +8,7 @@ use drivebus_can::Frame;
 use tokio::sync::{broadcast, mpsc, oneshot};
 
 use crate::hub::{Hub, HubFrame, ParticipantId};
+use crate::stats::BusErrors;
 
 /// Frames buffered towards the user before the transport counts an overrun.
 /// Deep enough for bursts (an SDO block is 127 frames); a user that stops
@@ -152,6 +153,15 @@ impl CanTx {
         }
     }
 
+    /// The error frames and error counters the transport reports (SocketCAN
+    /// error frames); `None` for transports that report none.
+    pub fn bus_errors(&self) -> Option<BusErrors> {
+        match &self.0 {
+            TxInner::Hub { .. } => None,
+            TxInner::Chan { status, .. } => status.errors.lock().ok().and_then(|e| e.clone()),
+        }
+    }
+
     /// Waits until every frame this transport was given before the call
     /// has been written to the socket or device, so that a program may
     /// report success and exit without losing it. On the in-process hub
@@ -231,6 +241,8 @@ pub(crate) fn hub_handle(hub: Hub, id: ParticipantId, rx: broadcast::Receiver<Hu
 pub(crate) struct LinkStatus {
     reason: Mutex<Option<String>>,
     overruns: AtomicU64,
+    /// Set by transports that report bus errors (SocketCAN).
+    errors: Mutex<Option<BusErrors>>,
 }
 
 impl LinkStatus {
@@ -262,6 +274,20 @@ impl Uplink {
             if n.is_power_of_two() {
                 tracing::warn!(lost = n + 1, "receiver not read fast enough: frames dropped");
             }
+        }
+    }
+    /// This transport reports bus errors: [`CanTx::bus_errors`] is `Some`
+    /// from now on.
+    pub fn reports_errors(&self) {
+        if let Ok(mut e) = self.status.errors.lock() {
+            e.get_or_insert_with(BusErrors::default);
+        }
+    }
+    /// Counts one SocketCAN error frame (`class`: its `CAN_ERR_*` bits).
+    #[cfg_attr(not(target_os = "linux"), allow(dead_code))] // only SocketCAN reports them
+    pub fn error_frame(&self, class: u32, data: &[u8]) {
+        if let Ok(mut e) = self.status.errors.lock() {
+            e.get_or_insert_with(BusErrors::default).record_socketcan(class, data);
         }
     }
     /// Records why the link stopped; the user's next call reports it.
@@ -300,4 +326,26 @@ pub(crate) fn link(rtr: bool) -> (CanBus, LinkEnd) {
         rx: CanRx(RxInner::Chan { rx, status: status.clone() }),
     };
     (bus, LinkEnd { from_user, up: Uplink { to_user, status } })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A transport that reports bus errors (SocketCAN) makes them visible
+    /// on every sender; the others report none.
+    #[tokio::test]
+    async fn bus_errors_reach_the_senders() {
+        let (bus, end) = link(true);
+        let tx = bus.sender();
+        assert_eq!(tx.bus_errors(), None);
+        end.up.reports_errors();
+        assert_eq!(tx.bus_errors(), Some(BusErrors::default()));
+        end.up.error_frame(0x0040, &[0; 8]);
+        end.up.error_frame(0x0204, &[0, 0x08, 0, 0, 0, 0, 128, 0]);
+        let e = bus.sender().bus_errors().unwrap();
+        assert_eq!((e.error_frames, e.bus_off, e.tx_errors, e.rx_errors), (2, 1, Some(128), Some(0)));
+        let hub = Hub::default();
+        assert_eq!(hub.attach().sender().bus_errors(), None);
+    }
 }

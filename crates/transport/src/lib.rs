@@ -9,7 +9,7 @@
 //! | `socketcand://HOST[:PORT]/CHANNEL` | socketcand client (TCP, ASCII, default port 29536) |
 //! | `slcan:///dev/ttyUSB0?bitrate=1000000` | slcan (Lawicel) adapter on a serial device |
 //! | `slcan://tcp:HOST:PORT?bitrate=…` | slcan over a TCP byte stream (pyserial `socket://` style) |
-//! | `socketcan://can0` | Linux SocketCAN (cargo feature `socketcan`, Linux only) |
+//! | `socketcan://can0` | Linux SocketCAN (Linux builds; needs AF_CAN at run time) |
 //! | `virtual`, `virtual://NAME` | in-process [`Hub`] shared by every handle opened on NAME |
 //!
 //! Servers that let outside programs join a bus:
@@ -27,15 +27,17 @@ mod handle;
 pub mod host;
 pub mod hub;
 pub mod slcan;
-#[cfg(all(feature = "socketcan", target_os = "linux"))]
+#[cfg(target_os = "linux")]
 pub mod socketcan;
 pub mod socketcand;
+pub mod stats;
 mod url;
 
 pub use drivebus_can::{CanId, Frame};
 pub use error::{Cause, TransportError};
 pub use handle::{CanBus, CanRx, CanTx, TrySendError};
 pub use hub::{FaultRule, FaultVerdict, Hub, HubConfig};
+pub use stats::{BusErrors, LoadMeter, LoadReport};
 pub use url::{BusUrl, SlcanPort};
 
 /// Opens the bus named by `url` (see [`BusUrl`] for the grammar).
@@ -61,14 +63,11 @@ pub async fn open_parsed(url: &str, parsed: &BusUrl) -> Result<CanBus, Transport
                 slcan::connect_tcp((host.as_str(), *port), *bitrate).await.map_err(io)
             }
         },
-        #[cfg(all(feature = "socketcan", target_os = "linux"))]
+        #[cfg(target_os = "linux")]
         BusUrl::SocketCan { interface } => socketcan::open(interface).map_err(io),
-        #[cfg(not(all(feature = "socketcan", target_os = "linux")))]
-        BusUrl::SocketCan { .. } => Err(TransportError::new(
-            url,
-            Cause::Unsupported(
-                "this build has no SocketCAN support (Linux only, cargo feature `socketcan`)".into(),
-            ),
-        )),
+        #[cfg(not(target_os = "linux"))]
+        BusUrl::SocketCan { .. } => {
+            Err(TransportError::new(url, Cause::Unsupported("SocketCAN is Linux only".into())))
+        }
     }
 }

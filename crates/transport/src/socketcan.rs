@@ -1,11 +1,12 @@
 //! Linux SocketCAN (`socketcan://can0`), through the `socketcan` crate's
-//! tokio socket. Error frames are not passed up.
+//! tokio socket. Error frames are counted (`CanTx::bus_errors`), not
+//! passed up as frames.
 
 use std::io;
 
 use drivebus_can::{CanId, Frame};
 use socketcan::tokio::CanSocket;
-use socketcan::{CanFrame, EmbeddedFrame, ExtendedId, Id, StandardId};
+use socketcan::{CanFrame, EmbeddedFrame, ExtendedId, Id, SocketOptions, StandardId};
 
 use crate::handle::{CanBus, LinkEnd, Out, link};
 
@@ -14,7 +15,10 @@ use crate::handle::{CanBus, LinkEnd, Out, link};
 /// kernels without SocketCAN and ENODEV for an unknown interface.
 pub fn open(interface: &str) -> io::Result<CanBus> {
     let sock = CanSocket::open(interface)?;
+    // Error frames (bus errors, counters, bus-off) for the statistics.
+    sock.set_error_filter_accept_all()?;
     let (bus, end) = link(true);
+    end.up.reports_errors();
     tokio::spawn(run(sock, end));
     Ok(bus)
 }
@@ -47,6 +51,7 @@ async fn run(sock: CanSocket, mut end: LinkEnd) {
     loop {
         tokio::select! {
             r = sock.read_frame() => match r {
+                Ok(CanFrame::Error(e)) => end.up.error_frame(e.error_bits(), EmbeddedFrame::data(&e)),
                 Ok(f) => {
                     if let Some(f) = from_socketcan(&f) {
                         end.deliver(f);

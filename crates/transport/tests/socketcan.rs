@@ -1,5 +1,5 @@
 //! SocketCAN: runs only where the kernel has AF_CAN and a `vcan0`.
-#![cfg(all(feature = "socketcan", target_os = "linux"))]
+#![cfg(target_os = "linux")]
 
 use std::io::{self, Write};
 

@@ -77,6 +77,21 @@ impl Drive {
                 self.emcy.push(EmcyRequest::Raise(c));
             }
         }
+        if out.took(4) || out.took(16) {
+            // Enabled again: the errors that only stopped the motor
+            // (FaultAction::QuickStop) are over; a new stop reports anew.
+            let actions = &self.fault_actions;
+            let stopped =
+                |c: &u16| actions.iter().any(|&(r, a)| r == *c && a == super::FaultAction::QuickStop);
+            let emcy = &mut self.emcy;
+            self.raised.retain(|c| {
+                let keep = !stopped(c);
+                if !keep {
+                    emcy.push(EmcyRequest::Clear(*c));
+                }
+                keep
+            });
+        }
         if self.sm.drive_function() != DriveFunction::Enabled {
             // Target reached / acknowledge belong to the running mode.
             self.status_bits &= !(1 << 10 | 1 << 12);
@@ -103,6 +118,7 @@ impl Drive {
         self.sup.force_following_error = false;
         self.sup.pending_fault = None;
         self.sup.sync_lost = false;
+        self.error_warning = false;
         for c in self.raised.drain(..) {
             self.emcy.push(EmcyRequest::Clear(c));
         }
@@ -337,6 +353,9 @@ impl Drive {
             DriveFunction::Enabled => self.mode_step(),
             DriveFunction::Stopping(r) => self.stop_step(r),
             DriveFunction::Holding => {
+                // CiA 402-2 statusword bit 10: with quick stop option codes
+                // 5–8 "target reached" is set once the drive has stopped.
+                self.status_bits |= 1 << 10;
                 self.dem.vel = 0.0;
                 self.position_command(self.dem.pos, 0.0, 0.0)
             }
@@ -769,6 +788,24 @@ impl Drive {
                 let out = self.sm.fault_with(c, r);
                 self.after_transition(out);
             }
+            super::FaultAction::Warning | super::FaultAction::QuickStop => {
+                let stops = a == super::FaultAction::QuickStop && self.sm.state() == State::OperationEnabled;
+                // Each stop it causes is reported; a condition that stays
+                // is reported once (until a fault reset).
+                if stops || !self.raised.contains(&c) {
+                    if !self.raised.contains(&c) {
+                        self.raised.push(c);
+                    }
+                    self.emcy.push(EmcyRequest::Raise(c));
+                }
+                self.error_warning |= a == super::FaultAction::Warning;
+                if stops {
+                    self.sup.fe_timer = 0.0;
+                    self.sup.force_following_error = false;
+                    let out = self.sm.quick_stop();
+                    self.after_transition(out);
+                }
+            }
             super::FaultAction::NoAction => {
                 // Signalled once; the latch is cleared so that the fault
                 // comes back only while its condition lasts.
@@ -830,7 +867,8 @@ impl Drive {
     /// The statusword as the drive computes it.
     pub(crate) fn base_statusword(&self) -> u16 {
         let mut sw = self.sm.statusword();
-        sw |= u16::from(self.warning || self.mode_warning || self.command_error.is_some()) << 7;
+        let warned = self.warning || self.mode_warning || self.error_warning;
+        sw |= u16::from(warned || self.command_error.is_some()) << 7;
         sw |= u16::from(self.cfg.remote) << 9;
         if matches!(self.sm.state(), State::OperationEnabled | State::QuickStopActive) {
             sw |= self.status_bits & 0x3C00;

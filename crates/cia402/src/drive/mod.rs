@@ -83,6 +83,13 @@ pub enum Injection {
 pub enum FaultAction {
     /// Signal it (EMCY while the condition lasts) and go on.
     NoAction,
+    /// EMCY and statusword bit 7 (warning) until a fault reset; the motion
+    /// goes on (LAM DDS6 §5 class 0).
+    Warning,
+    /// EMCY and a quick stop from Operation enabled (605Ah decides where it
+    /// ends), no fault; over when Operation enabled is entered again or at
+    /// a fault reset (LAM DDS6 §5 class 2).
+    QuickStop,
     /// Fault with this reaction.
     React(crate::state_machine::Reaction),
 }
@@ -200,6 +207,9 @@ pub struct Drive {
     /// [`DriveConfig::scurve_forbids_change_immediately`]: its EMCY code,
     /// latched (statusword bit 7) until a fault reset.
     command_error: Option<u16>,
+    /// A fault with [`FaultAction::Warning`] was raised (statusword bit 7
+    /// until a fault reset).
+    error_warning: bool,
     /// Who commands the holding brake.
     brake_control: BrakeControl,
     /// Output lines a personality's objects set.
@@ -284,6 +294,7 @@ impl Drive {
             mode_emcy: Vec::with_capacity(4),
             jerk: cfg.profile_jerk,
             command_error: None,
+            error_warning: false,
             brake_control: BrakeControl::Auto,
             app_outputs: 0,
             cfg,

@@ -16,10 +16,11 @@ use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::{BLUE, GREEN, MAGENTA, RED};
+use std::collections::VecDeque;
 
 use crate::args::{DemoArgs, Global};
 use crate::output::outln;
-use crate::plot::{Panel, Phase, Sample, plot_panels};
+use crate::plot::{Panel, Phase, Sample, Style, plot_panels};
 
 /// The process-data cycle and SYNC0 period.
 const CYCLE: Duration = Duration::from_millis(1);
@@ -29,18 +30,35 @@ const MOVE: i32 = 4000;
 const MOVE_VELOCITY: u32 = 200_000;
 /// The csp sine: half a turn, 1 Hz.
 const AMPLITUDE: f64 = 1000.0;
+/// The velocity is 6064h differentiated over this many cycles: over one,
+/// the 1-count steps of the encoder make a comb of 0 and ±1000 counts/s.
+const VELOCITY_WINDOW: usize = 10;
 
 /// The demo's plot file unless `--out` says otherwise.
 pub const DEFAULT_OUT: &str = "drivebus-demo-ethercat.svg";
 
 const PANELS: [Panel; 3] = [
-    (
-        "iPOS (slave 1) position",
-        "counts",
-        &[("actual 6064h", BLUE, |x| x.position), ("demand (6064h + 60F4h)", RED, |x| x.demand)],
-    ),
-    ("iPOS velocity", "counts/s", &[("from 6064h per cycle", GREEN, |x| x.velocity)]),
-    ("iPOS following error", "counts", &[("actual 60F4h", MAGENTA, |x| x.following)]),
+    Panel {
+        title: "iPOS (slave 1) position",
+        unit: "counts",
+        node: 1,
+        series: &[
+            ("demand (6064h + 60F4h)", RED, Style::Demand, |x| x.demand),
+            ("actual 6064h", BLUE, Style::Actual, |x| x.position),
+        ],
+    },
+    Panel {
+        title: "iPOS velocity",
+        unit: "counts/s",
+        node: 1,
+        series: &[("from 6064h over 10 ms", GREEN, Style::Actual, |x| x.velocity)],
+    },
+    Panel {
+        title: "iPOS following error",
+        unit: "counts",
+        node: 1,
+        series: &[("actual 60F4h", MAGENTA, Style::Actual, |x| x.following)],
+    },
 ];
 
 /// What the demo measured.
@@ -82,12 +100,21 @@ pub async fn run(g: &Global, a: &DemoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The csp set-point of cycle `k`: A·(1 − cos 2πt) starts (and, after whole
+/// seconds, ends) at rest, where A·sin 2πt would start with a step to 2πA
+/// counts/s that the drive can only follow with a following-error spike.
+fn sine_target(base: f64, k: u64) -> i32 {
+    let t = k as f64 * CYCLE.as_secs_f64();
+    (base + AMPLITUDE * (1.0 - (std::f64::consts::TAU * t).cos())).round() as i32
+}
+
 /// Samples with their time on the host's clock.
 struct Trace {
     clock: Clock,
     t0: Instant,
     samples: Vec<Sample>,
-    last: Option<(f64, i32)>,
+    /// The last `VELOCITY_WINDOW` + 1 (time, position) pairs.
+    last: VecDeque<(f64, i32)>,
 }
 
 impl Trace {
@@ -99,11 +126,14 @@ impl Trace {
         let t = self.t();
         let following = f64::from(fb.following.unwrap_or(0));
         let position = f64::from(fb.position);
-        let velocity = match self.last {
-            Some((t1, p1)) if t > t1 => (position - f64::from(p1)) / (t - t1),
+        self.last.push_back((t, fb.position));
+        if self.last.len() > VELOCITY_WINDOW + 1 {
+            self.last.pop_front();
+        }
+        let velocity = match self.last.front() {
+            Some(&(t1, p1)) if t > t1 => (position - f64::from(p1)) / (t - t1),
             _ => 0.0,
         };
-        self.last = Some((t, fb.position));
         self.samples.push(Sample {
             t,
             demand: position + following,
@@ -125,7 +155,8 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         ProgressStyle::with_template("{spinner} {msg}").unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
     let mut r = Report::default();
-    let mut trace = Trace { clock: clock.clone(), t0: clock.now(), samples: Vec::new(), last: None };
+    let mut trace =
+        Trace { clock: clock.clone(), t0: clock.now(), samples: Vec::new(), last: VecDeque::new() };
     let start = clock.now();
     block_on(async {
         pb.set_message("scan: SII and 1018h over CoE");
@@ -144,7 +175,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         let h0 = trace.t();
         r.homing_position = d.home(35, Duration::from_secs(10), |fb| trace.push(fb)).await?;
         r.homing = trace.t() - h0;
-        r.phases.push(Phase { name: "homing", start: h0, end: trace.t() });
+        r.phases.push(Phase { name: "homing", node: 1, start: h0, end: trace.t() });
 
         pb.set_message("profile position move");
         let m0 = trace.t();
@@ -157,17 +188,14 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
             d.cycle().await?;
             trace.push(&d.fb);
         }
-        r.phases.push(Phase { name: "move", start: m0, end: trace.t() });
+        r.phases.push(Phase { name: "move", node: 1, start: m0, end: trace.t() });
 
         pb.set_message("CSP sine");
         let s0 = trace.t();
         let i0 = trace.samples.len();
         let base = f64::from(d.fb.position);
         let cycles = (sine_seconds * 1000.0).round() as u64;
-        let targets = (0..cycles).map(move |k| {
-            let t = k as f64 / 1000.0;
-            (base + AMPLITUDE * (std::f64::consts::TAU * t).sin()).round() as i32
-        });
+        let targets = (0..cycles).map(move |k| sine_target(base, k));
         r.csp_cycles = d.csp(targets, |_, fb| trace.push(fb)).await?;
         for _ in 0..100 {
             d.cycle().await?;
@@ -177,7 +205,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         r.csp_ferr_max = csp.iter().map(|s| s.following.abs()).fold(0.0, f64::max);
         r.csp_ferr_rms =
             (csp.iter().map(|s| s.following * s.following).sum::<f64>() / csp.len().max(1) as f64).sqrt();
-        r.phases.push(Phase { name: "CSP sine", start: s0, end: trace.t() });
+        r.phases.push(Phase { name: "CSP sine", node: 1, start: s0, end: trace.t() });
         r.cycles = d.cycles;
         r.bad_wkc = d.bad_wkc;
         d.stop().await?;
@@ -255,4 +283,41 @@ fn print_summary(g: &Global, r: &Report, out: &std::path::Path) {
     outln!("  {:<44} {:.3} s", time, r.sim_seconds);
     outln!();
     outln!("plot: {} ({} samples from the process data)", out.display(), r.samples.len());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The recorded run: the sine starts at rest (no velocity step, no
+    /// following-error spike), and the velocity trace is no comb.
+    #[test]
+    fn the_sine_starts_smoothly_and_the_velocity_is_readable() {
+        let r = simulate(false, 1.0, false).unwrap();
+        let sine = r.phases.iter().find(|p| p.name == "CSP sine").unwrap();
+        let csp: Vec<&Sample> = r.samples.iter().filter(|s| s.t >= sine.start && s.t <= sine.end).collect();
+        assert!(csp.len() > 900, "{}", csp.len());
+        // The first 10 ms: A·(1 − cos 2πt) reaches 2πA·sin(2π·0.01) ≈ 390
+        // counts/s (A·sin 2πt would start at 2πA ≈ 6300 counts/s).
+        let v_max = csp.iter().take(10).map(|s| s.velocity.abs()).fold(0.0, f64::max);
+        assert!(v_max < 700.0, "velocity step at the start of the sine: {v_max} counts/s");
+        // No following-error spike as it starts (A·sin 2πt gave 12 counts
+        // there against 2-3 in the rest of the sine).
+        let f_start = csp.iter().take(50).map(|s| s.following.abs()).fold(0.0, f64::max);
+        let f_rest = csp.iter().skip(100).map(|s| s.following.abs()).fold(0.0, f64::max);
+        assert!(f_start <= f_rest + 2.0, "following-error spike at the start: {f_start} (then {f_rest})");
+        // No comb: the 1-cycle difference of 1-count steps jumps by 1000 counts/s.
+        let jump = csp.windows(2).map(|w| (w[1].velocity - w[0].velocity).abs()).fold(0.0, f64::max);
+        assert!(jump < 600.0, "velocity jumps by {jump} counts/s between samples");
+        // And it is the velocity: the peak 2πA counts/s of the sine.
+        let peak = csp.iter().map(|s| s.velocity.abs()).fold(0.0, f64::max);
+        assert!((5000.0..7500.0).contains(&peak), "{peak}");
+    }
+
+    #[test]
+    fn the_sine_set_points_start_at_rest() {
+        assert_eq!(sine_target(100.0, 0), 100);
+        assert!((sine_target(100.0, 1) - 100).abs() <= 1);
+        assert_eq!(sine_target(100.0, 500), 2100);
+    }
 }

@@ -39,6 +39,22 @@ struct SyncProducer {
     next: Instant,
 }
 
+/// The master's own heartbeat: it is node `node` on the bus, in NMT state `state`.
+struct OwnHeartbeat {
+    node: u8,
+    state: u8,
+    producer: drivebus_nmt::HeartbeatProducer,
+}
+
+/// The TIME producer (CiA 301 §7.2.6): a stamp every `period`; the Unix
+/// time of a stamp is `unix_ms` at `at` plus the master time since.
+struct TimeProducer {
+    period: Duration,
+    next: Instant,
+    at: Instant,
+    unix_ms: u64,
+}
+
 /// Node guarding requests to one node (CiA 301 §7.2.8.3.2.1).
 struct Guard {
     period: Duration,
@@ -76,6 +92,8 @@ pub(crate) struct Core {
     pdo: HashMap<u16, broadcast::Sender<Frame>>,
     pdo_sinks: HashMap<u16, Vec<(u64, PdoSink)>>,
     sync: Option<SyncProducer>,
+    heartbeat: Option<OwnHeartbeat>,
+    time: Option<TimeProducer>,
     guards: BTreeMap<u8, Guard>,
     pub(crate) eds: HashMap<u8, Arc<ObjectDictionary>>,
     pub(crate) emcy_tables: HashMap<u8, Arc<HashMap<u16, String>>>,
@@ -104,6 +122,8 @@ impl Core {
             pdo: HashMap::new(),
             pdo_sinks: HashMap::new(),
             sync: None,
+            heartbeat: None,
+            time: None,
             guards: BTreeMap::new(),
             eds: HashMap::new(),
             emcy_tables: HashMap::new(),
@@ -313,6 +333,24 @@ impl Core {
             }
             next = drivebus_can::earliest(next, Some(s.next));
         }
+        if let Some(h) = &mut self.heartbeat {
+            let id = 0x700 + u16::from(h.node);
+            next = drivebus_can::earliest(next, h.producer.poll(now, id, h.state, &mut out));
+        }
+        if let Some(t) = &mut self.time {
+            if t.next <= now {
+                let ms = t.unix_ms + now.saturating_duration_since(t.at).as_millis() as u64;
+                // Outside 1984..2163 TIME_OF_DAY has no encoding: nothing is sent.
+                if let Some(stamp) = drivebus_sync::TimeOfDay::from_unix_ms(ms) {
+                    out.push(Frame::new(0x100, &stamp.to_bytes()));
+                }
+                t.next += t.period;
+                if t.next <= now {
+                    t.next = now + t.period;
+                }
+            }
+            next = drivebus_can::earliest(next, Some(t.next));
+        }
         for (node, g) in &mut self.guards {
             if g.next <= now {
                 out.push(Frame::remote(0x700 + u16::from(*node & 0x7F), 1));
@@ -355,6 +393,12 @@ impl Core {
         }
         for g in self.guards.values() {
             next = drivebus_can::earliest(next, Some(g.next));
+        }
+        if let Some(t) = &self.time {
+            next = drivebus_can::earliest(next, Some(t.next));
+        }
+        if let Some(h) = &self.heartbeat {
+            next = drivebus_can::earliest(next, h.producer.next());
         }
         for s in self.nodes.values() {
             if let (Some(t), Some(last), false) = (s.monitor, s.last_heartbeat, s.lost) {
@@ -412,6 +456,30 @@ impl Core {
 
     pub(crate) fn stop_sync(&mut self) {
         self.sync = None;
+    }
+
+    /// Heartbeats as node `node` in NMT state `state` every `period_ms`
+    /// (the first one period after the start, as after a boot-up); 0
+    /// stops them.
+    pub(crate) fn start_heartbeat(&mut self, node: u8, state: u8, period_ms: u16) {
+        if period_ms == 0 {
+            self.heartbeat = None;
+            return;
+        }
+        let mut producer = drivebus_nmt::HeartbeatProducer::default();
+        producer.set_period(period_ms, self.now, true);
+        self.heartbeat = Some(OwnHeartbeat { node, state, producer });
+    }
+
+    /// TIME stamps every `period` (the first at once); `unix_ms` is the
+    /// Unix time now.
+    pub(crate) fn start_time(&mut self, period: Duration, unix_ms: u64) {
+        let period = period.max(Duration::from_millis(1));
+        self.time = Some(TimeProducer { period, next: self.now, at: self.now, unix_ms });
+    }
+
+    pub(crate) fn stop_time(&mut self) {
+        self.time = None;
     }
 
     pub(crate) fn sync_running(&self) -> bool {

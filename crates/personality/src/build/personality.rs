@@ -166,6 +166,10 @@ impl Application for Personality {
     fn on_sync(&mut self, cx: &mut AppContext<'_>, counter: Option<u8>) {
         let _ = counter;
         self.drive.sync(cx.od);
+        let (now, node_id) = (cx.now, cx.node_id());
+        let (od, requests) = cx.parts();
+        let mut c = Context { drive: &mut self.drive, requests, node_id, now };
+        self.behaviour.on_sync(&mut c, od);
         self.after_step(cx);
         self.flush(cx);
     }

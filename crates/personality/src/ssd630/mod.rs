@@ -3,8 +3,9 @@
 //! What a master sees that differs from a plain CiA 301/402 device:
 //!
 //! * an unknown index is answered `0601 0000h`, not `0602 0000h` (§14.1);
-//! * after initialisation an EMCY 0000h "no error" carries the firmware
-//!   version as ASCII "Vxxxx" in bytes 3–7 (§9 transition 0, Table 1);
+//! * after initialisation (power-on and NMT reset node) an EMCY 0000h "no
+//!   error" carries the firmware version as ASCII "Vxxxx" in bytes 3–7 (§9
+//!   transition 0, Table 1);
 //! * the state machine follows the controlword only while the "Controller
 //!   Active" input X10.7 is at 24 V: statusword bit 9 "remote" shows it and
 //!   Shutdown is not accepted without it (§10.2); dropping the input goes
@@ -20,6 +21,9 @@
 //! * EMCY error register per code as in §9 Table 1 (03h, 05h, 09h, 21h, 81h);
 //! * 60FFh must be 0 before leaving profile velocity (§14.15 note): a mode
 //!   change with 60FFh ≠ 0 while in pv is refused with `0800 0022h`;
+//! * with transmission type 254 only the bits the masks 2014h–2017h select
+//!   trigger a TPDO (§7, §11); configuration mode 5 (4804h:05) ignores the
+//!   controlword (§1.4); the behaviour ledger is `ledger.tsv`;
 //! * 2018h = 1 "NMT state (operational after power on)" (§11): after the
 //!   boot-up message the drive goes operational by itself (value as
 //!   loaded from storage at power-on). NMT Reset Node, which CiA 301
@@ -61,6 +65,29 @@ pub fn error_register(code: u16) -> Option<u8> {
         0x8400 | 0x8611 | 0x8612 | 0x8700 => 0x21,
         _ => return None,
     })
+}
+
+/// §7, §11 2014h–2017h: with transmission type 254 only the bits set in
+/// TPDO `n`'s mask (sub 1 bytes 0–3, sub 2 bytes 4–7) trigger it ("Only
+/// valid in transmission type 254"); any other type, or all bits set (the
+/// default, "all bits are event driven"), sends on any change.
+pub fn tpdo_change_mask(od: &ObjectDictionary, n: u16) -> Option<[u8; 8]> {
+    if od.get_u32(0x1800 + n, 2) != Some(254) {
+        return None;
+    }
+    let lo = od.get_u32(0x2014 + n, 1).unwrap_or(u32::MAX);
+    let hi = od.get_u32(0x2014 + n, 2).unwrap_or(u32::MAX);
+    if lo == u32::MAX && hi == u32::MAX {
+        return None;
+    }
+    let mut m = [0u8; 8];
+    m[..4].copy_from_slice(&lo.to_le_bytes());
+    m[4..].copy_from_slice(&hi.to_le_bytes());
+    Some(m)
+}
+
+fn tpdo_mask_request(od: &ObjectDictionary, n: u16) -> Request {
+    Request::TpdoChangeMask { tpdo: n, mask: tpdo_change_mask(od, n) }
 }
 
 /// The EMCY "no error" frame data sent after initialisation (§9, 0.):
@@ -270,6 +297,18 @@ impl Ssd630 {
         sw
     }
 
+    /// The end of an initialisation (power-on, NMT reset node): the stored
+    /// values are loaded by now (node boot before this).
+    fn initialised(cx: &mut Context<'_>, od: &ObjectDictionary) {
+        // §9 transition 0: "After the initialisation … the message 'no
+        // error' is being sent", manufacturer field "Vxxxx".
+        cx.request(EmcyFrame { code: 0, register: Some(0), bytes: FIRMWARE_TAG }.raw());
+        for n in 0..4 {
+            cx.request(tpdo_mask_request(od, n));
+        }
+        Self::autostart(cx, od);
+    }
+
     /// §11 2018h: 1 = "NMT state (operational after power on)": the local
     /// Start that follows the boot-up message.
     fn autostart(cx: &mut Context<'_>, od: &ObjectDictionary) {
@@ -354,7 +393,8 @@ impl Behaviour for Ssd630 {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x100C, 0x100D, 0x1400, 0x1401, 0x1402, 0x1403, 0x1600, 0x1601, 0x1602, 0x1603, 0x1800, 0x1801,
-            0x1802, 0x1803, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6040, 0x6099, 0x1006, 0x6080,
+            0x1802, 0x1803, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6040, 0x6099, 0x1006, 0x6080, 0x2014, 0x2015,
+            0x2016, 0x2017, 0x6060, 0x6048, 0x4803,
         ]
     }
 
@@ -426,12 +466,26 @@ impl Behaviour for Ssd630 {
                 let _ = sub;
                 Ok(Verdict::Pass)
             }
+            // §14.15: "The object 60FFh must be set to 0 before the
+            // operating mode is changed": leaving pv with a target velocity
+            // is refused (§5 0800 0022h, "operating mode wrong").
+            0x6060
+                if cx.drive.mode() == 3
+                    && data.first().is_some_and(|&m| m as i8 != 3)
+                    && od.get_i64(0x60FF, 0).is_some_and(|v| v != 0) =>
+            {
+                Err(SdoAbort(STATE_ABORT))
+            }
             0x6040 if !self.enable_input => {
                 // §10.2: without the enable input the drive is not "remote"
                 // and does not follow the controlword (Shutdown refused):
                 // the value is stored, the state machine does not move.
                 Ok(Verdict::Store)
             }
+            // §1.4 configuration mode 5 (4804h:05) "CANopen configuration
+            // DS301 + PDO mapping": "The control of the DS402 State-machine
+            // is being ignored. 6040h, 6041h … are not being evaluated".
+            0x6040 if od.get_u32(0x4804, 5) == Some(5) => Ok(Verdict::Store),
             0x6040 => {
                 // The drive takes the controlword now; the statusword it
                 // publishes is put in the 630's form before a TPDO samples it.
@@ -450,7 +504,21 @@ impl Behaviour for Ssd630 {
         }
     }
 
-    fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, _sub: u8) {
+    fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
+        match index {
+            0x2014..=0x2017 => cx.request(tpdo_mask_request(od, index - 0x2014)),
+            0x1800..=0x1803 if sub == 2 => cx.request(tpdo_mask_request(od, index - 0x1800)),
+            // §12: "acceleration and deceleration are calculated
+            // symmetrically in velocity mode": 6048h is the deceleration too.
+            0x6048 if sub > 0 => {
+                if let Some(v) = od.get_u64(0x6048, sub) {
+                    let b = v.to_le_bytes();
+                    let n = if sub == 1 { 4 } else { 2 };
+                    let _ = cx.drive.on_write(od, 0x6049, sub, &b[..n]);
+                }
+            }
+            _ => {}
+        }
         if index == 0x1006 {
             // §14.13: "interpolation time 5000 µs" is written to 1006h; the
             // 630 runs ip on that cycle. The drive's ip reads 60C2h, so the
@@ -476,11 +544,7 @@ impl Behaviour for Ssd630 {
     }
 
     fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        // §9 transition 0: "After the initialisation … the message 'no
-        // error' is being sent", manufacturer field "Vxxxx".
-        cx.request(EmcyFrame { code: 0, register: Some(0), bytes: FIRMWARE_TAG }.raw());
-        // The stored values are loaded by now (node boot before on_boot).
-        Self::autostart(cx, od);
+        Self::initialised(cx, od);
     }
 
     fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
@@ -491,7 +555,7 @@ impl Behaviour for Ssd630 {
             NodeEvent::NmtState { from, to } => {
                 self.nmt = to;
                 if from.is_initialisation() && core::mem::take(&mut self.reset_node) {
-                    Self::autostart(cx, od);
+                    Self::initialised(cx, od);
                 }
             }
             _ => {}
@@ -514,6 +578,29 @@ impl Behaviour for Ssd630 {
             }
         }
         self.publish(cx, od);
+    }
+
+    fn on_read(
+        &mut self,
+        cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        index: u16,
+        sub: u8,
+    ) -> Result<(), SdoAbort> {
+        // §13 4803h "Drive information" (units not given): 05h motor
+        // temperature in °C, 06h the DC link Ucc in V, 07h the analog input
+        // X10 in mV (two's complement), from the machine.
+        let m = cx.drive.model();
+        let v = match (index, sub) {
+            (0x4803, 5) => m.temperature().round().clamp(0.0, 65535.0) as u16,
+            (0x4803, 6) => m.bus_voltage().round().clamp(0.0, 65535.0) as u16,
+            (0x4803, 7) => (m.analog_input(1) * 1000.0).round().clamp(-32768.0, 32767.0) as i16 as u16,
+            _ => return Ok(()),
+        };
+        if let Ok(r) = od.find(index, sub) {
+            od.set_le(r, &v.to_le_bytes());
+        }
+        Ok(())
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {
