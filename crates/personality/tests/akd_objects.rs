@@ -5,6 +5,8 @@
 mod replay_rig;
 use drivebus_personality::Profile;
 use replay_rig::kc_objects::{self as k, emcy};
+use replay_rig::kc_outputs as o;
+use replay_rig::kc_tuning as t;
 
 const P: Profile = Profile::Akd;
 
@@ -390,4 +392,157 @@ fn warning_reset_emcy_after_bit11_set() {
     // The error-reset EMCY: code 0000h, register 00h, bytes 3–7 zero.
     assert_eq!(e, vec![drivebus_can::Frame::new(0x83, &[0; 8])], "reset EMCY");
     assert_eq!(k::getu(&mut r, 0x1001, 0), 0);
+}
+
+/// §7.1.4: PL.KP 3542h.
+#[test]
+fn position_loop_gain() {
+    t::position_gain(P);
+}
+
+/// §7.1.4: VL.KVFF 354Bh, 3407h:2.
+#[test]
+fn velocity_feedforward_share() {
+    t::velocity_feedforward(P);
+}
+
+/// §7.1.4: VL.KP 3548h.
+#[test]
+fn velocity_loop_gain() {
+    t::velocity_gain(P);
+}
+
+/// §7.1.4: VL.KI 354Dh.
+#[test]
+fn velocity_loop_integral() {
+    t::velocity_integral(P);
+}
+
+/// §7.1.4: MOTOR.INERTIA 35ABh, LOAD.INERTIA 525Fh.
+#[test]
+fn motor_and_load_inertia() {
+    t::inertia(P);
+}
+
+/// §7.1.4: MOTOR.KT 3593h.
+#[test]
+fn motor_torque_constant() {
+    t::torque_constant(P);
+}
+
+/// §7.1.4: MOTOR.R 3456h.
+#[test]
+fn motor_winding_resistance() {
+    t::winding_resistance(P);
+}
+
+/// §7.1.4: MOTOR.KE 5260h.
+#[test]
+fn motor_back_emf_constant() {
+    t::back_emf(P);
+}
+
+/// §7.1.4: IL.LIMITP 356Eh, IL.LIMITN 356Fh, 60E0h/60E1h (§6.7.2.7/8).
+#[test]
+fn current_limits_per_direction() {
+    t::current_limits(P);
+}
+
+/// §7.1.4: VL.LIMITP 3622h, VL.LIMITN 3623h.
+#[test]
+fn velocity_limits_per_direction() {
+    t::velocity_limits(P);
+}
+
+/// §7.1.4: MOTOR.CTF0, IL.IFOLD, IL.MIFOLD, IL.MI2T, IL.FOLDWTHRESH (n304), IL.FOLDFTHRESHU (F304); §6.1 F304/n304.
+#[test]
+fn motor_foldback() {
+    t::foldback(P);
+}
+
+/// §7.1.4: PLS.P/WIDTH/T/EN/MODE/RESET/STATE 34A0h–34A3h.
+#[test]
+fn position_limit_switches() {
+    o::position_limit_switches(P);
+}
+
+/// §7.1.4: MOTOR.TBRAKERLS 366Fh, MOTOR.TBRAKEAPP 366Eh.
+#[test]
+fn brake_times() {
+    o::brake_times(P);
+}
+
+/// §7.1.4: VL.FBFILTER 3407h:1.
+#[test]
+fn filtered_speed() {
+    o::filtered_speed(P);
+}
+
+/// §7.1.4: IL.OFFSET 3423h, IL.FRICTION 3422h.
+#[test]
+fn current_feedforward() {
+    t::current_feedforward(P);
+}
+
+/// §7.1.4: IL.KP 3598h, MOTOR.LQLL 3455h.
+#[test]
+fn current_loop_gain() {
+    t::current_loop_gain(P);
+}
+
+/// §7.1.4: AOUT.VALUEU 3470h:3, AOUT.VALUE 3470h:2.
+#[test]
+fn analog_output() {
+    o::analog_output(P);
+}
+
+/// §7.1.4: AIN.CUTOFF 5000h.
+#[test]
+fn analog_input_cutoff() {
+    o::analog_input_cutoff(P);
+}
+
+/// §7.1.4 AIN.CUTOFF 5000h in mode −1: the current set-point follows the
+/// filtered analog input (2 V × 250 mA/V, 1 Hz: τ ≈ 159 ms, a fifth of
+/// the way after 35 ms) where without the filter it is there at once.
+#[test]
+fn mode_minus_1_follows_the_filtered_input() {
+    use drivebus_cia402::drive::Injection;
+    use drivebus_cia402::model::Injection as Plant;
+    let current = |cutoff: u32| {
+        let mut r = with_inputs(0.0, 0.0);
+        k::put(&mut r, 0x5002, 0, &250u32.to_le_bytes());
+        k::put(&mut r, 0x5000, 0, &cutoff.to_le_bytes());
+        k::enable(&mut r, -1);
+        r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: 2.0 }));
+        r.run_ms(35);
+        k::get(&mut r, 0x2077, 0)
+    };
+    let (raw, filtered) = (current(0), current(1));
+    assert!((raw - 500).abs() < 60, "unfiltered: {raw} mA");
+    assert!((60..=140).contains(&filtered), "1 Hz: {filtered} mA");
+}
+
+/// §7.1.4: MOTOR.VOLTMAX 3452h.
+#[test]
+fn motor_voltage() {
+    t::motor_voltage(P);
+}
+
+/// §7.1.4: REGEN.POWER 3416h.
+#[test]
+fn regen_power() {
+    t::regen_power(P);
+}
+
+/// §7.1.4, §6.2.1.3: HOME.SET 35F0h.
+#[test]
+fn home_set() {
+    o::home_set(P);
+}
+
+/// §7.1.4: FB1.OFFSET 3490h.
+#[test]
+fn position_offset() {
+    o::position_offset(P);
 }

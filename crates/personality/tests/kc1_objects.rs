@@ -5,6 +5,8 @@
 mod replay_rig;
 use drivebus_personality::Profile;
 use replay_rig::kc_objects::{self as k, emcy};
+use replay_rig::kc_outputs as o;
+use replay_rig::kc_tuning as t;
 
 const P: Profile = Profile::Kc1;
 
@@ -201,4 +203,130 @@ fn secondary_feedback_and_ambient() {
 #[test]
 fn pp_target_clamped_to_software_limit() {
     k::target_clamped_to_limit(P);
+}
+
+/// §8.1.3: PL.KP 3542h.
+#[test]
+fn position_loop_gain() {
+    t::position_gain(P);
+}
+
+/// §8.1.3: VL.KVFF 354Bh, 3407h:2.
+#[test]
+fn velocity_feedforward_share() {
+    t::velocity_feedforward(P);
+}
+
+/// §8.1.3: VL.KP 3548h.
+#[test]
+fn velocity_loop_gain() {
+    t::velocity_gain(P);
+}
+
+/// §8.1.3: VL.KI 354Dh.
+#[test]
+fn velocity_loop_integral() {
+    t::velocity_integral(P);
+}
+
+/// §8.1.3: MOTOR.INERTIA 35ABh, LOAD.INERTIA 525Fh.
+#[test]
+fn motor_and_load_inertia() {
+    t::inertia(P);
+}
+
+/// §8.1.3: MOTOR.KT 3593h.
+#[test]
+fn motor_torque_constant() {
+    t::torque_constant(P);
+}
+
+/// §8.1.3: MOTOR.R 3456h.
+#[test]
+fn motor_winding_resistance() {
+    t::winding_resistance(P);
+}
+
+/// §8.1.3: MOTOR.KE 5260h.
+#[test]
+fn motor_back_emf_constant() {
+    t::back_emf(P);
+}
+
+/// §8.1.3: IL.LIMITP 356Eh, IL.LIMITN 356Fh.
+#[test]
+fn current_limits_per_direction() {
+    t::current_limits(P);
+}
+
+/// §8.1.3: VL.LIMITP 3622h, VL.LIMITN 3623h.
+#[test]
+fn velocity_limits_per_direction() {
+    t::velocity_limits(P);
+}
+
+/// §8.1.3: MOTOR.CTF0, IL.IFOLD, IL.MIFOLD, IL.MI2T, IL.FOLDWTHRESH (n304), IL.FOLDFTHRESHU (F304); §7.1 F304/n304.
+#[test]
+fn motor_foldback() {
+    t::foldback(P);
+}
+
+/// §8.1.3: PLS.P/WIDTH/T/EN/MODE/RESET/STATE 34A0h–34A3h.
+#[test]
+fn position_limit_switches() {
+    o::position_limit_switches(P);
+}
+
+/// §8.1.3: MOTOR.TBRAKERLS 366Fh, MOTOR.TBRAKEAPP 366Eh.
+#[test]
+fn brake_times() {
+    o::brake_times(P);
+}
+
+/// §8.1.3: VL.FBFILTER 3407h:1.
+#[test]
+fn filtered_speed() {
+    o::filtered_speed(P);
+}
+
+/// §8.1.3: IL.OFFSET 3423h, IL.FRICTION 3422h.
+#[test]
+fn current_feedforward() {
+    t::current_feedforward(P);
+}
+
+/// §8.1.3: IL.KP 3598h, MOTOR.LQLL 3455h.
+#[test]
+fn current_loop_gain() {
+    t::current_loop_gain(P);
+}
+
+/// §8.1.3: AOUT.VALUEU 3470h:3, AOUT.VALUE 3470h:2.
+#[test]
+fn analog_output() {
+    o::analog_output(P);
+}
+
+/// §8.1.3: AIN.CUTOFF 5000h.
+#[test]
+fn analog_input_cutoff() {
+    o::analog_input_cutoff(P);
+}
+
+/// §8.1.3: MOTOR.VOLTMAX 3452h.
+#[test]
+fn motor_voltage() {
+    t::motor_voltage(P);
+}
+
+/// §8.1.3: REGEN.POWER 3416h.
+#[test]
+fn regen_power() {
+    t::regen_power(P);
+}
+
+/// §8.1.3, §7.2.1.3: HOME.SET 35F0h.
+#[test]
+fn home_set() {
+    o::home_set(P);
 }

@@ -18,6 +18,9 @@
 //!   reaction); the brake closes after its apply delay, a hanging load may
 //!   sag meanwhile.
 //!
+//! A drive configured with its brake's times ([`super::BrakeDelays`])
+//! waits for those instead of the brake itself.
+//!
 //! 60FEh:1 bit 0 "set brake" (CiA 402-2, with [`super::IoConfig::set_brake_bit`]
 //! and enabled in 60FEh:2) and a personality's brake object
 //! ([`Drive::set_brake_control`]) override the sequence.
@@ -51,12 +54,24 @@ impl Drive {
         self.brake_control
     }
 
+    /// The drive's own brake times (`None`: it waits for the brake, the
+    /// machine's delays); from the next command on.
+    pub fn set_brake_delays(&mut self, d: Option<super::BrakeDelays>) {
+        self.cfg.io.brake_delays = d;
+    }
+
     /// The digital output lines a personality's output objects set (bit
     /// `n − 1`: line `n`); the machine sees them together with 60FEh's
     /// ([`crate::model::DriveModel::outputs`]).
     pub fn set_output_lines(&mut self, lines: u16) {
         self.app_outputs = lines;
         self.sync_outputs();
+    }
+
+    /// Sets the drive's analog output \[V\]
+    /// ([`crate::model::DriveModel::analog_output`]).
+    pub fn set_analog_output(&mut self, volts: f64) {
+        self.model.set_analog_output(volts);
     }
 
     /// The output lines the machine sees: the personality's
@@ -97,7 +112,15 @@ impl Drive {
     /// drive function's own command.
     pub(crate) fn brake_hold(&mut self, f: DriveFunction) -> Option<Command> {
         let b = self.model.brake();
-        if !(b.fitted && b.pending) {
+        let pending = match self.cfg.io.brake_delays {
+            // The drive's own times from its last command.
+            Some(d) => {
+                let ms = if b.commanded { d.apply_ms } else { d.release_ms };
+                self.model.brake_command_age() * 1000.0 + 1e-6 < f64::from(ms)
+            }
+            None => b.pending,
+        };
+        if !(b.fitted && pending) {
             return None;
         }
         let hold = match f {

@@ -163,6 +163,22 @@ pub struct IoConfig {
     /// 60FEh:2) the holding brake is engaged whatever the drive's brake
     /// sequence wants.
     pub set_brake_bit: bool,
+    /// The drive's own brake times ([`BrakeDelays`]); `None`: the drive
+    /// waits for the brake itself (the machine's delays).
+    pub brake_delays: Option<BrakeDelays>,
+}
+
+/// How long the drive waits for the holding brake, whatever the brake
+/// does (a drive configured with its brake's times, e.g. Kollmorgen
+/// MOTOR.TBRAKERLS / MOTOR.TBRAKEAPP): after a release command the
+/// operating mode waits `release_ms`, after an apply command the power
+/// stage holds the axis `apply_ms`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BrakeDelays {
+    /// From the release command until the mode runs \[ms\].
+    pub release_ms: u32,
+    /// From the apply command until the power stage goes off \[ms\].
+    pub apply_ms: u32,
 }
 
 impl Default for IoConfig {
@@ -178,6 +194,7 @@ impl Default for IoConfig {
             input_lines: false,
             output_lines: false,
             set_brake_bit: false,
+            brake_delays: None,
         }
     }
 }

@@ -36,6 +36,7 @@ mod pp;
 pub mod profile;
 mod supervise;
 mod table;
+mod tuning;
 pub mod units;
 
 #[cfg(test)]
@@ -43,8 +44,8 @@ mod tests;
 
 pub use brake::BrakeControl;
 pub use config::{
-    DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk, TargetReached,
-    ZeroMeansOff, ZeroRamp, profile_type,
+    BrakeDelays, DriveConfig, IoConfig, LimitSwitchReaction, ProbeInput, ProfileDefaults, ProfileJerk,
+    TargetReached, ZeroMeansOff, ZeroRamp, profile_type,
 };
 pub use generic::{default_pdo_mapping, generic_drive, generic_drive_with};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};

@@ -1,5 +1,5 @@
 //! The plant's signals besides the axis: general-purpose digital inputs
-//! and outputs, analog inputs, a master encoder (pulse/direction) input, a
+//! and outputs, analog inputs, an analog output, a master encoder (pulse/direction) input, a
 //! holding brake and the motor temperature reading.
 //!
 //! Their power-on values are [`IoParams`] (a machine file sets them); at
@@ -104,9 +104,13 @@ pub(super) struct Io {
     pub brake_natural: bool,
     /// Time the command has differed from `brake_natural` \[s\].
     pub brake_timer: f64,
+    /// Time since the command last changed \[s\] (infinite: never).
+    pub brake_age: f64,
     /// Forced brake (stuck engaged, held released).
     pub brake_forced: Option<bool>,
     pub temperature: Option<f64>,
+    /// The drive's analog output \[V\].
+    pub analog_out: f64,
 }
 
 impl Io {
@@ -121,8 +125,10 @@ impl Io {
             brake_cmd: true,
             brake_natural: true,
             brake_timer: 0.0,
+            brake_age: f64::INFINITY,
             brake_forced: None,
             temperature: p.motor_temperature,
+            analog_out: 0.0,
         }
     }
 }
@@ -220,7 +226,27 @@ impl DriveModel {
         if engage != self.io.brake_cmd {
             self.io.brake_cmd = engage;
             self.io.brake_timer = 0.0;
+            self.io.brake_age = 0.0;
         }
+    }
+
+    /// Sets the drive's analog output \[V\] (a non-finite value or one
+    /// beyond ±1000 V is ignored).
+    pub fn set_analog_output(&mut self, volts: f64) {
+        if volts.is_finite() && volts.abs() <= MAX_VOLTS {
+            self.io.analog_out = volts;
+        }
+    }
+
+    /// The drive's analog output \[V\] as the machine sees it.
+    pub fn analog_output(&self) -> f64 {
+        self.io.analog_out
+    }
+
+    /// Seconds since the drive last changed its brake command (infinite
+    /// before the first change).
+    pub fn brake_command_age(&self) -> f64 {
+        self.io.brake_age
     }
 
     /// The holding brake: fitted, commanded, engaged, delay pending.
@@ -254,6 +280,7 @@ impl DriveModel {
     pub(super) fn io_step(&mut self, dt: f64) {
         let io = &mut self.io;
         io.master_pos = (io.master_pos + io.master_vel * dt).clamp(-2.0 * MAX_MASTER, 2.0 * MAX_MASTER);
+        io.brake_age += dt;
         if let Some(b) = self.p.io.brake
             && io.brake_cmd != io.brake_natural
         {

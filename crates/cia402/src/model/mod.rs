@@ -30,6 +30,7 @@ pub mod events;
 pub mod io;
 pub mod params;
 mod physics;
+pub mod tuning;
 
 pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, SwitchInput, Switches};
 pub use io::{ANALOG_INPUTS, BrakeParams, BrakeState, DIGITAL_LINES, IoParams};
@@ -37,6 +38,7 @@ pub use params::{
     AxisKind, AxisParams, BusParams, ControlParams, DriveParams, EncoderParams, LoadTorque, MotorKind,
     MotorParams, ParamError, StepperParams,
 };
+pub use tuning::FoldbackParams;
 
 use core::f64::consts::PI;
 
@@ -141,6 +143,8 @@ pub struct DriveModel {
     torque: f64,
     temperature: f64,
     bus_voltage: f64,
+    /// Power the braking resistor dissipated in the last step \[W\].
+    regen_power: f64,
     // sensing
     counts: i64,
     prev_counts: i64,
@@ -173,6 +177,8 @@ pub struct DriveModel {
     load_step: f64,
     /// Inputs, outputs, master encoder, brake, temperature reading.
     io: io::Io,
+    /// Run-time current and speed limits, foldback.
+    limits: tuning::Limits,
     events: StepEvents,
 }
 
@@ -238,6 +244,7 @@ impl DriveModel {
             torque: 0.0,
             temperature: params.motor.ambient_temperature,
             bus_voltage: params.bus.nominal_voltage,
+            regen_power: 0.0,
             counts: 0,
             prev_counts: 0,
             vel_meas: 0.0,
@@ -260,6 +267,7 @@ impl DriveModel {
             encoder_failed: false,
             load_step: 0.0,
             io: io::Io::new(&params.io),
+            limits: tuning::Limits::none(),
             events: StepEvents::default(),
         };
         m.counts = m.read_counts(theta);
@@ -352,6 +360,7 @@ impl DriveModel {
             MotorKind::Servo => self.servo_step(dt),
             MotorKind::Stepper(s) => self.stepper_step(dt, s),
         }
+        self.foldback_step(dt);
         self.thermal_step();
         self.bus_step(dt);
         self.detect(theta0);
@@ -504,6 +513,12 @@ impl DriveModel {
         self.bus_voltage
     }
 
+    /// Power the braking resistor (the DC link's chopper) dissipates
+    /// \[W\], averaged over the last step; 0 while it is off.
+    pub fn regen_power(&self) -> f64 {
+        self.regen_power
+    }
+
     /// Switch levels.
     pub fn switches(&self) -> Switches {
         self.switches
@@ -588,3 +603,5 @@ mod tests_axis;
 mod tests_io;
 #[cfg(test)]
 mod tests_prop;
+#[cfg(test)]
+mod tests_tuning;

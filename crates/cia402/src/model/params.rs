@@ -178,6 +178,9 @@ pub struct ControlParams {
     pub velocity_ki: f64,
     /// Velocity measurement filter time constant \[s\] (0 = none).
     pub velocity_filter: f64,
+    /// Share of the velocity feed-forward the position loop adds to its
+    /// output (1 = all of it, 0 = none: the position error alone drives).
+    pub velocity_feedforward: f64,
     /// Control (and simulation) rate \[Hz\], 4–16 kHz.
     pub control_rate_hz: f64,
 }
@@ -356,6 +359,7 @@ impl DriveParams {
                 velocity_kp: 0.075,
                 velocity_ki: 17.5,
                 velocity_filter: 1.0e-4,
+                velocity_feedforward: 1.0,
                 control_rate_hz: 8000.0,
             },
             io: super::IoParams::default(),
@@ -382,6 +386,7 @@ impl DriveParams {
                 velocity_kp: 0.154,
                 velocity_ki: 27.0,
                 velocity_filter: 1.0e-4,
+                velocity_feedforward: 1.0,
                 control_rate_hz: 8000.0,
             },
             io: super::IoParams::default(),
@@ -409,6 +414,7 @@ impl DriveParams {
                 velocity_kp: 0.0,
                 velocity_ki: 0.0,
                 velocity_filter: 0.0,
+                velocity_feedforward: 1.0,
                 control_rate_hz: 4000.0,
             },
             io: super::IoParams::default(),
@@ -539,6 +545,7 @@ impl DriveParams {
         range("control.velocity_kp", c.velocity_kp, 0.0, 1e9)?;
         range("control.velocity_ki", c.velocity_ki, 0.0, 1e12)?;
         range("control.velocity_filter", c.velocity_filter, 0.0, 1.0)?;
+        range("control.velocity_feedforward", c.velocity_feedforward, 0.0, 10.0)?;
         finite("control.control_rate_hz", c.control_rate_hz)?;
         check(
             "control.control_rate_hz",

@@ -41,23 +41,25 @@ impl DriveModel {
     /// `|R·i + kₑ·ω| ≤ V_bus`, intersected with `±i_max`.
     fn current_window(&self, w: f64) -> (f64, f64) {
         let m = &self.p.motor;
-        let v = self.bus_voltage.max(0.0);
+        let v = self.bus_voltage.max(0.0).min(self.limits.voltage);
         let emf = m.ke * w;
-        let imax = m.max_current;
-        let hi = ((v - emf) / m.resistance).clamp(-imax, imax);
-        let lo = ((-v - emf) / m.resistance).clamp(-imax, imax);
+        let imax = self.current_cap();
+        let (ip, in_) = (imax.min(self.limits.current[0]), imax.min(self.limits.current[1]));
+        let hi = ((v - emf) / m.resistance).clamp(-in_, ip);
+        let lo = ((-v - emf) / m.resistance).clamp(-in_, ip);
         (lo, hi.max(lo))
     }
 
     /// Velocity PI with conditional-integration anti-windup: the integrator
     /// only moves when the output is not saturated or the error drives it
     /// back out of saturation.
-    fn velocity_loop(&mut self, v_ref: f64, acc_ff: f64, lo: f64, hi: f64, dt: f64) -> f64 {
+    fn velocity_loop(&mut self, v_ref: f64, acc_ff: f64, i_ff: f64, lo: f64, hi: f64, dt: f64) -> f64 {
         let c = &self.p.control;
         let m = &self.p.motor;
-        let v_ref = v_ref.clamp(-m.max_speed, m.max_speed);
+        let (vlo, vhi) = self.velocity_window();
+        let v_ref = v_ref.clamp(vlo, vhi);
         let e = v_ref - self.vel_meas;
-        let ff = acc_ff * self.d.inertia / m.kt;
+        let ff = acc_ff * self.d.inertia / m.kt + i_ff;
         let u = c.velocity_kp * e + self.int_vel + ff;
         let y = u.clamp(lo, hi);
         let sat = y != u;
@@ -72,9 +74,10 @@ impl DriveModel {
     fn position_loop(&mut self, p_ref: f64, v_ff: f64, dt: f64) -> f64 {
         let c = &self.p.control;
         let vmax = self.p.motor.max_speed;
+        let (vlo, vhi) = self.velocity_window();
         let e = p_ref - self.position_measured();
-        let u = v_ff + c.position_kp * e + self.int_pos;
-        let y = u.clamp(-vmax, vmax);
+        let u = c.velocity_feedforward * v_ff + c.position_kp * e + self.int_pos;
+        let y = u.clamp(vlo, vhi);
         if c.position_ki > 0.0 && y == u && !self.vel_saturated {
             self.int_pos = (self.int_pos + c.position_ki * e * dt).clamp(-vmax, vmax);
         }
@@ -85,16 +88,17 @@ impl DriveModel {
         let m = self.p.motor;
         let w = self.omega;
         let (lo, hi) = self.current_window(w);
+        let ff = self.current_feedforward();
         let i_ref = match self.cmd {
             Command::Off => 0.0,
             Command::ShortCircuit => (-m.ke * w / m.resistance).clamp(-m.max_current, m.max_current),
-            Command::Torque(t) => (t / m.kt).clamp(lo, hi),
+            Command::Torque(t) => (t / m.kt + ff).clamp(lo, hi),
             Command::Velocity { velocity, acceleration } => {
-                self.velocity_loop(velocity, acceleration, lo, hi, dt)
+                self.velocity_loop(velocity, acceleration, ff, lo, hi, dt)
             }
             Command::Position { position, velocity, acceleration } => {
                 let v = self.position_loop(position, velocity, dt);
-                self.velocity_loop(v, acceleration, lo, hi, dt)
+                self.velocity_loop(v, acceleration, ff, lo, hi, dt)
             }
         };
         self.current += (i_ref - self.current) * self.k.current;
@@ -102,7 +106,11 @@ impl DriveModel {
         self.torque = t_motor;
         self.mechanics(t_motor, dt, false);
         // Blocked rotor: at the current limit without moving for 50 ms.
-        let blocked = self.current.abs() >= 0.95 * m.max_current && self.omega.abs() < 0.01 * m.max_speed;
+        // At the limit in force (a lowered limit, the foldback) counts too.
+        let (ip, in_) = self.current_limits();
+        let limit = if self.current >= 0.0 { ip } else { in_ };
+        let blocked =
+            limit > 0.0 && self.current.abs() >= 0.95 * limit && self.omega.abs() < 0.01 * m.max_speed;
         self.stall_timer = if blocked { self.stall_timer + dt } else { 0.0 };
         let pushing = self.contact != 0 && t_motor * f64::from(self.contact) > m.coulomb_friction;
         self.set_stalled(pushing || self.stall_timer >= 0.05);
@@ -246,6 +254,7 @@ impl DriveModel {
 
     pub(super) fn bus_step(&mut self, dt: f64) {
         let b = self.p.bus;
+        self.regen_power = 0.0;
         if let Some(v) = self.force_bus {
             self.bus_voltage = v;
             return;
@@ -267,7 +276,10 @@ impl DriveModel {
         if let Some(on) = b.brake_on_voltage {
             let on2 = on * on;
             if v2 > on2 {
-                v2 = (v2 * self.k.brake).max(on2);
+                let after = (v2 * self.k.brake).max(on2);
+                // The energy the braking resistor took this step.
+                self.regen_power = (v2 - after) * c / (2.0 * dt);
+                v2 = after;
             }
         }
         let v = libm::sqrt(v2.max(0.0));

@@ -186,3 +186,27 @@ fn thermal_model_without_a_forced_reading() {
     m.inject(Injection::MotorTemperature(None));
     assert_eq!(m.temperature(), 25.0, "back to the thermal model");
 }
+
+#[test]
+fn brake_command_age_counts_from_the_last_change() {
+    let mut m = hanging(true);
+    assert_eq!(m.brake_command_age(), f64::INFINITY, "never commanded");
+    m.set_brake(false);
+    run(&mut m, 0.1);
+    assert!((m.brake_command_age() - 0.1).abs() < 1e-6, "{}", m.brake_command_age());
+    m.set_brake(false);
+    assert!(m.brake_command_age() > 0.09, "the same command again changes nothing");
+    m.set_brake(true);
+    assert_eq!(m.brake_command_age(), 0.0);
+}
+
+#[test]
+fn analog_output_is_what_the_drive_sets() {
+    let mut m = hanging(false);
+    assert_eq!(m.analog_output(), 0.0);
+    m.set_analog_output(-2.5);
+    assert_eq!(m.analog_output(), -2.5);
+    m.set_analog_output(f64::NAN);
+    m.set_analog_output(1e9);
+    assert_eq!(m.analog_output(), -2.5, "refused values change nothing");
+}

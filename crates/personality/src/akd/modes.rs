@@ -2,7 +2,7 @@
 //! machine's inputs: −1 analog current (analog input 1 × AIN.ISCALE 5002h,
 //! mA per V), −2 analog velocity (analog input 1 × AIN.VSCALE 3629h, rpm
 //! per V, float scale 1000:1), both after AIN.OFFSET 5003h and
-//! AIN.DEADBAND 5001h (mV); −3 electronic gearing (the master encoder's
+//! AIN.DEADBAND 5001h (mV), through the AIN.CUTOFF 5000h low-pass; −3 electronic gearing (the master encoder's
 //! speed × GEAR.OUT 50BEh / GEAR.IN 50BBh, motor increments per master
 //! count, 0 read as 1). The modes run on tq / pv (`Akd::manufacturer_mode`),
 //! the set-point handed to the drive as its 6071h / 60FFh.
@@ -38,8 +38,13 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
 impl InputModes {
     /// The analog input 1 after offset and deadband \[mV\].
     fn analog_mv(&self, cx: &Context<'_>, od: &ObjectDictionary) -> f64 {
-        let mv =
-            cx.drive.model().analog_input(1) * 1000.0 - f64::from(word(od, self.refs.offset) as u32 as i32);
+        // With AIN.CUTOFF 5000h set, the filtered input AIN.VALUE shows.
+        let input = if od.get_u32(0x5000, 0).unwrap_or(0) > 0 {
+            od.get_i64(0x3509, 0).map_or(0.0, |v| v as f64)
+        } else {
+            cx.drive.model().analog_input(1) * 1000.0
+        };
+        let mv = input - f64::from(word(od, self.refs.offset) as u32 as i32);
         if mv.abs() < word(od, self.refs.deadband) as u32 as f64 { 0.0 } else { mv }
     }
 

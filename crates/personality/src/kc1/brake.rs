@@ -5,10 +5,13 @@
 //! 1 brake released (after the brake's delay), bit 2 STO, bit 3 hardware
 //! enable (the model has neither: 0). MOTOR.BRAKERLS 3450h (§8.1.3): 0
 //! the drive's brake, 1 released, 2 applied; the fieldbus control comes
-//! first.
+//! first. MOTOR.TBRAKERLS 366Fh / MOTOR.TBRAKEAPP 366Eh (ms): the
+//! drive's own brake times ([`BrakeDelays`]): after the release the mode
+//! waits TBRAKERLS, after the apply the power stage holds TBRAKEAPP,
+//! whatever the brake does; 0 (both) = the drive waits for the brake.
 
 use crate::build::Context;
-use drivebus_cia402::drive::BrakeControl;
+use drivebus_cia402::drive::{BrakeControl, BrakeDelays};
 use drivebus_cia402::state_machine::State;
 use drivebus_od::{EntryRef, ObjectDictionary, SdoAbort};
 
@@ -79,4 +82,33 @@ impl Brake {
             od.set_raw(r, &status.to_le_bytes());
         }
     }
+}
+
+/// The drive's brake times from MOTOR.TBRAKERLS 366Fh / MOTOR.TBRAKEAPP
+/// 366Eh (ms; `pending` a write in progress); 0 in both: the drive waits
+/// for the brake itself, 0 in one: the machine's delay for that one.
+pub fn set_delays(
+    cx: &mut Context<'_>,
+    od: &ObjectDictionary,
+    pending: Option<(u16, u32)>,
+) -> Result<(), SdoAbort> {
+    let get = |i: u16| match pending {
+        Some((p, v)) if p == i => v as i32,
+        _ => od.get_i64(i, 0).unwrap_or(0) as i32,
+    };
+    let (rls, app) = (get(0x366F), get(0x366E));
+    if rls < 0 || app < 0 {
+        return Err(SdoAbort::VALUE_TOO_LOW);
+    }
+    let machine = cx.drive.model().params().io.brake;
+    let own = |v: i32, m: f64| if v > 0 { v as u32 } else { (m * 1000.0).round() as u32 };
+    let d = match (rls, app, machine) {
+        (0, 0, _) => None,
+        (_, _, Some(b)) => {
+            Some(BrakeDelays { release_ms: own(rls, b.release_delay), apply_ms: own(app, b.apply_delay) })
+        }
+        (_, _, None) => Some(BrakeDelays { release_ms: own(rls, 0.0), apply_ms: own(app, 0.0) }),
+    };
+    cx.drive.set_brake_delays(d);
+    Ok(())
 }

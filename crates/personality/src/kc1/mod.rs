@@ -26,8 +26,10 @@ mod latch;
 mod monitor;
 mod objects;
 mod params;
+mod pls;
 pub mod status;
 mod timing;
+mod tuning;
 
 pub use facts::INFO;
 
@@ -92,6 +94,12 @@ pub struct Kollmorgen {
     brake: brake::Brake,
     /// DIN1–7 and their change flags in 60FDh.
     inputs: io::Inputs,
+    /// The foldback readings and supervision.
+    foldback: tuning::Foldback,
+    /// The position limit switches.
+    pls: pls::Pls,
+    /// FB1.OFFSET in force in the drive's reference \[position units\].
+    fb_offset: i64,
 }
 
 impl Kollmorgen {
@@ -115,6 +123,9 @@ impl Kollmorgen {
             latch: latch::Latch::default(),
             brake: brake::Brake::default(),
             inputs: io::Inputs::default(),
+            foldback: tuning::Foldback::default(),
+            pls: pls::Pls::default(),
+            fb_offset: 0,
         }
     }
 
@@ -129,7 +140,10 @@ impl Kollmorgen {
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
         0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
-        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450, 0x20B8,
+        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450, 0x20B8, 0x3542, 0x3480, 0x3548,
+        0x354D, 0x354B, 0x3407, 0x3593, 0x35AB, 0x525F, 0x3456, 0x5260, 0x3454, 0x356E, 0x356F, 0x3622,
+        0x3623, 0x358F, 0x34A3, 0x366E, 0x366F, 0x3422, 0x3423, 0x3598, 0x3455, 0x3470, 0x3452, 0x35F0,
+        0x3490,
     ];
 }
 
@@ -192,6 +206,7 @@ impl Behaviour for Kollmorgen {
             self.status.reset();
             self.period.reset();
             self.brake = brake::Brake::default();
+            self.pls = pls::Pls::default();
         }
         // §7.2.2.15: "when fieldbus communication is lost, the drive will
         // regain control of the brake".
@@ -470,10 +485,12 @@ impl Kollmorgen {
         self.pll.run(od, cx.now, period, matches!(view.mode, op::IP | op::CSP));
         self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);
         self.inputs.update(cx, od);
+        self.foldback.update(cx, od, &mut self.status);
         self.status.update(cx, od);
         self.monitor.update(cx, od, &mut self.status);
         self.latch.update(od);
         self.brake.update(cx, od);
+        self.pls.update(cx, od);
     }
 }
 

@@ -1,9 +1,13 @@
 //! The parameter mirrors of the drive's measurements and their limits
 //! (KC1 §8.1.3, AKD §7.1.4 object tables): PL.ERR 35C5h, VL.FB 3618h,
 //! VBUS.VALUE 361Ah, MOTOR.TEMP 3612h, IL.FB 3558h, FB1.MECHPOS 35D2h,
-//! AIN.VALUE 3509h/3470h:4 (analog input 1), DRV.HANDWHEEL 2050h and AKD
+//! AIN.VALUE 3509h/3470h:4 (analog input 1, through the AIN.CUTOFF 5000h
+//! low-pass), AOUT.VALUE 3470h:2 (the
+//! analog output AOUT.VALUEU 3470h:3 sets), VL.FBFILTER 3407h:1 (the
+//! speed through a 10 Hz low-pass), DRV.HANDWHEEL 2050h and AKD
 //! 60E4h:1 (the master encoder as secondary feedback), DRV.TEMPERATURES
-//! 3610h (the ambient) read
+//! 3610h (the ambient), REGEN.POWER 3416h (the braking resistor's power)
+//! read
 //! what the model measures; VL.THRESH 3627h (overspeed, F302),
 //! MOTOR.TEMPWARN 3453h (n301) and MOTOR.TEMPFAULT 3586h (F301) act on
 //! them, VBUS.UVFTHRESH 361Dh (F502) on the DC bus (0 = off).
@@ -42,12 +46,20 @@ struct Refs {
     factors: [Option<EntryRef>; 5],
     current: Option<EntryRef>,
     velocity: Option<EntryRef>,
+    fb_filter: Option<EntryRef>,
+    aout: Option<EntryRef>,
+    ain_cutoff: Option<EntryRef>,
+    regen: Option<EntryRef>,
 }
 
 /// The measurement mirrors and their limits.
 #[derive(Debug, Clone, Default)]
 pub struct Monitor {
     refs: Refs,
+    /// VL.FBFILTER's state \[rpm\] and the time of the last update \[ns\].
+    fb_filter: (f64, u64),
+    /// The analog input 1 through AIN.CUTOFF \[V\].
+    ain: f64,
 }
 
 fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
@@ -89,6 +101,10 @@ impl Monitor {
             ],
             current: f(0x2077),
             velocity: f(0x606C),
+            fb_filter: od.find(0x3407, 1).ok(),
+            aout: od.find(0x3470, 2).ok(),
+            ain_cutoff: f(0x5000),
+            regen: f(0x3416),
         }
     }
 
@@ -106,16 +122,36 @@ impl Monitor {
         let bus_mv = model.bus_voltage() * 1000.0;
         put(od, r.pl_err, (drive.demand_position() - drive.position() as f64).round() as i64);
         put(od, r.vl_fb, velocity);
+        // VL.FBFILTER 3407h:1 (rpm × 1000): the speed through a 10 Hz
+        // first-order low-pass.
+        let now = cx.now.as_nanos();
+        let dt = now.saturating_sub(self.fb_filter.1) as f64 * 1e-9;
+        self.fb_filter.1 = now;
+        let rpm = model.velocity_measured() * 30.0 / core::f64::consts::PI;
+        let k = -(-2.0 * core::f64::consts::PI * 10.0 * dt.min(1.0)).exp_m1();
+        self.fb_filter.0 += (rpm - self.fb_filter.0) * k;
+        put(od, r.fb_filter, (self.fb_filter.0 * 1000.0).round().clamp(-2e9, 2e9) as i64);
         put(od, r.vbus, model.bus_voltage().round() as i64);
         put(od, r.temp, temp.round() as i64);
         put(od, r.il_fb, i64::from(word(od, r.current) as u32 as i32));
         let per_rev = i64::from(drive.config().params.encoder.counts_per_rev).max(1);
         put(od, r.mechpos, drive.position_increments().rem_euclid(per_rev));
-        // AIN.VALUE (mV, float scale 1000:1): the machine's analog input 1.
-        let mv = (model.analog_input(1) * 1000.0).round().clamp(-32768.0, 32767.0) as i64;
+        // AIN.VALUE (mV, float scale 1000:1): the machine's analog input 1,
+        // through a first-order low-pass at AIN.CUTOFF 5000h (Hz; 0: none).
+        let cutoff = word(od, r.ain_cutoff) as u32;
+        let raw = model.analog_input(1);
+        self.ain = if cutoff == 0 {
+            raw
+        } else {
+            let k = -(-2.0 * core::f64::consts::PI * f64::from(cutoff) * dt.min(1.0)).exp_m1();
+            self.ain + (raw - self.ain) * k
+        };
+        let mv = (self.ain * 1000.0).round().clamp(-32768.0, 32767.0) as i64;
         for a in r.ain {
             put(od, a, mv);
         }
+        // AOUT.VALUE (mV): the analog output the machine sees.
+        put(od, r.aout, (model.analog_output() * 1000.0).round().clamp(-32768.0, 32767.0) as i64);
         // DRV.HANDWHEEL: the secondary feedback, the machine's master
         // encoder (counts); AKD 60E4h:1 its position in user units, as
         // 6064h through the factors 60E8h/60EDh (gear) and 60E9h/60EEh
@@ -130,6 +166,8 @@ impl Monitor {
             put(od, r.additional, pos.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i64);
         }
         put(od, r.ambient, model.params().motor.ambient_temperature.round() as i64);
+        // REGEN.POWER (W): what the braking resistor dissipates.
+        put(od, r.regen, model.regen_power().round().clamp(0.0, 2e9) as i64);
         let state = drive.state_machine().state();
         let faulted = matches!(state, State::Fault | State::FaultReactionActive);
         let over = word(od, r.overspeed) as u32 as i32;

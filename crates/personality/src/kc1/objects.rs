@@ -5,7 +5,7 @@
 //! forwarded to the drive, the latches, inputs, brake, save and motion
 //! tasks. The CiA 301 quirks stay in `Kollmorgen::on_write`.
 
-use super::{Kollmorgen, ascii, params, status, timing};
+use super::{Kollmorgen, ascii, params, status, timing, tuning};
 use crate::build::{Context, Verdict};
 use drivebus_node::Request;
 use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
@@ -87,6 +87,54 @@ impl Kollmorgen {
                     Ok(Verdict::Pass)
                 }
             },
+            // The tuning, motor and limit parameters on the model.
+            _ if tuning::is_tuned(index, sub) => {
+                tuning::apply(cx, od, Some((index, sub, data)))?;
+                if index == 0x3593 {
+                    // MOTOR.KT: the rated torque follows (with KT stored
+                    // first: the forward sets the model from the objects).
+                    if let Ok(r) = od.find(index, sub) {
+                        od.set_raw(r, data);
+                    }
+                    let icont = od.get_u32(0x358E, 0).unwrap_or(0);
+                    self.forward(cx, od, 0x358E, 0, &icont.to_le_bytes())?;
+                }
+                Ok(Verdict::Store)
+            }
+            // MOTOR.TBRAKEAPP / MOTOR.TBRAKERLS: the drive's brake times.
+            0x366E | 0x366F => {
+                super::brake::set_delays(cx, od, Some((index, le_u64(data) as u32)))?;
+                Ok(Verdict::Store)
+            }
+            // AOUT.VALUEU (V × 1000): the analog output's user value.
+            0x3470 if sub == 3 => {
+                cx.drive.set_analog_output(f64::from(le_u64(data) as u16 as i16) / 1000.0);
+                Ok(Verdict::Store)
+            }
+            // HOME.SET: the axis is homed where it stands, its position the
+            // home offset 607Ch (HOME.P), as homing method 35/37 would.
+            0x35F0 => {
+                let home = od.get_i64(0x607C, 0).unwrap_or(0);
+                let inc = cx.drive.units().pos_to_inc(home);
+                cx.drive.set_position_increments(inc);
+                self.status.set_homed();
+                Ok(Verdict::Handled)
+            }
+            // FB1.OFFSET: an offset on the position actual value.
+            0x3490 => {
+                self.position_offset(cx, i64::from(le_u64(data) as u32 as i32));
+                Ok(Verdict::Store)
+            }
+            // PLS.RESET re-arms single-shot switches.
+            0x34A3 if sub == 2 => {
+                self.pls.reset(le_u64(data) as u16);
+                Ok(Verdict::Store)
+            }
+            // MOTOR.IPEAK: the foldback's peak current.
+            0x358F => {
+                tuning::apply(cx, od, Some((index, sub, data)))?;
+                Ok(Verdict::Store)
+            }
             i if params::FORWARDED.contains(&i) => {
                 self.forward(cx, od, index, sub, data)?;
                 Ok(Verdict::Store)
@@ -137,5 +185,20 @@ impl Kollmorgen {
             _ => return Ok(None),
         };
         verdict.map(Some)
+    }
+}
+
+impl Kollmorgen {
+    /// FB1.OFFSET 3490h (position units): the position actual value reads
+    /// `offset` more than the feedback; the reference shifts by the change
+    /// (kept across an NMT reset, as the drive's reference is; homing sets
+    /// the reference anew).
+    pub(crate) fn position_offset(&mut self, cx: &mut Context<'_>, offset: i64) {
+        let delta = offset.saturating_sub(self.fb_offset);
+        if delta != 0 {
+            let inc = cx.drive.position_increments().saturating_add(cx.drive.units().pos_to_inc(delta));
+            cx.drive.set_position_increments(inc);
+            self.fb_offset = offset;
+        }
     }
 }

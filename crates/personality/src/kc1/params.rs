@@ -109,10 +109,14 @@ impl Kollmorgen {
             0x358E => {
                 let m = &cx.drive.config().params.motor;
                 let ma = if v == 0 { (m.rated_current * 1000.0).round() } else { v as u32 as f64 };
-                let mnm = (ma * m.kt).round().clamp(1.0, f64::from(u32::MAX)) as u32;
+                // The torque constant in force (MOTOR.KT).
+                let kt = cx.drive.model().params().motor.kt;
+                let mnm = (ma * kt).round().clamp(1.0, f64::from(u32::MAX)) as u32;
                 let ma = ma.clamp(1.0, f64::from(u32::MAX)) as u32;
                 cx.drive.on_write(od, 0x6075, 0, &ma.to_le_bytes())?;
                 cx.drive.on_write(od, 0x6076, 0, &mnm.to_le_bytes())?;
+                // The foldback's continuous current.
+                super::tuning::apply(cx, od, Some((0x358E, 0, data)))?;
             }
             _ => {}
         }
@@ -129,5 +133,10 @@ impl Kollmorgen {
                 let _ = self.forward(cx, od, index, 0, &v.to_le_bytes()[..4]);
             }
         }
+        let _ = super::tuning::apply(cx, od, None);
+        let _ = super::brake::set_delays(cx, od, None);
+        // A stored FB1.OFFSET at power-on.
+        let offset = od.get_i64(0x3490, 0).unwrap_or(0);
+        self.position_offset(cx, offset);
     }
 }

@@ -30,6 +30,9 @@ pub enum Warning {
     /// n167: a pp target beyond a software limit was clamped to it, EMCY
     /// 86A9h.
     SoftLimitTraversed,
+    /// n304: the motor foldback below IL.FOLDWTHRESH (or its I²t above
+    /// IL.MI2TWTRESH), EMCY 8381h.
+    MotorFoldback,
 }
 
 impl Warning {
@@ -42,6 +45,7 @@ impl Warning {
             Warning::SyncLost => 125,
             Warning::MotorTemperature => 301,
             Warning::SoftLimitTraversed => 167,
+            Warning::MotorFoldback => 304,
         }
     }
 
@@ -54,12 +58,13 @@ impl Warning {
             Warning::SyncLost => 0x8781,
             Warning::MotorTemperature => 0x7186,
             Warning::SoftLimitTraversed => 0x86A9,
+            Warning::MotorFoldback => 0x8381,
         }
     }
 }
 
-/// Up to this many warnings are active at once (there are six kinds).
-const MAX_WARNINGS: usize = 6;
+/// Up to this many warnings are active at once (there are seven kinds).
+const MAX_WARNINGS: usize = 7;
 /// AKD 2012h/2013h: the last 20 faults.
 const HISTORY: usize = 20;
 
@@ -183,6 +188,11 @@ impl Status {
             homed: false,
             number: (0, 0),
         }
+    }
+
+    /// The axis was homed outside the homing mode (HOME.SET): 1002h bit 1.
+    pub fn set_homed(&mut self) {
+        self.homed = true;
     }
 
     /// Whether `w` is active.

@@ -4,6 +4,8 @@
 #![allow(dead_code)]
 
 pub mod kc_objects;
+pub mod kc_outputs;
+pub mod kc_tuning;
 pub mod kollmorgen;
 pub mod trace;
 
