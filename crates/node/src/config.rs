@@ -78,6 +78,11 @@ pub struct NodeConfig {
     /// 301 bit rate.
     #[cfg(feature = "std")]
     pub eds_device_info: Option<drivebus_eds::DeviceInfo>,
+    /// The file served at 1021h as it is (a device built from its EDS or
+    /// DCF, [`crate::Node::from_eds`]) instead of one generated from the
+    /// running dictionary.
+    #[cfg(feature = "std")]
+    pub eds_text: Option<std::sync::Arc<str>>,
 }
 
 impl NodeConfig {
@@ -110,6 +115,8 @@ impl NodeConfig {
             eds_object: false,
             #[cfg(feature = "std")]
             eds_device_info: None,
+            #[cfg(feature = "std")]
+            eds_text: None,
         }
     }
 }

@@ -25,6 +25,8 @@ mod config;
 mod device;
 mod dictionary;
 #[cfg(feature = "std")]
+mod eds_device;
+#[cfg(feature = "std")]
 mod eds_object;
 mod foreign;
 mod node;
@@ -36,6 +38,8 @@ pub mod storage;
 pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
 pub use config::{Identity, NodeConfig};
 pub use device::NodeDevice;
+#[cfg(feature = "std")]
+pub use eds_device::EdsOptions;
 pub use dictionary::build_dictionary;
 pub use node::{Node, NodeTemplate};
 pub use owners::{LOAD_SIGNATURE, SAVE_SIGNATURE};

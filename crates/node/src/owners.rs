@@ -118,9 +118,10 @@ pub(crate) struct Services {
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
     /// What the EDS served at 1021h says besides the dictionary: LSS
-    /// slave or not, and the device's own `[DeviceInfo]`.
+    /// slave or not, the device's own `[DeviceInfo]`, and the file itself
+    /// when the device serves its file as it is.
     #[cfg(feature = "std")]
-    pub eds_info: (bool, Option<drivebus_eds::DeviceInfo>),
+    pub eds_info: (bool, Option<drivebus_eds::DeviceInfo>, Option<std::sync::Arc<str>>),
 }
 
 /// The node's side of an application callback, borrowed apart from the
@@ -266,7 +267,11 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
             tag::EMCY => self.s.emcy.check_read(at.index, at.sub),
             #[cfg(feature = "std")]
             tag::EDS => {
-                let (lss, info) = &self.s.eds_info;
+                let (lss, info, file) = &self.s.eds_info;
+                if let Some(file) = file {
+                    od.set_raw(at.r, file.as_bytes());
+                    return Ok(());
+                }
                 let text = crate::eds_object::generate(
                     od,
                     self.s.nmt.node_id(),
