@@ -14,7 +14,8 @@
 //!             AccessType=ro\nDefaultValue=0x000F0191\n[1017]\nParameterName=Producer heartbeat time\n\
 //!             DataType=0x0006\nAccessType=rw\nDefaultValue=100\n";
 //! let eds = drivebus_eds::parse(text).unwrap().eds;
-//! let node = Node::from_eds(&eds, text, 5, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap();
+//! let (node, _warnings) =
+//!     Node::from_eds(&eds, text, 5, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap();
 //! assert_eq!(node.od().get_u32(0x1000, 0), Some(0x000F_0191));
 //! assert!(node.od().object(0x1018).is_none()); // only what the file has
 //! ```
@@ -24,7 +25,7 @@ use crate::node::{Node, NodeTemplate};
 use crate::storage::Storage;
 use alloc::boxed::Box;
 use alloc::vec::Vec;
-use drivebus_eds::{Eds, EdsError};
+use drivebus_eds::{Diagnostic, Eds, EdsError};
 use drivebus_od::{Object, ObjectDictionary};
 use drivebus_pdo::Granularity;
 
@@ -116,22 +117,63 @@ fn prune(od: &mut ObjectDictionary, file: &ObjectDictionary, keep: &[u16]) {
             *dst = src.clone();
         }
         od.insert(n);
+        // Sub 0, which the merge raised to the services' highest
+        // sub-index, back as the file has it.
+        if let (Some(fs), Ok(r)) = (f.get(0), od.find(index, 0)) {
+            od.set_raw(r, fs.bytes());
+            if let Some(s0) = od.get_mut(index, 0) {
+                s0.default.clone_from(&fs.default);
+            }
+        }
     }
+}
+
+/// `eds` without its objects whose values are of no basic data type (a
+/// node cannot encode them), and a warning for each; `None`: all servable.
+fn servable(eds: &Eds) -> (Option<Eds>, Vec<Diagnostic>) {
+fn bad(o: &drivebus_eds::EdsObject) -> Option<&drivebus_eds::EdsVar> {
+        o.var.iter().chain(o.subs.values()).find(|v| drivebus_od::DataType::from_index(v.data_type).is_none())
+    }
+    let skipped: Vec<Diagnostic> = eds
+        .objects
+        .values()
+        .filter(|o| o.object_type != drivebus_od::ObjectCode::Null)
+        .filter_map(|o| {
+            bad(o).map(|v| Diagnostic {
+                line: v.line,
+                message: alloc::format!(
+                    "object {:04X} left out: DataType {:#06x} is not a basic type",
+                    o.index,
+                    v.data_type
+                ),
+            })
+        })
+        .collect();
+    if skipped.is_empty() {
+        return (None, skipped);
+    }
+    let mut e = eds.clone();
+    e.objects.retain(|_, o| o.object_type == drivebus_od::ObjectCode::Null || bad(o).is_none());
+    (Some(e), skipped)
 }
 
 impl Node {
     /// The device `eds` (read from `text`, which 1021h serves) describes,
     /// as node `node_id` (`$NODEID` evaluated for it), parameters in
     /// `storage` (see the module docs). A value the file gets wrong (a
-    /// default that does not fit its type) is an error with its line.
+    /// default that does not fit its type) is an error with its line; an
+    /// object of a data type that is no basic type (a structure the file
+    /// does not define for it) is left out, named in the warnings returned
+    /// beside the node.
     pub fn from_eds(
         eds: &Eds,
         text: &str,
         node_id: u8,
         storage: Box<dyn Storage + Send>,
         options: EdsOptions,
-    ) -> Result<Node, EdsError> {
-        let file = drivebus_eds::to_od(eds, node_id)?;
+    ) -> Result<(Node, Vec<Diagnostic>), EdsError> {
+        let (served, skipped) = servable(eds);
+        let file = drivebus_eds::to_od(served.as_ref().unwrap_or(eds), node_id)?;
         let mut cfg = NodeConfig::from_eds(eds, &file, node_id);
         cfg.eds_object |= options.eds_object;
         if cfg.eds_object {
@@ -141,7 +183,7 @@ impl Node {
         let t = NodeTemplate::with_dictionary(cfg, file.clone());
         let (cfg, mut od) = t.into_parts();
         prune(&mut od, &file, keep);
-        Ok(Node::assemble(cfg, od, storage))
+        Ok((Node::assemble(cfg, od, storage), skipped))
     }
 }
 
@@ -152,7 +194,7 @@ mod tests {
 
     fn node(text: &str, id: u8) -> Node {
         let eds = drivebus_eds::parse(text).unwrap().eds;
-        Node::from_eds(&eds, text, id, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap()
+        Node::from_eds(&eds, text, id, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap().0
     }
 
     const PDO: &str = "[DeviceInfo]\nGranularity=8\nLSS_Supported=1\n\
@@ -192,10 +234,23 @@ mod tests {
     }
 
     #[test]
+    fn an_object_of_no_basic_type_is_left_out_with_a_warning() {
+        let text = "[2020]\nParameterName=Complex\nDataType=0x40\nAccessType=rw\n\
+                    [2021]\nParameterName=x\nDataType=0x0005\nAccessType=rw\nDefaultValue=7\n";
+        let eds = drivebus_eds::parse(text).unwrap().eds;
+        let (n, w) = Node::from_eds(&eds, text, 1, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap();
+        assert!(n.od().object(0x2020).is_none());
+        assert_eq!(n.od().get_u32(0x2021, 0), Some(7));
+        assert_eq!(w.len(), 1);
+        assert_eq!(w[0].line, 1);
+        assert!(w[0].message.contains("2020"), "{}", w[0].message);
+    }
+
+    #[test]
     fn eds_object_serves_the_file_text() {
         let eds = drivebus_eds::parse(PDO).unwrap().eds;
         let opts = EdsOptions { eds_object: true };
-        let mut n = Node::from_eds(&eds, PDO, 3, Box::new(MemoryStorage::new()), opts).unwrap();
+        let (mut n, _) = Node::from_eds(&eds, PDO, 3, Box::new(MemoryStorage::new()), opts).unwrap();
         assert!(n.od().object(0x1022).is_some());
         let got = n.read_object(0x1021, 0, drivebus_can::Instant::ZERO, &mut drivebus_od::NoHooks).unwrap();
         assert_eq!(got, PDO.as_bytes());
