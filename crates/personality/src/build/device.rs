@@ -185,7 +185,6 @@ impl Application for DeviceApp {
         let DeviceApp::Io(n) = self else { return None };
         let module = &mut n.module;
         let next = n.schedule.run_with(cx.now, |i| IoNode::inject(module, i));
-        n.module.poll(cx);
-        next
+        drivebus_can::earliest(next, n.module.poll(cx))
     }
 }
