@@ -290,35 +290,6 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_file_name_is_the_files_own() {
-        let t = "; c\r\n[FileInfo]\r\nFileName=drivebus.eds\r\nFileVersion=1\r\n\r\n[DeviceInfo]\r\nX=1\r\n";
-        let w = with_file_name(t, "akd-node1.eds");
-        assert_eq!(w, t.replace("drivebus.eds", "akd-node1.eds"));
-        let none = "[FileInfo]\nFileVersion=1\n[DeviceInfo]\n";
-        assert_eq!(
-            with_file_name(none, "x.eds"),
-            "[FileInfo]\nFileVersion=1\nFileName=x.eds\r\n[DeviceInfo]\n"
-        );
-        let (date, time) = now_306();
-        assert_eq!((date.len(), date.as_bytes()[2], time.len()), (10, b'-', 7), "{date} {time}");
-    }
-
-    #[test]
-    fn a_broken_eds_names_its_cause_first() {
-        let e = parse_text(
-            "[FileInfo]\nFileName=x\n[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n[1000\nDataType=7\n",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(e.starts_with("line 6: section header without ']'"), "{e}");
-    }
-}
-
 fn show(g: &Global, eds: &Eds) {
     let mut rows = Vec::new();
     for (idx, o) in &eds.objects {
@@ -368,5 +339,34 @@ fn show(g: &Global, eds: &Eds) {
         };
         let n: String = n.chars().take(44).collect();
         outln!("{obj:<9} {n:<44} {t:<15} {a:<6} {:<4} {d}", if p { "yes" } else { "" });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_file_name_is_the_files_own() {
+        let t = "; c\r\n[FileInfo]\r\nFileName=drivebus.eds\r\nFileVersion=1\r\n\r\n[DeviceInfo]\r\nX=1\r\n";
+        let w = with_file_name(t, "akd-node1.eds");
+        assert_eq!(w, t.replace("drivebus.eds", "akd-node1.eds"));
+        let none = "[FileInfo]\nFileVersion=1\n[DeviceInfo]\n";
+        assert_eq!(
+            with_file_name(none, "x.eds"),
+            "[FileInfo]\nFileVersion=1\nFileName=x.eds\r\n[DeviceInfo]\n"
+        );
+        let (date, time) = now_306();
+        assert_eq!((date.len(), date.as_bytes()[2], time.len()), (10, b'-', 7), "{date} {time}");
+    }
+
+    #[test]
+    fn a_broken_eds_names_its_cause_first() {
+        let e = parse_text(
+            "[FileInfo]\nFileName=x\n[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n[1000\nDataType=7\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("line 6: section header without ']'"), "{e}");
     }
 }

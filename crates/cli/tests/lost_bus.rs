@@ -1,6 +1,6 @@
 //! Issue 15 §1: a client whose server dies. `drive move` waited past
 //! `--wait` until Ctrl-C; `dump` and `gateway --listen` kept running on
-//! the closed connection. Each must end within its timeout, say what was
+//! the closed connection (`monitor` said so already, with other words). Each must end within its timeout, say what was
 //! lost and exit non-zero.
 
 mod common;
@@ -65,12 +65,13 @@ fn every_client_notices_a_dead_server() {
     let mv = spawn(&u, &["--node", "5", "drive", "move", "500000", "--velocity", "100000", "--wait", "6"]);
     let dump = spawn(&u, &["dump"]);
     let gw = spawn(&u, &["gateway", "--listen", "127.0.0.1:0"]);
+    let mon = spawn(&u, &["monitor", "--watch", "statusword"]);
     std::thread::sleep(Duration::from_millis(1500));
     let _ = srv.child.kill();
     let _ = srv.child.wait();
     // Well before --wait runs out: the loss itself ends them.
     let by = Instant::now() + Duration::from_secs(4);
-    for (child, what) in [(mv, "drive move"), (dump, "dump"), (gw, "gateway --listen")] {
+    for (child, what) in [(mv, "drive move"), (dump, "dump"), (gw, "gateway --listen"), (mon, "monitor")] {
         let (st, err) = ended_by(child, by, what);
         assert!(!st.success(), "{what}: {st}");
         assert!(err.contains("lost") && err.contains("server closed the connection"), "{what}: {err}");

@@ -135,6 +135,11 @@ pub enum Request {
     /// A local NMT command: the device acts on it as on one received for
     /// its node-ID (see [`crate::Node::nmt_command`]).
     Nmt(NmtCommand),
+    /// Store all parameters, as a 1010h:1 "save" write does (a
+    /// manufacturer's save command, e.g. Kollmorgen DRV.NVSAVE). A store
+    /// that fails is not reported (the application's object has no abort
+    /// left to give).
+    StoreParameters,
     /// Put this raw value back into a sub-object after the current call,
     /// and re-read the PDO configuration (used to lift a restriction for
     /// one write, e.g. remapping a valid PDO).

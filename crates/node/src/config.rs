@@ -56,6 +56,12 @@ pub struct NodeConfig {
     /// 1015h inhibit time EMCY. Without it (a device whose manual does not
     /// list the object) EMCY frames go out with no inhibit time.
     pub emcy_inhibit: bool,
+    /// The EMCY of a heartbeat or life-guarding loss (8130h) with a
+    /// device-defined error register and manufacturer bytes (as the
+    /// application's `Request::RaiseEmcy` with `Some` register), for a
+    /// device that sends it in the form of its other errors; `None`: CiA
+    /// 301 bookkeeping.
+    pub comm_error_emcy: Option<(u8, [u8; 5])>,
     /// 1007h synchronous window length. Without it there is no window:
     /// synchronous PDOs are processed whenever a SYNC came.
     pub sync_window: bool,
@@ -107,6 +113,7 @@ impl NodeConfig {
             emcy_consumers: 0,
             error_classes: 1,
             emcy_inhibit: true,
+            comm_error_emcy: None,
             sync_window: true,
             sync_counter: true,
             time: true,

@@ -232,7 +232,7 @@ fn group(slot: Slot) -> PersistGroup {
 }
 
 /// 1010h store / 1011h restore: the signature, then the storage.
-fn store_restore(
+pub(crate) fn store_restore(
     storage: &mut (dyn Storage + Send),
     od: &ObjectDictionary,
     at: &Target,

@@ -308,7 +308,12 @@ impl Node {
 
     /// A communication error: EMCY 8130h and the 1029h reaction.
     fn comm_error<A: Application + ?Sized>(&mut self, now: Instant, app: &mut A, out: &mut impl TxSink) {
-        self.raise_emcy(EMCY_GUARD, [0; 5], now);
+        match self.config().comm_error_emcy {
+            Some((bits, bytes)) => self.raise_defined(EMCY_GUARD, bits, bytes, now),
+            None => {
+                self.raise_emcy(EMCY_GUARD, [0; 5], now);
+            }
+        }
         if let Some(ev) = self.s.nmt.on_error(COMM_ERROR) {
             self.on_nmt_event(ev, now, app, out);
         }
@@ -317,7 +322,7 @@ impl Node {
     fn comm_recovered(&mut self, now: Instant) {
         let any_lost = self.s.nmt.is_life_guarding_lost()
             || self.s.nmt.consumer_entries().any(|e| self.s.nmt.is_heartbeat_timed_out(e.node));
-        if !any_lost {
+        if !any_lost && !self.clear_defined(EMCY_GUARD, now) {
             self.clear_emcy(EMCY_GUARD, now);
         }
     }

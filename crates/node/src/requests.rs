@@ -75,6 +75,13 @@ impl Node {
                 self.poll_services(now, app, out);
                 self.nmt_command(cmd, now, app, out);
             }
+            Request::StoreParameters => {
+                if let Ok(r) = self.od.find(0x1010, 1) {
+                    let at = self.od.target(r);
+                    let save = crate::owners::SAVE_SIGNATURE.to_le_bytes();
+                    let _ = crate::owners::store_restore(&mut *self.s.storage, &self.od, &at, &save);
+                }
+            }
             Request::Restore { index, sub, value, only_if } => {
                 if let Ok(r) = self.od.find(index, sub)
                     && only_if.is_none_or(|v| self.od.get_u32(index, sub) == Some(v))
@@ -91,7 +98,7 @@ impl Node {
 
     /// An error with a device-defined register: 1001h is the OR of these
     /// errors' bits, 1003h gets `code | byte 0 << 16`, the EMCY is sent raw.
-    fn raise_defined(&mut self, code: u16, bits: u8, bytes: [u8; 5], now: Instant) {
+    pub(crate) fn raise_defined(&mut self, code: u16, bits: u8, bytes: [u8; 5], now: Instant) {
         if self.app_errors.iter().any(|(c, _)| *c == code) {
             return;
         }
@@ -109,7 +116,7 @@ impl Node {
 
     /// Clears an error raised by [`Self::raise_defined`]; the error-reset
     /// EMCY carries the bits of the errors still active.
-    fn clear_defined(&mut self, code: u16, now: Instant) -> bool {
+    pub(crate) fn clear_defined(&mut self, code: u16, now: Instant) -> bool {
         let before = self.app_errors.len();
         self.app_errors.retain(|(c, _)| *c != code);
         if self.app_errors.len() == before {

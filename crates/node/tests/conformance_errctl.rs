@@ -38,6 +38,23 @@ fn hb_02_consumer_timeout_raises_8130_and_applies_1029h() {
     assert_eq!(r.take(), frs(&["085#0000000000000000"]));
 }
 
+/// `NodeConfig::comm_error_emcy`: the same loss in a device's own EMCY
+/// form (KC1/AKD: register 10h without the generic bit, category 01h).
+#[test]
+fn hb_02b_consumer_timeout_emcy_in_the_device_form() {
+    let mut cfg = device();
+    cfg.comm_error_emcy = Some((0x10, [0x01, 0, 0, 0, 0]));
+    let mut r = Rig::new(cfg);
+    Rig::assert_written(r.sdo_write(5, 0x1016, 1, &0x0006_0096u32.to_le_bytes()), 5, 0x1016, 1);
+    r.send("000#0105");
+    r.send("706#05");
+    r.run_for(Duration::from_millis(151));
+    assert_eq!(r.take(), frs(&["085#3081100100000000"]));
+    assert_eq!(r.node().od().get_u32(0x1001, 0), Some(0x10));
+    r.send("706#05");
+    assert_eq!(r.take(), frs(&["085#0000000000000000"]));
+}
+
 #[test]
 fn hb_03_duplicate_consumer_entry_is_refused() {
     let mut r = Rig::new(device());

@@ -73,6 +73,8 @@ KC1_AKD_COMMON = {
     (0x6072, 0): ov(default="4000", why="no default given; drivebus's working value 4000 per mille (the motor's peak / rated current) written", sec="KC1 8.1.4 / AKD 7.1.5"),
 }
 
+for _i, _n in ((0x3501, "DRV.ACC"), (0x3522, "DRV.DEC"), (0x3502, "HOME.ACC")):
+    KC1_AKD_COMMON[(_i, 0)] = ov(default="36000000", why=f"no default given; {_n} is the drive's own ramp that 6083h/6084h/609Ah = 0 select, drivebus's working value 36000000 units/s² (1000 rev/s² at 36000 units per revolution) written", sec="KC1 7.11.2.4, 7.11.2.5, 7.10.2.4, 8.1.3 / AKD 6.11.2.4, 6.11.2.5, 6.10.2.4, 7.1.4")
 KC1_AKD_COMMON[(0x6063, 0)] = ov(default="0", why="default: the table prints 2^20 ('as printed'), the increments of one turn (PRBASE 20, §7.8.2.1), not a position; the drive starts at 0 increments (what the running drive reads)", sec="KC1 7.8.2.1 / AKD 6.8.2.1")
 
 PROFILES["kc1"]["overrides"] = dict(KC1_AKD_COMMON)
@@ -82,11 +84,10 @@ PROFILES["kc1"]["overrides"].update({
     (0x35B9, 1): ov(type=I32, why="type not given; INTEGER32 as the AKD appendix lists MT.CNTL (35B9h)", sec="7.11.2.1"),
 })
 PROFILES["akd"]["overrides"] = dict(KC1_AKD_COMMON)
-PROFILES["akd"]["remove_subs"] = [(0x60C1, 2), (0x60C1, 3)]
 PROFILES["akd"]["overrides"].update({
     (0x6099, 2): ov(default="18000", why="default '50 % of sub 1': 36000 / 2 = 18000 written", sec="6.10.2.3"),
     (0x6087, 0): ov(default="10000", why="no default given ('-'); drivebus's working value 10000 per mille/s written (above the ~2385 minimum)", sec="6.7.2.6; 7.1.5"),
-    (0x60C1, 0): ov(why="sub 0 = 1 (body: linear interpolation only); subs 2 and 3 of the appendix are remnants of the PVT mode removed in edition M and left out, so sub 0 is the highest sub-index", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
+    (0x60C1, 0): ov(default="3", why="sub 0 = 1 in the body (linear interpolation only) but the appendix of this edition lists subs 2 and 3 (the PVT record removed in edition M): the firmware's dictionary still has them, so they are kept as values the linear interpolation ignores, and sub 0 = 3 is the highest sub-index", sec="6.9.2.2; 7.1.5; 9 (edition M)"),
 })
 PROFILES["ipos"]["overrides"] = {
     (0x1000, 0): ov(default="0x00060192", why="default: table prints '60192' meaning hex; 0x00060192 written", sec="4.8.1"),

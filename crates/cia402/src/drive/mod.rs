@@ -420,6 +420,14 @@ impl Drive {
         }
     }
 
+    /// Changes the drive's own ramps ([`ZeroRamp`], what a 0 in 6083h,
+    /// 6084h or 609Ah selects), e.g. from a manufacturer parameter
+    /// (Kollmorgen DRV.ACC). Takes effect at the next write or reload of
+    /// those objects.
+    pub fn set_zero_ramp(&mut self, ramp: ZeroRamp) {
+        self.cfg.zero_ramp = ramp;
+    }
+
     /// The jerk of the jerk-limited ramp in force.
     pub fn profile_jerk(&self) -> ProfileJerk {
         self.jerk

@@ -5,11 +5,11 @@
 //! plus:
 //!
 //! - manufacturer modes (§6.4.2.4 / 6060h table): −1 analog current, −2
-//!   analog velocity, −3 electronic gearing. The virtual drive has no analog
-//!   input and no master encoder, so the set-point is 0: −1 runs as torque
-//!   mode with 0 ‰, −2 and −3 as profile velocity with 0. While one of them
-//!   is active, 6071h/60FFh writes are stored but do not move the motor
-//!   (the set-point comes from the input, not the bus). 6061h shows the
+//!   analog velocity, −3 electronic gearing, with their set-points from the
+//!   machine's analog input 1 and master encoder (`modes.rs`): −1 runs as
+//!   torque mode, −2 and −3 as profile velocity. While one of them is
+//!   active, 6071h/60FFh writes are stored but do not move the motor (the
+//!   set-point comes from the input, not the bus). 6061h shows the
 //!   negative code.
 //! - manufacturer homing methods (§6.10.2.2 table, edition R): −7/−6 to the
 //!   reference switch negative/positive then the next feedback zero
@@ -18,6 +18,7 @@
 
 mod emcy;
 mod facts;
+mod modes;
 
 pub use facts::INFO;
 
@@ -33,7 +34,7 @@ use drivebus_can::Frame;
 use drivebus_cia402::drive::{DriveConfig, op};
 use drivebus_cia402::homing::{HomingContext, HomingMethod, MethodStep, StandardMethod};
 use drivebus_node::{Node, NodeConfig, NodeEvent};
-use drivebus_od::{ObjectDictionary, SdoAbort};
+use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
 
 extern crate alloc;
 
@@ -65,20 +66,20 @@ impl HomingMethod for Alias {
 /// AKD manufacturer homing methods and the standard method each runs as.
 pub const HOMING_ALIASES: [(i8, i8); 5] = [(-7, 5), (-6, 3), (-5, 37), (-4, 19), (-3, 21)];
 
-/// The AKD.
+/// The AKD: the Kollmorgen behaviour and the input-driven modes.
 #[derive(Debug, Clone)]
-pub struct Akd(Kollmorgen);
+pub struct Akd(Kollmorgen, modes::InputModes);
 
 impl Akd {
     /// The AKD behaviour.
     pub fn new() -> Self {
-        Akd(Kollmorgen::new(Profile::Akd))
+        Akd(Kollmorgen::new(Profile::Akd), modes::InputModes::default())
     }
 
     /// With the DC bus charged before *Switch on* (statusword 0231h; see
     /// [`Kollmorgen::dc_bus_before_switch_on`]).
     pub fn with_dc_bus_before_switch_on(self, on: bool) -> Self {
-        Akd(self.0.with_dc_bus_before_switch_on(on))
+        Akd(self.0.with_dc_bus_before_switch_on(on), self.1)
     }
 }
 
@@ -88,11 +89,19 @@ impl Default for Akd {
     }
 }
 
-const HOOKED: &[u16] = &[
-    0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403, 0x1800,
-    0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6071, 0x60FF,
-    0x60C4,
-];
+/// The KC1's hooked objects plus 6071h/60FFh (the set-points modes
+/// −1..−3 take from their inputs).
+const HOOKED: [u16; Kollmorgen::HOOKED.len() + 2] = {
+    let k = Kollmorgen::HOOKED;
+    let mut all = [0x6071; Kollmorgen::HOOKED.len() + 2];
+    let mut i = 0;
+    while i < k.len() {
+        all[i] = k[i];
+        i += 1;
+    }
+    all[k.len() + 1] = 0x60FF;
+    all
+};
 
 impl Behaviour for Akd {
     fn profile(&self) -> Profile {
@@ -102,7 +111,7 @@ impl Behaviour for Akd {
         self.0.adjust_node_config(cfg);
     }
     fn hooked_objects(&self) -> &'static [u16] {
-        HOOKED
+        &HOOKED
     }
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
         self.0.adjust_drive_config(cfg);
@@ -151,6 +160,15 @@ impl Behaviour for Akd {
             }
             return Ok(Verdict::Pass);
         }
+        // §6.9.2.1: linear interpolation only (60C0h = 0).
+        if index == 0x60C0 && le_u64(data) != 0 {
+            return Err(SdoAbort::INVALID_VALUE);
+        }
+        // §7.1.5: 60C1h:2/3 are listed (the PVT mode's record, removed in
+        // edition M): kept as values, the linear interpolation ignores them.
+        if index == 0x60C1 && (2..=3).contains(&sub) {
+            return Ok(Verdict::Store);
+        }
         if index == 0x6060 && sub == 0 {
             let m = data.first().copied().unwrap_or(0) as i8;
             if m < 0 && self.manufacturer_mode(m).is_some() {
@@ -176,7 +194,11 @@ impl Behaviour for Akd {
     fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
         self.0.on_event(cx, od, event);
     }
+    fn on_boot(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        self.0.on_boot(cx, od);
+    }
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        self.1.update(cx, od);
         self.0.after_step(cx, od);
     }
     fn emcy(&self, code: u16) -> EmcyFrame {

@@ -17,8 +17,17 @@
 //! - 6099h homing speeds above 65535 velocity units → `0609 0031`
 //!   (example 9 frames 43–44; our reading, see docs/personalities.md).
 
+mod ascii;
+mod brake;
 mod emcy;
 mod facts;
+mod io;
+mod latch;
+mod monitor;
+mod objects;
+mod params;
+pub mod status;
+mod timing;
 
 pub use facts::INFO;
 
@@ -30,8 +39,9 @@ use crate::Profile;
 extern crate alloc;
 use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict, set_default};
 use drivebus_can::Frame;
-use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp};
+use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp, op};
 use drivebus_cia402::interp::IpMode;
+use drivebus_cia402::state_machine::State;
 use drivebus_node::{Node, NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort, Value, le_u64};
 use drivebus_pdo::PdoConfig;
@@ -58,9 +68,30 @@ pub struct Kollmorgen {
     /// A PVT point's position (60C1h:1), held until the point's last item
     /// (60C1h:3) completes the record (§7.9.2.2).
     pvt_position: Option<[u8; 4]>,
-    /// 2026h ASCII channel: the command being received, the reply being read.
-    ascii_in: alloc::string::String,
-    ascii_out: alloc::collections::VecDeque<u8>,
+    /// 2026h ASCII channel (4 characters per SDO).
+    telnet: ascii::Line,
+    /// 1026h OS prompt (one character per SDO).
+    prompt: ascii::Line,
+    /// The parameter names of the object table, for Telnet.
+    names: alloc::vec::Vec<(alloc::string::String, u16, u8)>,
+    /// Motion tasks stored by MT.SET.
+    tasks: alloc::vec::Vec<ascii::Task>,
+    /// MT.NUM where the dictionary has no object for it.
+    task_num: usize,
+    /// 1002h, 2000h–2002h, 2011h–2013h and the warnings.
+    status: status::Status,
+    /// The fieldbus PLL (36E6h, 3496h).
+    pll: timing::Pll,
+    /// 60C2h written as a pair.
+    period: timing::PeriodPair,
+    /// The measurement mirrors and their limits.
+    monitor: monitor::Monitor,
+    /// The latch objects over the touch probe.
+    latch: latch::Latch,
+    /// The brake objects 345Ah, MOTOR.BRAKERLS.
+    brake: brake::Brake,
+    /// DIN1–7 and their change flags in 60FDh.
+    inputs: io::Inputs,
 }
 
 impl Kollmorgen {
@@ -72,8 +103,18 @@ impl Kollmorgen {
             lifted: None,
             sync_seen: false,
             pvt_position: None,
-            ascii_in: alloc::string::String::new(),
-            ascii_out: alloc::collections::VecDeque::new(),
+            telnet: ascii::Line::default(),
+            prompt: ascii::Line::default(),
+            names: alloc::vec::Vec::new(),
+            tasks: alloc::vec![ascii::Task::default(); ascii::TASKS],
+            task_num: 0,
+            status: status::Status::new(profile.info().emcy),
+            pll: timing::Pll::default(),
+            period: timing::PeriodPair::default(),
+            monitor: monitor::Monitor::default(),
+            latch: latch::Latch::default(),
+            brake: brake::Brake::default(),
+            inputs: io::Inputs::default(),
         }
     }
 
@@ -87,7 +128,8 @@ impl Kollmorgen {
     pub const HOOKED: &'static [u16] = &[
         0x2014, 0x2015, 0x2016, 0x2017, 0x2026, 0x2100, 0x6099, 0x608F, 0x1400, 0x1401, 0x1402, 0x1403,
         0x1800, 0x1801, 0x1802, 0x1803, 0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03,
-        0x60C4,
+        0x60C4, 0x1026, 0x2071, 0x3431, 0x35C7, 0x352A, 0x35A3, 0x35C6, 0x3856, 0x204C, 0x36E9, 0x358E,
+        0x20A4, 0x20A5, 0x3501, 0x3522, 0x3502, 0x35EB, 0x345A, 0x3450, 0x20B8,
     ];
 }
 
@@ -107,6 +149,9 @@ impl Behaviour for Kollmorgen {
         cfg.sync_window = false;
         cfg.sync_counter = false;
         cfg.sdo_server_param = false;
+        // KC1 §6.4.4.2 / AKD §5.4.4.2: F129 (guarding/heartbeat loss,
+        // §7.1) goes out like every drive fault: class bits, category.
+        cfg.comm_error_emcy = Some((crate::shared::class_bit(0x8130), [EMCY_CATEGORY, 0, 0, 0, 0]));
     }
 
     fn hooked_objects(&self) -> &'static [u16] {
@@ -123,6 +168,10 @@ impl Behaviour for Kollmorgen {
 
     fn adjust_drive_config(&self, cfg: &mut DriveConfig) {
         kollmorgen_units(cfg);
+        // KC1 §7.2.3.9 / AKD §6.2.3.9: 60FEh:1 bit 0 "set brake", bits
+        // 16/17 DOUT1/2 (as far as 60FEh:2 enables them).
+        cfg.io.output_lines = true;
+        cfg.io.set_brake_bit = true;
         // SYNC loss is supervised only when FBUS.PARAM04 (36E8h) = 1.
         cfg.sync_loss_fault = false;
         kollmorgen_power_on(cfg);
@@ -137,10 +186,37 @@ impl Behaviour for Kollmorgen {
         }
         if matches!(event, NodeEvent::ResetCommunication | NodeEvent::ResetApplication) {
             self.sync_seen = false;
+            self.pll.stop();
+        }
+        if matches!(event, NodeEvent::ResetApplication) {
+            self.status.reset();
+            self.period.reset();
+            self.brake = brake::Brake::default();
+        }
+        // §7.2.2.15: "when fieldbus communication is lost, the drive will
+        // regain control of the brake".
+        let left_operational =
+            matches!(event, NodeEvent::NmtState { from: drivebus_node::NmtState::Operational, .. });
+        if left_operational
+            || matches!(event, NodeEvent::HeartbeatTimeout { .. } | NodeEvent::LifeGuardingLost)
+        {
+            self.brake.lost();
+        }
+        // The drive reloaded its parameters: set those that follow a
+        // manufacturer parameter again.
+        if let NodeEvent::NmtState { to: drivebus_node::NmtState::PreOperational, from } = event
+            && *from != drivebus_node::NmtState::Operational
+        {
+            self.forward_all(cx, od);
         }
     }
 
+    fn on_boot(&mut self, cx: &mut Context<'_>, _od: &mut ObjectDictionary) {
+        self.status.boot(cx.now);
+    }
+
     fn finish(&mut self, node: &mut Node) {
+        self.names = ascii::parameter_names(&self.profile.eds().eds);
         for index in 0x2014..=0x2017u16 {
             let mask = tpdo_mask(node.od(), index);
             node.set_tpdo_change_mask(index - 0x2014, mask);
@@ -175,6 +251,7 @@ impl Behaviour for Kollmorgen {
             && u32::from(id) == cob & 0x7FF
         {
             self.sync_seen = true;
+            self.pll.sync_pending = true;
         }
         if let Some(f) = crate::shared::resize_expedited(od, node_id, frame) {
             return FilterOutcome::Replace(f);
@@ -193,19 +270,10 @@ impl Behaviour for Kollmorgen {
         sub: u8,
         data: &[u8],
     ) -> Result<Verdict, SdoAbort> {
+        if let Some(verdict) = self.object_write(cx, od, index, sub, data)? {
+            return Ok(verdict);
+        }
         match index {
-            // §7.2.2.6 / example 10: Telnet commands, 4 characters per write,
-            // executed at CR LF.
-            0x2026 if sub == 1 => {
-                self.ascii_in.extend(data.iter().map(|&b| char::from(b)));
-                if let Some(end) = self.ascii_in.find("\r\n") {
-                    let cmd: alloc::string::String = self.ascii_in.drain(..end + 2).collect();
-                    let reply = ascii_command(cmd.trim(), cx.drive);
-                    self.ascii_out.clear();
-                    self.ascii_out.extend(reply.bytes());
-                }
-                Ok(Verdict::Handled)
-            }
             // §8.2.2.1: the placeholder takes the RPDO bytes and ignores them.
             0x2100 => Ok(Verdict::Handled),
             // §7.9.2.2: 60C1h:2 is the time to the next point (ms,
@@ -297,12 +365,19 @@ impl Behaviour for Kollmorgen {
         if (index, sub) == (0x2026, 2) {
             // The next 4 characters of the reply; NUL once it is exhausted
             // (the manual does not say).
-            let mut chunk = [0u8; 4];
-            for c in &mut chunk {
-                *c = self.ascii_out.pop_front().unwrap_or(0);
-            }
+            let chunk = self.telnet.read::<4>();
             let r = od.find(index, sub)?;
             od.set_raw(r, &chunk);
+        }
+        if index == 0x35C7
+            && let (Some(w), Ok(r)) = (od.get_u32(0x6065, 0), od.find(index, sub))
+        {
+            od.set_raw(r, &w.to_le_bytes());
+        }
+        if (index, sub) == (0x1026, 2) {
+            let c = self.prompt.read::<1>();
+            let r = od.find(index, sub)?;
+            od.set_raw(r, &c);
         }
         Ok(())
     }
@@ -319,8 +394,9 @@ impl Behaviour for Kollmorgen {
         }
     }
 
-    fn after_step(&mut self, _cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         kollmorgen_statusword(od, self.dc_bus_before_switch_on);
+        self.supervise(cx, od);
         // ip: bit 10 is not shown (example 12 frames 53/55: 0237h, 1237h;
         // CiA 402 would show 0637h while ip is not active).
         if od.get_i64(0x6061, 0) == Some(7)
@@ -356,6 +432,51 @@ impl Behaviour for Kollmorgen {
     }
 }
 
+impl Kollmorgen {
+    /// After every step: software limits, PLL, then the status objects
+    /// (which set statusword bit 7 for the warnings).
+    fn supervise(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+        let view = cx.drive.view();
+        // KC1 §7.11.2.2 / AKD §6.11.2.2: limits relative to the machine
+        // home; 0/0 = off; not while homing.
+        let (lo, hi) = cx.drive.mode_params().software_limits;
+        let active = (lo != 0 || hi != 0) && view.mode != op::HM;
+        let pos = cx.drive.position();
+        let (above, below) = (active && pos > i64::from(hi), active && pos < i64::from(lo));
+        if self.profile == Profile::Kc1 {
+            // KC1 §7.1: F107/F108 (8580h/8581h) when the set-point takes
+            // the axis past a limit outwards (not the settling of a move
+            // that stops at it); back inwards it may move.
+            let v = cx.drive.demand_velocity();
+            let d = cx.drive.demand_position();
+            let (above, below) = (active && d > f64::from(hi), active && d < f64::from(lo));
+            if view.state == State::OperationEnabled && ((above && v > 0.0) || (below && v < 0.0)) {
+                cx.drive.inject(Injection::Fault(if above { 0x8580 } else { 0x8581 }));
+            }
+        } else {
+            // AKD §6.1 lists only the warnings n107/n108 (8582h/8583h).
+            self.status.set(cx, od, status::Warning::PositiveSoftLimit, above);
+            self.status.set(cx, od, status::Warning::NegativeSoftLimit, below);
+        }
+        // n167: the drive clamped a pp target to a limit (statusword bit
+        // 11 without a limit switch).
+        let clamped = active
+            && view.mode == op::PP
+            && view.state == State::OperationEnabled
+            && view.statusword & 0x800 != 0
+            && view.digital_inputs & 0x3 == 0;
+        self.status.set(cx, od, status::Warning::SoftLimitTraversed, clamped);
+        let period = cx.drive.mode_params().interpolation_period_s().map(|s| (s * 1e9).round() as u64);
+        self.pll.run(od, cx.now, period, matches!(view.mode, op::IP | op::CSP));
+        self.status.set(cx, od, status::Warning::SyncLost, self.pll.lost);
+        self.inputs.update(cx, od);
+        self.status.update(cx, od);
+        self.monitor.update(cx, od, &mut self.status);
+        self.latch.update(od);
+        self.brake.update(cx, od);
+    }
+}
+
 /// Statusword bit 4 "voltage enabled" is only shown from *Switched on*
 /// on: *Ready to switch on* reads 0221h (KC1 example 9 frame 47, AKD §9),
 /// not CiA 402's 0231h.
@@ -376,21 +497,6 @@ pub fn kollmorgen_statusword(od: &mut ObjectDictionary, dc_bus_before_switch_on:
             od.set_le(r, &new.to_le_bytes());
         }
     }
-}
-
-/// The drive's answer to a Telnet command on 2026h (example 10): a prompt
-/// `>`, the text, `\n\r\n`. Only `DRV.FAULTS` is interpreted; other
-/// commands answer as an unknown command.
-pub fn ascii_command(cmd: &str, drive: &drivebus_cia402::drive::Drive) -> alloc::string::String {
-    let text = if cmd.eq_ignore_ascii_case("DRV.FAULTS") {
-        match drive.state_machine().fault_code() {
-            0 => alloc::string::String::from("No faults active"),
-            code => alloc::format!("{code:04X}h: fault active"),
-        }
-    } else {
-        alloc::string::String::from("Error: unknown command")
-    };
-    alloc::format!(">{text}\n\r\n")
 }
 
 /// The Kollmorgen EMCY code for a fault the CiA 402 drive reports with its

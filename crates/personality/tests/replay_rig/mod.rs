@@ -3,6 +3,7 @@
 //! frames written candump-style (`603#2F 60 60 00 03 00 00 00`).
 #![allow(dead_code)]
 
+pub mod kc_objects;
 pub mod kollmorgen;
 pub mod trace;
 
