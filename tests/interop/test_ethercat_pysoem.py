@@ -352,3 +352,90 @@ def test_op_with_process_data(master, line):
     master.state = pysoem.INIT_STATE
     master.write_state()
     assert master.state_check(pysoem.INIT_STATE, 2_000_000) == pysoem.INIT_STATE
+
+
+SYNC0_NS = 4_000_000  # a multiple of the iPOS's 1 ms slow loop (§3.2.1)
+
+
+def _to_op(master, line) -> None:
+    """Requests OP for the whole line, cycling process data until every slave is there."""
+    master.state = pysoem.OP_STATE
+    master.send_processdata()
+    master.receive_processdata(10_000)
+    master.write_state()
+    for _ in range(400):
+        master.send_processdata()
+        master.receive_processdata(10_000)
+        if master.state_check(pysoem.OP_STATE, 5_000) == pysoem.OP_STATE:
+            return
+    pytest.fail(f"not all in OP: {[hex(s.state) for s in master.slaves]}\n{line.describe()}")
+
+
+@pytest.mark.limit(120)
+def test_csp_on_dc_sync0_in_soem_order(master, line):
+    """DC SYNC0 set up in SOEM's own order: `config_map` (which already
+    requests SAFE-OP of every slave), `config_dc`, `dc_sync` (SYNC0 every
+    4 ms), then SAFE-OP and OP. The iPOS must run on SYNC0 (1C32h:01 = 2,
+    60C2h = the SYNC0 cycle, §13.2.1) and follow a csp ramp sent by a
+    4 ms Python loop (no real-time cycle: some SYNC0 periods get two
+    frames, some none), then hold still on the last target."""
+    ipos = master.slaves[IPOS]
+    for s in master.slaves:
+        s.set_watchdog("processdata", 1000)
+    ipos.sdo_write(0x6060, 0, bytes([8]))  # csp
+    master.config_map()
+    assert master.config_dc(), "both drives have DC"
+    ipos.dc_sync(True, SYNC0_NS)
+    assert master.state_check(pysoem.SAFEOP_STATE, 2_000_000) == pysoem.SAFEOP_STATE, [
+        hex(s.al_status) for s in master.slaves
+    ]
+    _to_op(master, line)
+    assert int.from_bytes(ipos.sdo_read(0x1C32, 1), "little") == 2, "1C32h:01: synchronous with SYNC0"
+    assert u32(ipos.sdo_read(0x1C32, 0x0A)) == SYNC0_NS, "1C32h:0Ah: the SYNC0 cycle"
+    assert (ipos.sdo_read(0x60C2, 1), ipos.sdo_read(0x60C2, 2)) == (bytes([4]), bytes([0xFD])), "60C2h = 4 ms"
+
+    period = SYNC0_NS / 1e9
+    expected = master.expected_wkc
+    next_at = time.monotonic()
+
+    def cycle(controlword: int, target: int) -> tuple[int, int] | None:
+        """One frame: (statusword, 6064h), or None when the reply did not
+        come back complete within 100 ms (a loaded host can stall either
+        process that long; the inputs are then stale)."""
+        nonlocal next_at
+        ipos.output = controlword.to_bytes(2, "little") + target.to_bytes(4, "little", signed=True)
+        master.send_processdata()
+        wkc = master.receive_processdata(100_000)
+        next_at = max(next_at + period, time.monotonic() - period)
+        time.sleep(max(0.0, next_at - time.monotonic()))
+        if wkc != expected:
+            return None
+        return int.from_bytes(ipos.input[0:2], "little"), int.from_bytes(ipos.input[2:6], "little", signed=True)
+
+    start = int.from_bytes(ipos.sdo_read(0x6064, 0), "little", signed=True)
+    for cw, want in ((0x0006, 0x0021), (0x0007, 0x0023), (0x000F, 0x0027)):
+        for _ in range(200):
+            got = cycle(cw, start)
+            if got and got[0] & 0x6F == want:
+                break
+        else:
+            pytest.fail(f"controlword {cw:04X}h: statusword never & 6Fh = {want:04X}h")
+    # 1 s ramp of 4 counts per frame, then 1 s on the last target.
+    step, ramp, hold = 4, 250, 250
+    trace = [(start + step * k, cycle(0x000F, start + step * k)) for k in range(1, ramp + 1)]
+    target = start + step * ramp
+    trace += [(target, cycle(0x000F, target)) for _ in range(hold)]
+    good = [(t, r) for t, r in trace if r is not None]
+    assert len(good) * 10 >= 9 * len(trace), f"{len(trace) - len(good)} of {len(trace)} frames without a reply"
+    assert all(sw & 0x6F == 0x27 for _, (sw, _) in good), "left Operation enabled"
+    # Along the steady ramp the position trails the set-point sent by the
+    # set-point's own delay: the next SYNC0 latches it, 60C2h later it is
+    # the demand, the position loop follows (a few frames in all).
+    lags = [t - p for t, (_, p) in good[50:] if t != target]
+    assert lags and max(lags) <= 10 * step and min(lags) >= 0, f"the drive does not follow the ramp: lags {lags}"
+    tail = [p for _, (_, p) in good[-75:]]
+    worst = max(abs(p - target) for p in tail)
+    assert worst <= 3, f"6064h does not hold still on {target}: worst {worst}, last {tail[-8:]}"
+    master.state = pysoem.INIT_STATE
+    master.write_state()
+    assert master.state_check(pysoem.INIT_STATE, 2_000_000) == pysoem.INIT_STATE

@@ -39,26 +39,50 @@ pub struct Sample {
 /// Linear interpolation between values latched at SYNC.
 ///
 /// At each SYNC the segment restarts from the value reached so far and
-/// heads for the new target, to be reached one cycle later; so on-time
-/// SYNCs reproduce the targets exactly at the SYNC instants (one cycle of
-/// delay: the target latched at SYNC k is the demand at SYNC k+1), and the
-/// demand never jumps. A late SYNC extrapolates the last
-/// slope for at most one more cycle, then holds.
+/// heads for the new target, to be reached one cycle (60C2h) later; so
+/// on-time SYNCs reproduce the targets exactly at the SYNC instants (one
+/// cycle of delay: the target latched at SYNC k is the demand at SYNC k+1),
+/// and the demand never jumps. A SYNC later than one cycle continues the
+/// targets' own rate, (target − previous target) / cycle, for at most one
+/// more cycle, then holds: a constant target is held however late the
+/// SYNC comes. The segment's own slope also closes the distance left by
+/// the previous segment; continued past the target it would carry the
+/// demand beyond a constant target by that distance, and the next segment
+/// back beyond it the other way — with SYNCs two cycles apart or more (a
+/// 10 ms SYNC against a 1 ms 60C2h) an alternation that never dies out.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Interpolator {
+    /// The demand at the last SYNC.
     start: f64,
+    /// The segment's slope: from `start` to `target` in one cycle.
     slope: f64,
+    /// The target latched at the last SYNC.
+    target: f64,
+    /// The targets' rate (target − previous target) / cycle: what a late
+    /// SYNC continues.
+    rate: f64,
     curvature: f64,
     steps: u32,
     dt_sum: f64,
     period: f64,
 }
 
+/// Relative tolerance of the cycle boundaries against the rounding of Σdt.
+const EDGE: f64 = 1e-9;
+
 impl Interpolator {
     /// Resting at `value` with cycle time `period` \[s\].
     pub fn new(value: f64, period: f64) -> Self {
-        let mut i =
-            Interpolator { start: 0.0, slope: 0.0, curvature: 0.0, steps: 0, dt_sum: 0.0, period: 1e-3 };
+        let mut i = Interpolator {
+            start: 0.0,
+            slope: 0.0,
+            target: 0.0,
+            rate: 0.0,
+            curvature: 0.0,
+            steps: 0,
+            dt_sum: 0.0,
+            period: 1e-3,
+        };
         i.set_period(period);
         i.reset(value);
         i
@@ -67,7 +91,9 @@ impl Interpolator {
     /// Rest at `value` (bumpless entry).
     pub fn reset(&mut self, value: f64) {
         self.start = if value.is_finite() { value } else { 0.0 };
+        self.target = self.start;
         self.slope = 0.0;
+        self.rate = 0.0;
         self.curvature = 0.0;
         self.dt_sum = 0.0;
         self.steps = 0;
@@ -88,26 +114,60 @@ impl Interpolator {
     fn elapsed(&self) -> f64 {
         // Reaching the next SYNC instant exactly despite rounding of Σdt.
         let t = self.dt_sum;
-        if (t - self.period).abs() <= 1e-9 * self.period { self.period } else { t.min(2.0 * self.period) }
+        if (t - self.period).abs() <= EDGE * self.period { self.period } else { t.min(2.0 * self.period) }
     }
 
     /// The demand now.
     pub fn value(&self) -> f64 {
-        self.start + self.slope * self.elapsed()
+        let t = self.elapsed();
+        if t <= self.period {
+            self.start + self.slope * t
+        } else {
+            self.target + self.rate * (t - self.period)
+        }
+    }
+
+    /// The demand's rate of change now: the segment's slope within the
+    /// cycle, the targets' rate in the cycle after, then 0 (held).
+    pub fn rate(&self) -> f64 {
+        let t = self.dt_sum;
+        if t < self.period * (1.0 - EDGE) {
+            self.slope
+        } else if t < 2.0 * self.period * (1.0 - EDGE) {
+            self.rate
+        } else {
+            0.0
+        }
     }
 
     /// SYNC: head for `target` over the next cycle. A non-finite target
     /// holds the present value.
     pub fn sync(&mut self, target: f64) {
         let now = self.value();
-        let old = self.slope;
+        // The slope the demand had over the last cycle (the segment's, up
+        // to an on-time SYNC).
+        let old = if self.dt_sum <= self.period * (1.0 + EDGE) { self.slope } else { self.rate() };
         self.start = now;
-        self.slope =
-            if target.is_finite() { (target.clamp(-MAX_VALUE, MAX_VALUE) - now) / self.period } else { 0.0 };
+        if target.is_finite() {
+            let target = target.clamp(-MAX_VALUE, MAX_VALUE);
+            self.slope = (target - now) / self.period;
+            self.rate = (target - self.target) / self.period;
+            self.target = target;
+        } else {
+            self.slope = 0.0;
+            self.rate = 0.0;
+            self.target = now;
+        }
         // The average rate of change of the slope over the last cycle.
         self.curvature = if self.steps > 0 { (self.slope - old) / self.period } else { 0.0 };
         self.dt_sum = 0.0;
         self.steps = 0;
+    }
+
+    /// SYNC without a new target (an ip buffer underflow): hold the present
+    /// value.
+    pub fn hold(&mut self) {
+        self.sync(f64::NAN);
     }
 
     /// The demand for the control period starting now, then advances by
@@ -117,11 +177,10 @@ impl Interpolator {
     /// output from the first period after the next SYNC on.
     pub fn step(&mut self, dt: f64) -> Sample {
         let t = self.dt_sum;
-        let late = t >= 2.0 * self.period * (1.0 - 1e-9);
         let sample = Sample {
             value: self.value(),
-            slope: if late { 0.0 } else { self.slope },
-            curvature: if t >= self.period * (1.0 - 1e-9) { 0.0 } else { self.curvature },
+            slope: self.rate(),
+            curvature: if t >= self.period * (1.0 - EDGE) { 0.0 } else { self.curvature },
         };
         if dt.is_finite() && dt > 0.0 {
             self.dt_sum += dt;
@@ -365,9 +424,39 @@ impl Cyclic {
 
     fn interp_rate(&self) -> f64 {
         match self.kind {
-            CyclicKind::Position => self.interp.slope + self.ff_offset,
+            CyclicKind::Position => self.interp.rate() + self.ff_offset,
             // csv / cst ramps start from the present demand value.
             CyclicKind::Velocity | CyclicKind::Torque => 0.0,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A SYNC half a cycle early leaves the demand short of the target;
+    /// then SYNCs ten cycles apart (a 10 ms SYNC against a 1 ms 60C2h)
+    /// with the target constant: the demand reaches it within the cycle and
+    /// stays on it, never carried past it to swing back from the other side
+    /// at the next SYNC.
+    #[test]
+    fn syncs_far_apart_hold_a_constant_target() {
+        let mut i = Interpolator::new(0.0, 1e-3);
+        i.sync(100.0);
+        for _ in 0..4 {
+            i.step(1.25e-4);
+        }
+        assert_eq!(i.value(), 50.0);
+        let mut demand = Vec::new();
+        for _ in 0..6 {
+            i.sync(100.0);
+            for _ in 0..80 {
+                demand.push(i.step(1.25e-4).value);
+            }
+        }
+        assert!(demand.iter().all(|&v| (50.0..=100.0).contains(&v)), "{demand:?}");
+        assert!(demand[8..].iter().all(|&v| v == 100.0), "{demand:?}");
+        assert_eq!(i.rate(), 0.0);
     }
 }

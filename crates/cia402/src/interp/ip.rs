@@ -496,8 +496,7 @@ impl Ip {
             None => {
                 self.starve();
                 // Hold where the interpolation stands.
-                let here = self.linear.value();
-                self.linear.sync(here);
+                self.linear.hold();
             }
         }
     }

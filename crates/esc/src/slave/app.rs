@@ -69,7 +69,7 @@ pub enum SyncMode {
 }
 
 /// The synchronisation and process data configuration the master set up,
-/// as latched at PRE-OP → SAFE-OP.
+/// as latched at PRE-OP → SAFE-OP (the DC part again at SAFE-OP → OP).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SyncConfig {
     /// Mode derived from 0x0981.
@@ -117,7 +117,11 @@ pub trait SlaveApp {
     }
 
     /// Last word on an upward transition after the framework's own checks
-    /// passed; return an AL status code to refuse it.
+    /// passed; return an AL status code to refuse it. `config` is the set-up
+    /// the slave runs with once the transition is taken: at PRE-OP →
+    /// SAFE-OP the one just checked, at SAFE-OP → OP that one with the DC
+    /// registers read again (a master such as SOEM activates SYNC0 in
+    /// SAFE-OP), else the one in force.
     fn check_transition(&mut self, transition: Transition, config: &SyncConfig) -> Result<(), AlStatusCode> {
         let _ = (transition, config);
         Ok(())

@@ -16,8 +16,10 @@
 //!   against the application's current mapping (enabled, 3-buffer mode,
 //!   direction, start address from the SII, length: 0x001D/0x001E/0x0029)
 //!   and the DC registers against [`SyncSupport`] (0x0027, 0x0028, 0x0030,
-//!   0x0035, 0x0036); then the application decides. SAFE-OP → OP waits for
-//!   the first SYNC0 in DC mode and, if configured, for outputs.
+//!   0x0035, 0x0036); then the application decides. SAFE-OP → OP reads
+//!   the DC registers again (SOEM activates SYNC0 after its `config_map`
+//!   has requested SAFE-OP) with the same checks, then waits for the first
+//!   SYNC0 in DC mode and, if configured, for outputs.
 //! * **Errors while running**: the process-data watchdog in OP → SAFE-OP +
 //!   0x001B; SYNC0 pulses stopping in DC OP → SAFE-OP + 0x002C; an
 //!   application error ([`SlaveApp::take_error`]) → the state it names.
@@ -381,6 +383,17 @@ impl<A: SlaveApp> Slave<A> {
                 self.sync = cfg;
                 return Ok(());
             }
+            (AlState::SafeOp, AlState::Op) => {
+                // SOEM's order: `ec_config_map` already requests SAFE-OP,
+                // `ec_configdc` and `ec_dcsync0` follow. A DC set-up made
+                // in SAFE-OP is taken here (the application hears it with
+                // the new configuration), else the drive would run
+                // SM-synchronous beside running SYNC0 pulses.
+                let cfg = self.dc_setup(self.sync)?;
+                self.app.check_transition(t, &cfg)?;
+                self.sync = cfg;
+                return Ok(());
+            }
             _ => {}
         }
         self.app.check_transition(t, &self.sync)
@@ -398,11 +411,13 @@ impl<A: SlaveApp> Slave<A> {
         if good { Ok(()) } else { Err(code) }
     }
 
-    fn check_process_data(&mut self) -> Result<SyncConfig, AlStatusCode> {
-        let sizes = self.app.process_data_sizes();
+    /// The synchronisation the DC registers set up (0x0981 activation,
+    /// 0x09A0/0x09A4 cycles), checked against the application's support:
+    /// `cfg` with its mode and cycles replaced.
+    fn dc_setup(&self, mut cfg: SyncConfig) -> Result<SyncConfig, AlStatusCode> {
         let support = self.app.sync_support();
         let act = self.esc.peek_u16(0x0980).to_le_bytes()[1];
-        let mut cfg = SyncConfig::default();
+        (cfg.mode, cfg.sync0_cycle, cfg.sync1_cycle) = (SyncMode::FreeRun, 0, 0);
         if act & 0x01 != 0 {
             if act & 0x02 == 0 {
                 return Err(AlStatusCode::INVALID_DC_SYNC_CONFIG);
@@ -427,6 +442,12 @@ impl<A: SlaveApp> Slave<A> {
         } else if !support.free_run {
             return Err(AlStatusCode::FREE_RUN_NOT_SUPPORTED);
         }
+        Ok(cfg)
+    }
+
+    fn check_process_data(&mut self) -> Result<SyncConfig, AlStatusCode> {
+        let sizes = self.app.process_data_sizes();
+        let mut cfg = self.dc_setup(SyncConfig::default())?;
         let free_run = cfg.mode == SyncMode::FreeRun;
         let check = |sm: Option<(usize, u16)>,
                      bytes: usize,

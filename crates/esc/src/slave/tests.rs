@@ -323,6 +323,40 @@ fn dc_op_waits_for_sync0_then_applies_outputs_at_each_pulse() {
     assert_eq!(r.status(), (0x14, 0x002C));
 }
 
+/// SOEM's order: `ec_config_map` requests SAFE-OP (taken in free run),
+/// then `ec_configdc` / `ec_dcsync0` activate SYNC0. The SAFE-OP → OP
+/// request takes the DC set-up: OP waits for SYNC0 and the outputs go to
+/// the application at the pulses, not at the SM event. A cycle the
+/// application cannot run is refused there as it would be at PRE-OP →
+/// SAFE-OP.
+#[test]
+fn dc_set_up_in_safe_op_is_taken_at_op() {
+    let mut r = Rig::new();
+    r.enter_preop();
+    r.pd_sms(2, 0x64, 4);
+    r.wr(0x0981, &[0]);
+    assert_eq!(r.request(4), (0x04, 0));
+    assert_eq!(r.s.sync_config().mode, SyncMode::FreeRun);
+    r.s.app_mut().support =
+        Some(SyncSupport { cycle_step: Duration::from_micros(250), ..SyncSupport::default() });
+    dc(&mut r, 0x03, 1_100_000);
+    assert_eq!(r.request(8), (0x14, 0x0035), "not a multiple of the loop period");
+    assert_eq!(r.request(0x14), (0x04, 0), "acknowledged");
+    let start = dc(&mut r, 0x03, 1_000_000);
+    r.wr(0x1100, &[7, 7]);
+    assert_eq!(r.request(8), (0x04, 0), "pending: no SYNC0 yet");
+    assert_eq!(r.s.sync_config().mode, SyncMode::DcSync0);
+    assert_eq!(r.s.sync_config().sync0_cycle, 1_000_000);
+    r.advance(Duration::from_millis(2));
+    assert_eq!(r.status(), (0x08, 0));
+    r.wr(0x1100, &[9, 9]);
+    assert!(r.s.app().outputs.iter().all(|(o, _)| o == &[7, 7]), "DC: not applied at the SM event");
+    r.advance(Duration::from_millis(1));
+    let (o, at) = r.s.app().outputs.last().unwrap().clone();
+    assert_eq!(o, [9, 9]);
+    assert_eq!((r.s.esc().system_time(at) - start) % 1_000_000, 0, "on the SYNC0 grid");
+}
+
 /// Mailbox message: CoE-typed, counter `cnt`, payload `p`.
 fn msg(cnt: u8, p: &[u8]) -> Vec<u8> {
     let mut m = vec![0u8; 6];

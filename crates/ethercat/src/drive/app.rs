@@ -48,6 +48,8 @@ pub struct DriveApp {
     tx: Image,
     sync: SyncConfig,
     params: SyncParams,
+    /// `sync` changed at SAFE-OP → OP: the sync objects follow it in OP.
+    resync: bool,
     started: bool,
     /// The SYNC0 pulse the drive was last aligned and stepped to.
     pulse: Option<Instant>,
@@ -94,6 +96,7 @@ impl DriveApp {
             tx: Image::default(),
             sync: SyncConfig::default(),
             params: SyncParams::default(),
+            resync: false,
             started: false,
             pulse: None,
             poll_period: Duration::from_millis(1),
@@ -248,12 +251,20 @@ impl SlaveApp for DriveApp {
     }
 
     fn check_transition(&mut self, t: Transition, config: &SyncConfig) -> Result<(), AlStatusCode> {
-        if (t.from, t.to) != (AlState::PreOp, AlState::SafeOp) {
-            return Ok(());
+        match (t.from, t.to) {
+            (AlState::PreOp, AlState::SafeOp) => {
+                self.resolve_images()?;
+                self.params.check(self.dev.node.od(), config)?;
+                self.sync = *config;
+            }
+            // DC set up in SAFE-OP (SOEM's order): taken with OP.
+            (AlState::SafeOp, AlState::Op) if *config != self.sync => {
+                self.params.check(self.dev.node.od(), config)?;
+                self.sync = *config;
+                self.resync = true;
+            }
+            _ => {}
         }
-        self.resolve_images()?;
-        self.params.check(self.dev.node.od(), config)?;
-        self.sync = *config;
         Ok(())
     }
 
@@ -265,7 +276,8 @@ impl SlaveApp for DriveApp {
         if from == AlState::Init || to == AlState::Init {
             self.mbx.reset(&mut *self.files);
         }
-        if from == AlState::PreOp && to == AlState::SafeOp {
+        let resync = core::mem::take(&mut self.resync) && to == AlState::Op;
+        if (from == AlState::PreOp && to == AlState::SafeOp) || resync {
             let (dev, frames) = (&mut self.dev, &mut self.frames);
             self.params.enter_safe_op(dev, &self.sync, now, frames);
         }
@@ -330,6 +342,11 @@ impl SlaveApp for DriveApp {
     }
 
     fn sync0(&mut self, now: Instant, _system_time: u64) {
+        if self.sync.mode == SyncMode::FreeRun {
+            // SM-synchronous: the SM2 event latches the set-points; pulses
+            // the master activated after OP do not latch them a second time.
+            return;
+        }
         // iPOS §3.2 / Fig. 3.2.1: SYNC0 starts the control loop, which
         // takes the set-points copied after the last frame; the inputs
         // the slave latches next are its actual values.

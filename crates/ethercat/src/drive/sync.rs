@@ -63,9 +63,10 @@ impl SyncParams {
         Ok(())
     }
 
-    /// Entered SAFE-OP with `cfg`: 1C32h/1C33h show it, the counters
-    /// start at 0, and in DC mode 60C2h is the SYNC0 cycle (written
-    /// through the write path, so the drive's cyclic modes take it).
+    /// Entered SAFE-OP with `cfg` (or OP with a DC set-up made in
+    /// SAFE-OP): 1C32h/1C33h show it, the counters start at 0, and in DC
+    /// mode 60C2h is the SYNC0 cycle (written through the write path, so
+    /// the drive's cyclic modes take it).
     pub fn enter_safe_op(
         &mut self,
         dev: &mut PersonalityDevice,
