@@ -125,7 +125,8 @@ impl IoModule {
     pub fn install(node: &mut Node) -> IoModule {
         let od = node.od_mut();
         for &index in &OWNED {
-            let subs: Vec<u8> = od.object(index).map(|o| o.subs().iter().map(|s| s.sub).collect()).unwrap_or_default();
+            let subs: Vec<u8> =
+                od.object(index).map(|o| o.subs().iter().map(|s| s.sub).collect()).unwrap_or_default();
             for s in subs {
                 if let Some(e) = od.get_mut(index, s)
                     && e.owner == Owner::NONE
@@ -137,7 +138,8 @@ impl IoModule {
         }
         let mut n = 0u16;
         while od.object(0x1A00 + n).is_some() && n < 512 {
-            let subs: Vec<u8> = od.object(0x1A00 + n).map(|o| o.subs().iter().map(|s| s.sub).collect()).unwrap_or_default();
+            let subs: Vec<u8> =
+                od.object(0x1A00 + n).map(|o| o.subs().iter().map(|s| s.sub).collect()).unwrap_or_default();
             for s in subs {
                 if let Some(e) = od.get_mut(0x1A00 + n, s) {
                     e.watched = true;
@@ -148,7 +150,8 @@ impl IoModule {
         let od: &ObjectDictionary = od;
         // Only entries of the width CiA 401 gives them (a file's other
         // type would not take the module's values).
-        let sized = |r: Option<EntryRef>, n: usize| r.filter(|&r| od.entry(r).data_type.fixed_size() == Some(n));
+        let sized =
+            |r: Option<EntryRef>, n: usize| r.filter(|&r| od.entry(r).data_type.fixed_size() == Some(n));
         let ndi = channels(od, 0x6000);
         let ndo = channels(od, 0x6200);
         let nai = channels(od, 0x6401);
@@ -158,7 +161,13 @@ impl IoModule {
             .enumerate()
             .filter_map(|(k, v)| {
                 let at = |i| od.find(i, k as u8 + 1).ok();
-                Some(DiGroup { value: sized(v, 1)?, polarity: at(0x6002), any: at(0x6006), rise: at(0x6007), fall: at(0x6008) })
+                Some(DiGroup {
+                    value: sized(v, 1)?,
+                    polarity: at(0x6002),
+                    any: at(0x6006),
+                    rise: at(0x6007),
+                    fall: at(0x6008),
+                })
             })
             .collect::<Vec<_>>();
         let dout = subs(od, 0x6200, ndo)
@@ -348,7 +357,8 @@ impl IoModule {
             }
             let trig = Self::byte(od, c.trigger, 0x07);
             let (v64, last) = (i64::from(v), i64::from(self.ai_last[k]));
-            let beyond = |r: Option<EntryRef>, dir: i64| Self::int(od, r).is_some_and(|l| (v64 - l) * dir > 0);
+            let beyond =
+                |r: Option<EntryRef>, dir: i64| Self::int(od, r).is_some_and(|l| (v64 - l) * dir > 0);
             let moved = |r: Option<EntryRef>, d: i64| {
                 let step = Self::int(od, r).unwrap_or(0);
                 d > 0 && d >= step
@@ -438,16 +448,9 @@ impl IoModule {
     }
 }
 
+/// Every value CiA 401 allows is taken (the file's types and limits are
+/// checked before): the module only applies.
 impl Application for IoModule {
-    fn check_write(
-        &mut self,
-        _cx: &mut AppContext<'_>,
-        _at: &Target,
-        _data: &[u8],
-    ) -> Result<drivebus_od::WriteOutcome, SdoAbort> {
-        Ok(drivebus_od::WriteOutcome::Store)
-    }
-
     fn apply_write(&mut self, cx: &mut AppContext<'_>, at: &Target) {
         match at.index {
             0x6200 | 0x6202 | 0x6206 | 0x6207 | 0x6208 | 0x6411 | 0x6443 | 0x6444 => {

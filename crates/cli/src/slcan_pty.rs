@@ -21,7 +21,8 @@ pub async fn run(g: &Global, a: &SlcanPtyArgs) -> anyhow::Result<()> {
             _ => bail!("slcan-pty runs on the in-process virtual bus: use --bus virtual (not `{}`)", g.bus),
         };
         crate::fault::install(&hub, &a.faults)?;
-        let (_drives, _) = spawn_on_hub(&specs, &devices, &hub, None, Default::default(), g.machine.as_deref())?;
+        let (_drives, _) =
+            spawn_on_hub(&specs, &devices, &hub, None, Default::default(), g.machine.as_deref())?;
         let pty = drivebus_transport::slcan::SlcanPty::spawn(hub.attach())
             .context("cannot open a pseudo-terminal")?;
         {

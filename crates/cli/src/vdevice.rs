@@ -67,7 +67,8 @@ impl DeviceSpec {
 
     /// `io16-3`: the directory name under `--state-dir`.
     pub fn dir_name(&self) -> String {
-        let stem = self.path.file_stem().map_or_else(|| "device".into(), |s| s.to_string_lossy().into_owned());
+        let stem =
+            self.path.file_stem().map_or_else(|| "device".into(), |s| s.to_string_lossy().into_owned());
         format!("{stem}-{}", self.node)
     }
 
@@ -92,9 +93,10 @@ impl DeviceSpec {
             }
             None => Box::new(MemoryStorage::new()),
         };
-        let (dev, warnings) =
-            drivebus_personality::build::build_device(&self.eds, &self.text, self.node, storage, options, machine)
-                .map_err(|e| anyhow!("{}: {e}", self.path.display()))?;
+        let (dev, warnings) = drivebus_personality::build::build_device(
+            &self.eds, &self.text, self.node, storage, options, machine,
+        )
+        .map_err(|e| anyhow!("{}: {e}", self.path.display()))?;
         for w in warnings {
             eprintln!("warning: {}: {w}", self.path.display());
         }

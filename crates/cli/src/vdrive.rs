@@ -82,7 +82,11 @@ impl Machines {
     /// [`Machines::load`] for drives and devices from a file
     /// (`devices`: their node-IDs, whose tables take only `io` and digital
     /// and analog `inputs`).
-    pub fn load_with_devices(path: Option<&Path>, specs: &[DriveSpec], devices: &[u8]) -> anyhow::Result<Machines> {
+    pub fn load_with_devices(
+        path: Option<&Path>,
+        specs: &[DriveSpec],
+        devices: &[u8],
+    ) -> anyhow::Result<Machines> {
         let Some(path) = path else {
             return Ok(Machines { file: None });
         };

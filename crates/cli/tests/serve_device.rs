@@ -22,14 +22,22 @@ fn io16() -> String {
 }
 
 fn cli(args: &[&str]) -> assert_cmd::assert::Assert {
-    Command::new(common::bin()).args(args).env_remove("DRIVEBUS_BUS").timeout(Duration::from_secs(60)).assert()
+    Command::new(common::bin())
+        .args(args)
+        .env_remove("DRIVEBUS_BUS")
+        .timeout(Duration::from_secs(60))
+        .assert()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_cia401_module_beside_a_drive() {
     let io = format!("{}:3", io16());
     let mut srv = Serve::start(&["--drive", "generic:1", "--device", &io], None);
-    assert!(srv.line.contains("drives generic:1; devices ") && srv.line.contains("io16.eds:3 (CiA 401)"), "{}", srv.line);
+    assert!(
+        srv.line.contains("drives generic:1; devices ") && srv.line.contains("io16.eds:3 (CiA 401)"),
+        "{}",
+        srv.line
+    );
     let url = srv.url();
     cli(&["--bus", &url, "--node", "3", "sdo", "read", "1000"]).success().stdout(contains("0x000F0191"));
     // An output written over SDO is what 6200h reads.
@@ -63,14 +71,19 @@ fn sim_hosts_third_party_files() {
 fn a_malformed_file_is_refused_with_its_line_before_anything_starts() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.eds");
-    std::fs::write(&bad, "[1000]\nParameterName=Device type\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x191\n[1001\n")
-        .unwrap();
+    std::fs::write(
+        &bad,
+        "[1000]\nParameterName=Device type\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x191\n[1001\n",
+    )
+    .unwrap();
     let spec = format!("{}:3", bad.display());
     cli(&["serve", "--listen", "127.0.0.1:0", "--device", &spec])
         .failure()
         .stdout(predicate::str::is_empty())
         .stderr(contains("bad.eds: line 6: section header without ']'"));
-    cli(&["--sim", &spec, "--node", "3", "sdo", "read", "1000"]).failure().stderr(contains("bad.eds: line 6"));
+    cli(&["--sim", &spec, "--node", "3", "sdo", "read", "1000"])
+        .failure()
+        .stderr(contains("bad.eds: line 6"));
     // A node-ID taken by a drive.
     let io = format!("{}:1", io16());
     cli(&["serve", "--listen", "127.0.0.1:0", "--drive", "akd:1", "--device", &io])

@@ -56,7 +56,14 @@ fn bit_pattern(t: &str, dt: DataType) -> Result<Option<Vec<u8>>, String> {
     }
     let signed = matches!(
         dt,
-        T::Integer8 | T::Integer16 | T::Integer24 | T::Integer32 | T::Integer40 | T::Integer48 | T::Integer56 | T::Integer64
+        T::Integer8
+            | T::Integer16
+            | T::Integer24
+            | T::Integer32
+            | T::Integer40
+            | T::Integer48
+            | T::Integer56
+            | T::Integer64
     );
     if !(signed || matches!(dt, T::Real32 | T::Real64)) {
         return Ok(None);
@@ -165,7 +172,10 @@ mod tests {
             core::f64::consts::PI.to_le_bytes()
         );
         assert_eq!(eval("1.5", DataType::Real32, 1).unwrap(), 1.5f32.to_le_bytes());
-        assert_eq!(eval("365 43200000", DataType::TimeOfDay, 1).unwrap(), [0x00, 0x2E, 0x93, 0x02, 0x6D, 0x01]);
+        assert_eq!(
+            eval("365 43200000", DataType::TimeOfDay, 1).unwrap(),
+            [0x00, 0x2E, 0x93, 0x02, 0x6D, 0x01]
+        );
         assert!(eval("365 0x10000000", DataType::TimeDifference, 1).is_err());
     }
 

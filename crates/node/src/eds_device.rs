@@ -110,7 +110,8 @@ fn prune(od: &mut ObjectDictionary, file: &ObjectDictionary, keep: &[u16]) {
             continue;
         }
         let kept: Vec<_> = o.subs().iter().filter(|s| f.get(s.sub).is_some()).cloned().collect();
-        let mut n = kept.iter().cloned().fold(Object::with_code(index, o.code, o.name.clone()), Object::with_sub);
+        let mut n =
+            kept.iter().cloned().fold(Object::with_code(index, o.code, o.name.clone()), Object::with_sub);
         n.flags = o.flags;
         // `with_sub` may re-group persistence: each entry exactly as merged.
         for (dst, src) in n.subs_mut().iter_mut().zip(&kept) {
@@ -131,7 +132,7 @@ fn prune(od: &mut ObjectDictionary, file: &ObjectDictionary, keep: &[u16]) {
 /// `eds` without its objects whose values are of no basic data type (a
 /// node cannot encode them), and a warning for each; `None`: all servable.
 fn servable(eds: &Eds) -> (Option<Eds>, Vec<Diagnostic>) {
-fn bad(o: &drivebus_eds::EdsObject) -> Option<&drivebus_eds::EdsVar> {
+    fn bad(o: &drivebus_eds::EdsObject) -> Option<&drivebus_eds::EdsVar> {
         o.var.iter().chain(o.subs.values()).find(|v| drivebus_od::DataType::from_index(v.data_type).is_none())
     }
     let skipped: Vec<Diagnostic> = eds
@@ -238,7 +239,8 @@ mod tests {
         let text = "[2020]\nParameterName=Complex\nDataType=0x40\nAccessType=rw\n\
                     [2021]\nParameterName=x\nDataType=0x0005\nAccessType=rw\nDefaultValue=7\n";
         let eds = drivebus_eds::parse(text).unwrap().eds;
-        let (n, w) = Node::from_eds(&eds, text, 1, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap();
+        let (n, w) =
+            Node::from_eds(&eds, text, 1, Box::new(MemoryStorage::new()), EdsOptions::default()).unwrap();
         assert!(n.od().object(0x2020).is_none());
         assert_eq!(n.od().get_u32(0x2021, 0), Some(7));
         assert_eq!(w.len(), 1);
@@ -261,7 +263,9 @@ mod tests {
         // Read fine; only node 127 takes the UNSIGNED8 beyond FFh.
         let text = "[2000]\nParameterName=x\nDataType=0x0005\nAccessType=ro\nDefaultValue=$NODEID+0xF0\n";
         let eds = drivebus_eds::parse(text).unwrap().eds;
-        assert!(Node::from_eds(&eds, text, 15, Box::new(MemoryStorage::new()), EdsOptions::default()).is_ok());
+        assert!(
+            Node::from_eds(&eds, text, 15, Box::new(MemoryStorage::new()), EdsOptions::default()).is_ok()
+        );
         let e = Node::from_eds(&eds, text, 127, Box::new(MemoryStorage::new()), EdsOptions::default())
             .err()
             .unwrap();

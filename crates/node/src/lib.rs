@@ -38,9 +38,9 @@ pub mod storage;
 pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
 pub use config::{Identity, NodeConfig};
 pub use device::NodeDevice;
+pub use dictionary::build_dictionary;
 #[cfg(feature = "std")]
 pub use eds_device::EdsOptions;
-pub use dictionary::build_dictionary;
 pub use node::{Node, NodeTemplate};
 pub use owners::{LOAD_SIGNATURE, SAVE_SIGNATURE};
 #[cfg(feature = "std")]

@@ -218,7 +218,11 @@ impl Node {
 
     /// The node of a finished configuration and dictionary (see
     /// [`NodeTemplate`]): the services are set up from them.
-    pub(crate) fn assemble(mut cfg: NodeConfig, od: ObjectDictionary, storage: Box<dyn Storage + Send>) -> Node {
+    pub(crate) fn assemble(
+        mut cfg: NodeConfig,
+        od: ObjectDictionary,
+        storage: Box<dyn Storage + Send>,
+    ) -> Node {
         let node_id = cfg.node_id;
         // CiA 305 §3.2: the LSS address is 1018h:01h–04h. A dictionary
         // from elsewhere (an EDS) keeps its own 1018h, so the identity is

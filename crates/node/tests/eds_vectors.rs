@@ -19,7 +19,9 @@ fn vectors() -> Vec<(String, String)> {
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "eds" || e == "dcf"))
-        .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read_to_string(&p).unwrap()))
+        .map(|p| {
+            (p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read_to_string(&p).unwrap())
+        })
         .collect();
     v.sort();
     assert!(v.len() >= 10, "vectors missing: {v:?}");
@@ -65,7 +67,8 @@ fn upload(rig: &mut Rig, index: u16, sub: u8) -> Result<Vec<u8>, u32> {
     let mut toggle = 0u8;
     loop {
         rig.take();
-        rig.bus.send_from(rig.probe, Frame::new(0x600 + u16::from(NODE), &[0x60 | toggle, 0, 0, 0, 0, 0, 0, 0]));
+        rig.bus
+            .send_from(rig.probe, Frame::new(0x600 + u16::from(NODE), &[0x60 | toggle, 0, 0, 0, 0, 0, 0, 0]));
         rig.run_for(Duration::from_micros(1));
         let f = rig.take();
         let d = f[0].data();
@@ -107,18 +110,17 @@ fn every_readable_entry_answers_with_the_files_value() {
 /// `(index, sub, bits)` of a PDO's valid mapping in `od`.
 fn mapping(od: &ObjectDictionary, map: u16) -> Vec<(u16, u8, u32)> {
     let n = od.get_u32(map, 0).unwrap_or(0) as u8;
-    (1..=n)
-        .filter_map(|k| od.get_u32(map, k))
-        .map(|e| ((e >> 16) as u16, (e >> 8) as u8, e & 0xFF))
-        .collect()
+    (1..=n).filter_map(|k| od.get_u32(map, k)).map(|e| ((e >> 16) as u16, (e >> 8) as u8, e & 0xFF)).collect()
 }
 
 /// The bytes a PDO of `map` carries (byte-aligned entries).
 fn packed(od: &ObjectDictionary, map: &[(u16, u8, u32)]) -> Vec<u8> {
-    map.iter().flat_map(|&(i, s, bits)| match od.get(i, s) {
-        Some(e) => e.bytes()[..(bits / 8) as usize].to_vec(),
-        None => vec![0; (bits / 8) as usize], // a dummy entry
-    }).collect()
+    map.iter()
+        .flat_map(|&(i, s, bits)| match od.get(i, s) {
+            Some(e) => e.bytes()[..(bits / 8) as usize].to_vec(),
+            None => vec![0; (bits / 8) as usize], // a dummy entry
+        })
+        .collect()
 }
 
 #[test]
@@ -159,7 +161,8 @@ fn default_pdos_run() {
         for n in 0..cfg.rpdo_count {
             let cob = file.get_u32(0x1400 + n, 1).unwrap_or(0x8000_0000);
             let map = mapping(&file, 0x1600 + n);
-            let writable = map.iter().all(|&(i, s, b)| b % 8 == 0 && (i < 0x1000 || file.get(i, s).is_some()));
+            let writable =
+                map.iter().all(|&(i, s, b)| b % 8 == 0 && (i < 0x1000 || file.get(i, s).is_some()));
             if cob & 0x8000_0000 != 0 || map.is_empty() || !writable {
                 continue;
             }
@@ -176,7 +179,12 @@ fn default_pdos_run() {
                 let k = (bits / 8) as usize;
                 if i >= 0x1000 {
                     let od = rig.node().od();
-                    assert_eq!(od.get(i, s).unwrap().bytes(), &data[at..at + k], "{name}: RPDO{} {i:04X}:{s}", n + 1);
+                    assert_eq!(
+                        od.get(i, s).unwrap().bytes(),
+                        &data[at..at + k],
+                        "{name}: RPDO{} {i:04X}:{s}",
+                        n + 1
+                    );
                 }
                 at += k;
             }
@@ -187,4 +195,23 @@ fn default_pdos_run() {
     // nothing by default, canopen-python's sample maps objects it lacks);
     // a run that checks none checks nothing.
     assert!(tpdos >= 1 && rpdos >= 1, "TPDOs {tpdos}, RPDOs {rpdos} checked");
+}
+
+/// `LSS_Supported=1` (CiA 306 §4.4) makes an LSS slave (CiA 305): in
+/// configuration state it answers "inquire node-ID" with its node-ID; a
+/// file without it ignores LSS.
+#[test]
+fn lss_as_the_file_says() {
+    let mut with = 0;
+    for (name, text) in vectors() {
+        let lss = drivebus_eds::parse(&text).unwrap().eds.device_info.lss_supported;
+        let (node, _) = build(&text);
+        let mut rig = rig(node);
+        rig.send("7E5#0401000000000000");
+        rig.send("7E5#5E00000000000000");
+        let want = if lss { vec![Frame::new(0x7E4, &[0x5E, NODE, 0, 0, 0, 0, 0, 0])] } else { vec![] };
+        assert_eq!(rig.take(), want, "{name}: LSS_Supported={lss}");
+        with += usize::from(lss);
+    }
+    assert!(with >= 2, "{with} files with LSS");
 }

@@ -88,6 +88,7 @@ fn drive_keys_are_refused_for_a_device_node() {
     let e = f.io_machine_for(3).unwrap_err();
     assert!(e.message.contains("limits"), "{e}");
     assert_eq!(e.line, 2);
-    let f = MachineFile::parse("[[node]]\nid = 3\n[[node.inputs]]\nat = 1.0\ninput = \"brake\"\nvalue = 1\n").unwrap();
+    let f = MachineFile::parse("[[node]]\nid = 3\n[[node.inputs]]\nat = 1.0\ninput = \"brake\"\nvalue = 1\n")
+        .unwrap();
     assert_eq!(f.io_machine_for(3).unwrap_err().line, 5);
 }

@@ -58,7 +58,9 @@ impl IoNode {
 
     fn inject(module: &mut IoModule, i: Injection) {
         match i {
-            Injection::Model(Plant::DigitalInput { line, level }) => module.set_input_line(line.into(), level),
+            Injection::Model(Plant::DigitalInput { line, level }) => {
+                module.set_input_line(line.into(), level)
+            }
             Injection::Model(Plant::AnalogInput { channel, volts }) => {
                 module.set_analog_input(channel.into(), volts_to_raw(volts))
             }
@@ -121,7 +123,8 @@ pub fn build_device(
     if let Some(m) = machine {
         m.check().map_err(DeviceError::Machine)?;
     }
-    let (mut node, warnings) = Node::from_eds(eds, text, node_id, storage, options).map_err(DeviceError::Eds)?;
+    let (mut node, warnings) =
+        Node::from_eds(eds, text, node_id, storage, options).map_err(DeviceError::Eds)?;
     let app = if drivebus_cia401::is_io_module(node.config().device_type) {
         let module = IoModule::install(&mut node);
         let default = Machine::default();
@@ -158,7 +161,12 @@ impl Application for DeviceApp {
         }
     }
 
-    fn filter_frame(&mut self, _od: &ObjectDictionary, _node_id: u8, _frame: &drivebus_can::Frame) -> FrameFilter {
+    fn filter_frame(
+        &mut self,
+        _od: &ObjectDictionary,
+        _node_id: u8,
+        _frame: &drivebus_can::Frame,
+    ) -> FrameFilter {
         FrameFilter::Pass
     }
 
