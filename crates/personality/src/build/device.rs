@@ -76,7 +76,7 @@ pub enum DeviceApp {
     /// A CiA 301 device: the dictionary is all there is.
     Plain,
     /// A CiA 401 generic I/O module.
-    Io(IoNode),
+    Io(Box<IoNode>),
 }
 
 /// A device built by [`build_device`].
@@ -128,7 +128,7 @@ pub fn build_device(
     let app = if drivebus_cia401::is_io_module(node.config().device_type) {
         let module = IoModule::install(&mut node);
         let default = Machine::default();
-        DeviceApp::Io(IoNode::new(module, machine.unwrap_or(&default)))
+        DeviceApp::Io(Box::new(IoNode::new(module, machine.unwrap_or(&default))))
     } else {
         DeviceApp::Plain
     };
