@@ -672,6 +672,58 @@ mod tests {
         assert_eq!(dev.read_object(0x6422, 1, now).unwrap(), 0u32.to_le_bytes(), "reset when read");
     }
 
+    /// The module's file broken in many ways (a window of lines left out,
+    /// types and counts changed) gives a module or an error, never a
+    /// panic: installed, booted, started, inputs set, outputs written.
+    #[test]
+    fn broken_files_never_panic() {
+        let lines: Vec<&str> = EDS.lines().collect();
+        let mut variants: Vec<String> = (0..lines.len())
+            .step_by(7)
+            .map(|at| {
+                let mut l = lines.clone();
+                l.drain(at..(at + 5).min(lines.len()));
+                l.join("\n")
+            })
+            .collect();
+        variants.push(EDS.replace("DataType=0x0005", "DataType=0x0007"));
+        variants.push(
+            EDS.replace("DataType=0x0003", "DataType=0x0005").replace("DefaultValue=0\n", "DefaultValue=1\n"),
+        );
+        variants.push(EDS.replace("DefaultValue=0x00000000", "DefaultValue=0x60000140"));
+        let mut built = 0;
+        for v in variants {
+            let Ok(p) = drivebus_eds::parse(&v) else { continue };
+            let Ok((mut node, _)) =
+                Node::from_eds(&p.eds, &v, 1, Box::new(MemoryStorage::new()), EdsOptions::default())
+            else {
+                continue;
+            };
+            let io = IoModule::install(&mut node);
+            let mut dev = NodeDevice::new(node, io);
+            let mut out = Vec::new();
+            let now = Instant::from_nanos(1);
+            dev.start(Instant::ZERO, &mut out);
+            dev.handle_frame(&Frame::new(0, &[1, 1]), now, &mut out);
+            for line in [1, 8, 9, 16, 17, 200] {
+                dev.app.set_input_line(line, true);
+            }
+            dev.app.set_analog_input(1, -3);
+            dev.app.set_wiring(&[16, 1, 40]);
+            dev.node.od_mut();
+            dev.poll(now, &mut out);
+            for (i, s) in [(0x6200, 1), (0x6411, 1), (0x6002, 2), (0x6423, 0), (0x1A00, 0), (0x6422, 1)] {
+                let _ = dev.write_object(i, s, &[1], now, &mut out);
+                let _ = dev.read_object(i, s, now);
+            }
+            dev.handle_frame(&Frame::new(0x201, &[0xFF, 0xFF]), now, &mut out);
+            dev.handle_frame(&Frame::new(0, &[2, 1]), now, &mut out);
+            dev.poll(now, &mut out);
+            built += 1;
+        }
+        assert!(built > 50, "{built} variants built");
+    }
+
     #[test]
     fn volts_scale_to_full_range_at_ten_volts() {
         assert_eq!(volts_to_raw(10.0), 32767);
