@@ -189,7 +189,8 @@ pub struct ServeArgs {
     #[arg(long = "drive", value_name = "PROFILE:NODE", required_unless_present = "devices")]
     pub drives: Vec<String>,
     /// A device from its EDS or DCF (repeatable): its objects, defaults and PDOs; a CiA 401 I/O
-    /// module when its 1000h says so (inputs from --machine: docs/machine.md).
+    /// module when its 1000h says so (inputs from --machine: docs/machine.md). A DCF may leave
+    /// :NODE out: its [DeviceComissioning] NodeID.
     #[arg(long = "device", value_name = "FILE:NODE")]
     pub devices: Vec<String>,
     /// Directory where each drive keeps its stored parameters (1010h).
@@ -483,7 +484,8 @@ pub struct SlcanPtyArgs {
     #[arg(long = "drive", value_name = "PROFILE:NODE")]
     pub drives: Vec<String>,
     /// A device from its EDS or DCF (repeatable): its objects, defaults and PDOs; a CiA 401 I/O
-    /// module when its 1000h says so (inputs from --machine: docs/machine.md).
+    /// module when its 1000h says so (inputs from --machine: docs/machine.md). A DCF may leave
+    /// :NODE out: its [DeviceComissioning] NodeID.
     #[arg(long = "device", value_name = "FILE:NODE")]
     pub devices: Vec<String>,
     /// Stop after this many seconds (default: until SIGINT/SIGTERM).

@@ -28,26 +28,36 @@ impl DeviceSpec {
     /// Whether a `--sim` argument names a file rather than a profile
     /// (`FILE.eds:NODE`, `FILE.dcf:NODE`).
     pub fn is_file_spec(s: &str) -> bool {
-        s.rsplit_once(':').is_some_and(|(f, _)| {
-            let f = f.to_ascii_lowercase();
-            f.ends_with(".eds") || f.ends_with(".dcf")
-        })
+        let f = s.rsplit_once(':').map_or(s, |(f, _)| f).to_ascii_lowercase();
+        let l = s.to_ascii_lowercase();
+        f.ends_with(".eds") || f.ends_with(".dcf") || l.ends_with(".dcf")
     }
 
-    /// Parses `FILE:NODE` and reads the file: a file that cannot be read or
-    /// parsed is an error naming the file, the line and the cause.
+    /// Parses `FILE:NODE` (or `FILE` alone for a DCF whose
+    /// `[DeviceComissioning]` gives its NodeID) and reads the file: a file
+    /// that cannot be read or parsed is an error naming the file, the line
+    /// and the cause.
     pub fn parse(s: &str) -> anyhow::Result<DeviceSpec> {
-        let Some((f, n)) = s.rsplit_once(':') else {
-            bail!("bad device `{s}`: expected FILE:NODE, e.g. io16.eds:3 (an EDS or DCF)");
-        };
-        let node = match n.trim().parse::<u32>() {
-            Ok(v @ 1..=127) => v as u8,
-            _ => bail!("bad device `{s}`: node-ID `{n}` is not in 1..127"),
+        let (f, node) = match s.rsplit_once(':') {
+            Some((f, n)) if !n.is_empty() && n.trim().bytes().all(|b| b.is_ascii_digit()) => {
+                match n.trim().parse::<u32>() {
+                    Ok(v @ 1..=127) => (f, Some(v as u8)),
+                    _ => bail!("bad device `{s}`: node-ID `{n}` is not in 1..127"),
+                }
+            }
+            _ => (s, None),
         };
         let path = PathBuf::from(f);
         let bytes = std::fs::read(&path).with_context(|| format!("cannot read device file {f}"))?;
         let text = String::from_utf8_lossy(&bytes).into_owned();
         let eds = crate::eds_cmd::parse_text(&text).map_err(|e| anyhow!("{f}: {e}"))?;
+        let from_dcf = eds.commissioning.as_ref().map(|c| c.node_id).filter(|n| (1..=127).contains(n));
+        let Some(node) = node.or(from_dcf) else {
+            bail!(
+                "bad device `{s}`: expected FILE:NODE, e.g. io16.eds:3 (an EDS or DCF; a DCF whose \
+                 [DeviceComissioning] NodeID is 1..127 may leave NODE out)"
+            );
+        };
         Ok(DeviceSpec { path, node, text, eds })
     }
 

@@ -67,6 +67,17 @@ fn sim_hosts_third_party_files() {
         .stdout(contains("= 3.1415927 [REAL32]"));
 }
 
+/// A DCF names its node: `FILE` alone takes `[DeviceComissioning]
+/// NodeID` (Lely's co-nmt-slave.dcf: node 2); an EDS has none to give.
+#[test]
+fn a_dcf_without_node_takes_its_commissioned_node_id() {
+    let dcf = root("tests/vectors/eds/lely-co-nmt-slave.dcf");
+    cli(&["--sim", &dcf, "--node", "2", "sdo", "read", "1017"]).success().stdout(contains("1017h:00"));
+    cli(&["--sim", &io16(), "--node", "3", "sdo", "read", "1000"])
+        .failure()
+        .stderr(contains("expected FILE:NODE").and(contains("NodeID")));
+}
+
 #[test]
 fn a_malformed_file_is_refused_with_its_line_before_anything_starts() {
     let dir = tempfile::tempdir().unwrap();
