@@ -1,5 +1,5 @@
 """Devices from third-party EDS/DCF files (`drivebus serve --device
-FILE:NODE`, tests/vectors/eds/ and the CiA 401 module
+FILE:NODE`, `slcan-pty --device`; tests/vectors/eds/ and the CiA 401 module
 crates/cia401/eds/io16.eds) on a bus Lely's `dcfgen` (dcf-tools 2.4.2,
 pinned) configures: the files pass Lely's `dcfchk`, `dcfgen` takes a bus of
 them (warnings as errors), the running devices accept every entry of the
@@ -16,6 +16,7 @@ import struct
 import time
 from pathlib import Path
 
+import canopen
 import pytest
 
 from conftest import ROOT, connect
@@ -121,3 +122,28 @@ def test_a_served_file_comes_back_at_1021h_and_passes_dcfchk(serve, tmp_path):
     got = tmp_path / "read-back.eds"
     got.write_bytes(text)
     dcfchk(got, 4)
+
+
+@pytest.mark.limit(60)
+def test_a_cia401_module_behind_slcan_pty():
+    """`slcan-pty --device`: canopen over python-can's slcan reads and
+    writes the module with its own EDS as the dictionary."""
+    from conftest import Proc
+
+    proc = Proc(["slcan-pty", "--device", f"{IO16}:3"])
+    try:
+        path = proc.wait_line(r"slcan-pty\s+(/\S+)").group(1)
+        net = canopen.Network()
+        net.NOTIFIER_CYCLE = 0.1
+        net.connect(interface="slcan", channel=path, bitrate=500000, sleep_after_open=0.1)
+        try:
+            io = net.add_node(3, str(IO16))
+            io.sdo.RESPONSE_TIMEOUT = 2.0
+            assert io.sdo[0x1000].raw == 0x000F0191
+            io.sdo[0x6200][1].raw = 0x33
+            assert io.sdo[0x6200][1].raw == 0x33
+            assert io.sdo["Read analogue input 16-bit"][1].raw == 0
+        finally:
+            net.disconnect()
+    finally:
+        assert proc.stop() == 0, proc.describe()
