@@ -640,6 +640,29 @@ mod tests {
         assert_eq!(dev.app.analog_outputs(), [1234, 0]);
     }
 
+    /// A communication error (here a heartbeat consumer timeout, as the
+    /// node reports it) puts the outputs in their error state; the
+    /// heartbeat coming back while operational takes them out.
+    #[test]
+    fn a_communication_error_sets_the_error_values() {
+        let (mut dev, mut out) = module();
+        write(&mut dev, 0x6200, 1, &[0x0F], &mut out);
+        write(&mut dev, 0x6207, 1, &[0xF0], &mut out);
+        let mut requests = Vec::new();
+        let now = Instant::from_nanos(1);
+        let mut cx = AppContext::new(dev.node.od_mut(), now, 1, &mut requests);
+        dev.app.on_event(&mut cx, NodeEvent::HeartbeatTimeout { node: 9 });
+        assert_eq!(dev.app.output_lines(), [0xF0, 0x00]);
+        dev.app.on_event(&mut cx, NodeEvent::HeartbeatRecovered { node: 9 });
+        assert_eq!(dev.app.output_lines(), [0x0F, 0x00]);
+        // Bus-off likewise; and pre-operational alone changes nothing.
+        dev.app.on_event(&mut cx, NodeEvent::Link(LinkState::BusOff { recover_at: None }));
+        assert!(dev.app.in_error_state());
+        let pre = NodeEvent::NmtState { from: NmtState::Operational, to: NmtState::PreOperational };
+        dev.app.on_event(&mut cx, pre);
+        assert!(dev.app.in_error_state());
+    }
+
     #[test]
     fn a_wired_output_reads_back_at_its_input() {
         let (mut dev, mut out) = module();

@@ -92,3 +92,27 @@ fn drive_keys_are_refused_for_a_device_node() {
         .unwrap();
     assert_eq!(f.io_machine_for(3).unwrap_err().line, 5);
 }
+
+/// 6423h TRUE (CiA 401: analog interrupts on): the scheduled change of
+/// channel 2 at 1 s sends TPDO2 then (6421h's default 7: a change by the
+/// delta 6426h = 0, i.e. any change), with both channels.
+#[test]
+fn analog_interrupts_send_tpdo2_once_enabled() {
+    let (mut bus, _, probe) = bus();
+    bus.send_from(probe, Frame::new(0, &[1, 3]));
+    bus.run_for(Duration::from_millis(100));
+    bus.take_received(probe);
+    // SDO download 6423h:00 = 1.
+    bus.send_from(probe, Frame::new(0x603, &[0x2F, 0x23, 0x64, 0x00, 0x01, 0, 0, 0]));
+    bus.run_for(Duration::from_millis(100));
+    assert_eq!(bus.take_received(probe), [Frame::new(0x583, &[0x60, 0x23, 0x64, 0, 0, 0, 0, 0])]);
+    bus.run_for(Duration::from_millis(1000));
+    let got: Vec<(u128, Frame)> = bus
+        .take_received_timed(probe)
+        .into_iter()
+        .map(|(t, f)| ((t - Instant::ZERO).as_nanos() / 1_000_000, f))
+        .filter(|(_, f)| f.id().raw() == 0x283)
+        .collect();
+    // -10 V is -32767 (0x8001).
+    assert_eq!(got, [(1000, Frame::new(0x283, &[0x00, 0x20, 0x01, 0x80, 0, 0, 0, 0]))]);
+}
