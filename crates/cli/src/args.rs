@@ -65,7 +65,8 @@ pub struct Global {
     #[arg(long, global = true, default_value_t = 0)]
     pub retries: u8,
     /// On the `virtual` bus: host a virtual drive PROFILE:NODE in this
-    /// process (repeatable), e.g. --sim akd:1.
+    /// process (repeatable), e.g. --sim akd:1, or a device from its EDS or
+    /// DCF, FILE:NODE (a name ending in .eds or .dcf), e.g. --sim io16.eds:3.
     #[arg(long = "sim", global = true, value_name = "PROFILE:NODE")]
     pub sim: Vec<String>,
     /// The machine around the virtual drives of --sim, serve, slcan-pty and demo: a TOML file
@@ -185,8 +186,13 @@ pub struct ServeArgs {
     #[arg(long, default_value = "can0")]
     pub channel: String,
     /// A virtual drive: PROFILE (kc1, akd, ipos, ssd630, dds6, generic) and NODE (1..127).
-    #[arg(long = "drive", value_name = "PROFILE:NODE", required = true)]
+    #[arg(long = "drive", value_name = "PROFILE:NODE", required_unless_present = "devices")]
     pub drives: Vec<String>,
+    /// A device from its EDS or DCF (repeatable): its objects, defaults and PDOs; a CiA 401 I/O
+    /// module when its 1000h says so (inputs from --machine: docs/machine.md). A DCF may leave
+    /// :NODE out: its [DeviceComissioning] NodeID.
+    #[arg(long = "device", value_name = "FILE:NODE")]
+    pub devices: Vec<String>,
     /// Directory where each drive keeps its stored parameters (1010h).
     #[arg(long)]
     pub state_dir: Option<PathBuf>,
@@ -474,9 +480,14 @@ Prints `slcan-pty PATH`; open PATH with python-can: can.Bus(interface='slcan', c
 /// `drivebus slcan-pty`.
 #[derive(Args, Debug)]
 pub struct SlcanPtyArgs {
-    /// A virtual drive PROFILE:NODE behind the adapter (repeatable).
+    /// A virtual drive: PROFILE (kc1, akd, ipos, ssd630, dds6, generic) and NODE (1..127).
     #[arg(long = "drive", value_name = "PROFILE:NODE")]
     pub drives: Vec<String>,
+    /// A device from its EDS or DCF (repeatable): its objects, defaults and PDOs; a CiA 401 I/O
+    /// module when its 1000h says so (inputs from --machine: docs/machine.md). A DCF may leave
+    /// :NODE out: its [DeviceComissioning] NodeID.
+    #[arg(long = "device", value_name = "FILE:NODE")]
+    pub devices: Vec<String>,
     /// Stop after this many seconds (default: until SIGINT/SIGTERM).
     #[arg(long)]
     pub seconds: Option<f64>,

@@ -11,6 +11,7 @@ use drivebus_master::{Master, MasterConfig};
 
 use crate::args::Global;
 use crate::dict::Dict;
+use crate::vdevice::DeviceSpec;
 use crate::vdrive::{DriveSpec, spawn_on_hub};
 
 /// Virtual drives hosted by this process for `--sim`; stopped on drop.
@@ -61,18 +62,23 @@ impl Conn {
 
     /// [`open`](Self::open) with the dictionary loaded already.
     pub async fn open_with(g: &Global, dict: Dict) -> anyhow::Result<Conn> {
-        let specs = DriveSpec::parse_all(&g.sim)?;
+        // `--sim FILE.eds:NODE` is a device from its file, else a drive.
+        let (files, drives_given): (Vec<String>, Vec<String>) =
+            g.sim.iter().cloned().partition(|s| DeviceSpec::is_file_spec(s));
+        let specs = DriveSpec::parse_all(&drives_given)?;
+        let devices = DeviceSpec::parse_all(&files, &specs.iter().map(|s| s.node).collect::<Vec<_>>())?;
         // The transport's message already names the URL and the cause.
         let parsed =
             drivebus_transport::BusUrl::parse(&g.bus).map_err(|e| crate::error::coded("bus", e.into()))?;
         let mut drives = Vec::new();
-        if specs.is_empty() && g.machine.is_some() {
+        let none = specs.is_empty() && devices.is_empty();
+        if none && g.machine.is_some() {
             return Err(crate::error::coded(
                 "usage",
                 anyhow!("--machine is the machine around --sim drives: give them with --sim PROFILE:NODE"),
             ));
         }
-        if !specs.is_empty() {
+        if !none {
             let drivebus_transport::BusUrl::Virtual { name } = &parsed else {
                 return Err(crate::error::coded(
                     "usage",
@@ -80,10 +86,10 @@ impl Conn {
                 ));
             };
             let hub = drivebus_transport::hub::virtual_hub(name);
-            drives = spawn_on_hub(&specs, &hub, None, Default::default(), g.machine.as_deref())?;
+            drives = spawn_on_hub(&specs, &devices, &hub, None, Default::default(), g.machine.as_deref())?.0;
         }
         let hosted = Hosted(drives);
-        if specs.is_empty() && matches!(parsed, drivebus_transport::BusUrl::Virtual { .. }) {
+        if none && matches!(parsed, drivebus_transport::BusUrl::Virtual { .. }) {
             let _ = EMPTY_BUS.set(format!(
                 "; nothing is on the bus: `{}` is this process's own in-process bus and no --sim drive was given. Give --bus URL (or set DRIVEBUS_BUS, e.g. socketcand://127.0.0.1:29536/can0 for `drivebus serve`), or --sim PROFILE:NODE",
                 g.bus
@@ -96,7 +102,7 @@ impl Conn {
                     crate::error::coded("bus", anyhow!("timed out after 10 s: cannot open `{}`", g.bus))
                 })?
                 .map_err(|e| crate::error::coded("bus", open_error(&g.bus, e)))?;
-        if !specs.is_empty() {
+        if !none {
             // Let the hosted drives boot before the first request.
             tokio::time::sleep(Duration::from_millis(20)).await;
         }

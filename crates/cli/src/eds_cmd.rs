@@ -21,7 +21,7 @@ pub fn load_eds(path: &Path) -> anyhow::Result<Eds> {
 /// Parses an EDS; the error names the first problem with its line (the
 /// cause: the file's errors come in file order, consequences found at the
 /// end last), then how many more there are and the next few.
-fn parse_text(text: &str) -> anyhow::Result<Eds> {
+pub(crate) fn parse_text(text: &str) -> anyhow::Result<Eds> {
     match drivebus_eds::parse(text) {
         Ok(p) => Ok(p.eds),
         Err(e) => {

@@ -34,6 +34,7 @@ mod sdo_cmd;
 mod serve;
 mod slcan_pty;
 mod stats_cmd;
+mod vdevice;
 mod vdrive;
 
 use clap::parser::ValueSource;

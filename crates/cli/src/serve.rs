@@ -19,11 +19,14 @@ use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
 use drivebus_transport::{BusUrl, Hub, HubConfig};
 
 use crate::args::{DEFAULT_LISTEN, Global, ServeArgs};
+use crate::vdevice::DeviceSpec;
 use crate::vdrive::{DriveSpec, spawn_on_hub};
 
 /// Runs the drives until a termination signal.
 pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     let specs = DriveSpec::parse_all(&a.drives)?;
+    // The device files are read and checked before anything starts.
+    let devices = DeviceSpec::parse_all(&a.devices, &specs.iter().map(|s| s.node).collect::<Vec<_>>())?;
     if a.channel.is_empty() || a.channel.contains(char::is_whitespace) || a.channel.contains(['<', '>']) {
         anyhow::bail!("bad --channel `{}`: a bus name without spaces or angle brackets", a.channel);
     }
@@ -73,8 +76,14 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         tokio::time::sleep(std::time::Duration::from_millis(100)).await;
     }
     let options = BuildOptions { eds_object: a.eds_object };
-    let drives = spawn_on_hub(&specs, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
-    let list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
+    let (drives, described) =
+        spawn_on_hub(&specs, &devices, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
+    let drive_list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
+    let list = match (specs.is_empty(), described.is_empty()) {
+        (_, true) => format!("drives {drive_list}"),
+        (true, false) => format!("devices {}", described.join(" ")),
+        (false, false) => format!("drives {drive_list}; devices {}", described.join(" ")),
+    };
     let pace = a.bitrate.map_or_else(|| "unpaced".to_owned(), |b| format!("{b} bit/s"));
     // Handlers first: a SIGTERM right after the ready line must end in a
     // clean exit 0, not the default action (found by the interop suite).
@@ -85,10 +94,10 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         match &server {
             Some((_, addr)) => writeln!(
                 out,
-                "drivebus serve: socketcand listening on {addr} (channel {}) ({pace}); drives {list}{on}",
+                "drivebus serve: socketcand listening on {addr} (channel {}) ({pace}); {list}{on}",
                 a.channel
             )?,
-            None => writeln!(out, "drivebus serve: serving on {} ({pace}); drives {list}", g.bus)?,
+            None => writeln!(out, "drivebus serve: serving on {} ({pace}); {list}", g.bus)?,
         }
         out.flush()?;
     }

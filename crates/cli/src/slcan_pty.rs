@@ -6,6 +6,7 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 
 use crate::args::{Global, SlcanPtyArgs};
+use crate::vdevice::DeviceSpec;
 use crate::vdrive::{DriveSpec, spawn_on_hub};
 
 /// `drivebus slcan-pty`.
@@ -14,12 +15,14 @@ pub async fn run(g: &Global, a: &SlcanPtyArgs) -> anyhow::Result<()> {
     {
         use std::io::Write;
         let specs = DriveSpec::parse_all(&a.drives)?;
+        let devices = DeviceSpec::parse_all(&a.devices, &specs.iter().map(|s| s.node).collect::<Vec<_>>())?;
         let hub = match drivebus_transport::BusUrl::parse(&g.bus)? {
             drivebus_transport::BusUrl::Virtual { name } => drivebus_transport::hub::virtual_hub(&name),
             _ => bail!("slcan-pty runs on the in-process virtual bus: use --bus virtual (not `{}`)", g.bus),
         };
         crate::fault::install(&hub, &a.faults)?;
-        let _drives = spawn_on_hub(&specs, &hub, None, Default::default(), g.machine.as_deref())?;
+        let (_drives, _) =
+            spawn_on_hub(&specs, &devices, &hub, None, Default::default(), g.machine.as_deref())?;
         let pty = drivebus_transport::slcan::SlcanPty::spawn(hub.attach())
             .context("cannot open a pseudo-terminal")?;
         {

@@ -12,6 +12,8 @@ use drivebus_personality::machine::{Machine, MachineFile};
 use drivebus_personality::{PersonalityDevice, Profile};
 use tokio::task::JoinHandle;
 
+use crate::vdevice::DeviceSpec;
+
 /// A drive to host, as given on the command line (`akd:1`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DriveSpec {
@@ -74,16 +76,41 @@ impl Machines {
     /// a table for a node that is not hosted, or a machine that does not
     /// make sense is an error naming the file, line and column.
     pub fn load(path: Option<&Path>, specs: &[DriveSpec]) -> anyhow::Result<Machines> {
+        Machines::load_with_devices(path, specs, &[])
+    }
+
+    /// [`Machines::load`] for drives and devices from a file
+    /// (`devices`: their node-IDs, whose tables take only `io` and digital
+    /// and analog `inputs`).
+    pub fn load_with_devices(
+        path: Option<&Path>,
+        specs: &[DriveSpec],
+        devices: &[u8],
+    ) -> anyhow::Result<Machines> {
         let Some(path) = path else {
             return Ok(Machines { file: None });
         };
         let at = |e: drivebus_personality::machine::MachineFileError| anyhow!("{}: {e}", path.display());
         let file = MachineFile::read(path).map_err(at)?;
-        file.check_nodes(&specs.iter().map(|s| s.node).collect::<Vec<_>>()).map_err(at)?;
+        let mut nodes: Vec<u8> = specs.iter().map(|s| s.node).collect();
+        nodes.extend_from_slice(devices);
+        file.check_nodes(&nodes).map_err(at)?;
         for s in specs {
             file.machine_for(s.profile, s.node).map_err(at)?;
         }
+        for &n in devices {
+            file.io_machine_for(n).map_err(at)?;
+        }
         Ok(Machines { file: Some((file, path.to_owned())) })
+    }
+
+    /// The machine of device node `node` (`None`: no machine file, all
+    /// inputs low).
+    pub fn io_machine_for(&self, node: u8) -> anyhow::Result<Option<Machine>> {
+        self.file
+            .as_ref()
+            .map(|(f, path)| f.io_machine_for(node).map_err(|e| anyhow!("{}: {e}", path.display())))
+            .transpose()
     }
 
     /// The machine of `spec`.
@@ -120,24 +147,34 @@ pub fn build(
         .map_err(|e| anyhow!("cannot build {spec}: {e}"))
 }
 
-/// Builds and starts `specs` on `hub`, each as its own participant, each
-/// on its machine (`--machine FILE` or the profile's default).
+/// Builds and starts `specs` and `devices` on `hub`, each as its own
+/// participant, each on its machine (`--machine FILE` or the profile's
+/// default); returns the hosts and what each device is (for the ready
+/// line). Every file and machine is checked before anything starts.
 pub fn spawn_on_hub(
     specs: &[DriveSpec],
+    devices: &[DeviceSpec],
     hub: &drivebus_transport::Hub,
     state_dir: Option<&Path>,
     options: BuildOptions,
     machine_file: Option<&Path>,
-) -> anyhow::Result<Vec<JoinHandle<()>>> {
-    let machines = Machines::load(machine_file, specs)?;
+) -> anyhow::Result<(Vec<JoinHandle<()>>, Vec<String>)> {
+    let nodes: Vec<u8> = devices.iter().map(|d| d.node).collect();
+    let machines = Machines::load_with_devices(machine_file, specs, &nodes)?;
     let mut drives = Vec::new();
     for s in specs {
         drives.push(build(*s, state_dir, options, &machines.machine_for(*s)?)?);
     }
-    Ok(drivebus_transport::host::spawn_on_hub(drives, hub)
-        .into_iter()
-        .map(|h| h.into_join_handle())
-        .collect())
+    let mut built = Vec::new();
+    let eds_options = drivebus_node::EdsOptions { eds_object: options.eds_object };
+    for d in devices {
+        let dev = d.build(state_dir, eds_options, machines.io_machine_for(d.node)?.as_ref())?;
+        built.push((d.describe(&dev), dev));
+    }
+    let (described, built): (Vec<String>, Vec<_>) = built.into_iter().unzip();
+    let hosts = drivebus_transport::host::spawn_on_hub(drives, hub).into_iter().map(|h| h.into_join_handle());
+    let more = drivebus_transport::host::spawn_on_hub(built, hub).into_iter().map(|h| h.into_join_handle());
+    Ok((hosts.chain(more).collect(), described))
 }
 
 #[cfg(test)]

@@ -137,6 +137,23 @@ fn the_machine_section_runs_as_written() {
     assert_eq!(mask_position("at position 232 (x), position -5"), "at position N (x), position N");
 }
 
+/// "A CiA 401 I/O module beside the drives": the module of
+/// `crates/cia401/eds/io16.eds` next to a drive, its machine file as
+/// printed, inputs, an output wired back and an analog input read as written.
+#[test]
+fn the_io_module_section_runs_as_written() {
+    let text = readme();
+    let heading = "### A CiA 401 I/O module beside the drives";
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("io.toml"), toml_block(&text, heading)).unwrap();
+    let eds = concat!(env!("CARGO_MANIFEST_DIR"), "/../cia401/eds/io16.eds");
+    std::fs::copy(eds, dir.path().join("io16.eds")).unwrap();
+    let lines = block(&text, heading);
+    assert!(lines.iter().any(|l| l.contains("--device io16.eds:3")), "{lines:?}");
+    let ran = run_block(lines, common::free_port(), dir.path(), false);
+    assert_eq!(ran, 5);
+}
+
 #[test]
 fn the_install_section_and_the_command_table_match_the_tool() {
     let text = readme();

@@ -12,8 +12,17 @@ pub fn is_node_relative(text: &str) -> bool {
 /// Evaluate a value text for `dt` with `node_id` substituted, returning the
 /// little-endian encoding. Integer expressions are sums and differences of
 /// numbers and `$NODEID`.
+///
+/// Forms other tools write and read are taken as they mean them: a hex
+/// number for a signed type or a REAL is the value's bit pattern
+/// (`0x80000000` for INTEGER32 is −2³¹, `0x40490FDB` for REAL32 is π, as
+/// canopen-python and Lely read them), and a TIME_OF_DAY or
+/// TIME_DIFFERENCE may be written `DAYS MS` (Lely).
 pub fn eval(text: &str, dt: DataType, node_id: u8) -> Result<Vec<u8>, String> {
     let t = text.trim();
+    if let Some(bytes) = bit_pattern(t, dt)? {
+        return Ok(bytes);
+    }
     if dt.num_kind().is_some() && !matches!(dt, DataType::Real32 | DataType::Real64) || is_node_relative(t) {
         let v = eval_int(t, node_id)?;
         let val = if v < 0 { Value::I64(v as i64) } else { Value::U64(v as u64) };
@@ -28,6 +37,44 @@ pub fn eval(text: &str, dt: DataType, node_id: u8) -> Result<Vec<u8>, String> {
     }
     let v = Value::parse(dt, text).map_err(|e| e.to_string())?;
     v.encode(dt).map_err(|e| format!("{t:?}: {e}"))
+}
+
+/// A hex number as the bit pattern of a signed or REAL type, or `DAYS MS`
+/// of a time type (see [`eval`]); `None`: not such a form.
+fn bit_pattern(t: &str, dt: DataType) -> Result<Option<Vec<u8>>, String> {
+    use DataType as T;
+    if matches!(dt, T::TimeOfDay | T::TimeDifference)
+        && let Some((d, ms)) = t.split_once(char::is_whitespace)
+    {
+        let (d, ms) = (parse_int(d), parse_int(ms.trim()));
+        return match (d, ms) {
+            (Some(d @ 0..=0xFFFF), Some(ms @ 0..=0x0FFF_FFFF)) => {
+                Ok(Some(Value::Time { ms: ms as u32, days: d as u16 }.encode(dt).map_err(|e| e.to_string())?))
+            }
+            _ => Err(format!("{t:?} is not DAYS MS for {}", dt.name())),
+        };
+    }
+    let signed = matches!(
+        dt,
+        T::Integer8
+            | T::Integer16
+            | T::Integer24
+            | T::Integer32
+            | T::Integer40
+            | T::Integer48
+            | T::Integer56
+            | T::Integer64
+    );
+    if !(signed || matches!(dt, T::Real32 | T::Real64)) {
+        return Ok(None);
+    }
+    let Some(h) = t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) else { return Ok(None) };
+    let Some(n) = dt.fixed_size() else { return Ok(None) };
+    let v = u64::from_str_radix(h, 16).map_err(|_| format!("{t:?} is not a number"))?;
+    if n < 8 && v >> (8 * n) != 0 {
+        return Err(format!("{t:?} is out of range for {}", dt.name()));
+    }
+    Ok(Some(v.to_le_bytes()[..n].to_vec()))
 }
 
 fn eval_int(t: &str, node_id: u8) -> Result<i128, String> {
@@ -107,6 +154,29 @@ mod tests {
         assert!(eval("0x100", DataType::Unsigned8, 1).is_err());
         assert!(eval("$NODEID+", DataType::Unsigned8, 1).is_err());
         assert!(eval("abc", DataType::Unsigned8, 1).is_err());
+    }
+
+    #[test]
+    fn other_tools_forms() {
+        // canopen-python's sample.eds: limits of INTEGER32/64 as bit patterns.
+        assert_eq!(eval("0x80000000", DataType::Integer32, 1).unwrap(), i32::MIN.to_le_bytes());
+        assert_eq!(eval("0xFFFFFFFF", DataType::Integer32, 1).unwrap(), (-1i32).to_le_bytes());
+        assert_eq!(eval("0xFFFFFFFFFFFFFFF6", DataType::Integer64, 1).unwrap(), (-10i64).to_le_bytes());
+        assert_eq!(eval("0x7F", DataType::Integer8, 1).unwrap(), [0x7F]);
+        assert!(eval("0x100", DataType::Integer8, 1).is_err());
+        assert_eq!(eval("-5", DataType::Integer8, 1).unwrap(), [0xFB]);
+        // Lely's co-sdev.dcf: REALs as bit patterns, times as DAYS MS.
+        assert_eq!(eval("0x40490FDB", DataType::Real32, 1).unwrap(), 0x4049_0FDBu32.to_le_bytes());
+        assert_eq!(
+            eval("0x400921FB54442D18", DataType::Real64, 1).unwrap(),
+            core::f64::consts::PI.to_le_bytes()
+        );
+        assert_eq!(eval("1.5", DataType::Real32, 1).unwrap(), 1.5f32.to_le_bytes());
+        assert_eq!(
+            eval("365 43200000", DataType::TimeOfDay, 1).unwrap(),
+            [0x00, 0x2E, 0x93, 0x02, 0x6D, 0x01]
+        );
+        assert!(eval("365 0x10000000", DataType::TimeDifference, 1).is_err());
     }
 
     #[test]

@@ -90,6 +90,11 @@ pub struct NodeConfig {
     /// generated header.
     #[cfg(feature = "std")]
     pub eds_file_info: Option<Vec<(String, String)>>,
+    /// The file served at 1021h as it is (a device built from its EDS or
+    /// DCF, [`crate::Node::from_eds`]) instead of one generated from the
+    /// running dictionary.
+    #[cfg(feature = "std")]
+    pub eds_text: Option<std::sync::Arc<str>>,
 }
 
 impl NodeConfig {
@@ -125,6 +130,8 @@ impl NodeConfig {
             eds_device_info: None,
             #[cfg(feature = "std")]
             eds_file_info: None,
+            #[cfg(feature = "std")]
+            eds_text: None,
         }
     }
 }

@@ -16,6 +16,9 @@ pub(crate) struct Given {
     pub device_info: Option<DeviceInfo>,
     /// `[FileInfo]`: file name, versions, dates, authors.
     pub file_info: Option<Vec<(String, String)>>,
+    /// The file itself, served as it is instead of a generated one (a
+    /// device built from its file, `Node::from_eds`).
+    pub file: Option<std::sync::Arc<str>>,
 }
 
 /// The EDS text of `od` as node `node_id` has it now, with `[DeviceInfo]`

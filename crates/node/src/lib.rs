@@ -25,6 +25,8 @@ mod config;
 mod device;
 mod dictionary;
 #[cfg(feature = "std")]
+mod eds_device;
+#[cfg(feature = "std")]
 mod eds_object;
 mod foreign;
 mod node;
@@ -37,6 +39,8 @@ pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
 pub use config::{Identity, NodeConfig};
 pub use device::NodeDevice;
 pub use dictionary::build_dictionary;
+#[cfg(feature = "std")]
+pub use eds_device::EdsOptions;
 pub use node::{Node, NodeTemplate};
 pub use owners::{LOAD_SIGNATURE, SAVE_SIGNATURE};
 #[cfg(feature = "std")]

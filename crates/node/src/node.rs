@@ -165,6 +165,13 @@ impl NodeTemplate {
     pub fn into_node(self, storage: Box<dyn Storage + Send>) -> Node {
         Node::assemble(self.cfg, self.od, storage)
     }
+
+    /// The configuration and the dictionary, to edit before
+    /// [`Node::assemble`].
+    #[cfg(feature = "std")]
+    pub(crate) fn into_parts(self) -> (NodeConfig, ObjectDictionary) {
+        (self.cfg, self.od)
+    }
 }
 
 /// `cfg` with its node-ID in 1..=127 or FFh (unconfigured), also for NMT.
@@ -211,7 +218,11 @@ impl Node {
 
     /// The node of a finished configuration and dictionary (see
     /// [`NodeTemplate`]): the services are set up from them.
-    fn assemble(mut cfg: NodeConfig, od: ObjectDictionary, storage: Box<dyn Storage + Send>) -> Node {
+    pub(crate) fn assemble(
+        mut cfg: NodeConfig,
+        od: ObjectDictionary,
+        storage: Box<dyn Storage + Send>,
+    ) -> Node {
         let node_id = cfg.node_id;
         // CiA 305 §3.2: the LSS address is 1018h:01h–04h. A dictionary
         // from elsewhere (an EDS) keeps its own 1018h, so the identity is
@@ -248,6 +259,7 @@ impl Node {
                 lss: cfg.lss,
                 device_info: cfg.eds_device_info.clone(),
                 file_info: cfg.eds_file_info.clone(),
+                file: cfg.eds_text.clone(),
             },
         };
         let lss = cfg.lss.then(|| {

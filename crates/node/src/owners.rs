@@ -118,7 +118,8 @@ pub(crate) struct Services {
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
     /// What the EDS served at 1021h says besides the dictionary: LSS
-    /// slave or not, and the device's own `[DeviceInfo]` and `[FileInfo]`.
+    /// slave or not, the device's own `[DeviceInfo]` and `[FileInfo]`, and
+    /// the file itself when the device serves its file as it is.
     #[cfg(feature = "std")]
     pub eds_info: crate::eds_object::Given,
 }
@@ -276,6 +277,10 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
             tag::EMCY => self.s.emcy.check_read(at.index, at.sub),
             #[cfg(feature = "std")]
             tag::EDS => {
+                if let Some(file) = &self.s.eds_info.file {
+                    od.set_raw(at.r, file.as_bytes());
+                    return Ok(());
+                }
                 let text = crate::eds_object::generate(
                     od,
                     self.s.nmt.node_id(),

@@ -74,10 +74,12 @@ use drivebus_pdo::{DEFAULT_DUMMY_TYPES, Granularity, PdoDefaults, PdoKind, set_d
 extern crate alloc;
 
 mod conform;
+mod device;
 mod eds_od;
 mod node_od;
 mod personality;
 
+pub use device::{DeviceApp, DeviceError, EdsDevice, IoNode, build_device};
 pub(crate) use personality::BEHAVIOUR;
 pub use personality::Personality;
 

@@ -202,7 +202,7 @@ impl FaultSchedule {
     }
 
     /// The inputs a change may have touched, back at the machine's values.
-    fn restore_inputs(&self, drive: &mut Drive) {
+    fn restore_inputs(&self, inject: &mut impl FnMut(Injection)) {
         use ModelInjection as M;
         let touched = |f: fn(&Input) -> bool| {
             self.faults.iter().any(|(e, p)| *p != Phase::Pending && matches!(&e.what, What::Input(i) if f(i)))
@@ -211,22 +211,28 @@ impl FaultSchedule {
         if touched(|i| matches!(i, Input::Digital { .. })) {
             for line in 1..=DIGITAL_LINES as u8 {
                 let level = b.digital_inputs & (1 << (line - 1)) != 0;
-                drive.inject(Injection::Model(M::DigitalInput { line, level }));
+                inject(Injection::Model(M::DigitalInput { line, level }));
             }
         }
         if touched(|i| matches!(i, Input::Analog { .. })) {
             for (k, &volts) in b.analog_inputs.iter().enumerate() {
-                drive.inject(Injection::Model(M::AnalogInput { channel: k as u8 + 1, volts }));
+                inject(Injection::Model(M::AnalogInput { channel: k as u8 + 1, volts }));
             }
         }
         if touched(|i| matches!(i, Input::MasterVelocity(_))) {
-            drive.inject(Injection::Model(M::MasterVelocity(b.master_velocity)));
+            inject(Injection::Model(M::MasterVelocity(b.master_velocity)));
         }
     }
 
     /// Applies what is due at `now` to `drive` (it shows at the drive's
     /// next control period) and returns when the next change is due.
     pub fn run(&mut self, now: Instant, drive: &mut Drive) -> Option<Instant> {
+        self.run_with(now, |i| drive.inject(i))
+    }
+
+    /// [`FaultSchedule::run`] for any device the injections reach (an I/O
+    /// module takes the digital and analog inputs).
+    pub fn run_with(&mut self, now: Instant, mut inject: impl FnMut(Injection)) -> Option<Instant> {
         let t0 = *self.t0.get_or_insert(now);
         let t = now.as_nanos().saturating_sub(t0.as_nanos());
         let mut ended = false;
@@ -234,7 +240,7 @@ impl FaultSchedule {
             let (f, phase) = self.faults[i];
             if phase == Phase::Pending && t >= f.start_ns() {
                 self.faults[i].1 = Phase::Active;
-                drive.inject(self.injection(f.what));
+                inject(self.injection(f.what));
             }
             if self.faults[i].1 == Phase::Active && f.end_ns().is_some_and(|e| t >= e) {
                 self.faults[i].1 = Phase::Over;
@@ -246,11 +252,11 @@ impl FaultSchedule {
             // inputs go back to the machine's values; the faults and
             // changes still on are put back (a jump of the master encoder
             // is not repeated).
-            drive.inject(Injection::Model(ModelInjection::Clear));
-            self.restore_inputs(drive);
+            inject(Injection::Model(ModelInjection::Clear));
+            self.restore_inputs(&mut inject);
             for (f, _) in self.faults.iter().filter(|(_, p)| *p == Phase::Active) {
                 if !matches!(f.what, What::Input(Input::MasterPosition(_))) {
-                    drive.inject(self.injection(f.what));
+                    inject(self.injection(f.what));
                 }
             }
         }

@@ -464,6 +464,48 @@ impl MachineFile {
         Ok(m)
     }
 
+    /// The machine of node `node` hosting a device from its EDS or DCF (a
+    /// CiA 401 I/O module): `io` (inputs at power-on, outputs wired back)
+    /// and the digital and analog changes of `[[node.inputs]]`. A key of a
+    /// drive's machine (an axis, switches, faults …) is an error at its
+    /// place: the device has none of it.
+    pub fn io_machine_for(&self, node: u8) -> Result<Machine, MachineFileError> {
+        if let Some(n) = self.nodes.get(&node) {
+            let p = n.get_ref();
+            let spans = [
+                ("feed", p.feed.as_ref().map(|s| s.span())),
+                ("gear_ratio", p.gear_ratio.as_ref().map(|s| s.span())),
+                ("start", p.start.as_ref().map(|s| s.span())),
+                ("faults", p.faults.first().map(|s| s.span())),
+            ];
+            let tables = [
+                ("limits", p.limits.is_some()),
+                ("home_switch", p.home_switch.is_some()),
+                ("hard_stops", p.hard_stops.is_some()),
+                ("index", p.index.is_some()),
+                ("load", p.load.is_some()),
+                ("master_encoder", p.master_encoder.is_some()),
+                ("brake", p.brake.is_some()),
+                ("temperature", p.temperature.is_some()),
+            ];
+            let why = "a device from an EDS/DCF has only `io` and digital and analog `inputs`";
+            if let Some((key, span)) = spans.iter().find_map(|(k, s)| s.clone().map(|s| (k, s))) {
+                return Err(self.error_at(node, span.start, format!("{key}: {why}")));
+            }
+            if let Some((key, _)) = tables.iter().find(|(_, on)| *on) {
+                return Err(self.error_at(node, p.id.span().start, format!("{key}: {why}")));
+            }
+            for c in &p.inputs {
+                let name = *c.get_ref().input.get_ref();
+                if !matches!(name, InputName::Digital | InputName::Analog) {
+                    let at = c.get_ref().input.span().start;
+                    return Err(self.error_at(node, at, format!("inputs: {why}")));
+                }
+            }
+        }
+        self.machine_for(Profile::Generic, node)
+    }
+
     fn error_at(&self, node: u8, at: usize, message: String) -> MachineFileError {
         let (line, column) = line_col(&self.text, at);
         MachineFileError { line, column, message: format!("node {node}: {message}") }
