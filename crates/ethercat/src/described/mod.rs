@@ -34,8 +34,10 @@
 
 mod app;
 pub mod ihex;
+mod line;
 
 pub use app::{DescribedApp, DescribedStats, InputSource, Loopback};
+pub use line::{Member, devices, with_device};
 
 use app::{Coe, Mirror};
 use drivebus_coe::{MailboxConfig, MailboxServer};
@@ -246,10 +248,20 @@ pub fn slave(d: &Described, serial: u32, inputs: Box<dyn InputSource>) -> Result
         Format::Esi => SiiImage::from(&SlaveDescription { serial, ..desc.clone() }),
         _ => d.sii.clone(),
     };
+    let d = &Described { sii: sii.clone(), ..d.clone() };
     let coe = match desc.mailbox.and_then(|m| m.coe) {
         Some(details) => {
             let objects = drivebus_esi::device_objects(&SlaveDescription { serial, ..desc.clone() });
-            let od = drivebus_esi::dictionary(&objects);
+            let mut od = drivebus_esi::dictionary(&objects);
+            // The identity is the device's (`Device/Type`, SII words 8–15):
+            // an ESI's 1018h defaults are often placeholders.
+            let id = d.sii.parse().map(|c| c.identity).unwrap_or_default();
+            for (sub, v) in [(1, id.vendor_id), (2, id.product_code), (3, id.revision), (4, id.serial)] {
+                if let Some(e) = od.get_mut(0x1018, sub).filter(|e| e.data_type == drivebus_od::DataType::Unsigned32) {
+                    e.default = v.to_le_bytes().to_vec();
+                }
+                let _ = od.set_value(0x1018, sub, &drivebus_od::Value::U32(v));
+            }
             let access = objects.iter().flat_map(|o| o.subs.iter().map(move |s| ((o.index, s.sub), s.access))).collect();
             let size = |k| desc.sm(k).and_then(|(_, s)| s.default_size).map_or(0, usize::from);
             let cfg = MailboxConfig {

@@ -57,6 +57,8 @@ fn esi_device_with_dictionary() {
     let od = s.app().dictionary().unwrap();
     assert_eq!(od.get(0x6003, 0).map(|e| e.name.as_ref()), Some("mag_x"));
     assert_eq!(od.get_u32(0x1C13, 1), Some(0x1A00));
+    let id: Vec<_> = (1..=4).map(|k| od.get_u32(0x1018, k).unwrap()).collect();
+    assert_eq!(id, [0x6A5, 0x00DE_FEDE, 0x5A01, 9], "1018h is the device's identity, not the ESI's placeholder");
     let c = s.esc().sii_image().parse().unwrap();
     assert_eq!((c.identity.product_code, c.identity.serial), (0x00DE_FEDE, 9));
     assert_eq!(s.app().coe.as_ref().unwrap().outputs.len(), 3, "LED_R/G/B mirrored");
