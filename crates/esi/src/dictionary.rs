@@ -65,10 +65,13 @@ impl EsiSub {
     }
 }
 
-/// The objects `d`'s device serves: its own dictionary if it has one,
-/// else [`objects_from_description`].
+/// The objects `d`'s device serves: its own dictionary, completed by the
+/// objects of [`objects_from_description`] it lacks (an ESI without 1C00h
+/// still describes its SM types, and SOEM reads them), in index order.
 pub fn device_objects(d: &SlaveDescription) -> Vec<EsiObject> {
-    if d.objects.is_empty() { objects_from_description(d) } else { d.objects.clone() }
+    let mut all: BTreeMap<u16, EsiObject> = objects_from_description(d).into_iter().map(|o| (o.index, o)).collect();
+    all.extend(d.objects.iter().map(|o| (o.index, o.clone())));
+    all.into_values().collect()
 }
 
 /// The dictionary of `objects`.
@@ -256,6 +259,16 @@ mod tests {
         let out = od.get(0x7030, 1).unwrap();
         assert_eq!((out.data_type, out.access, out.pdo_mappable), (DataType::Boolean, Access::Rww, true));
         assert_eq!(od.get_u32(0x7030, 0), Some(1), "sub 0: highest sub-index");
+    }
+
+    #[test]
+    fn a_dictionary_is_completed_not_replaced() {
+        let mut d = el2004_like();
+        d.objects = vec![var(0x1000, "Device type", DataType::Unsigned32, vec![0x92, 1, 0, 0])];
+        let all = device_objects(&d);
+        assert_eq!(all.iter().find(|o| o.index == 0x1000).unwrap().subs[0].default, [0x92, 1, 0, 0], "the ESI's");
+        assert!(all.iter().any(|o| o.index == 0x1C00), "SM types added");
+        assert!(all.windows(2).all(|w| w[0].index < w[1].index));
     }
 
     #[test]

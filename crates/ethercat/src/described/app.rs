@@ -67,6 +67,8 @@ pub struct DescribedApp {
     pub(crate) name: String,
     pub(crate) sizes: ProcessDataSizes,
     pub(crate) outputs: Vec<u8>,
+    /// The outputs of the last update in OP, kept when they are switched off.
+    pub(crate) applied: Vec<u8>,
     pub(crate) inputs: Vec<u8>,
     pub(crate) source: Box<dyn InputSource>,
     pub(crate) coe: Option<Coe>,
@@ -89,6 +91,12 @@ impl DescribedApp {
     /// The outputs last applied (zero outside OP).
     pub fn outputs(&self) -> &[u8] {
         &self.outputs
+    }
+
+    /// The outputs of the last update applied in OP (kept after the
+    /// outputs went to their safe state on leaving OP).
+    pub fn last_applied(&self) -> &[u8] {
+        &self.applied
     }
 
     /// The inputs last produced.
@@ -220,6 +228,7 @@ impl SlaveApp for DescribedApp {
     fn outputs(&mut self, data: &[u8], _now: Instant) {
         let n = data.len().min(self.outputs.len());
         self.outputs[..n].copy_from_slice(&data[..n]);
+        self.applied.clone_from(&self.outputs);
         self.stats.outputs_applied += 1;
         if let Some(c) = self.coe.as_mut() {
             Self::mirror(&mut c.od, &c.outputs, &self.outputs);

@@ -280,6 +280,7 @@ pub fn slave(d: &Described, serial: u32, inputs: Box<dyn InputSource>) -> Result
         name: d.name().to_owned(),
         sizes,
         outputs: vec![0; sizes.output_bytes()],
+        applied: vec![0; sizes.output_bytes()],
         inputs: vec![0; sizes.input_bytes()],
         source: inputs,
         coe,
