@@ -361,3 +361,30 @@ pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
         EthercatCmd::Drive(a) => drive::run(g, a).await.map(|()| 0),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::{Args as _, FromArgMatches as _};
+
+    fn line(args: &[&str]) -> Result<Vec<LineSlave>, clap::Error> {
+        let m = LineArgs::augment_args(clap::Command::new("serve")).try_get_matches_from(args)?;
+        Ok(LineArgs::from_arg_matches(&m)?.slaves)
+    }
+
+    #[test]
+    fn drives_and_devices_keep_the_command_line_order() {
+        let got = line(&["serve", "--device", "ek1100.bin", "--drive", "ipos", "--device", "b.xml#2", "--drive=generic"]);
+        assert_eq!(
+            got.unwrap(),
+            [
+                LineSlave::Device("ek1100.bin".into()),
+                LineSlave::Drive("ipos".into()),
+                LineSlave::Device("b.xml#2".into()),
+                LineSlave::Drive("generic".into()),
+            ]
+        );
+        assert_eq!(line(&["serve", "--device", "a.bin"]).unwrap(), [LineSlave::Device("a.bin".into())]);
+        assert!(line(&["serve"]).is_err(), "a line needs a slave");
+    }
+}

@@ -150,3 +150,37 @@ fn el2004_outputs_reach_the_device() {
     dg(&mut s, &mut t, Command::Fpwr, st(0x0120), &[4, 0]);
     assert_eq!(s.app().outputs(), [0], "outputs off outside OP");
 }
+
+/// Truncated and corrupted real files give a slave or an error, never a
+/// panic (the fuzz target `device_file` does the same at random).
+#[test]
+fn damaged_files_never_panic() {
+    let files: [&[u8]; 5] = [
+        vector!("el2004.bin"),
+        vector!("el2004.hex"),
+        vector!("akd.bin"),
+        vector!("kickcat-freedom-k64f.xml"),
+        vector!("kickcat-multi-device.xml"),
+    ];
+    let mut seed = 0x2545_F491u32;
+    for f in files {
+        for cut in (0..f.len()).step_by(97) {
+            if let Ok(d) = from_bytes("cut", &f[..cut], None) {
+                let _ = slave(&d, 1, Box::new(Loopback));
+            }
+        }
+        for _ in 0..200 {
+            let mut b = f.to_vec();
+            for _ in 0..4 {
+                seed ^= seed << 13;
+                seed ^= seed >> 17;
+                seed ^= seed << 5;
+                let i = seed as usize % b.len();
+                b[i] = (seed >> 24) as u8;
+            }
+            if let Ok(d) = from_bytes("flip", &b, Some("1")).or_else(|_| from_bytes("flip", &b, None)) {
+                let _ = slave(&d, 1, Box::new(Loopback));
+            }
+        }
+    }
+}
