@@ -1,6 +1,7 @@
 //! `drivebus ethercat …`: the EtherCAT side of the tool. `serve` puts
-//! CiA 402 drive twins on a network interface as software EtherCAT
-//! slaves (`drivebus_ethercat::drive`); `scan`, `sdo`, `state`, `pdo` and
+//! CiA 402 drive twins and real devices (from their SII image or ESI
+//! file) on a network interface as software EtherCAT
+//! slaves (`drivebus_ethercat::drive`, `drivebus_ethercat::described`); `scan`, `sdo`, `state`, `pdo` and
 //! `drive` are an EtherCAT master on an interface
 //! (`drivebus_ethercat::master`, on ethercrab), and `demo.rs` is
 //! `drivebus demo --ethercat`.
@@ -18,7 +19,7 @@ use crate::args::Global;
 /// `drivebus ethercat` subcommands.
 #[derive(Subcommand, Debug)]
 pub enum EthercatCmd {
-    /// Serve drives as EtherCAT slaves on a network interface (AF_PACKET; root or CAP_NET_RAW).
+    /// Serve drives and real devices (SII EEPROM image, ESI file) as EtherCAT slaves on a network interface (AF_PACKET; root or CAP_NET_RAW).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(EcatServeArgs),
     /// List the slaves on the line: position, addresses, identity (SII and 1018h), AL state, mailbox.
