@@ -69,7 +69,8 @@ impl EsiSub {
 /// objects of [`objects_from_description`] it lacks (an ESI without 1C00h
 /// still describes its SM types, and SOEM reads them), in index order.
 pub fn device_objects(d: &SlaveDescription) -> Vec<EsiObject> {
-    let mut all: BTreeMap<u16, EsiObject> = objects_from_description(d).into_iter().map(|o| (o.index, o)).collect();
+    let mut all: BTreeMap<u16, EsiObject> =
+        objects_from_description(d).into_iter().map(|o| (o.index, o)).collect();
     all.extend(d.objects.iter().map(|o| (o.index, o.clone())));
     all.into_values().collect()
 }
@@ -266,7 +267,11 @@ mod tests {
         let mut d = el2004_like();
         d.objects = vec![var(0x1000, "Device type", DataType::Unsigned32, vec![0x92, 1, 0, 0])];
         let all = device_objects(&d);
-        assert_eq!(all.iter().find(|o| o.index == 0x1000).unwrap().subs[0].default, [0x92, 1, 0, 0], "the ESI's");
+        assert_eq!(
+            all.iter().find(|o| o.index == 0x1000).unwrap().subs[0].default,
+            [0x92, 1, 0, 0],
+            "the ESI's"
+        );
         assert!(all.iter().any(|o| o.index == 0x1C00), "SM types added");
         assert!(all.windows(2).all(|w| w[0].index < w[1].index));
     }

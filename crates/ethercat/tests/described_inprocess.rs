@@ -19,7 +19,8 @@ fn vector(name: &str) -> String {
 }
 
 fn line() -> Host {
-    let dev = |f: &str| Member::Device(Box::new(described::load(&vector(f)).unwrap_or_else(|e| panic!("{e}"))));
+    let dev =
+        |f: &str| Member::Device(Box::new(described::load(&vector(f)).unwrap_or_else(|e| panic!("{e}"))));
     let members = [
         dev("ek1100.bin"),
         dev("el2004.hex"),
@@ -62,7 +63,11 @@ fn real_devices_discovered_to_op_with_outputs_and_inputs() {
         assert_eq!(board.inputs_raw().to_vec(), [1, 2, 3, 1, 2, 3, 1, 2, 3, 1, 2, 3], "outputs looped back");
         assert!(wkc > 0);
         for i in 0..5 {
-            assert_eq!(m.al_status(i + 1).await.unwrap().state, drivebus_ethercat::master::AlState::Op, "slave {i}");
+            assert_eq!(
+                m.al_status(i + 1).await.unwrap().state,
+                drivebus_ethercat::master::AlState::Op,
+                "slave {i}"
+            );
         }
     });
     let outputs = |i| described::with_device(&host, i, |s| s.app().outputs().to_vec()).unwrap();

@@ -25,13 +25,15 @@ fn vector(name: &str) -> String {
 fn soem_discovers_real_devices_and_drives_their_outputs() {
     let explicit = std::env::var("PYSOEM_PYTHON").ok();
     let python = explicit.clone().unwrap_or_else(|| "python3".into());
-    let usable = Command::new(&python).args(["-c", "import pysoem"]).output().is_ok_and(|o| o.status.success());
+    let usable =
+        Command::new(&python).args(["-c", "import pysoem"]).output().is_ok_and(|o| o.status.success());
     if !usable {
         assert!(explicit.is_none(), "PYSOEM_PYTHON is set but cannot import pysoem");
         println!("SKIPPED soem_discovers_real_devices_and_drives_their_outputs: `{python}` has no pysoem");
         return;
     }
-    let dev = |f: &str| Member::Device(Box::new(described::load(&vector(f)).unwrap_or_else(|e| panic!("{e}"))));
+    let dev =
+        |f: &str| Member::Device(Box::new(described::load(&vector(f)).unwrap_or_else(|e| panic!("{e}"))));
     let members = [
         dev("ek1100.bin"),
         dev("el2004.hex"),
@@ -75,5 +77,9 @@ fn soem_discovers_real_devices_and_drives_their_outputs() {
     assert_eq!(applied(1), [0x01], "EL2004: the low 4 bits of 0x31");
     assert_eq!(applied(2), [0x32], "EL2828");
     assert_eq!(applied(3), [0x33, 0x34, 0x35], "the board's LEDs");
-    assert_eq!(described::with_device(&host, 1, |s| s.app().outputs().to_vec()).unwrap(), [0], "off outside OP");
+    assert_eq!(
+        described::with_device(&host, 1, |s| s.app().outputs().to_vec()).unwrap(),
+        [0],
+        "off outside OP"
+    );
 }

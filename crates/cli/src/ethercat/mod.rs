@@ -304,7 +304,9 @@ pub struct LineArgs {
 impl clap::FromArgMatches for LineArgs {
     fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
         let mut all: Vec<(usize, LineSlave)> = Vec::new();
-        for (id, make) in [("drive", LineSlave::Drive as fn(String) -> LineSlave), ("device", LineSlave::Device)] {
+        for (id, make) in
+            [("drive", LineSlave::Drive as fn(String) -> LineSlave), ("device", LineSlave::Device)]
+        {
             if let (Some(v), Some(i)) = (m.get_many::<String>(id), m.indices_of(id)) {
                 all.extend(i.zip(v.map(|s| make(s.clone()))));
             }
@@ -375,7 +377,16 @@ mod tests {
 
     #[test]
     fn drives_and_devices_keep_the_command_line_order() {
-        let got = line(&["serve", "--device", "ek1100.bin", "--drive", "ipos", "--device", "b.xml#2", "--drive=generic"]);
+        let got = line(&[
+            "serve",
+            "--device",
+            "ek1100.bin",
+            "--drive",
+            "ipos",
+            "--device",
+            "b.xml#2",
+            "--drive=generic",
+        ]);
         assert_eq!(
             got.unwrap(),
             [

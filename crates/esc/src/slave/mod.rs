@@ -341,7 +341,12 @@ impl<A: SlaveApp> Slave<A> {
     /// changed.
     fn emulated_outputs(&mut self, now: Instant) {
         let n = self.out_buf.len();
-        if !self.esc.device_emulation() || self.state != AlState::Op || n == 0 || n > 4 || self.out_addr >= 0x1000 {
+        if !self.esc.device_emulation()
+            || self.state != AlState::Op
+            || n == 0
+            || n > 4
+            || self.out_addr >= 0x1000
+        {
             return;
         }
         let mut v = [0u8; 4];

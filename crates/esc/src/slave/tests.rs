@@ -486,7 +486,11 @@ fn device_emulation_state_is_followed_with_process_data() {
     assert_eq!(r.s.state(), AlState::Op);
     assert_eq!(
         r.s.app().states,
-        vec![(AlState::Init, AlState::PreOp), (AlState::PreOp, AlState::SafeOp), (AlState::SafeOp, AlState::Op)]
+        vec![
+            (AlState::Init, AlState::PreOp),
+            (AlState::PreOp, AlState::SafeOp),
+            (AlState::SafeOp, AlState::Op)
+        ]
     );
     r.request(1);
     assert_eq!(r.s.state(), AlState::Init);

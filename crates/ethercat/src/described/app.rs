@@ -78,7 +78,10 @@ pub struct DescribedApp {
 
 impl std::fmt::Debug for DescribedApp {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("DescribedApp").field("name", &self.name).field("esm", &self.esm).finish_non_exhaustive()
+        f.debug_struct("DescribedApp")
+            .field("name", &self.name)
+            .field("esm", &self.esm)
+            .finish_non_exhaustive()
     }
 }
 
@@ -132,7 +135,9 @@ impl DescribedApp {
 
     fn drain(&mut self, now: Instant, out: &mut MailboxOut<'_>) {
         let Some(c) = self.coe.as_mut() else { return };
-        while out.pending().0 < 8 && let Some(m) = c.mbx.next_response(now) {
+        while out.pending().0 < 8
+            && let Some(m) = c.mbx.next_response(now)
+        {
             out.respond(m);
         }
     }

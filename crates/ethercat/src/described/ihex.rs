@@ -93,7 +93,10 @@ pub fn parse(text: &[u8]) -> Result<Vec<u8>, HexError> {
         }
     }
     if !ended {
-        return Err(HexError { line: text.split(|b| *b == b'\n').count(), message: "no end-of-file record".into() });
+        return Err(HexError {
+            line: text.split(|b| *b == b'\n').count(),
+            message: "no end-of-file record".into(),
+        });
     }
     Ok(out)
 }

@@ -140,7 +140,10 @@ pub fn from_bytes(file: &str, bytes: &[u8], select: Option<&str>) -> Result<Desc
         return Ok(Described { description, sii, format: Format::Esi });
     }
     if select.is_some() {
-        return Err(err(String::new(), "#SELECT picks a device of an ESI file; this is an EEPROM image".into()));
+        return Err(err(
+            String::new(),
+            "#SELECT picks a device of an ESI file; this is an EEPROM image".into(),
+        ));
     }
     let (image, format) = if ihex::is_hex(bytes) {
         let b = ihex::parse(bytes).map_err(|e| err(format!("line {}", e.line), e.message))?;
@@ -161,7 +164,15 @@ fn pick(mut all: Vec<SlaveDescription>, select: Option<&str>) -> Result<SlaveDes
     let list = |all: &[SlaveDescription]| {
         all.iter()
             .enumerate()
-            .map(|(i, d)| format!("#{} {} (product {:#010x}, revision {:#010x})", i + 1, d.type_name, d.product_code, d.revision))
+            .map(|(i, d)| {
+                format!(
+                    "#{} {} (product {:#010x}, revision {:#010x})",
+                    i + 1,
+                    d.type_name,
+                    d.product_code,
+                    d.revision
+                )
+            })
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -169,7 +180,11 @@ fn pick(mut all: Vec<SlaveDescription>, select: Option<&str>) -> Result<SlaveDes
         return match all.len() {
             1 => Ok(all.remove(0)),
             0 => Err("describes no device".into()),
-            _ => Err(format!("describes {} devices, pick one with FILE#N or FILE#PRODUCT: {}", all.len(), list(&all))),
+            _ => Err(format!(
+                "describes {} devices, pick one with FILE#N or FILE#PRODUCT: {}",
+                all.len(),
+                list(&all)
+            )),
         };
     };
     let code = sel
@@ -257,12 +272,17 @@ pub fn slave(d: &Described, serial: u32, inputs: Box<dyn InputSource>) -> Result
             // an ESI's 1018h defaults are often placeholders.
             let id = d.sii.parse().map(|c| c.identity).unwrap_or_default();
             for (sub, v) in [(1, id.vendor_id), (2, id.product_code), (3, id.revision), (4, id.serial)] {
-                if let Some(e) = od.get_mut(0x1018, sub).filter(|e| e.data_type == drivebus_od::DataType::Unsigned32) {
+                if let Some(e) =
+                    od.get_mut(0x1018, sub).filter(|e| e.data_type == drivebus_od::DataType::Unsigned32)
+                {
                     e.default = v.to_le_bytes().to_vec();
                 }
                 let _ = od.set_value(0x1018, sub, &drivebus_od::Value::U32(v));
             }
-            let access = objects.iter().flat_map(|o| o.subs.iter().map(move |s| ((o.index, s.sub), s.access))).collect();
+            let access = objects
+                .iter()
+                .flat_map(|o| o.subs.iter().map(move |s| ((o.index, s.sub), s.access)))
+                .collect();
             let size = |k| desc.sm(k).and_then(|(_, s)| s.default_size).map_or(0, usize::from);
             let cfg = MailboxConfig {
                 complete_access: details.complete_access,

@@ -24,12 +24,19 @@ fn real_eeprom_images_describe_their_devices() {
     assert_eq!((el.name(), el.description.product_code), ("EL2004", 0x07D4_3052));
     assert_eq!(process_data(&el.description).unwrap().0.output_bits, 4);
     let el = image("el2828.bin", vector!("el2828.bin"));
-    assert_eq!(process_data(&el.description).unwrap(), (ProcessDataSizes { output_bits: 8, input_bits: 0 }, Some(0), None));
+    assert_eq!(
+        process_data(&el.description).unwrap(),
+        (ProcessDataSizes { output_bits: 8, input_bits: 0 }, Some(0), None)
+    );
     let akd = image("akd.bin", vector!("akd.bin"));
     assert_eq!((akd.name(), akd.description.vendor_id), ("AKD", 0x6A));
     assert!(akd.description.mailbox.is_some_and(|m| m.coe.is_some()));
     let (sizes, out_sm, in_sm) = process_data(&akd.description).unwrap();
-    assert_eq!((sizes.output_bits, sizes.input_bits, out_sm, in_sm), (48, 48, Some(2), Some(3)), "1701h and 1B01h");
+    assert_eq!(
+        (sizes.output_bits, sizes.input_bits, out_sm, in_sm),
+        (48, 48, Some(2), Some(3)),
+        "1701h and 1B01h"
+    );
 }
 
 #[test]
@@ -51,14 +58,21 @@ fn two_output_sync_managers_are_refused_by_name() {
 fn esi_device_with_dictionary() {
     let d = from_bytes("k64f.xml", vector!("kickcat-freedom-k64f.xml"), None).unwrap();
     assert_eq!(d.format, Format::Esi);
-    assert_eq!((d.name(), d.description.vendor_id, d.description.product_code), ("Board", 0x6A5, 0x00DE_FEDE));
+    assert_eq!(
+        (d.name(), d.description.vendor_id, d.description.product_code),
+        ("Board", 0x6A5, 0x00DE_FEDE)
+    );
     let s = slave(&d, 9, Box::new(Loopback)).unwrap();
     assert_eq!(s.app().process_data_sizes(), ProcessDataSizes { output_bits: 24, input_bits: 96 });
     let od = s.app().dictionary().unwrap();
     assert_eq!(od.get(0x6003, 0).map(|e| e.name.as_ref()), Some("mag_x"));
     assert_eq!(od.get_u32(0x1C13, 1), Some(0x1A00));
     let id: Vec<_> = (1..=4).map(|k| od.get_u32(0x1018, k).unwrap()).collect();
-    assert_eq!(id, [0x6A5, 0x00DE_FEDE, 0x5A01, 9], "1018h is the device's identity, not the ESI's placeholder");
+    assert_eq!(
+        id,
+        [0x6A5, 0x00DE_FEDE, 0x5A01, 9],
+        "1018h is the device's identity, not the ESI's placeholder"
+    );
     let c = s.esc().sii_image().parse().unwrap();
     assert_eq!((c.identity.product_code, c.identity.serial), (0x00DE_FEDE, 9));
     assert_eq!(s.app().coe.as_ref().unwrap().outputs.len(), 3, "LED_R/G/B mirrored");
@@ -68,8 +82,14 @@ fn esi_device_with_dictionary() {
 fn several_devices_need_a_selector() {
     let f = vector!("kickcat-multi-device.xml");
     let e = from_bytes("m.xml", f, None).unwrap_err();
-    assert!(e.message.starts_with("describes 3 devices, pick one with FILE#N or FILE#PRODUCT: #1 kickcat_multi_dev_alpha"), "{e}");
-    let pick = |s| from_bytes("m.xml", f, Some(s)).map(|d| (d.description.product_code, d.description.revision));
+    assert!(
+        e.message.starts_with(
+            "describes 3 devices, pick one with FILE#N or FILE#PRODUCT: #1 kickcat_multi_dev_alpha"
+        ),
+        "{e}"
+    );
+    let pick =
+        |s| from_bytes("m.xml", f, Some(s)).map(|d| (d.description.product_code, d.description.revision));
     assert_eq!(pick("2"), Ok((0x2222, 1)));
     assert_eq!(pick("KICKCAT_MULTI_DEV_ALPHA"), Ok((0x1111, 1)));
     assert_eq!(pick("#x1111"), Ok((0x1111, 1)));

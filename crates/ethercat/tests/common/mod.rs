@@ -64,7 +64,8 @@ impl Wire {
         let ns = format!("db{tag}{id}");
         let (outer, inner) = (format!("db{tag}{id}a"), format!("db{tag}{id}b"));
         ok(&["netns", "add", &ns]).map_err(|e| format!("cannot create a network namespace: {e}"))?;
-        let mut w = Wire { ns, outer, inner, stop: Arc::new(AtomicBool::new(false)), server: None, host: None };
+        let mut w =
+            Wire { ns, outer, inner, stop: Arc::new(AtomicBool::new(false)), server: None, host: None };
         for step in [
             vec!["link", "add", w.outer.as_str(), "type", "veth", "peer", "name", w.inner.as_str()],
             vec!["link", "set", w.inner.as_str(), "netns", w.ns.as_str()],
