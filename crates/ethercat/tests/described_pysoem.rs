@@ -10,6 +10,7 @@
 //!
 //! Same set-up and skip rules as `pysoem.rs` (root, `ip`, `PYSOEM_PYTHON`).
 
+#[allow(dead_code)]
 mod common;
 
 use drivebus_ethercat::described::{self, Member};

@@ -368,7 +368,7 @@ pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::{Args as _, FromArgMatches as _};
+    use clap::FromArgMatches as _;
 
     fn line(args: &[&str]) -> Result<Vec<LineSlave>, clap::Error> {
         let m = LineArgs::augment_args(clap::Command::new("serve")).try_get_matches_from(args)?;

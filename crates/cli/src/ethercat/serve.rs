@@ -67,7 +67,7 @@ fn names(members: &[Member]) -> Vec<String> {
         .iter()
         .map(|m| match m {
             Member::Drive(p) => p.to_string(),
-            Member::Device(d) => d.name().to_owned(),
+            Member::Device(d) => d.type_name().to_owned(),
         })
         .collect()
 }

@@ -98,7 +98,7 @@ pub struct Described {
 
 impl Described {
     /// The name masters show: the SII order string / ESI `Type`.
-    pub fn name(&self) -> &str {
+    pub fn type_name(&self) -> &str {
         &self.description.type_name
     }
 }
@@ -256,7 +256,7 @@ fn mirrors(od: &drivebus_od::ObjectDictionary, pdos: &[drivebus_esi::Pdo], sm: O
 /// The slave of `d`, with serial number `serial` in an ESI device's SII
 /// (an image keeps its own) and `inputs` as its input source.
 pub fn slave(d: &Described, serial: u32, inputs: Box<dyn InputSource>) -> Result<DescribedSlave, LoadError> {
-    let err = |message: String| LoadError { file: d.name().to_owned(), at: String::new(), message };
+    let err = |message: String| LoadError { file: d.type_name().to_owned(), at: String::new(), message };
     let desc = &d.description;
     let (sizes, out_sm, in_sm) = process_data(desc).map_err(err)?;
     let sii = match d.format {
@@ -297,7 +297,7 @@ pub fn slave(d: &Described, serial: u32, inputs: Box<dyn InputSource>) -> Result
         None => None,
     };
     let app = DescribedApp {
-        name: d.name().to_owned(),
+        name: d.type_name().to_owned(),
         sizes,
         outputs: vec![0; sizes.output_bytes()],
         applied: vec![0; sizes.output_bytes()],

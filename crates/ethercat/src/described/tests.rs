@@ -18,10 +18,10 @@ fn real_eeprom_images_describe_their_devices() {
     let ek = image("ek1100.bin", vector!("ek1100.bin"));
     let d = &ek.description;
     assert_eq!((d.vendor_id, d.product_code, d.revision), (2, 0x044C_2C52, 0x0012_0000));
-    assert_eq!((ek.name(), d.name.as_str()), ("EK1100", "EK1100 EtherCAT-Koppler (2A E-Bus)"));
+    assert_eq!((ek.type_name(), d.name.as_str()), ("EK1100", "EK1100 EtherCAT-Koppler (2A E-Bus)"));
     assert!(d.sync_managers.is_empty() && d.mailbox.is_none(), "a coupler: no SMs, no mailbox");
     let el = image("el2004.bin", vector!("el2004.bin"));
-    assert_eq!((el.name(), el.description.product_code), ("EL2004", 0x07D4_3052));
+    assert_eq!((el.type_name(), el.description.product_code), ("EL2004", 0x07D4_3052));
     assert_eq!(process_data(&el.description).unwrap().0.output_bits, 4);
     let el = image("el2828.bin", vector!("el2828.bin"));
     assert_eq!(
@@ -29,7 +29,7 @@ fn real_eeprom_images_describe_their_devices() {
         (ProcessDataSizes { output_bits: 8, input_bits: 0 }, Some(0), None)
     );
     let akd = image("akd.bin", vector!("akd.bin"));
-    assert_eq!((akd.name(), akd.description.vendor_id), ("AKD", 0x6A));
+    assert_eq!((akd.type_name(), akd.description.vendor_id), ("AKD", 0x6A));
     assert!(akd.description.mailbox.is_some_and(|m| m.coe.is_some()));
     let (sizes, out_sm, in_sm) = process_data(&akd.description).unwrap();
     assert_eq!(
@@ -59,7 +59,7 @@ fn esi_device_with_dictionary() {
     let d = from_bytes("k64f.xml", vector!("kickcat-freedom-k64f.xml"), None).unwrap();
     assert_eq!(d.format, Format::Esi);
     assert_eq!(
-        (d.name(), d.description.vendor_id, d.description.product_code),
+        (d.type_name(), d.description.vendor_id, d.description.product_code),
         ("Board", 0x6A5, 0x00DE_FEDE)
     );
     let s = slave(&d, 9, Box::new(Loopback)).unwrap();

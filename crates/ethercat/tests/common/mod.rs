@@ -38,6 +38,7 @@ pub struct Wire {
     stop: Arc<AtomicBool>,
     server: Option<JoinHandle<std::io::Result<ServerStats>>>,
     /// The served line, to look at its devices.
+    #[allow(dead_code)] // not every test looks
     pub host: Option<Host>,
 }
 
