@@ -474,13 +474,19 @@ impl StateMachine {
     /// With 605Eh = 0, or if the drive function was not enabled, there is
     /// nothing to stop and transition 14 follows at once.
     pub fn fault(&mut self, code: u16) -> Outcome {
+        let r = self.options.fault_reaction_reaction();
+        self.fault_with(code, r)
+    }
+
+    /// A fault with the reaction `r` instead of 605Eh's (a manufacturer's
+    /// per-error option code).
+    pub fn fault_with(&mut self, code: u16, r: Reaction) -> Outcome {
         let prev = self.begin();
         if !matches!(self.state, State::FaultReactionActive | State::Fault) {
             self.fault_code = code;
             let powered = !matches!(self.function, DriveFunction::Disabled);
             self.pending = None;
             self.go(13, State::FaultReactionActive);
-            let r = self.options.fault_reaction_reaction();
             if powered && r != Reaction::DisableDrive {
                 self.function = DriveFunction::Stopping(r);
             } else {

@@ -186,3 +186,33 @@ fn sync_loss_in_a_cyclic_mode_faults() {
     assert_eq!(r.emcys(), vec![emcy(0x8700, 0x21)]);
     assert_eq!(r.read(0x603F, 0), 0x8700);
 }
+
+/// `Drive::set_fault_action`: a fault taken without action signals its
+/// EMCY while the condition lasts and the drive stays enabled; the error
+/// reset EMCY follows when the condition is gone. A per-code reaction
+/// replaces 605Eh's.
+#[test]
+fn fault_actions_per_code() {
+    use drivebus_cia402::drive::FaultAction;
+    use drivebus_cia402::state_machine::Reaction;
+    let mut r = Rig::generic();
+    r.start();
+    r.drive_mut().set_fault_action(0x3210, Some(FaultAction::NoAction));
+    r.enable();
+    r.run_ms(2.0);
+    r.take();
+    r.drive_mut().inject(Injection::Model(M::BusOverVoltage));
+    r.run_ms(20.0);
+    assert_eq!(r.emcys(), vec![emcy(0x3210, 0x05)], "signalled once");
+    assert_eq!(r.statusword() & 0x6F, 0x27, "still enabled");
+    assert_eq!(r.drive().ignored_fault(), Some(0x3210));
+    r.drive_mut().inject(Injection::Model(M::Clear));
+    r.run_ms(5.0);
+    assert_eq!(r.emcys(), vec![emcy(0x0000, 0x00)], "condition gone");
+    assert_eq!(r.drive().ignored_fault(), None);
+    // A reaction instead of 605Eh's (generic default 2, quick stop ramp).
+    r.drive_mut().set_fault_action(0x3210, Some(FaultAction::React(Reaction::DisableDrive)));
+    r.drive_mut().inject(Injection::Model(M::BusOverVoltage));
+    r.run_ms(1.0);
+    assert_eq!(r.statusword(), FAULT, "straight to Fault");
+}

@@ -119,3 +119,24 @@ fn halt_during_the_return_interrupts() {
     let rest = r.run_until(125, 1000.0, |r| r.drive().statusword() & 0x3400 == 0x0400);
     assert!(rest.is_some(), "interrupted at rest: {:04X}", r.drive().statusword());
 }
+
+/// `Drive::set_homing_keeps_position` (Technosoft iPOS 210Bh bit 12): the
+/// reference is found but the position is not reset; the return goes back
+/// to the point found, so 6064h ends where the reference was, in the
+/// coordinates the axis had.
+#[test]
+fn keeping_the_position_returns_to_the_point_found() {
+    let mut r = rig(Return::Config);
+    // Method 1 once with reset: the reference is then at 607Ch.
+    let (p, _) = home_watching(&mut r, 1);
+    assert!((p - HOME_OFFSET).abs() <= 2);
+    // Move the coordinates away, then home again keeping them.
+    r.dn_mut().app.set_position_increments(0);
+    r.run_ms(2.0);
+    let shifted = r.read(0x6064, 0) as i32;
+    r.dn_mut().app.set_homing_keeps_position(true);
+    let (p, _) = home_watching(&mut r, 1);
+    // The same physical point, seen in the shifted coordinates.
+    assert!((p - shifted).abs() <= 30, "6064h {p}, the reference in kept coordinates {shifted}");
+    assert!((p - HOME_OFFSET).abs() > 1000, "not reset to 607Ch");
+}

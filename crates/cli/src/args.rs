@@ -57,9 +57,9 @@ pub struct Global {
     /// Machine-readable output: one JSON object (errors too: {"error":{"code","message"}}).
     #[arg(long, global = true)]
     pub json: bool,
-    /// SDO and response timeout in milliseconds.
-    #[arg(long, global = true, default_value_t = 1000)]
-    pub timeout: u64,
+    /// SDO and response timeout in milliseconds [default: 1000].
+    #[arg(long, global = true, value_name = "MS")]
+    pub timeout: Option<u64>,
     /// SDO retries after a timeout.
     #[arg(long, global = true, default_value_t = 0)]
     pub retries: u8,
@@ -72,6 +72,13 @@ pub struct Global {
     /// home switch, hard stops, index, load, gear, faults at run time; docs/machine.md).
     #[arg(long, global = true, value_name = "FILE")]
     pub machine: Option<PathBuf>,
+}
+
+impl Global {
+    /// `--timeout` in ms, or the command's own default.
+    pub fn timeout_ms(&self, default: u64) -> u64 {
+        self.timeout.unwrap_or(default).max(1)
+    }
 }
 
 /// A node-ID as people write it: `5`, `0x05`, `05h`.

@@ -24,8 +24,19 @@ impl Drop for Hosted {
     }
 }
 
+/// Set when a command opened the in-process bus with nothing on it: a
+/// timeout then says so.
+static EMPTY_BUS: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
+/// The hint for a timeout on the empty in-process bus, if that is the bus.
+pub fn empty_bus_hint() -> Option<&'static str> {
+    EMPTY_BUS.get().map(String::as_str)
+}
+
 /// The master of one command, with what it needs to explain itself.
 pub struct Conn {
+    /// The bus URL as given.
+    pub url: String,
     /// The master on the bus.
     pub master: Master,
     /// The SDO/response timeout in force.
@@ -72,18 +83,24 @@ impl Conn {
             drives = spawn_on_hub(&specs, &hub, None, Default::default(), g.machine.as_deref())?;
         }
         let hosted = Hosted(drives);
+        if specs.is_empty() && matches!(parsed, drivebus_transport::BusUrl::Virtual { .. }) {
+            let _ = EMPTY_BUS.set(format!(
+                "; nothing is on the bus: `{}` is this process's own in-process bus and no --sim drive was given. Give --bus URL (or set DRIVEBUS_BUS, e.g. socketcand://127.0.0.1:29536/can0 for `drivebus serve`), or --sim PROFILE:NODE",
+                g.bus
+            ));
+        }
         let bus =
             tokio::time::timeout(Duration::from_secs(10), drivebus_transport::open_parsed(&g.bus, &parsed))
                 .await
                 .map_err(|_| {
-                    crate::error::coded("bus", anyhow!("cannot open `{}`: timed out after 10 s", g.bus))
+                    crate::error::coded("bus", anyhow!("timed out after 10 s: cannot open `{}`", g.bus))
                 })?
-                .map_err(|e| crate::error::coded("bus", e.into()))?;
+                .map_err(|e| crate::error::coded("bus", open_error(&g.bus, e)))?;
         if !specs.is_empty() {
             // Let the hosted drives boot before the first request.
             tokio::time::sleep(Duration::from_millis(20)).await;
         }
-        let timeout = Duration::from_millis(g.timeout.max(1));
+        let timeout = Duration::from_millis(g.timeout_ms(1000));
         let master = Master::with_config(
             bus,
             MasterConfig { sdo_timeout: timeout, sdo_retries: g.retries, ..MasterConfig::default() },
@@ -94,12 +111,41 @@ impl Conn {
         {
             master.set_eds(node, od);
         }
-        Ok(Conn { master, timeout, dict, _hosted: hosted })
+        Ok(Conn { url: g.bus.clone(), master, timeout, dict, _hosted: hosted })
+    }
+
+    /// The error of a command whose bus went away: what was lost and why.
+    pub fn lost(&self, why: &str) -> anyhow::Error {
+        crate::error::coded(
+            "bus_lost",
+            anyhow!("the bus connection was lost: {why} (bus `{}`); the command ended", self.url),
+        )
     }
 
     /// Closes the bus after every frame sent was written (see
-    /// `Master::close`).
+    /// `Master::close`); a bus lost meanwhile is this command's error.
     pub async fn close(self) -> anyhow::Result<()> {
+        if let Some(why) = self.master.bus_lost() {
+            return Err(self.lost(&why));
+        }
         self.master.close().await.context("closing the bus")
+    }
+}
+
+/// A bus that would not open: the cause first, then the URL and, where
+/// it helps, what to check.
+fn open_error(url: &str, e: drivebus_transport::TransportError) -> anyhow::Error {
+    use drivebus_transport::Cause;
+    match &e.cause {
+        Cause::Io(io) => {
+            let hint = match io.kind() {
+                std::io::ErrorKind::ConnectionRefused => {
+                    " (nothing listens there: is `drivebus serve` or socketcand running? check --bus or DRIVEBUS_BUS)"
+                }
+                _ => "",
+            };
+            anyhow!("{io}: cannot open `{url}`{hint}")
+        }
+        _ => e.into(),
     }
 }

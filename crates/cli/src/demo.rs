@@ -372,8 +372,8 @@ async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<Vec<(u8
     let k2 = prepare_homing(m, 2).await?;
     let h0 = m.now();
     let (a, b) =
-        tokio::join!(async { d1.home(k1, Duration::from_secs(30)).await.map(|()| secs(m, h0)) }, async {
-            d2.home(k2, Duration::from_secs(30)).await.map(|()| secs(m, h0))
+        tokio::join!(async { d1.home(k1, Duration::from_secs(30)).await.map(|_| secs(m, h0)) }, async {
+            d2.home(k2, Duration::from_secs(30)).await.map(|_| secs(m, h0))
         });
     Ok(vec![(1, k1, a.context("node 1 homing")?), (2, k2, b.context("node 2 homing")?)])
 }
@@ -385,7 +385,7 @@ async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<f64> {
         drivebus_master::Profile { velocity: 720_000, acceleration: 3_600_000, deceleration: 3_600_000 };
     let t0 = m.now();
     let one = async {
-        d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|()| secs(m, t0))
+        d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|_| secs(m, t0))
     };
     let (a, b) = tokio::join!(one, d2.move_to(20_000, false, None, Duration::from_secs(20)));
     b.context("node 2 move")?;

@@ -9,14 +9,14 @@ use std::time::Duration;
 
 use anyhow::{anyhow, bail};
 use drivebus_master::{
-    Drive, DriveError, DriveState, MotionLimits, MotionProgress, Profile, SdoError, StopAction,
-    drive::human_secs, drive::mode, mode_name,
+    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
+    Profile, SdoError, StopAction, drive::human_secs, drive::mode, mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::{DriveCmd, Global};
 use crate::conn::{Conn, need_node};
-use crate::error::coded;
+use crate::error::{coded, coded_with};
 
 fn state_name(sw: u16) -> &'static str {
     DriveState::from_statusword(sw).name()
@@ -48,7 +48,74 @@ fn explain(node: u8, timeout: Duration, e: DriveError) -> anyhow::Error {
                 state_name(statusword)
             ),
         ),
-        other => anyhow::Error::new(other).context(format!("node {node}")),
+        DriveError::Stopped(r) => stopped(node, &r),
+        DriveError::Transport(why) | DriveError::Sdo(SdoError::Transport(why)) => {
+            coded("bus_lost", anyhow!("node {node}: the bus connection was lost: {why}"))
+        }
+        other => anyhow!("node {node}: {other}"),
+    }
+}
+
+/// What to do after a motion that ended short of its goal.
+fn next_step(node: u8, r: &MotionReport) -> String {
+    match r.end {
+        MotionEnd::LimitSwitch { positive } => format!(
+            "; the drive refuses motion further {}: move back with `drivebus --node {node} drive move TARGET` {} the switch",
+            if positive { "in the positive direction" } else { "in the negative direction" },
+            if positive { "below" } else { "above" }
+        ),
+        MotionEnd::SoftwareLimit => "; give a target inside 607Dh".to_owned(),
+        MotionEnd::HomingError if r.homing_method == Some(0) || !r.homing_methods.is_empty() => {
+            "; give one of them with --method M".to_owned()
+        }
+        MotionEnd::Fault | MotionEnd::FollowingError => {
+            format!("; `drivebus --node {node} drive reset` clears a fault, `drive enable` enables again")
+        }
+        MotionEnd::QuickStop | MotionEnd::Disabled => {
+            format!("; `drivebus --node {node} drive enable` enables again")
+        }
+        _ => String::new(),
+    }
+}
+
+/// A motion that ended elsewhere than its goal: the cause first, then
+/// where the axis is, then what to do; `--json` gets the report's fields.
+fn stopped(node: u8, r: &MotionReport) -> anyhow::Error {
+    let what = if r.homing_method.is_some() { "homing" } else { "the move" };
+    let mut text = format!("node {node}: {}: {what} stopped at ", r.reason());
+    text += &r.position.map_or_else(|| "an unknown position".to_owned(), |p| p.to_string());
+    if let (Some(t), Some(left)) = (r.target, r.short_of_target()) {
+        text += &format!(", {} short of the target {t}", left.abs());
+    }
+    text += &format!(
+        ", after {:.3} s (statusword {:04X}h, {}){}",
+        r.duration.as_secs_f64(),
+        r.statusword,
+        state_name(r.statusword),
+        next_step(node, r)
+    );
+    coded_with(r.end.code(), Report::from(node, r).0, anyhow!(text))
+}
+
+/// The fields of a motion's end for `--json` (success and failure alike).
+struct Report(serde_json::Value);
+
+impl Report {
+    fn from(node: u8, r: &MotionReport) -> Report {
+        Report(serde_json::json!({
+            "node": node,
+            "outcome": r.end.code(),
+            "position": r.position,
+            "target": r.target,
+            "duration": (r.duration.as_secs_f64() * 1000.0).round() / 1000.0,
+            "statusword": r.statusword,
+            "state": state_name(r.statusword),
+            "reason": r.reason(),
+            "inputs": r.inputs,
+            "error_code": r.error_code,
+            "homing_method": r.homing_method,
+            "homing_methods": (!r.homing_methods.is_empty()).then_some(&r.homing_methods),
+        }))
     }
 }
 
@@ -91,13 +158,17 @@ pub async fn run(g: &Global, c: &DriveCmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-type Report = Option<(String, serde_json::Value)>;
+type Printed = Option<(String, serde_json::Value)>;
 
-fn done(node: u8, msg: String, sw: u16) -> Report {
-    Some((
-        format!("node {node}: {msg} (statusword {sw:04X}h, {})", state_name(sw)),
-        serde_json::json!({"node": node, "result": msg, "statusword": sw, "state": state_name(sw)}),
-    ))
+/// A command's report: `msg` in words; for `--json` the outcome `code`,
+/// the statusword and state, and `fields`.
+fn done(node: u8, code: &str, msg: String, sw: u16, fields: serde_json::Value) -> Printed {
+    let mut json =
+        serde_json::json!({"node": node, "outcome": code, "statusword": sw, "state": state_name(sw)});
+    if let (Some(j), serde_json::Value::Object(f)) = (json.as_object_mut(), fields) {
+        j.extend(f);
+    }
+    Some((format!("node {node}: {msg} (statusword {sw:04X}h, {})", state_name(sw)), json))
 }
 
 /// Runs `motion`; on an error, a timeout or Ctrl-C stops the axis and
@@ -113,10 +184,22 @@ async fn guarded<T>(
 ) -> anyhow::Result<T> {
     let interrupted = crate::serve::wait_for_signal();
     let r = tokio::select! {
-        r = motion => r.map_err(|e| explain(node, timeout, e)),
+        r = motion => match r {
+            // The axis stands already (at a limit, halted, faulted): nothing to stop.
+            Err(DriveError::Stopped(s)) => return Err(stopped(node, &s)),
+            r => r.map_err(|e| explain(node, timeout, e)),
+        },
         Ok(()) = interrupted => Err(coded("interrupted", anyhow!("node {node}: {what} interrupted (Ctrl-C)"))),
     };
     let Err(e) = r else { return r };
+    let (code, _) = crate::error::describe(&e);
+    let cause = crate::error::render(&e);
+    if code == "bus_lost" {
+        return Err(coded(
+            code,
+            anyhow!("{cause} during {what}; the axis could not be stopped from here: it may still be moving"),
+        ));
+    }
     let stop = match d.stop_motion(Duration::from_secs(5)).await {
         Ok(s) => match s.action {
             StopAction::NotMoving => "the drive is not in operation enabled: no motion to stop".to_owned(),
@@ -135,15 +218,15 @@ async fn guarded<T>(
     let limits = d.motion_limits().await;
     let position = d.position().await;
     let lines = limits.describe(position, target, homing);
-    let mut text = stop;
+    let mut text = format!("{cause}; {stop}");
     if !lines.is_empty() {
         text.push_str("; objects that shape this motion:\n  ");
         text.push_str(&lines.join("\n  "));
     }
-    Err(e.context(text))
+    Err(coded(code, anyhow!(text)))
 }
 
-async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Result<Report> {
+async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Result<Printed> {
     let timeout = conn.timeout;
     let ex = |e: DriveError| explain(node, timeout, e);
     let pb = progress_bar(g);
@@ -191,9 +274,16 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             let vel = read_i(0x606C).await;
             let err = read_i(0x603F).await.map(|e| e as u16);
             let reg = d.read_raw(0x1001, 0).await.ok().and_then(|v| v.first().copied());
+            let inputs = d.digital_inputs().await;
+            let flags = DriveFlags { statusword: sw, inputs, mode };
+            let bits = flags.statusword_text();
+            let active = inputs.map(DriveFlags::inputs_text).unwrap_or_default();
             let json = serde_json::json!({"node": node, "statusword": sw, "state": state_name(sw), "mode": mode,
                 "mode_name": mode.map(mode_name), "position": pos, "velocity": vel, "error_code": err, "error_register": reg,
-                "target_reached": sw & 0x400 != 0, "warning": sw & 0x80 != 0});
+                "target_reached": sw & 0x400 != 0, "warning": sw & 0x80 != 0, "internal_limit": sw & 0x800 != 0,
+                "bit13": sw & 0x2000 != 0, "statusword_flags": bits, "inputs": inputs,
+                "negative_limit_switch": inputs.map(|i| i & 1 != 0), "positive_limit_switch": inputs.map(|i| i & 2 != 0),
+                "home_switch": inputs.map(|i| i & 4 != 0)});
             let mut t = format!("node {node}: {} (statusword {sw:04X}h)", state_name(sw));
             if let Some(m) = mode {
                 t += &format!("\n  mode      {m} ({})", mode_name(m));
@@ -204,8 +294,15 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             if let Some(v) = vel {
                 t += &format!("\n  velocity  {v}");
             }
+            if !bits.is_empty() {
+                t += &format!("\n  flags     {}", bits.join(", "));
+            }
+            if !active.is_empty() {
+                t += &format!("\n  inputs    {active}");
+            }
             t += &match err {
-                Some(0) | None => "\n  errors    none".to_owned(),
+                Some(0) | None if bits.is_empty() => "\n  errors    none".to_owned(),
+                Some(0) | None => "\n  errors    none in 603Fh".to_owned(),
                 Some(e) => format!(
                     "\n  error     {e:04X}h {} (register {:02X}h)",
                     drivebus_master::emcy_description(e).unwrap_or("manufacturer specific"),
@@ -216,34 +313,80 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
         }
         DriveCmd::Enable => {
             d.enable().await.map_err(ex)?;
-            done(node, "operation enabled".into(), d.statusword().await.map_err(ex)?)
+            done(
+                node,
+                "operation_enabled",
+                "operation enabled".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Disable => {
             d.disable().await.map_err(ex)?;
-            done(node, "operation disabled".into(), d.statusword().await.map_err(ex)?)
+            done(
+                node,
+                "disabled",
+                "operation disabled".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Quickstop => {
             d.quick_stop().await.map_err(ex)?;
-            done(node, "quick stop".into(), d.statusword().await.map_err(ex)?)
+            done(
+                node,
+                "quick_stop",
+                "quick stop".into(),
+                d.statusword().await.map_err(ex)?,
+                serde_json::json!({}),
+            )
         }
         DriveCmd::Stop => {
             let s = d.stop_motion(Duration::from_secs(5)).await.map_err(ex)?;
-            let what = match s.action {
-                StopAction::NotMoving => "not in operation enabled: nothing to stop",
-                StopAction::Halted => "halted",
-                StopAction::QuickStopped => "halt did not stop the axis: quick stop",
+            let (code, what) = match s.action {
+                StopAction::NotMoving => ("not_moving", "not in operation enabled: nothing to stop"),
+                StopAction::Halted => ("halted", "halted"),
+                StopAction::QuickStopped => ("quick_stopped", "halt did not stop the axis: quick stop"),
             };
             let pos = s.position.map_or_else(String::new, |p| format!(" at position {p}"));
-            done(node, format!("{what}{pos}"), s.statusword)
+            done(
+                node,
+                code,
+                format!("{what}{pos}"),
+                s.statusword,
+                serde_json::json!({"position": s.position}),
+            )
         }
         DriveCmd::Reset => {
             let reset = d.fault_reset().await.map_err(ex)?;
             let sw = d.statusword().await.map_err(ex)?;
-            let msg = if reset { "fault reset" } else { "no fault to reset: left as it is" };
-            done(node, msg.into(), sw)
+            let (code, msg) = if reset {
+                ("fault_reset", "fault reset")
+            } else {
+                ("no_fault", "no fault to reset: left as it is")
+            };
+            done(node, code, msg.into(), sw, serde_json::json!({}))
         }
         DriveCmd::Move(a) => {
             require_enabled().await?;
+            let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
+            let from = d.position().await;
+            let target = match (a.relative, from) {
+                (true, Some(p)) => Some(p.saturating_add(a.target)),
+                (true, None) => None,
+                (false, _) => Some(a.target),
+            };
+            // Checked with the profile the move would run at, before anything
+            // is written: a refused move leaves the drive as it was.
+            let mut limits = d.motion_limits().await;
+            if let Some(v) = a.velocity {
+                limits.profile_velocity = Some(v);
+            }
+            if let Some(acc) = a.acceleration {
+                limits.profile_acceleration = Some(acc);
+                limits.profile_deceleration = Some(acc);
+            }
+            preflight(&limits, node, from, target, wait)?;
             d.set_mode(mode::PP).await.map_err(ex)?;
             if let Some(v) = a.velocity {
                 d.write_raw(0x6081, 0, &v.to_le_bytes()).await.map_err(ex)?;
@@ -252,15 +395,6 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 d.write_raw(0x6083, 0, &acc.to_le_bytes()).await.map_err(ex)?;
                 d.write_raw(0x6084, 0, &acc.to_le_bytes()).await.map_err(ex)?;
             }
-            let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
-            let from = d.position().await;
-            let target = match (a.relative, from) {
-                (true, Some(p)) => Some(p.saturating_add(a.target)),
-                (true, None) => None,
-                (false, _) => Some(a.target),
-            };
-            preflight(&d.motion_limits().await, node, from, target, wait)?;
-            let t0 = conn.master.now();
             let r = guarded(
                 &d,
                 node,
@@ -272,14 +406,7 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             )
             .await;
             pb.finish_and_clear();
-            r?;
-            let pos = read_i(0x6064).await.unwrap_or(0);
-            let secs = conn.master.now().saturating_duration_since(t0).as_secs_f64();
-            done(
-                node,
-                format!("target reached at {pos} after {secs:.3} s"),
-                d.statusword().await.map_err(ex)?,
-            )
+            reached(node, &r?)
         }
         DriveCmd::Velocity(a) => {
             require_enabled().await?;
@@ -290,7 +417,14 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             })
             .await;
             r?;
-            done(node, format!("target velocity {}", a.value), d.statusword().await.map_err(ex)?)
+            let sw = d.statusword().await.map_err(ex)?;
+            done(
+                node,
+                "target_velocity",
+                format!("target velocity {}", a.value),
+                sw,
+                serde_json::json!({"velocity": a.value}),
+            )
         }
         DriveCmd::Torque(a) => {
             let t = i16::try_from(a.value)
@@ -302,7 +436,8 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 d.controlword(0x0F).await
             })
             .await?;
-            done(node, format!("target torque {t} ‰"), d.statusword().await.map_err(ex)?)
+            let sw = d.statusword().await.map_err(ex)?;
+            done(node, "target_torque", format!("target torque {t} ‰"), sw, serde_json::json!({"torque": t}))
         }
         DriveCmd::Home(a) => {
             require_enabled().await?;
@@ -313,17 +448,24 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
             let r = guarded(&d, node, timeout, "homing", None, true, d.home(method, wait)).await;
             pb.finish_and_clear();
-            r?;
-            let pos = read_i(0x6064).await.unwrap_or(0);
-            done(
-                node,
-                format!("homing attained (method {method}), position {pos}"),
-                d.statusword().await.map_err(ex)?,
-            )
+            reached(node, &r?)
         }
     };
     pb.finish_and_clear();
     Ok(report)
+}
+
+/// The report of a motion that did what it was asked.
+fn reached(node: u8, r: &MotionReport) -> Printed {
+    let at = r.position.map_or_else(|| "an unknown position".to_owned(), |p| p.to_string());
+    let what = match r.homing_method {
+        Some(m) => format!("homing attained (method {m}), position {at}"),
+        None => format!("target reached at {at} after {:.3} s", r.duration.as_secs_f64()),
+    };
+    Some((
+        format!("node {node}: {what} (statusword {:04X}h, {})", r.statusword, state_name(r.statusword)),
+        Report::from(node, r).0,
+    ))
 }
 
 /// Refuses a move that cannot finish within `wait` at the drive's own

@@ -15,18 +15,117 @@ use crate::output::{out, outln};
 pub fn load_eds(path: &Path) -> anyhow::Result<Eds> {
     let text = std::fs::read(path).with_context(|| format!("cannot read EDS file {}", path.display()))?;
     let text = String::from_utf8_lossy(&text);
-    parse_text(&text).with_context(|| format!("EDS file {}", path.display()))
+    parse_text(&text).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
+/// Parses an EDS; the error names the first problem with its line (the
+/// cause: the file's errors come in file order, consequences found at the
+/// end last), then how many more there are and the next few.
 fn parse_text(text: &str) -> anyhow::Result<Eds> {
     match drivebus_eds::parse(text) {
         Ok(p) => Ok(p.eds),
         Err(e) => {
-            let lines: Vec<String> =
-                e.errors.iter().take(10).map(|d| format!("line {}: {}", d.line, d.message)).collect();
-            Err(anyhow!("does not parse:\n  {}", lines.join("\n  ")))
+            let at = |d: &drivebus_eds::Diagnostic| {
+                if d.line == 0 { d.message.clone() } else { format!("line {}: {}", d.line, d.message) }
+            };
+            let first = e.errors.first().map(at).unwrap_or_else(|| "does not parse".into());
+            let more: Vec<String> = e.errors.iter().skip(1).take(9).map(at).collect();
+            let rest = match e.errors.len() {
+                0 | 1 => String::new(),
+                n => format!(
+                    " (the EDS does not parse; {} more error(s){}:\n  {})",
+                    n - 1,
+                    if n > 10 { ", the next 9" } else { "" },
+                    more.join("\n  ")
+                ),
+            };
+            Err(anyhow!("{first}{rest}"))
         }
     }
+}
+
+/// `text` with `FileName=` in `[FileInfo]` set to `name` (CiA 306 §4.2:
+/// the name of the file it is in), inserted when missing.
+pub fn with_file_name(text: &str, name: &str) -> String {
+    let mut out = String::with_capacity(text.len() + name.len());
+    let mut in_info = false;
+    let mut done = false;
+    for line in text.split_inclusive('\n') {
+        let t = line.trim();
+        if t.starts_with('[') {
+            if in_info && !done {
+                out.push_str(&format!("FileName={name}\r\n"));
+                done = true;
+            }
+            in_info = t.eq_ignore_ascii_case("[FileInfo]");
+        } else if in_info
+            && !done
+            && t.split('=').next().is_some_and(|k| k.trim().eq_ignore_ascii_case("FileName"))
+        {
+            let eol = if line.ends_with("\r\n") {
+                "\r\n"
+            } else if line.ends_with('\n') {
+                "\n"
+            } else {
+                ""
+            };
+            out.push_str(&format!("FileName={name}{eol}"));
+            done = true;
+            continue;
+        }
+        out.push_str(line);
+    }
+    out
+}
+
+/// `[FileInfo]` of a DCF read off a node: its file name and what CiA 306
+/// §4.2 asks for, keeping what the template had.
+fn stamp_file_info(dcf: &mut Eds, name: &str, node: u8) {
+    let (date, time) = now_306();
+    let set = |fi: &mut Vec<(String, String)>, k: &str, v: String, replace: bool| match fi
+        .iter_mut()
+        .find(|(key, _)| key.eq_ignore_ascii_case(k))
+    {
+        Some(e) if replace || e.1.trim().is_empty() => e.1 = v,
+        Some(_) => {}
+        None => fi.push((k.to_owned(), v)),
+    };
+    let fi = &mut dcf.file_info;
+    set(fi, "FileName", name.to_owned(), true);
+    set(fi, "FileVersion", "1".into(), false);
+    set(fi, "FileRevision", "0".into(), false);
+    set(fi, "EDSVersion", "4.0".into(), false);
+    set(fi, "Description", format!("node {node} as read by drivebus eds dcf"), false);
+    set(fi, "CreationTime", time.clone(), false);
+    set(fi, "CreationDate", date.clone(), false);
+    set(fi, "CreatedBy", "drivebus".into(), false);
+    set(fi, "ModificationTime", time, true);
+    set(fi, "ModificationDate", date, true);
+    set(fi, "ModifiedBy", "drivebus".into(), true);
+}
+
+/// Today's date and time as CiA 306 writes them: `mm-dd-yyyy`, `hh:mmAM`.
+fn now_306() -> (String, String) {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs());
+    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    let (h, min) = (rem / 3600, rem % 3600 / 60);
+    let (h12, ampm) = match h {
+        0 => (12, "AM"),
+        1..=11 => (h, "AM"),
+        12 => (12, "PM"),
+        _ => (h - 12, "PM"),
+    };
+    (format!("{m:02}-{d:02}-{y}"), format!("{h12:02}:{min:02}{ampm}"))
 }
 
 /// The `--eds` file, if given.
@@ -141,6 +240,12 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
             } else {
                 bail!("nothing to export: give --profile NAME, --node N (reads 1021h) or --eds FILE");
             };
+            // The file's own name, not the one it had elsewhere (1021h
+            // says drivebus.eds whatever the file is called).
+            let text = match a.out.as_deref().and_then(Path::file_name) {
+                Some(name) => with_file_name(&text, &name.to_string_lossy()),
+                None => text,
+            };
             deliver(g, a.out.as_deref(), &text)?;
             Ok(0)
         }
@@ -153,7 +258,13 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
             };
             let timeout = conn.timeout;
             conn.close().await?;
-            let (dcf, report) = r.map_err(|e| crate::error::sdo(node, 0, 0, false, timeout)(e))?;
+            let (mut dcf, report) = r.map_err(|e| crate::error::sdo(node, 0, 0, false, timeout)(e))?;
+            let name = a
+                .out
+                .as_deref()
+                .and_then(Path::file_name)
+                .map_or_else(|| format!("node{node}.dcf"), |n| n.to_string_lossy().into_owned());
+            stamp_file_info(&mut dcf, &name, node);
             let text = drivebus_eds::write(&dcf);
             deliver(g, a.out.as_deref(), &text)?;
             if !g.json {
@@ -228,5 +339,34 @@ fn show(g: &Global, eds: &Eds) {
         };
         let n: String = n.chars().take(44).collect();
         outln!("{obj:<9} {n:<44} {t:<15} {a:<6} {:<4} {d}", if p { "yes" } else { "" });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_file_name_is_the_files_own() {
+        let t = "; c\r\n[FileInfo]\r\nFileName=drivebus.eds\r\nFileVersion=1\r\n\r\n[DeviceInfo]\r\nX=1\r\n";
+        let w = with_file_name(t, "akd-node1.eds");
+        assert_eq!(w, t.replace("drivebus.eds", "akd-node1.eds"));
+        let none = "[FileInfo]\nFileVersion=1\n[DeviceInfo]\n";
+        assert_eq!(
+            with_file_name(none, "x.eds"),
+            "[FileInfo]\nFileVersion=1\nFileName=x.eds\r\n[DeviceInfo]\n"
+        );
+        let (date, time) = now_306();
+        assert_eq!((date.len(), date.as_bytes()[2], time.len()), (10, b'-', 7), "{date} {time}");
+    }
+
+    #[test]
+    fn a_broken_eds_names_its_cause_first() {
+        let e = parse_text(
+            "[FileInfo]\nFileName=x\n[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n[1000\nDataType=7\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("line 6: section header without ']'"), "{e}");
     }
 }

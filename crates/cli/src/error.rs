@@ -14,6 +14,8 @@ pub struct Coded {
     pub code: &'static str,
     /// The error.
     pub error: anyhow::Error,
+    /// Fields for `--json` besides code and message (a motion's outcome, position, ...).
+    pub fields: Option<serde_json::Value>,
 }
 
 impl fmt::Display for Coded {
@@ -26,7 +28,12 @@ impl std::error::Error for Coded {}
 
 /// Tags `e` with `code`.
 pub fn coded(code: &'static str, e: anyhow::Error) -> anyhow::Error {
-    anyhow::Error::new(Coded { code, error: e })
+    anyhow::Error::new(Coded { code, error: e, fields: None })
+}
+
+/// Tags `e` with `code` and the `--json` fields `fields`.
+pub fn coded_with(code: &'static str, fields: serde_json::Value, e: anyhow::Error) -> anyhow::Error {
+    anyhow::Error::new(Coded { code, error: e, fields: Some(fields) })
 }
 
 /// A duration option in seconds (`--seconds`, `--wait`), at most a year:
@@ -79,6 +86,7 @@ impl fmt::Display for SdoFailure {
                 self.timeout.as_millis(),
                 self.node
             ),
+            SdoError::Transport(why) => write!(f, "failed: the bus was lost: {why}"),
             e => write!(f, "failed: {e}"),
         }
     }
@@ -97,12 +105,35 @@ pub fn sdo(
     move |error| anyhow::Error::new(SdoFailure { node, index, sub, write, error, timeout })
 }
 
+/// An error as the user reads it: the root cause first, then what the
+/// command was doing, each told once (a cause whose text its wrapper
+/// repeats appears once: not "refused: refused").
+pub fn render(e: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = e
+        .chain()
+        .map(|c| match c.downcast_ref::<Coded>() {
+            Some(k) => render(&k.error),
+            None => c.to_string(),
+        })
+        .collect();
+    for i in 0..parts.len().saturating_sub(1) {
+        let next = parts[i + 1].clone();
+        if let Some(own) = parts[i].strip_suffix(next.as_str()) {
+            parts[i] = own.trim_end().trim_end_matches(':').trim_end().to_owned();
+        }
+    }
+    parts.retain(|p| !p.is_empty());
+    parts.dedup();
+    parts.reverse();
+    parts.join(": ")
+}
+
 /// The `--json` code and extra fields of an error.
 pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
     let mut extra = serde_json::json!({});
     for cause in e.chain() {
         if let Some(c) = cause.downcast_ref::<Coded>() {
-            return (c.code, extra);
+            return (c.code, c.fields.clone().unwrap_or(extra));
         }
         if let Some(f) = cause.downcast_ref::<SdoFailure>() {
             extra = serde_json::json!({"node": f.node, "index": format!("{:04X}", f.index), "sub": f.sub});
@@ -112,6 +143,7 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
                     ("sdo_abort", extra)
                 }
                 None if f.error == SdoError::Timeout => ("sdo_timeout", extra),
+                None if matches!(f.error, SdoError::Transport(_)) => ("bus_lost", extra),
                 None => ("sdo_error", extra),
             };
         }
@@ -119,8 +151,9 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
             return match d {
                 DriveError::Timeout { .. } => ("drive_timeout", extra),
                 DriveError::Fault { .. } => ("drive_fault", extra),
-                DriveError::HomingError { .. } => ("homing_error", extra),
+                DriveError::Stopped(r) => (r.end.code(), extra),
                 DriveError::Sdo(SdoError::Timeout) => ("sdo_timeout", extra),
+                DriveError::Sdo(SdoError::Transport(_)) | DriveError::Transport(_) => ("bus_lost", extra),
                 DriveError::Sdo(_) => ("sdo_abort", extra),
                 _ => ("drive_error", extra),
             };
@@ -141,6 +174,16 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_cause_comes_first_and_once() {
+        let io =
+            std::io::Error::new(std::io::ErrorKind::ConnectionRefused, "Connection refused (os error 111)");
+        let e = anyhow::Error::new(io).context("cannot open `x`: Connection refused (os error 111)");
+        assert_eq!(render(&e), "Connection refused (os error 111): cannot open `x`");
+        let e = coded("bus", anyhow::anyhow!("inner")).context("closing the bus");
+        assert_eq!(render(&e), "inner: closing the bus");
+    }
 
     #[test]
     fn sdo_failures_explain_themselves() {

@@ -31,6 +31,9 @@ fn addr_flags(a: &LssAddress) -> String {
     )
 }
 
+/// The default wait for each LSS answer (`--timeout` changes it).
+const LSS_ANSWER_MS: u64 = 100;
+
 fn lss_err(e: LssError) -> anyhow::Error {
     coded("lss_error", anyhow!("{e}"))
 }
@@ -38,8 +41,9 @@ fn lss_err(e: LssError) -> anyhow::Error {
 /// Runs an `lss` subcommand.
 pub async fn run(g: &Global, c: &LssCmd) -> anyhow::Result<()> {
     let conn = Conn::open(g).await?;
-    // Each fastscan question waits this long for the (merged) answers.
-    let answer = Duration::from_millis((g.timeout / 10).clamp(10, 500));
+    // Each LSS question (a fastscan asks up to 133) waits this long for
+    // the (merged) answers: --timeout, as its help says.
+    let answer = Duration::from_millis(g.timeout_ms(LSS_ANSWER_MS));
     let lss = conn.master.lss().timeout(answer);
     let r = match c {
         LssCmd::Scan => match lss.probe_unconfigured().await.map_err(lss_err) {
@@ -112,8 +116,8 @@ async fn close_with(conn: Conn, r: anyhow::Result<()>) -> anyhow::Result<()> {
 
 async fn set_node_id(g: &Global, conn: &Conn, a: &LssSetArgs) -> anyhow::Result<(serde_json::Value, String)> {
     let parts = [&a.vendor, &a.product, &a.revision, &a.serial];
-    let answer = Duration::from_millis((g.timeout / 10).clamp(10, 500));
-    let lss = conn.master.lss().timeout(Duration::from_millis(g.timeout.max(10)));
+    let answer = Duration::from_millis(g.timeout_ms(LSS_ANSWER_MS));
+    let lss = conn.master.lss().timeout(answer);
     let stored = if a.store { " and stored" } else { "" };
     let address = if parts.iter().all(|p| p.is_some()) {
         let num = |s: &Option<String>| number(s.as_deref().unwrap_or("0")).map_err(|e| coded("usage", e));
@@ -150,14 +154,15 @@ async fn set_node_id(g: &Global, conn: &Conn, a: &LssSetArgs) -> anyhow::Result<
         lss.configure_selected(&addr, a.new_id, a.store).await.map_err(|e| match e {
             LssError::Timeout => coded(
                 "lss_error",
-                anyhow!("no LSS slave with {} answered within {} ms", addr_text(&addr), g.timeout),
+                anyhow!("no LSS slave with {} answered within {} ms", addr_text(&addr), answer.as_millis()),
             ),
             e => lss_err(e),
         })?;
         let when = if g.node.is_some() {
             format!(
-                " (active after NMT reset communication: drivebus --node {} nmt reset-comm)",
-                g.node.unwrap_or(0)
+                " (active after NMT reset communication: `drivebus --node {} nmt reset-comm`; the node then boots as node {})",
+                g.node.unwrap_or(0),
+                a.new_id
             )
         } else {
             " (active after NMT reset communication of a configured slave; an unconfigured one starts with it now)".to_owned()

@@ -34,7 +34,7 @@ mod vdrive;
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches};
 
-use args::{Cli, Command, EdsCmd, LssCmd};
+use args::{Cli, Command};
 
 /// The global options a command uses; the others are refused.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -60,32 +60,75 @@ const ALL_OPTS: [(Opt, &str); 8] = [
     (Opt::Machine, "machine"),
 ];
 
-fn uses(cmd: &Command) -> &'static [Opt] {
+/// The global options the command at `path` (`["drive", "move"]`) uses.
+fn uses(path: &[&str]) -> &'static [Opt] {
     use Opt::*;
     const NODE_SDO: &[Opt] = &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine];
-    match cmd {
-        Command::Serve(_) => &[Bus, Machine],
-        Command::Demo(_) => &[Json, Machine],
-        Command::Scan(_) => &[Bus, Json, Timeout, Retries, Sim, Machine],
-        Command::Sdo(_) | Command::Pdo(_) => NODE_SDO,
-        Command::Nmt(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
-        Command::Drive(_) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
-        Command::Dump(_) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
-        Command::Monitor(_) => NODE_SDO,
-        Command::Send(_) | Command::Replay(_) => &[Bus, Json, Sim, Machine],
-        Command::Gateway(_) => &[Bus, Node, Timeout, Retries, Sim, Machine],
-        Command::Eds(EdsCmd::Check(_)) => &[Json],
-        Command::Eds(EdsCmd::Show(_)) => &[Eds, Json],
-        Command::Eds(EdsCmd::Export(_)) => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
-        Command::Eds(EdsCmd::Dcf(_)) => NODE_SDO,
-        Command::Lss(LssCmd::SetNodeId(_)) => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
-        Command::Lss(_) => &[Bus, Json, Timeout, Sim, Machine],
-        Command::SlcanPty(_) => &[Bus, Machine],
+    match path {
+        ["serve", ..] => &[Bus, Machine],
+        ["demo", ..] => &[Json, Machine],
+        ["scan", ..] => &[Bus, Json, Timeout, Retries, Sim, Machine],
+        ["sdo" | "pdo", ..] => NODE_SDO,
+        ["nmt", ..] | ["drive", ..] => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        ["dump", ..] | ["monitor", ..] => NODE_SDO,
+        ["send" | "replay", ..] => &[Bus, Json, Sim, Machine],
+        ["gateway", ..] => &[Bus, Node, Timeout, Retries, Sim, Machine],
+        ["eds", "check", ..] => &[Json],
+        ["eds", "show", ..] => &[Eds, Json],
+        ["eds", ..] => NODE_SDO,
+        ["lss", "set-node-id", ..] => &[Bus, Node, Json, Timeout, Retries, Sim, Machine],
+        ["lss", ..] => &[Bus, Json, Timeout, Sim, Machine],
+        ["slcan-pty", ..] => &[Bus, Machine],
         // EtherCAT commands take their interface (--iface) after the subcommand;
         // the master commands print JSON and use --timeout for a frame's return.
-        Command::Ethercat(c) if crate::ethercat::is_master(c) => &[Json, Timeout],
-        Command::Ethercat(_) => &[],
+        ["ethercat", "serve", ..] => &[],
+        ["ethercat", ..] => &[Json, Timeout],
+        _ => &[Bus, Node, Eds, Json, Timeout, Retries, Sim, Machine],
     }
+}
+
+/// What `--timeout` means for the command at `path`, with its default.
+fn timeout_help(path: &[&str]) -> &'static str {
+    match path {
+        ["lss", "set-node-id", ..] => {
+            "Wait for each LSS answer, and for SDO answers with --node, in ms [default: 100 for LSS, 1000 for SDO]"
+        }
+        ["lss", ..] => "Wait for each LSS answer in ms (a fastscan asks up to 133 questions) [default: 100]",
+        ["ethercat", ..] => "Wait for a frame's return in ms [default: 1000]",
+        _ => "SDO and response timeout in milliseconds [default: 1000]",
+    }
+}
+
+/// The command line with each command's help listing only the global
+/// options it uses: each subcommand gets its own copy of every global
+/// option (clap then does not copy the top-level one), hidden where the
+/// command refuses it, with `--timeout` worded for the command.
+fn command() -> clap::Command {
+    fn own(cmd: clap::Command, globals: &[clap::Arg], path: &mut Vec<String>) -> clap::Command {
+        let names: Vec<String> = cmd.get_subcommands().map(|c| c.get_name().to_owned()).collect();
+        let mut cmd = cmd;
+        if !path.is_empty() {
+            let p: Vec<&str> = path.iter().map(String::as_str).collect();
+            let used = uses(&p);
+            for (opt, id) in ALL_OPTS {
+                let Some(arg) = globals.iter().find(|a| a.get_id() == id) else { continue };
+                let mut arg = arg.clone().hide(!used.contains(&opt));
+                if opt == Opt::Timeout {
+                    arg = arg.help(timeout_help(&p));
+                }
+                cmd = cmd.arg(arg);
+            }
+        }
+        for n in names {
+            path.push(n.clone());
+            cmd = cmd.mut_subcommand(&n, |c| own(c, globals, path));
+            path.pop();
+        }
+        cmd
+    }
+    let cmd = Cli::command();
+    let globals: Vec<clap::Arg> = cmd.get_arguments().filter(|a| a.is_global_set()).cloned().collect();
+    own(cmd, &globals, &mut Vec::new())
 }
 
 /// The subcommand path as typed (`drive move`).
@@ -100,9 +143,10 @@ fn path(m: &clap::ArgMatches) -> (Vec<String>, &clap::ArgMatches) {
 }
 
 /// Refuses global options given on the command line that `cmd` ignores.
-fn check_options(cmd: &Command, m: &clap::ArgMatches) -> Result<(), String> {
+fn check_options(m: &clap::ArgMatches) -> Result<(), String> {
     let (names, leaf) = path(m);
-    let used = uses(cmd);
+    let p: Vec<&str> = names.iter().map(String::as_str).collect();
+    let used = uses(&p);
     for (opt, id) in ALL_OPTS {
         let given = [m, leaf].iter().any(|mm| mm.value_source(id) == Some(ValueSource::CommandLine));
         if given && !used.contains(&opt) {
@@ -120,7 +164,7 @@ fn check_options(cmd: &Command, m: &clap::ArgMatches) -> Result<(), String> {
 fn main() {
     let argv: Vec<String> = std::env::args().collect();
     let json = argv.iter().any(|a| a == "--json");
-    let matches = match Cli::command().try_get_matches_from(&argv) {
+    let matches = match command().try_get_matches_from(&argv) {
         Ok(m) => m,
         Err(e) if json && e.use_stderr() => {
             let msg = e.to_string();
@@ -139,7 +183,7 @@ fn main() {
     if matches!(cli.cmd, Command::Serve(_)) && matches.value_source("bus") != Some(ValueSource::CommandLine) {
         cli.global.bus = "virtual".to_owned();
     }
-    if let Err(msg) = check_options(&cli.cmd, &matches) {
+    if let Err(msg) = check_options(&matches) {
         if cli.global.json {
             output::json_error("usage", &msg, serde_json::json!({}));
         } else {
@@ -165,12 +209,23 @@ fn main() {
         Ok(code) => std::process::exit(code),
         Err(e) => {
             let (code, extra) = error::describe(&e);
-            if json {
-                output::json_error(code, &format!("{e:#}"), extra);
-            } else {
-                eprintln!("error: {e:#}");
+            let mut msg = error::render(&e);
+            if code.ends_with("timeout")
+                && let Some(hint) = conn::empty_bus_hint()
+            {
+                msg.push_str(hint);
             }
-            std::process::exit(if code == "usage" { 2 } else { 1 });
+            if json {
+                output::json_error(code, &msg, extra);
+            } else {
+                eprintln!("error: {msg}");
+            }
+            // 130: killed by SIGINT, as shells report Ctrl-C.
+            std::process::exit(match code {
+                "usage" => 2,
+                "interrupted" => 130,
+                _ => 1,
+            });
         }
     }
 }
@@ -204,9 +259,94 @@ mod tests {
     use super::*;
 
     fn check(args: &[&str]) -> Result<(), String> {
-        let m = Cli::command().try_get_matches_from(args).unwrap();
-        let cli = Cli::from_arg_matches(&m).unwrap();
-        check_options(&cli.cmd, &m)
+        let m = command().try_get_matches_from(args).unwrap();
+        check_options(&m)
+    }
+
+    /// The help text of the command at `args` (`["drive", "move"]`).
+    fn help(args: &[&str]) -> String {
+        let mut cmd = command();
+        let mut c = &mut cmd;
+        for a in args {
+            c = c.find_subcommand_mut(a).unwrap();
+        }
+        c.render_long_help().to_string()
+    }
+
+    /// Splits an example line as a shell would (quotes, a `>` redirection
+    /// and the comment after two spaces dropped).
+    fn words(line: &str) -> Vec<String> {
+        let cmd = line.trim_start();
+        let cmd = cmd.split("  ").next().unwrap_or(cmd);
+        let cmd = cmd.split(" > ").next().unwrap_or(cmd);
+        let (mut out, mut cur, mut quote) = (Vec::new(), String::new(), None);
+        for c in cmd.chars() {
+            match (quote, c) {
+                (None, '\'' | '"') => quote = Some(c),
+                (Some(q), c) if c == q => quote = None,
+                (None, ' ') => {
+                    if !cur.is_empty() {
+                        out.push(std::mem::take(&mut cur));
+                    }
+                }
+                (_, c) => cur.push(c),
+            }
+        }
+        if !cur.is_empty() {
+            out.push(cur);
+        }
+        out
+    }
+
+    /// Every example line of every command's help.
+    fn examples(c: &clap::Command, into: &mut Vec<String>) {
+        for text in [c.get_after_help(), c.get_after_long_help()].into_iter().flatten() {
+            for line in text.to_string().lines() {
+                if line.trim_start().starts_with("drivebus ") {
+                    into.push(line.to_owned());
+                }
+            }
+        }
+        for sc in c.get_subcommands() {
+            examples(sc, into);
+        }
+    }
+
+    /// Issue 15: the examples of `--help` run as written: each parses,
+    /// takes only options its command uses, and names objects that resolve.
+    #[test]
+    fn every_help_example_parses_as_written() {
+        let mut all = Vec::new();
+        examples(&command(), &mut all);
+        assert!(all.len() > 60, "{} examples", all.len());
+        for line in all {
+            let w = words(&line);
+            let m = command().try_get_matches_from(&w).unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            check_options(&m).unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            let cli = Cli::from_arg_matches(&m).unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            if let Command::Sdo(args::SdoCmd::Read(a)) = &cli.cmd {
+                dict::Dict::default()
+                    .resolve(&a.object, a.sub.as_deref())
+                    .unwrap_or_else(|e| panic!("`{line}`: {e}"));
+            }
+        }
+        // The top-level help names an object the same way.
+        assert!(dict::Dict::default().resolve("identity/vendor-id", None).is_ok());
+    }
+
+    #[test]
+    fn each_command_lists_only_its_own_options() {
+        let eds = help(&["eds", "check"]);
+        assert!(eds.contains("--json") && !eds.contains("--bus") && !eds.contains("--sim"), "{eds}");
+        let ecat = help(&["ethercat", "scan"]);
+        for o in ["--bus", "--node", "--sim", "--eds", "--retries"] {
+            assert!(!ecat.contains(o), "{o} in {ecat}");
+        }
+        assert!(ecat.contains("--iface") && ecat.contains("--timeout"), "{ecat}");
+        let mv = help(&["drive", "move"]);
+        assert!(mv.contains("--bus") && mv.contains("--node") && !mv.contains("--eds "), "{mv}");
+        assert!(help(&["lss", "scan"]).contains("Wait for each LSS answer in ms"));
+        assert!(!help(&["serve"]).contains("--timeout"));
     }
 
     #[test]

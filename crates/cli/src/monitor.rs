@@ -109,7 +109,7 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
                             node,
                             Some(("emcy", format!("{code:04X}h {} (register {register:02X}h)", text.as_deref().unwrap_or("manufacturer specific")))),
                         ),
-                        MasterEvent::BusError { reason } => anyhow::bail!("the bus failed: {reason}"),
+                        MasterEvent::BusError { reason } => return Err(conn.lost(&reason)),
                         MasterEvent::HeartbeatRecovered { node } => (node, None),
                     };
                     if !wanted(node) {

@@ -3,7 +3,8 @@
 use std::time::Duration;
 
 use anyhow::{anyhow, bail};
-use drivebus_master::{NmtCommand, ScanOptions};
+use drivebus_master::{MasterEvent, NmtCommand, ScanOptions};
+use tokio::sync::broadcast::error::RecvError;
 
 use crate::args::{Global, NmtArgs, NmtKind, ScanArgs};
 use crate::conn::Conn;
@@ -79,7 +80,9 @@ pub async fn nmt(g: &Global, a: &NmtArgs) -> anyhow::Result<()> {
     let conn = Conn::open(g).await?;
     let m = &conn.master;
     let boot_wait = conn.timeout.max(Duration::from_millis(500));
-    let boot = m.expect_bootup(target, boot_wait);
+    // Any node's boot-up: a node whose node-ID was changed (LSS, 2000h
+    // objects) boots under its new one after a reset.
+    let mut events = m.subscribe_events();
     m.nmt(target, cmd).await?;
     let who = if target == 0 { "all nodes".to_owned() } else { format!("node {target}") };
     let confirmed = if target == 0 {
@@ -87,14 +90,39 @@ pub async fn nmt(g: &Global, a: &NmtArgs) -> anyhow::Result<()> {
     } else {
         match a.command {
             NmtKind::Reset | NmtKind::ResetComm => {
-                if boot.await.is_err() {
-                    conn.close().await?;
-                    bail!(
-                        "node {target}: no boot-up message within {} ms after NMT {what} (is node {target} on the bus?)",
-                        boot_wait.as_millis()
-                    );
+                let booted = m
+                    .timeout(boot_wait, async {
+                        let mut other = None;
+                        loop {
+                            match events.recv().await {
+                                Ok(MasterEvent::Bootup { node }) if node == target => return Some(node),
+                                // Another node's boot-up: this one under a new node-ID,
+                                // unless its own follows at once.
+                                Ok(MasterEvent::Bootup { node }) if other.is_none() => other = Some(node),
+                                Ok(_) | Err(RecvError::Lagged(_)) => {}
+                                Err(RecvError::Closed) => return other,
+                            }
+                            if let Some(o) = other
+                                && m.timeout(Duration::from_millis(100), events.recv()).await.is_err()
+                            {
+                                return Some(o);
+                            }
+                        }
+                    })
+                    .await
+                    .ok()
+                    .flatten();
+                match booted {
+                    Some(n) if n == target => Some("boot-up received".to_owned()),
+                    Some(n) => Some(format!("boot-up received from node {n} (its new node-ID)")),
+                    None => {
+                        conn.close().await?;
+                        bail!(
+                            "node {target}: no boot-up message within {} ms after NMT {what} (is node {target} on the bus?)",
+                            boot_wait.as_millis()
+                        );
+                    }
                 }
-                Some("boot-up received")
             }
             NmtKind::Start | NmtKind::Preop => {
                 // Both states answer SDO: check the node is there.
@@ -103,7 +131,7 @@ pub async fn nmt(g: &Global, a: &NmtArgs) -> anyhow::Result<()> {
                     conn.close().await?;
                     return Err(sdo(target, 0x1000, 0, false, timeout)(e));
                 }
-                Some("node answers SDO")
+                Some("node answers SDO".to_owned())
             }
             NmtKind::Stop => None,
         }

@@ -124,6 +124,13 @@ fn master_commands_against_served_drives_over_veth() {
     assert_eq!(text.trim(), "1018h:02 Identity object / Product code = 28002021 (0x01AB46E5) [UNSIGNED32]");
     let text = line.ok(&["sdo", "read", "--slave", "1", "1008"]);
     assert_eq!(text.trim(), "1008h:00 Manufacturer device name = iPOS [VISIBLE_STRING]");
+    // Issue 15: the whole PDO assignment array, named and typed (sub 0 alone before).
+    let text = line.ok(&["sdo", "read", "--slave", "1", "1C13"]);
+    assert!(text.starts_with("1C13h:00 Sync manager 3 PDO assignment / Number of entries = "), "{text}");
+    assert!(
+        text.contains("1C13h:01 Sync manager 3 PDO assignment / PDO 1 = ") && text.contains("[UNSIGNED16]"),
+        "{text}"
+    );
     line.ok(&["sdo", "write", "--slave", "2", "6081h", "123456"]);
     assert_eq!(line.json(&["sdo", "read", "--slave", "2", "profile velocity"])["value"], 123456);
     let (_, err) = line.fails(&["sdo", "read", "--slave", "1", "5FFF"]);
@@ -229,7 +236,7 @@ fn master_commands_against_served_drives_over_veth() {
     assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(out.status.code(), Some(130), "interrupted: 128 + SIGINT: {err}");
     assert!(
         err.contains(
             "move to 900000: interrupted; the motion was halted (controlword bit 8) and the drive is at rest"

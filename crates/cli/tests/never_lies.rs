@@ -206,7 +206,7 @@ fn lss_refuses_to_configure_two_slaves_at_once() {
         drivebus_transport::host::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub())
     });
     let u = format!("socketcand://{addr}/can0");
-    db(&u, &["--timeout", "300", "lss", "set-node-id", "9"]).failure().stderr(
+    db(&u, &["lss", "set-node-id", "9"]).failure().stderr(
         contains("more than one unconfigured LSS slave")
             .and(contains("--serial 0x10"))
             .and(contains("nothing was changed")),
@@ -215,15 +215,13 @@ fn lss_refuses_to_configure_two_slaves_at_once() {
     db(&u, &["--node", "9", "--timeout", "200", "sdo", "read", "1000"])
         .failure()
         .stderr(contains("timed out"));
-    db(&u, &["--timeout", "300", "lss", "scan"])
+    db(&u, &["lss", "scan"])
         .success()
         .stdout(contains("serial 0x00000010").and(contains("more unconfigured")));
     // The address path configures exactly one.
     db(
         &u,
         &[
-            "--timeout",
-            "300",
             "lss",
             "set-node-id",
             "9",
@@ -242,9 +240,7 @@ fn lss_refuses_to_configure_two_slaves_at_once() {
     std::thread::sleep(Duration::from_millis(100));
     db(&u, &["--node", "9", "sdo", "read", "1018:04"]).success().stdout(contains("= 32"));
     // One unconfigured slave left: the global path is safe now.
-    db(&u, &["--timeout", "300", "lss", "set-node-id", "10"])
-        .success()
-        .stdout(contains("only unconfigured slave"));
+    db(&u, &["lss", "set-node-id", "10"]).success().stdout(contains("only unconfigured slave"));
     std::thread::sleep(Duration::from_millis(100));
     db(&u, &["--node", "10", "sdo", "read", "1018:04"]).success().stdout(contains("= 16"));
     // A configured node by its node-ID: 1018h by SDO, selective switch.

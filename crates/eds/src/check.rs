@@ -305,12 +305,40 @@ impl Ctx<'_> {
     }
 }
 
+/// `[FileInfo]` (CiA 306 §4.2): the keys that identify the file are
+/// errors when missing (an empty section passed before), the dates and
+/// authors warnings.
+fn file_info(c: &mut Ctx<'_>) {
+    let has =
+        |k: &str| c.eds.file_info.iter().any(|(key, v)| key.eq_ignore_ascii_case(k) && !v.trim().is_empty());
+    let missing = |keys: &[&'static str]| keys.iter().copied().filter(|k| !has(k)).collect::<Vec<_>>();
+    let errors = missing(&["FileName", "FileVersion", "FileRevision", "EDSVersion"]);
+    let warnings = missing(&[
+        "Description",
+        "CreationTime",
+        "CreationDate",
+        "CreatedBy",
+        "ModificationTime",
+        "ModificationDate",
+        "ModifiedBy",
+    ]);
+    if !errors.is_empty() {
+        let msg = format!("[FileInfo] lacks {} (CiA 306 §4.2)", errors.join(", "));
+        c.push(Severity::Error, None, None, 0, msg);
+    }
+    if !warnings.is_empty() {
+        let msg = format!("[FileInfo] lacks {} (CiA 306 §4.2)", warnings.join(", "));
+        c.push(Severity::Warning, None, None, 0, msg);
+    }
+}
+
 /// Check a file for CiA 306 violations and inconsistencies, like Lely's
 /// dcfchk: missing mandatory objects, wrong types for standard objects,
 /// limits outside the type's range, defaults outside limits, default PDO
 /// mappings of non-mappable objects.
 pub fn check(eds: &Eds) -> Vec<Finding> {
     let mut c = Ctx { eds, out: Vec::new() };
+    file_info(&mut c);
     for idx in [0x1000u16, 0x1001, 0x1018] {
         if !eds.objects.contains_key(&idx) {
             c.push(Severity::Error, Some(idx), None, 0, "mandatory object missing (CiA 301 §7.4)".into());

@@ -70,6 +70,9 @@ pub struct Ini<'a> {
     by_name: BTreeMap<String, usize>,
     /// Recoverable oddities: (line, message).
     pub warnings: Vec<(usize, String)>,
+    /// Malformed lines that lose data (a section header that does not
+    /// close: its entries would land nowhere): (line, message).
+    pub errors: Vec<(usize, String)>,
 }
 
 impl<'a> Ini<'a> {
@@ -92,10 +95,13 @@ impl<'a> Ini<'a> {
             }
             if let Some(rest) = s.strip_prefix('[') {
                 let Some(end) = rest.find(']') else {
-                    ini.warnings.push((line, format!("section header without ']': {s}")));
+                    ini.errors.push((line, format!("section header without ']': {s}")));
                     current = None;
                     continue;
                 };
+                if !rest[end + 1..].trim().is_empty() {
+                    ini.errors.push((line, format!("text after the section header's ']': {s}")));
+                }
                 let name = rest[..end].trim();
                 let key = name.to_ascii_lowercase();
                 current = Some(match ini.by_name.get(&key) {

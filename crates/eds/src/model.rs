@@ -214,7 +214,7 @@ impl std::fmt::Display for Diagnostic {
 /// Reading failed: every real error found, each with its line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EdsError {
-    /// The errors, in file order.
+    /// The errors, in file order; those without a line (found after reading) last.
     pub errors: Vec<Diagnostic>,
 }
 

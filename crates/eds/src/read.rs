@@ -186,6 +186,9 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
     for (line, m) in &ini.warnings {
         r.warn(*line, m.clone());
     }
+    for (line, m) in &ini.errors {
+        r.err(*line, m.clone());
+    }
     let mut eds = Eds::default();
 
     if let Some(s) = ini.section("FileInfo") {
@@ -333,7 +336,9 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
     if r.errors.is_empty() {
         Ok(Parsed { eds, warnings: r.warnings })
     } else {
-        r.errors.sort_by_key(|d| d.line);
+        // In file order; the consequences found at the end (no line: an
+        // object listed without its section) after the causes with lines.
+        r.errors.sort_by_key(|d| (d.line == 0, d.line));
         Err(EdsError { errors: r.errors })
     }
 }

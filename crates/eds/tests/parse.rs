@@ -239,3 +239,34 @@ fn sub_0_below_the_highest_sub_index() {
         assert!(!warned(index, 0), "{index}");
     }
 }
+
+/// Issue 15: a section header that does not close lost its section
+/// silently; the error shown first was its consequence, "object 1000 is
+/// listed but has no section" at line 0, with the cause nowhere.
+#[test]
+fn a_broken_section_header_is_the_first_error_with_its_line() {
+    let n = QUIRKS.lines().position(|l| l.trim() == "[1000]").expect("[1000] in quirks.eds");
+    let broken: String = QUIRKS
+        .lines()
+        .enumerate()
+        .map(|(i, l)| if i == n { "[1000\n".to_owned() } else { format!("{l}\n") })
+        .collect();
+    let e = parse(&broken).unwrap_err();
+    assert_eq!(e.errors[0].line, n + 1, "{e}");
+    assert!(e.errors[0].message.contains("section header without ']'"), "{e}");
+    assert!(e.errors.iter().any(|d| d.line == 0 && d.message.contains("listed but has no section")), "{e}");
+    // Text after the header's `]` is an error too, not silently dropped.
+    let trailing = QUIRKS.replacen("[1000]", "[1000]x", 1);
+    let e = parse(&trailing).unwrap_err();
+    assert!(e.errors[0].message.contains("after the section header"), "{e}");
+}
+
+/// Issue 15: `eds dcf` wrote an empty `[FileInfo]` and the checker passed it.
+#[test]
+fn an_empty_file_info_is_an_error() {
+    let empty = QUIRKS.replace("FileName=quirks.eds\n", "").replace("FileVersion=1\n", "");
+    let p = parse(&empty).unwrap();
+    let errors: Vec<String> =
+        check(&p.eds).into_iter().filter(|f| f.severity == Severity::Error).map(|f| f.message).collect();
+    assert_eq!(errors, ["[FileInfo] lacks FileName, FileVersion (CiA 306 §4.2)"], "{errors:?}");
+}

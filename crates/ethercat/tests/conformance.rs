@@ -243,6 +243,32 @@ fn leaving_op_runs_the_abort_connection_option() {
     }
 }
 
+/// iPOS §4.9.8: 2080h resets the drive, "not the ECAT interface": the
+/// slave stays in OP, the drive restarts in Switch on disabled, and the
+/// process data keep driving it (the node follows the ESM again).
+#[test]
+fn ipos_reset_drive_keeps_the_esm() {
+    let mut r = rig_in(Profile::Ipos, al::PREOP);
+    r.down(0x6060, 0, &[8]).unwrap();
+    r.safeop();
+    assert_eq!(r.request(al::OP), (0x08, 0));
+    enable(&mut r);
+    r.down(0x2080, 0, &1u16.to_le_bytes()).unwrap();
+    r.tick(Duration::from_millis(20));
+    assert_eq!(r.rd16(0x0130) & 0x1F, 0x08, "still OP, no error");
+    let sw = u16::from_le_bytes(fresh_inputs(&mut r)[..2].try_into().unwrap());
+    assert_eq!(sw & 0x4F, 0x40, "switch on disabled after the reset: {sw:04X}");
+    let nmt = r.s.app().device().node.nmt_state();
+    assert_eq!(nmt, drivebus_node::NmtState::Operational, "the node follows OP");
+    // 6060h came back from the EEPROM (its power-on value); csp again.
+    r.down(0x6060, 0, &[8]).unwrap();
+    enable(&mut r);
+    // Leaving OP still runs 6007h (default 1: fault): the node is operational.
+    assert_eq!(r.request(al::SAFEOP), (0x04, 0));
+    r.tick(Duration::from_millis(20));
+    assert_eq!(r.up_u32(0x603F, 0) as u16, 0x8100, "6007h fault on leaving OP");
+}
+
 #[test]
 fn mailbox_counter_repeat_oversize_and_unknown_protocol() {
     for p in PROFILES {

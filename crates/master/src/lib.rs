@@ -42,7 +42,8 @@ pub mod sdo;
 pub use crate::core::Stats;
 pub use dcf::DumpReport;
 pub use drive::{
-    Drive, DriveError, DriveState, MotionLimits, MotionProgress, Profile, StopAction, StopReport, mode_name,
+    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
+    Profile, StopAction, StopReport, mode_name,
 };
 pub use driver::sim::{SimBus, Stalled};
 pub use lss::{LssError, LssMaster, OnlySlave};

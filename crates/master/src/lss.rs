@@ -105,7 +105,9 @@ impl LssMaster {
         let (op, rx) = Exchange::new(frames.to_vec(), matcher, first_only, self.timeout);
         let id = self.master.inner.with_core(|c| c.start_op(Box::new(op)));
         let guard = OpGuard { master: &self.master, id };
-        let got = rx.await.map_err(|_| LssError::Transport("the master's bus is closed".into()))?;
+        let got = rx.await.map_err(|_| {
+            LssError::Transport(self.master.bus_lost().unwrap_or_else(|| "the master's bus is closed".into()))
+        })?;
         drop(guard);
         Ok(got.iter().filter_map(master::parse_response).collect())
     }
@@ -246,7 +248,9 @@ impl LssMaster {
         let (op, rx) = FastScanOp::new(scan);
         let id = self.master.inner.with_core(|c| c.start_op(Box::new(op)));
         let guard = OpGuard { master: &self.master, id };
-        let outcome = rx.await.map_err(|_| LssError::Transport("the master's bus is closed".into()))?;
+        let outcome = rx.await.map_err(|_| {
+            LssError::Transport(self.master.bus_lost().unwrap_or_else(|| "the master's bus is closed".into()))
+        })?;
         drop(guard);
         match outcome {
             FastScanOutcome::Found(a) => Ok(Some(a)),

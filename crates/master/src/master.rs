@@ -329,12 +329,38 @@ impl Master {
         let _ = rx.await;
     }
 
-    /// Runs `fut` for at most `d` on the master's clock.
+    /// Runs `fut` for at most `d` on the master's clock; a lost bus ends
+    /// the wait with [`WaitError::Closed`].
     pub async fn timeout<T>(&self, d: Duration, fut: impl Future<Output = T>) -> Result<T, WaitError> {
         tokio::select! {
             biased;
             v = fut => Ok(v),
-            () = self.sleep(d) => Err(WaitError::Timeout),
+            () = self.sleep(d) => Err(if self.bus_lost().is_some() { WaitError::Closed } else { WaitError::Timeout }),
+        }
+    }
+
+    /// Why the bus was lost (the transport's words: "socketcand server
+    /// closed the connection"), once it has been; `None` while it works.
+    pub fn bus_lost(&self) -> Option<String> {
+        self.inner.core().closed.clone()
+    }
+
+    /// Resolves when the bus is lost, with the reason (never on a bus
+    /// that keeps working): a command that only listens (a trace, a
+    /// gateway) selects on it to end instead of waiting for ever.
+    pub async fn lost(&self) -> String {
+        let mut rx = self.subscribe_events();
+        loop {
+            if let Some(why) = self.bus_lost() {
+                return why;
+            }
+            match rx.recv().await {
+                Ok(MasterEvent::BusError { reason }) => return reason,
+                Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
+                Err(broadcast::error::RecvError::Closed) => {
+                    return self.bus_lost().unwrap_or_else(|| "the master's bus is closed".into());
+                }
+            }
         }
     }
 
@@ -396,17 +422,20 @@ impl Master {
     /// Every received frame from now on (a bus monitor). Slow readers lose
     /// the oldest frames.
     pub fn subscribe_frames(&self) -> broadcast::Receiver<Frame> {
-        self.inner.core().frames.subscribe()
+        let c = self.inner.core();
+        if c.closed.is_some() { closed_receiver() } else { c.frames.subscribe() }
     }
 
     /// Events from now on.
     pub fn subscribe_events(&self) -> broadcast::Receiver<MasterEvent> {
-        self.inner.core().events.subscribe()
+        let c = self.inner.core();
+        if c.closed.is_some() { closed_receiver() } else { c.events.subscribe() }
     }
 
     /// SYNCs sent by this master's producer from now on.
     pub fn subscribe_sync(&self) -> broadcast::Receiver<SyncTick> {
-        self.inner.core().sync_ticks.subscribe()
+        let c = self.inner.core();
+        if c.closed.is_some() { closed_receiver() } else { c.sync_ticks.subscribe() }
     }
 
     /// Uses `od` (e.g. from an EDS via `drivebus_eds::to_od`) for the data
@@ -591,7 +620,8 @@ impl Master {
 
     /// Frames received on `cob_id` (TPDOs of the nodes) from now on.
     pub fn subscribe_pdo(&self, cob_id: u16) -> broadcast::Receiver<Frame> {
-        self.inner.core().subscribe_pdo(cob_id)
+        let mut c = self.inner.core();
+        if c.closed.is_some() { closed_receiver() } else { c.subscribe_pdo(cob_id) }
     }
 
     /// Calls `f` with every frame received on `cob_id` and its time, in
@@ -618,6 +648,12 @@ impl Master {
             .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "PDO longer than 8 bytes"))?;
         self.send(f).await
     }
+}
+
+/// A receiver that reports `Closed` at once: what a subscriber gets after
+/// the bus was lost.
+fn closed_receiver<T: Clone>() -> broadcast::Receiver<T> {
+    broadcast::channel(1).1
 }
 
 /// A PDO callback registered with [`Master::on_pdo`]; removed on drop.

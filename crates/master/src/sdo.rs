@@ -15,7 +15,7 @@ use drivebus_sdo::client::{ClientError, Completed, Protocol, SdoClientConfig};
 use tokio::sync::oneshot;
 
 pub use crate::core::sdo::Progress;
-use crate::core::sdo::Request;
+use crate::core::sdo::{Outcome, Request};
 use crate::master::Master;
 
 /// Why an SDO transfer failed.
@@ -40,6 +40,17 @@ pub enum SdoError {
     InvalidRequest(String),
     /// The data does not decode as the requested type.
     Decode(String),
+    /// The transfer failed while another SDO client was talking to the
+    /// same node (its requests or its answers were on the bus); it was
+    /// started again where that is safe.
+    OtherClient {
+        /// How the last attempt failed.
+        cause: Box<SdoError>,
+        /// Times the transfer was started again.
+        retries: u8,
+        /// The object the other client's last answer named, if one was seen.
+        their_object: Option<(u16, u8)>,
+    },
 }
 
 impl SdoError {
@@ -47,6 +58,7 @@ impl SdoError {
     pub fn abort_code(&self) -> Option<SdoAbort> {
         match self {
             SdoError::Abort { code, .. } => Some(*code),
+            SdoError::OtherClient { cause, .. } => cause.abort_code(),
             _ => None,
         }
     }
@@ -76,6 +88,19 @@ impl fmt::Display for SdoError {
             SdoError::Transport(s) => write!(f, "bus error: {s}"),
             SdoError::InvalidRequest(s) => write!(f, "invalid SDO request: {s}"),
             SdoError::Decode(s) => write!(f, "cannot decode SDO data: {s}"),
+            SdoError::OtherClient { cause, retries, their_object } => {
+                write!(f, "another SDO client is talking to the node")?;
+                if let Some((i, s)) = their_object {
+                    write!(f, " (answers for its {i:04X}h:{s:02X} came in between)")?;
+                }
+                write!(f, "; {cause}")?;
+                if *retries > 0 {
+                    write!(f, " (after {retries} retries)")?;
+                }
+                f.write_str(
+                    "; stop the other client (a monitor, a second tool) or give it another SDO channel",
+                )
+            }
         }
     }
 }
@@ -249,7 +274,17 @@ impl SdoHandle {
         let r = rx.await;
         guard.id = None;
         match r {
-            Ok(r) => r.map_err(SdoError::from_client),
+            Ok(Outcome { result, other }) => result.map_err(|e| {
+                let cause = SdoError::from_client(e);
+                match other {
+                    Some(o) => SdoError::OtherClient {
+                        cause: Box::new(cause),
+                        retries: o.retries,
+                        their_object: o.last,
+                    },
+                    None => cause,
+                }
+            }),
             Err(_) => Err(SdoError::Transport(
                 shared.core().closed.clone().unwrap_or_else(|| "the master's bus is closed".into()),
             )),

@@ -260,7 +260,10 @@ async fn enable_move_and_home_over_pdo() {
         d.home(35, Duration::from_secs(1)).await.unwrap();
         assert_eq!(position(&r.m, 4).await, 0);
         let e = d.home(-1, Duration::from_secs(1)).await.unwrap_err();
-        assert!(matches!(e, DriveError::HomingError { .. }), "{e}");
+        assert!(
+            matches!(&e, DriveError::Stopped(r) if r.end == drivebus_master::MotionEnd::HomingError),
+            "{e}"
+        );
         d.velocity(10).await.unwrap();
         d.torque(-3).await.unwrap();
         assert_eq!(r.m.sdo(4).read::<i16>(0x6071, 0).await.unwrap(), -3);

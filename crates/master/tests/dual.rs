@@ -237,6 +237,130 @@ fn drive_enable_move_and_fault_reset_only_when_faulted() {
     );
 }
 
+/// A second SDO client (a `monitor --watch` elsewhere): reads 1000h of
+/// `node` every `period`, ignoring the answers.
+struct OtherSdoClient {
+    node: u8,
+    period: Duration,
+    next: drivebus_can::Instant,
+}
+
+impl drivebus_can::Device for OtherSdoClient {
+    fn start(&mut self, now: drivebus_can::Instant, _out: &mut dyn drivebus_can::TxSink) {
+        self.next = now + self.period;
+    }
+    fn handle_frame(
+        &mut self,
+        _: &drivebus_can::Frame,
+        _: drivebus_can::Instant,
+        _: &mut dyn drivebus_can::TxSink,
+    ) {
+    }
+    fn poll(
+        &mut self,
+        now: drivebus_can::Instant,
+        out: &mut dyn drivebus_can::TxSink,
+    ) -> Option<drivebus_can::Instant> {
+        if now >= self.next {
+            out.send(drivebus_can::Frame::new(
+                0x600 + u16::from(self.node),
+                &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0],
+            ));
+            self.next = now + self.period;
+        }
+        Some(self.next)
+    }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
+
+/// Issue 15: with a second SDO client on the node, its answers were taken
+/// for a protocol violation (abort 0604 0043, which broke its transfer
+/// too). They are ignored, a disturbed transfer is started again, and
+/// every read and write goes through.
+#[test]
+fn another_sdo_client_on_the_node_does_not_break_transfers() {
+    on_both(
+        || {
+            let other = OtherSdoClient {
+                node: 5,
+                period: Duration::from_millis(2),
+                next: drivebus_can::Instant::ZERO,
+            };
+            vec![Station::Plain(node(5)), Station::Other(Box::new(other))]
+        },
+        |m, which| async move {
+            let sdo = m.sdo(5);
+            for i in 0..150 {
+                let v =
+                    sdo.read::<u32>(0x1018, 1).await.unwrap_or_else(|e| panic!("{which:?} read {i}: {e}"));
+                assert_eq!(v, identity(5).vendor_id);
+                sdo.write::<i32>(0x2002, 0, i).await.unwrap_or_else(|e| panic!("{which:?} write {i}: {e}"));
+                if i % 10 == 0 {
+                    let name = sdo
+                        .read::<String>(0x1008, 0)
+                        .await
+                        .unwrap_or_else(|e| panic!("{which:?} name {i}: {e}"));
+                    assert_eq!(name, "test node 5");
+                }
+            }
+            assert_eq!(sdo.read::<i32>(0x2002, 0).await.unwrap(), 149);
+        },
+    );
+}
+
+/// A generic drive whose axis has a positive limit switch a tenth of a
+/// revolution (36 of the model's 360 feed units) from its start.
+fn drive_with_limit(id: u8) -> Station {
+    use drivebus_cia402::drive::{DriveConfig, ModeHandler, generic_drive_with};
+    let handlers: Vec<Box<dyn ModeHandler + Send>> =
+        vec![Box::new(drivebus_cia402::homing::HomingMode::default())];
+    let mut cfg = DriveConfig::default();
+    cfg.params.axis.positive_limit = Some(36.0);
+    Station::Drive(Box::new(generic_drive_with(id, cfg, handlers)))
+}
+
+/// Issue 15: a move stopped by a limit switch was "target reached"; the
+/// homing with 6098h = 0 a bare "homing error".
+#[test]
+fn a_move_that_ends_on_a_limit_switch_says_so() {
+    on_both(
+        || vec![drive_with_limit(9)],
+        |m, which| async move {
+            use drivebus_master::{DriveError, MotionEnd};
+            let d = m.drive(9).await.unwrap().with_timeout(Duration::from_secs(2));
+            d.enable().await.unwrap();
+            d.set_mode(drivebus_master::drive::mode::PP).await.unwrap();
+            let ok = d.move_to(10_000, false, None, Duration::from_secs(20)).await.unwrap();
+            assert_eq!(ok.end, MotionEnd::TargetReached, "{which:?}");
+            assert_eq!(ok.target, Some(10_000));
+            let e = d.move_to(1_000_000, false, None, Duration::from_secs(60)).await.unwrap_err();
+            let DriveError::Stopped(r) = &e else { panic!("{which:?}: {e}") };
+            assert_eq!(r.end, MotionEnd::LimitSwitch { positive: true }, "{which:?}: {e}");
+            let p = r.position.unwrap();
+            assert!((10_000..500_000).contains(&p), "{which:?}: stopped at {p}");
+            assert_eq!(r.inputs.map(|i| i & 2), Some(2), "60FDh bit 1");
+            let text = e.to_string();
+            assert!(
+                text.contains("short of the target 1000000") && text.contains("positive limit switch"),
+                "{text}"
+            );
+            let e = d.home(0, Duration::from_secs(5)).await.unwrap_err();
+            let DriveError::Stopped(r) = &e else { panic!("{which:?}: {e}") };
+            assert_eq!(r.end, MotionEnd::HomingError, "{which:?}: {e}");
+            let text = e.to_string();
+            assert!(
+                text.contains("6098h homing method is 0") && text.contains("60E3h offers methods"),
+                "{text}"
+            );
+        },
+    );
+}
+
 #[test]
 fn homing_waits_for_a_fresh_attained_and_a_runaway_is_halted() {
     on_both(

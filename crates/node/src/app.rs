@@ -135,10 +135,12 @@ pub enum Request {
     /// A local NMT command: the device acts on it as on one received for
     /// its node-ID (see [`crate::Node::nmt_command`]).
     Nmt(NmtCommand),
-    /// Store all parameters, as a 1010h:1 "save" write does (a
-    /// manufacturer's save command, e.g. Kollmorgen DRV.NVSAVE). A store
-    /// that fails is not reported (the application's object has no abort
-    /// left to give).
+    /// Save every parameter group as a 1010h:01 "save all parameters"
+    /// write does (a manufacturer's own save command, e.g. Kollmorgen
+    /// DRV.NVSAVE, Technosoft iPOS 2076h, whether or not the device has
+    /// 1010h); the stored values come back at the next power-on or reset.
+    /// A store that fails leaves the previous images and is not reported
+    /// (the application's object has no abort left to give).
     StoreParameters,
     /// Put this raw value back into a sub-object after the current call,
     /// and re-read the PDO configuration (used to lift a restriction for

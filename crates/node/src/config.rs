@@ -84,6 +84,12 @@ pub struct NodeConfig {
     /// 301 bit rate.
     #[cfg(feature = "std")]
     pub eds_device_info: Option<drivebus_eds::DeviceInfo>,
+    /// `[FileInfo]` of the EDS served at 1021h: the device's own
+    /// description's (file name, versions, dates, authors), so the served
+    /// file identifies itself as the shipped one does. `None`: drivebus's
+    /// generated header.
+    #[cfg(feature = "std")]
+    pub eds_file_info: Option<Vec<(String, String)>>,
 }
 
 impl NodeConfig {
@@ -117,6 +123,8 @@ impl NodeConfig {
             eds_object: false,
             #[cfg(feature = "std")]
             eds_device_info: None,
+            #[cfg(feature = "std")]
+            eds_file_info: None,
         }
     }
 }

@@ -6,19 +6,26 @@ use drivebus_eds::{DeviceInfo, from_od, write};
 use drivebus_od::ObjectDictionary;
 use drivebus_pdo::PdoConfig;
 
+/// What the served EDS takes from the device's own description rather
+/// than from the dictionary.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Given {
+    /// The node is an LSS slave.
+    pub lss: bool,
+    /// `[DeviceInfo]`: names, numbers, bit rates.
+    pub device_info: Option<DeviceInfo>,
+    /// `[FileInfo]`: file name, versions, dates, authors.
+    pub file_info: Option<Vec<(String, String)>>,
+}
+
 /// The EDS text of `od` as node `node_id` has it now, with `[DeviceInfo]`
-/// from `given` (the device's own description: names, numbers, bit
-/// rates), the PDO counts, granularity and LSS from the running node. The 1021h value itself is left out of the description's default (it
-/// would describe itself recursively); everything else is exactly the
-/// dictionary.
-pub(crate) fn generate(
-    od: &ObjectDictionary,
-    node_id: u8,
-    pdo: &PdoConfig,
-    lss: bool,
-    given: Option<&DeviceInfo>,
-) -> String {
-    let mut info = given.cloned().unwrap_or_else(|| DeviceInfo {
+/// and `[FileInfo]` from `given` (the device's own description), the PDO
+/// counts, granularity and LSS from the running node. The 1021h value
+/// itself is left out of the description's default (it would describe
+/// itself recursively); everything else is exactly the dictionary.
+pub(crate) fn generate(od: &ObjectDictionary, node_id: u8, pdo: &PdoConfig, given: &Given) -> String {
+    let lss = given.lss;
+    let mut info = given.device_info.clone().unwrap_or_else(|| DeviceInfo {
         product_name: od
             .get(0x1008, 0)
             .map(|s| String::from_utf8_lossy(s.bytes()).into_owned())
@@ -47,6 +54,9 @@ pub(crate) fn generate(
         described.set_raw(r, &[]);
     }
     let mut eds = from_od(&described, info, node_id, false);
+    if let Some(file_info) = &given.file_info {
+        eds.file_info = file_info.clone();
+    }
     for t in 1..=7u16 {
         eds.dummy_usage.insert(t, pdo.dummy_supported(t));
     }

@@ -244,7 +244,11 @@ impl Node {
             sdo_params_dirty: false,
             pending_nmt: None,
             #[cfg(feature = "std")]
-            eds_info: (cfg.lss, cfg.eds_device_info.clone()),
+            eds_info: crate::eds_object::Given {
+                lss: cfg.lss,
+                device_info: cfg.eds_device_info.clone(),
+                file_info: cfg.eds_file_info.clone(),
+            },
         };
         let lss = cfg.lss.then(|| {
             let id = cfg.identity;

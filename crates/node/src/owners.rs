@@ -118,9 +118,9 @@ pub(crate) struct Services {
     /// An NMT event produced while reconfiguring inside a hook.
     pub pending_nmt: Option<drivebus_nmt::NmtEvent>,
     /// What the EDS served at 1021h says besides the dictionary: LSS
-    /// slave or not, and the device's own `[DeviceInfo]`.
+    /// slave or not, and the device's own `[DeviceInfo]` and `[FileInfo]`.
     #[cfg(feature = "std")]
-    pub eds_info: (bool, Option<drivebus_eds::DeviceInfo>),
+    pub eds_info: crate::eds_object::Given,
 }
 
 /// The node's side of an application callback, borrowed apart from the
@@ -243,18 +243,28 @@ pub(crate) fn store_restore(
     if value != signature {
         return Err(SdoAbort::CANNOT_STORE);
     }
-    // One commit for every group the sub-index covers: a crash in the
-    // middle of "save all" must not leave a mix of old and new groups.
-    let images: Vec<(Slot, Option<Vec<u8>>)> = slots(at.sub)
+    commit_groups(storage, od, at.sub, save).map_err(|_| SdoAbort::HARDWARE_ERROR)?;
+    // The object keeps reading its capability (1: on command), not the signature.
+    Ok(WriteOutcome::Handled)
+}
+
+/// Saves (or, `save` false, forgets) the groups 1010h/1011h sub-index
+/// `sub` covers, in one commit: a crash in the middle of "save all" must
+/// not leave a mix of old and new groups.
+pub(crate) fn commit_groups(
+    storage: &mut (dyn Storage + Send),
+    od: &ObjectDictionary,
+    sub: u8,
+    save: bool,
+) -> Result<(), crate::storage::StorageError> {
+    let images: Vec<(Slot, Option<Vec<u8>>)> = slots(sub)
         .iter()
         // Restored defaults take effect at the next reset (§7.5.2.14).
         .map(|&slot| (slot, save.then(|| encode_image(od, group(slot)))))
         .collect();
     let changes: Vec<(Slot, Option<&[u8]>)> =
         images.iter().map(|(slot, image)| (*slot, image.as_deref())).collect();
-    storage.commit(&changes).map_err(|_| SdoAbort::HARDWARE_ERROR)?;
-    // The object keeps reading its capability (1: on command), not the signature.
-    Ok(WriteOutcome::Handled)
+    storage.commit(&changes)
 }
 
 impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
@@ -266,13 +276,11 @@ impl<A: Application + ?Sized> ObjectHooks for Dispatch<'_, A> {
             tag::EMCY => self.s.emcy.check_read(at.index, at.sub),
             #[cfg(feature = "std")]
             tag::EDS => {
-                let (lss, info) = &self.s.eds_info;
                 let text = crate::eds_object::generate(
                     od,
                     self.s.nmt.node_id(),
                     self.s.pdo.config(),
-                    *lss,
-                    info.as_ref(),
+                    &self.s.eds_info,
                 );
                 od.set_raw(at.r, text.as_bytes());
                 Ok(())

@@ -76,11 +76,7 @@ impl Node {
                 self.nmt_command(cmd, now, app, out);
             }
             Request::StoreParameters => {
-                if let Ok(r) = self.od.find(0x1010, 1) {
-                    let at = self.od.target(r);
-                    let save = crate::owners::SAVE_SIGNATURE.to_le_bytes();
-                    let _ = crate::owners::store_restore(&mut *self.s.storage, &self.od, &at, &save);
-                }
+                let _ = crate::owners::commit_groups(&mut *self.s.storage, &self.od, 1, true);
             }
             Request::Restore { index, sub, value, only_if } => {
                 if let Ok(r) = self.od.find(index, sub)

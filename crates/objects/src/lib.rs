@@ -197,6 +197,14 @@ pub fn entry(index: u16, sub: u8) -> Option<EntryInfo> {
 }
 
 /// Lower case, letters and digits only: how names are compared.
+/// The words of a name, lower case (`Identity object` → identity, object).
+fn words(s: &str) -> alloc::vec::Vec<String> {
+    s.split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .map(|w| w.to_ascii_lowercase())
+        .collect()
+}
+
 fn norm(s: &str) -> String {
     s.chars().filter(char::is_ascii_alphanumeric).map(|c| c.to_ascii_lowercase()).collect()
 }
@@ -218,25 +226,38 @@ pub fn find(name: &str) -> Option<(u16, Option<u8>)> {
         return None;
     }
     let mut hits: alloc::vec::Vec<(u16, Option<u8>)> = alloc::vec::Vec::new();
-    for def in defs() {
-        let base = norm(def.name);
-        for index in def.first..=def.last {
-            let n = u32::from(index - def.first) + 1;
-            let full = if def.name.contains("{n}") { norm(&fill(def.name, n)) } else { base.clone() };
-            if full == want {
-                let o = ObjectInfo { index, def };
-                match sub_part {
-                    None => hits.push((index, (def.kind == Kind::Var).then_some(0))),
-                    Some(s) => {
-                        let ws = norm(s);
-                        if let Some(e) = o.entries().find(|e| norm(&e.name()) == ws) {
-                            hits.push((index, Some(e.sub)));
+    // The object's full name first, then its first words (`identity`,
+    // `identity/vendor-id`: "Identity object"), when only one object starts so.
+    let want_words = words(obj_part);
+    for prefix in [false, true] {
+        if prefix && !hits.is_empty() {
+            break;
+        }
+        for def in defs() {
+            let base = norm(def.name);
+            for index in def.first..=def.last {
+                let n = u32::from(index - def.first) + 1;
+                let full = if def.name.contains("{n}") { norm(&fill(def.name, n)) } else { base.clone() };
+                let starts = || {
+                    let named =
+                        if def.name.contains("{n}") { fill(def.name, n) } else { Cow::Borrowed(def.name) };
+                    words(&named).starts_with(&want_words)
+                };
+                if (!prefix && full == want) || (prefix && starts()) {
+                    let o = ObjectInfo { index, def };
+                    match sub_part {
+                        None => hits.push((index, (def.kind == Kind::Var).then_some(0))),
+                        Some(s) => {
+                            let ws = norm(s);
+                            if let Some(e) = o.entries().find(|e| norm(&e.name()) == ws) {
+                                hits.push((index, Some(e.sub)));
+                            }
                         }
                     }
                 }
-            }
-            if def.first == def.last {
-                break;
+                if def.first == def.last {
+                    break;
+                }
             }
         }
     }

@@ -42,6 +42,13 @@ fn names_find_entries() {
     assert_eq!(find("profile-velocity"), Some((0x6081, Some(0))));
     assert_eq!(find("identity object"), Some((0x1018, None)));
     assert_eq!(find("identity object/serial number"), Some((0x1018, Some(4))));
+    // The example of `drivebus --help` (issue 15): the object by the start of its name.
+    assert_eq!(find("identity/vendor-id"), Some((0x1018, Some(1))));
+    assert_eq!(find("identity/vendor_id"), Some((0x1018, Some(1))));
+    // `drivebus sdo --help`: `sdo read identity` reads the record.
+    assert_eq!(find("identity"), Some((0x1018, None)));
+    // Several objects start so: none.
+    assert_eq!(find("tpdo1"), None);
     assert_eq!(find("vendor-id"), Some((0x1018, Some(1))));
     assert_eq!(find("tpdo1 mapping parameter"), Some((0x1A00, None)));
     assert_eq!(find("RPDO3 communication parameter/transmission type"), Some((0x1402, Some(2))));

@@ -362,6 +362,7 @@ fn full_node_config(
     let mut nc = node_config(profile.info(), node_id);
     // The EDS served at 1021h says what the shipped one says.
     nc.eds_device_info = Some(profile.eds().eds.device_info.clone());
+    nc.eds_file_info = Some(profile.eds().eds.file_info.clone());
     behaviour.adjust_node_config(&mut nc);
     // An option adds to the personality; it never takes 1021h away.
     nc.eds_object |= options.eds_object;

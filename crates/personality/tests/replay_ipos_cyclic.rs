@@ -689,9 +689,10 @@ fn pvt_empty_buffer_with_speed_quick_stops() {
 
 /// E31 (§11.3): electronic gearing through the second encoder input. The
 /// master encoder (2000 counts/rev, the same 500-line encoder) is the
-/// personality's simulated second encoder input (`Ipos::set_second_encoder`);
-/// the drive's csp stand-in takes the reference at a 1 ms SYNC (the
-/// EtherCAT cycle of the example's network).
+/// machine's master encoder (`master_position` of a machine file's
+/// `[[node.inputs]]`, here set by the test); 208Dh shows it; the drive's
+/// csp stand-in takes the reference at a 1 ms SYNC (the EtherCAT cycle of
+/// the example's network).
 #[test]
 fn e31_gearing_second_encoder() {
     let mut r = Rig::new();
@@ -707,9 +708,11 @@ fn e31_gearing_second_encoder() {
     r.sdo(0x2013, 1, &1i16.to_le_bytes());
     r.sdo(0x2013, 2, &1u16.to_le_bytes());
     let enc = |r: &mut Rig, m: i64| {
+        use drivebus_cia402::drive::Injection;
+        use drivebus_cia402::model::Injection as Model;
         let id = r.dut;
         let pn = r.bus.node_mut::<PersonalityDevice>(id).unwrap();
-        pn.app.behaviour_mut::<Ipos>().unwrap().set_second_encoder(m.rem_euclid(2000));
+        pn.app.inject(Injection::Model(Model::MasterPosition(m.rem_euclid(2000) as f64)));
     };
     // Step 8 (201Eh) is not used with 201Dh = 3: an online master position
     // is ignored.
@@ -724,6 +727,7 @@ fn e31_gearing_second_encoder() {
         sync(&mut r);
     }
     assert_eq!(r.od_i64(0x2017, 0), 100, "2017h: the encoder, not 201Eh");
+    assert_eq!(r.upload(0x208D, 0, 4), 100, "208Dh: the auxiliary (second) encoder");
     // Step 9: 1Fh; step 10: the master turns 15 counts per ms for 1 s.
     r.controlword(0x1F);
     let d0 = r.od_i64(0x6062, 0);

@@ -154,6 +154,9 @@ for i in (0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03):
     PROFILES["ipos"]["overrides"][(i, 8)]["why"] = "entries up to sub 8 added (§2.4: 'sub-indexes (1-8)'; the table lists the default ones)"
 # The EtherCAT side (ETG.1000.6 sync managers), as the manual means it.
 o = PROFILES["ipos"]["overrides"]
+o[(0x2103, 0)] = ov(default="2000", why="Number of encoder counts per revolution: no default given; the emulated motor's 500-line encoder, 2000 counts (the examples' motor, 6.4, 7.3)", sec="4.9.16")
+o[(0x2006, 0)] = ov(low=None, high=None, why="Call TML function: no limits written; the range 1..10 is the drive's own check, answered 0609 0030h (not 0609 0031h/0032h) as 18.2.2.1 says", sec="18.2.2.1")
+o[(0x201A, 0)] = ov(default="0x9E00", why="CAM table run address: the table's default 9E00h is hexadecimal (a RAM address), not 9 x 10^0", sec="12.2.2")
 o[(0x1C00, 4)] = ov(default="4", why="SM3 communication type: printed 3, but the value range of the same entry gives 4 = process data input, and ETG.1000.6 has SM3 inputs = 4", sec="2.3.9")
 for i, first, n_pdo, kind in ((0x1C12, 0x1600, 4, "RxPDO"), (0x1C13, 0x1A00, 4, "TxPDO")):
     o[(i, 0)] = ov(access="rw", why=f"{i:04X}h:00: printed RO, but the text and every example (§2.4, E10, E11) write 0, the entries, then the count (in pre-operational)", sec="2.3.10; 2.3.11; 2.4")

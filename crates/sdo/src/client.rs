@@ -28,12 +28,18 @@
 //!   `0504 0002`, block sequence number 0, above the block size or an ack
 //!   beyond what was sent `0504 0003`, CRC mismatch `0504 0004`, size
 //!   mismatch `0607 0010`.
-//! - **Multiplexer check.** An initiate response naming another index or
-//!   sub-index is aborted with `0604 0043` (general parameter
-//!   incompatibility): CiA 301 asks the client to check but names no code,
-//!   and accepting it could return a value of another object.
-//! - **Server aborts** are frames whose byte 0 is exactly `80h`; their
-//!   multiplexer is not checked (some servers send 0000h:00 there). Inside a
+//! - **Multiplexer check: another client's answers.** A response naming
+//!   another index or sub-index is never taken (it could return a value of
+//!   another object, CiA 301 asks the client to check), and it is not
+//!   aborted either: on a bus where a second client talks to the same
+//!   server (a monitor next to a command), it is that client's answer, and
+//!   an abort would break its transfer. It is ignored, counted
+//!   ([`SdoClient::foreign_answers`]) and does not re-arm the timeout; the
+//!   transfer waits for its own answer. So are initiate responses arriving
+//!   in the middle of a segmented transfer.
+//! - **Server aborts** are frames whose byte 0 is exactly `80h`. One whose
+//!   multiplexer names another object is another transfer's (ignored and
+//!   counted); 0000h:00 counts as ours (some servers send it). Inside a
 //!   block upload sub-block `80h` would be "last segment, seqno 0", which is
 //!   invalid anyway, so it is read as the abort there too.
 //! - **Lost block segments** are not errors: in a block upload the client
@@ -252,6 +258,10 @@ pub struct SdoClient {
     /// Block upload: next expected sequence number.
     expected: u8,
     result: Option<Result<Completed, ClientError>>,
+    /// Answers of another transfer seen during this one (another client).
+    foreign: u32,
+    /// The object the last of them named.
+    last_foreign: Option<(u16, u8)>,
 }
 
 impl SdoClient {
@@ -270,6 +280,8 @@ impl SdoClient {
             size: None,
             toggle: false,
             retries_left: 0,
+            foreign: 0,
+            last_foreign: None,
             deadline: Instant::MAX,
             crc: false,
             blksize: 1,
@@ -384,6 +396,11 @@ impl SdoClient {
         }
         // Servers should always send 8 bytes; a shorter frame reads as zero-padded.
         let d = *frame.raw_data();
+        if self.is_foreign(&d) {
+            self.foreign = self.foreign.saturating_add(1);
+            self.last_foreign = Some(mux_of(&d));
+            return;
+        }
         // An abort is exactly 80h (cs = 4, other bits 0). Inside a block upload
         // sub-block 80h would read as "last segment, seqno 0", which is
         // invalid anyway, so it is the server's abort there too.
@@ -456,6 +473,35 @@ impl SdoClient {
         self.proto = proto;
         self.retries_left = self.cfg.retries;
         self.result = None;
+        self.foreign = 0;
+        self.last_foreign = None;
+    }
+
+    /// Answers that belonged to another transfer (another client talking
+    /// to the same server) seen since the current or last transfer began.
+    pub fn foreign_answers(&self) -> u32 {
+        self.foreign
+    }
+
+    /// The object (index, sub-index) the last foreign answer named.
+    pub fn last_foreign(&self) -> Option<(u16, u8)> {
+        self.last_foreign
+    }
+
+    /// True when `d` is another transfer's answer: an abort or initiate
+    /// response naming another object, or an initiate response in the
+    /// middle of a segmented transfer (ours carry no multiplexer there).
+    fn is_foreign(&self, d: &[u8; 8]) -> bool {
+        let mux = mux_of(d);
+        let ours = mux == (self.index, self.sub);
+        match self.state {
+            _ if d[0] == CS_ABORT => !ours && mux != (0, 0),
+            State::InitDownload | State::InitUpload | State::BlockDownInit | State::BlockUpInit => !ours,
+            State::UpSegment | State::DownSegment => {
+                matches!(scs(d[0]), SCS_INITIATE_UPLOAD | SCS_INITIATE_DOWNLOAD) && !ours
+            }
+            _ => false,
+        }
     }
 
     /// Send the initiate request of the current transfer (first attempt or retry).
@@ -544,6 +590,8 @@ impl SdoClient {
         if mux_of(d) == (self.index, self.sub) {
             return true;
         }
+        // Foreign answers are filtered before; this is a block upload's
+        // protocol switch (pst) answer naming another object.
         self.violation(SdoAbort::PARAM_INCOMPATIBLE, out);
         false
     }

@@ -248,20 +248,41 @@ fn wrong_toggle_aborts_0503_0000() {
     failed(&mut s, ClientError::ProtocolViolation(SdoAbort::TOGGLE_NOT_ALTERNATED));
 }
 
+/// Issue 15: an answer naming another object is another client's (a
+/// monitor on the same node): not taken, not aborted (that would break the
+/// other client's transfer), counted; the transfer takes its own answer.
 #[test]
-fn multiplexer_mismatch_aborts_0604_0043() {
+fn another_clients_answers_are_ignored_not_aborted() {
     let mut s = Script::node();
     s.upload(0x6041, 0, Protocol::Auto);
     s.out.clear();
     s.recv("4B 40 60 00 37 02 00 00"); // answer for 6040h
-    s.sent(&["80 41 60 00 43 00 04 06"]);
-    failed(&mut s, ClientError::ProtocolViolation(SdoAbort::PARAM_INCOMPATIBLE));
+    s.silent();
+    assert!(s.c.is_busy());
+    assert_eq!(s.c.foreign_answers(), 1);
+    assert_eq!(s.c.last_foreign(), Some((0x6040, 0)));
+    s.recv("80 00 10 00 00 00 02 06"); // another transfer's abort (1000h)
+    s.silent();
+    assert_eq!(s.c.foreign_answers(), 2);
+    s.recv("4B 41 60 00 37 02 00 00");
+    assert_eq!(upload_ok(&mut s), vec![0x37, 0x02]);
 
     s.download(0x6040, 0, &[6, 0], Protocol::Auto);
     s.out.clear();
+    assert_eq!(s.c.foreign_answers(), 0, "counted per transfer");
     s.recv("60 40 60 01 00 00 00 00"); // wrong sub-index
-    s.sent(&["80 40 60 00 43 00 04 06"]);
-    failed(&mut s, ClientError::ProtocolViolation(SdoAbort::PARAM_INCOMPATIBLE));
+    s.silent();
+    s.recv("60 40 60 00 00 00 00 00");
+    download_ok(&mut s);
+
+    // In the middle of a segmented upload: another client's initiate answer.
+    s.upload(0x1008, 0, Protocol::Auto);
+    s.recv("41 08 10 00 0A 00 00 00");
+    s.out.clear();
+    s.recv("43 41 60 00 37 02 00 00");
+    s.silent();
+    assert_eq!(s.c.foreign_answers(), 1);
+    assert!(s.c.is_busy());
 }
 
 #[test]

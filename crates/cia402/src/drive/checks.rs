@@ -140,8 +140,8 @@ pub(super) fn factor_slot(f: &mut super::FactorGroup, i: u16) -> &mut (u32, u32)
 }
 
 /// 6091h/6092h/6096h/6097h: positive, and the units they make must stay
-/// exact (0609 0030 otherwise); stored set-up parameters only on a drive
-/// with a fixed factor group.
+/// exact (0609 0030 otherwise); stored set-up parameters only while
+/// scaling objects are in force ([`super::FactorGroup::scaling`]).
 pub(super) fn factor_check(
     d: &mut Drive,
     _: &mut ObjectDictionary,
@@ -149,7 +149,7 @@ pub(super) fn factor_check(
 ) -> Result<WriteOutcome, SdoAbort> {
     let Arg { index: i, sub: s, v, .. } = a;
     range(v.u as i64, 1, i64::from(u32::MAX))?;
-    if !d.cfg.fixed_factor_group {
+    if d.factor.scaling.is_none() {
         let mut f = d.factor;
         let slot = factor_slot(&mut f, i);
         if s == 1 {
@@ -164,18 +164,15 @@ pub(super) fn factor_check(
 
 pub(super) fn factor_apply(d: &mut Drive, _: &mut ObjectDictionary, a: Arg) {
     let Arg { index: i, sub: s, v, how, .. } = a;
-    if d.cfg.fixed_factor_group {
-        // Stored set-up parameters: the units in force stay.
-        return;
-    }
     let slot = factor_slot(&mut d.factor, i);
     if s == 1 {
         slot.0 = v.u32();
     } else {
         slot.1 = v.u32();
     }
-    // On a reload the units are derived once, after every factor.
-    if how == How::Write {
+    // On a reload the units are derived once, after every factor; under
+    // scaling objects the chain is kept but not in force.
+    if how == How::Write && d.factor.scaling.is_none() {
         d.retune_units();
     }
 }

@@ -146,6 +146,12 @@ pub struct IoConfig {
     /// inputs 3 / 4, manufacturer codes) are refused (0609 0030). `false`: no 60D0h from the drive, selection
     /// 10b captures nothing (personalities keep this unless they opt in).
     pub probe_source_object: bool,
+    /// 607Dh acts as a pair of limit switches in every mode but homing
+    /// (Technosoft iPOS §4.3.2): past a limit the motion that way stops on
+    /// the quick-stop ramp and is refused, statusword bit 11 shows it, and
+    /// [`DriveView::software_limit`](super::DriveView::software_limit)
+    /// reports which. `false`: 607Dh only clamps pp targets.
+    pub software_limit_switches: bool,
     /// 60FDh bits 16–31 (manufacturer-specific in CiA 402-2) show the
     /// machine's digital input lines 1–16
     /// ([`crate::model::DriveModel::digital_inputs`]).
@@ -168,6 +174,7 @@ impl Default for IoConfig {
             keep_unmasked_command: false,
             probe_inputs: [ProbeInput::HomeSwitch; 2],
             probe_source_object: true,
+            software_limit_switches: false,
             input_lines: false,
             output_lines: false,
             set_brake_bit: false,
@@ -256,12 +263,10 @@ pub struct DriveConfig {
     /// [`op::supported_bit`]); registered mode handlers add theirs.
     pub modes: u32,
     /// Factor group power-on values (608Fh:1 is forced to the encoder).
+    /// With [`FactorGroup::scaling`] the units follow scaling objects and
+    /// 6091h/6092h/6096h/6097h are stored set-up parameters (Technosoft
+    /// iPOS §5.2).
     pub factor: FactorGroup,
-    /// The units stay at `factor` whatever 6091h/6092h/6096h/6097h hold:
-    /// those objects are stored set-up parameters (Technosoft iPOS §5.2.2:
-    /// the conversion is the position factor 6093h, which the set-up tool
-    /// computes from them; their defaults 1/1 describe internal units).
-    pub fixed_factor_group: bool,
     /// 60A8h–60ABh SI unit codes (position, velocity, acceleration, jerk).
     pub si_units: [u32; 4],
     /// Profile defaults.
@@ -350,7 +355,6 @@ impl DriveConfig {
                 | op::supported_bit(op::PV)
                 | op::supported_bit(op::TQ),
             factor,
-            fixed_factor_group: false,
             // SI codes (CiA 402-2 / ETG.1004 style): milli-degree, per second.
             si_units: [0xFD41_0000, 0xFD41_0300, 0xFD41_0357, 0],
             profile,

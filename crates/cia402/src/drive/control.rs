@@ -126,7 +126,7 @@ impl Drive {
         nm / (f64::from(self.extra.rated_torque) / 1000.0) * 1000.0
     }
 
-    fn enter_mode(&mut self, from_disabled: bool) {
+    pub(crate) fn enter_mode(&mut self, from_disabled: bool) {
         if from_disabled {
             self.dem.pos = self.actual_pos_f();
             self.dem.vel = 0.0;
@@ -370,6 +370,7 @@ impl Drive {
                     halt_dec: self.halt_deceleration(),
                     soft_limits: self.params.software_limits,
                     range: self.params.position_range,
+                    rado: self.rado,
                     dt,
                 };
                 let (p, v, a) = self.pp.step(&pin, self.dem.pos, self.dem.vel);
@@ -702,6 +703,27 @@ impl Drive {
         } else {
             0
         };
+        // Software limits as limit switches (iPOS §4.3.2): a limit passed
+        // moving towards it stops the motion like the switch does.
+        // Once passed, the limit holds until a motion away from it (§4.3.2:
+        // "the motor will stand still until a new command is given to
+        // travel within the space defined by the limits").
+        let soft = if homing || !self.cfg.io.software_limit_switches {
+            0
+        } else {
+            match self.passed_soft_limit() {
+                0 if self.dem.vel * f64::from(self.sup.soft_limit) >= 0.0 => self.sup.soft_limit,
+                0 => 0,
+                side => side,
+            }
+        };
+        if soft != 0 && soft != self.sup.soft_limit && enabled && self.dem.vel * f64::from(soft) > 0.0 {
+            self.limit_stop();
+        }
+        self.sup.soft_limit = soft;
+        if self.sup.limit_block == 0 {
+            self.sup.limit_block = soft;
+        }
         self.limit_active = self.sup.limit_block != 0;
         self.warning = self.limit_active || self.sup.sync_lost;
         for i in 0..self.events.len() {
@@ -724,8 +746,56 @@ impl Drive {
         if let Some(c) = fault
             && !matches!(self.sm.state(), State::Fault | State::FaultReactionActive)
         {
-            let out = self.sm.fault(c);
-            self.after_transition(out);
+            match self.fault_action(c) {
+                Some(a) => self.take_fault(c, a),
+                None => {
+                    let out = self.sm.fault(c);
+                    self.after_transition(out);
+                }
+            }
+        } else if fault.is_none()
+            && let Some(c) = self.ignored_fault.take()
+        {
+            // The condition of a fault taken without action is gone.
+            self.raised.retain(|r| *r != c);
+            self.emcy.push(EmcyRequest::Clear(c));
+        }
+    }
+
+    /// A fault with a personality's action (`Drive::set_fault_action`).
+    pub(crate) fn take_fault(&mut self, c: u16, a: super::FaultAction) {
+        match a {
+            super::FaultAction::React(r) => {
+                let out = self.sm.fault_with(c, r);
+                self.after_transition(out);
+            }
+            super::FaultAction::NoAction => {
+                // Signalled once; the latch is cleared so that the fault
+                // comes back only while its condition lasts.
+                self.model.clear_faults();
+                self.ignored_fault = Some(c);
+                if c != code::GUARDING && !self.raised.contains(&c) {
+                    self.raised.push(c);
+                    self.emcy.push(EmcyRequest::Raise(c));
+                }
+            }
+        }
+    }
+
+    /// −1 / +1 when the position actual value is below / above 607Dh
+    /// (both 0: no limits, as for pp targets).
+    fn passed_soft_limit(&self) -> i8 {
+        let (lo, hi) = self.params.software_limits;
+        if lo == 0 && hi == 0 {
+            return 0;
+        }
+        let p = self.position();
+        if p < i64::from(lo) {
+            -1
+        } else if p > i64::from(hi) {
+            1
+        } else {
+            0
         }
     }
 

@@ -48,7 +48,7 @@ pub use config::{
 };
 pub use generic::{default_pdo_mapping, generic_drive, generic_drive_with};
 pub use mode::{ModeCommand, ModeHandler, ModeIo, ModeOutput, ModeParams, op};
-pub use units::{Carry, FactorGroup, Ratio, Units};
+pub use units::{Carry, FactorGroup, Ratio, Scaling, Units};
 
 use crate::model::{DriveModel, ParamError, StepEvents};
 use crate::state_machine::StateMachine;
@@ -73,6 +73,17 @@ pub enum Injection {
     Fault(u16),
     /// Connection to the master lost: executes 6007h (as on a heartbeat loss).
     ConnectionLost,
+}
+
+/// What the drive does on a fault of one code instead of 605Eh's (or
+/// 6007h's) reaction: a manufacturer's per-error option code (Technosoft
+/// iPOS 2113h/2114h, 605Eh −1 "no action" for its non-fatal errors).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultAction {
+    /// Signal it (EMCY while the condition lasts) and go on.
+    NoAction,
+    /// Fault with this reaction.
+    React(crate::state_machine::Reaction),
 }
 
 /// An EMCY the drive asks for (603Fh codes); [`Drive::flush_emcy`] turns
@@ -170,6 +181,12 @@ pub struct Drive {
     interlock: bool,
     /// The limit-switch function is off (inputs still read in 60FDh).
     limit_switches_off: bool,
+    /// 60F2h rado: how pp reaches a target on a modulo axis.
+    rado: pp::Rado,
+    /// Per-code fault actions ([`Drive::set_fault_action`]).
+    fault_actions: Vec<(u16, FaultAction)>,
+    /// A fault taken with [`FaultAction::NoAction`] whose condition lasts.
+    ignored_fault: Option<u16>,
     /// NMT operational (for [`DriveView::operational`]).
     operational: bool,
     /// The active handler's warning (statusword bit 7).
@@ -258,6 +275,9 @@ impl Drive {
             events: StepEvents::default(),
             interlock: false,
             limit_switches_off: false,
+            rado: pp::Rado::Shortest,
+            fault_actions: Vec::new(),
+            ignored_fault: None,
             operational: false,
             mode_warning: false,
             mode_emcy: Vec::with_capacity(4),
@@ -401,6 +421,75 @@ impl Drive {
         self.limit_switches_off = !on;
     }
 
+    /// Puts direct scaling objects in force ([`FactorGroup::scaling`], e.g.
+    /// Technosoft iPOS 6093h/6094h/210Fh), or the CiA 402-2 chain again
+    /// (`None`); the position stays where it is. `false` (nothing changed)
+    /// if a term is 0 or the units would not be exact.
+    pub fn set_scaling(&mut self, scaling: Option<Scaling>) -> bool {
+        let f = FactorGroup { scaling, ..self.factor };
+        if Units::new(&f).is_none() {
+            return false;
+        }
+        if f != self.factor {
+            self.factor = f;
+            self.retune_units();
+        }
+        true
+    }
+
+    /// Homing ends without setting the position to the home offset: the
+    /// counter keeps its value and a return-to-home goes back to the point
+    /// found (Technosoft iPOS 210Bh bit 12). Applies from the next homing.
+    pub fn set_homing_keeps_position(&mut self, on: bool) {
+        self.params.homing_keeps_position = on;
+    }
+
+    /// What a fault with `code` does from now on instead of 605Eh's (and,
+    /// for a lost connection with 6007h = 1, instead of its fault); `None`
+    /// goes back to 605Eh.
+    pub fn set_fault_action(&mut self, code: u16, action: Option<FaultAction>) {
+        self.fault_actions.retain(|(c, _)| *c != code);
+        if let Some(a) = action {
+            self.fault_actions.push((code, a));
+        }
+    }
+
+    /// The fault taken with [`FaultAction::NoAction`] whose condition still
+    /// lasts, if any.
+    pub fn ignored_fault(&self) -> Option<u16> {
+        self.ignored_fault
+    }
+
+    /// The action for a fault with `code`, if a personality set one.
+    pub(crate) fn fault_action(&self, code: u16) -> Option<FaultAction> {
+        self.fault_actions.iter().find(|(c, _)| *c == code).map(|(_, a)| *a)
+    }
+
+    /// How pp reaches a target on a modulo axis (60F2h bits 7–6, e.g. the
+    /// Technosoft iPOS's 60F2h); the shortest way until set.
+    pub fn set_positioning_option(&mut self, code: u16) {
+        self.rado = pp::Rado::from_option_code(code);
+    }
+
+    /// Sets position actual internal value (6063h) to `increments` where
+    /// the axis stands (e.g. Technosoft iPOS 2081h): the reference shifts,
+    /// the demand moves with it, nothing moves (a mode handler's mode is
+    /// entered again from the new position).
+    pub fn set_position_increments(&mut self, increments: i64) {
+        let delta = increments.saturating_sub(self.position_increments());
+        self.inc_offset = self.inc_offset.saturating_add(delta);
+        self.inc_frac = 0;
+        let d = self.units.inc_to_pos_f(delta as f64);
+        self.dem.pos += d;
+        self.pp.reset(self.dem.pos);
+        // A mode handler holds a position of the old coordinates: it
+        // starts again from here.
+        if self.mode_active {
+            self.exit_mode();
+            self.enter_mode(false);
+        }
+    }
+
     /// Sets the jerk of the jerk-limited ramp (6086h = 3), e.g. from a
     /// manufacturer object: a [`ProfileJerk::Time`] (Technosoft iPOS 2023h
     /// jerk time) follows later 6083h/6084h changes; a [`ProfileJerk::Rate`]
@@ -452,6 +541,7 @@ impl Drive {
             controlword: self.cw,
             digital_inputs: self.digital_inputs(),
             operational: self.operational,
+            software_limit: self.sup.soft_limit,
         }
     }
 
@@ -551,6 +641,12 @@ impl Drive {
     fn connection_lost(&mut self, code: u16) {
         // CiA 402-2 6007h: the reaction applies in Operation enabled.
         if self.sm.state() == crate::state_machine::State::OperationEnabled {
+            if self.sm.options().abort_connection() == 1
+                && let Some(a) = self.fault_action(code)
+            {
+                self.take_fault(code, a);
+                return;
+            }
             let out = self.sm.connection_lost(code);
             self.after_transition(out);
         }
@@ -688,6 +784,10 @@ pub struct DriveView {
     pub digital_inputs: u32,
     /// The node is NMT *Operational* (tracked from the node's events).
     pub operational: bool,
+    /// Past the negative (−1) or positive (+1) software position limit
+    /// acting as a limit switch (`IoConfig::software_limit_switches`), 0
+    /// inside or without.
+    pub software_limit: i8,
 }
 
 impl Drive {

@@ -122,6 +122,9 @@ pub struct ModeParams {
     /// Homing returns to the home position after the reference is taken
     /// ([`DriveConfig::homing_return_to_home`](super::DriveConfig::homing_return_to_home)).
     pub homing_return_to_home: bool,
+    /// Homing takes its reference without resetting the position (set by
+    /// [`Drive::set_homing_keeps_position`](super::Drive::set_homing_keeps_position)).
+    pub homing_keeps_position: bool,
 }
 
 impl ModeParams {

@@ -62,6 +62,9 @@ pub(crate) struct PpIn {
     pub halt_dec: f64,
     pub soft_limits: (i32, i32),
     pub range: (i32, i32),
+    /// How a target on a modulo axis is reached (60F2h bits 7–6, "rado"):
+    /// [`Rado::Shortest`] unless a personality sets another.
+    pub rado: Rado,
     pub dt: f64,
     /// The running target counts as reached (actual in the position
     /// window, [`TargetReached::ActualInWindow`](super::TargetReached)):
@@ -74,6 +77,34 @@ pub(crate) struct PpIn {
     /// With [`Shape::JerkLimited`], a set-point with bit 5 is refused
     /// ([`DriveConfig::scurve_forbids_change_immediately`](super::DriveConfig::scurve_forbids_change_immediately)).
     pub forbid_change_immediately: bool,
+}
+
+/// Positioning on a modulo axis (607Bh), CiA 402-2 60F2h bits 7–6.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Rado {
+    /// 00: as a linear axis: an absolute target is reached from the
+    /// wrapped position without wrapping the target, a relative move goes
+    /// its whole way (moves over a modulo value).
+    Linear,
+    /// 01: only in the negative direction.
+    Negative,
+    /// 10: only in the positive direction.
+    Positive,
+    /// 11: the shortest way.
+    #[default]
+    Shortest,
+}
+
+impl Rado {
+    /// From 60F2h (bits 7–6).
+    pub fn from_option_code(code: u16) -> Rado {
+        match (code >> 6) & 3 {
+            0 => Rado::Linear,
+            1 => Rado::Negative,
+            2 => Rado::Positive,
+            _ => Rado::Shortest,
+        }
+    }
 }
 
 /// Wraps `x` into the position range `[lo, hi]` (modulo axis, 607Bh).
@@ -112,20 +143,27 @@ impl Pp {
     fn absolute_target(&self, i: &PpIn, pos: f64) -> (f64, bool) {
         let raw = f64::from(i.target_raw);
         // Bit 6: relative to the preceding target (60F2h default).
-        let mut t = if self.edge_cw & 0x40 != 0 { self.target + raw } else { raw };
+        let relative = self.edge_cw & 0x40 != 0;
+        let mut t = if relative { self.target + raw } else { raw };
         let (lo, hi) = i.range;
         if lo < hi {
-            // Modulo axis: the nearest equivalent of the wrapped target.
             let w = wrap(t, lo, hi);
             let span = f64::from(hi) - f64::from(lo) + 1.0;
             let here = wrap(pos, lo, hi);
             let mut d = w - here;
-            if d > span / 2.0 {
-                d -= span;
-            } else if d < -span / 2.0 {
-                d += span;
+            match i.rado {
+                // An absolute target is taken from the wrapped position as on
+                // a linear axis (a relative move keeps its whole way).
+                Rado::Linear => d = t - here,
+                Rado::Negative if d > 0.0 => d -= span,
+                Rado::Positive if d < 0.0 => d += span,
+                Rado::Shortest if d > span / 2.0 => d -= span,
+                Rado::Shortest if d < -span / 2.0 => d += span,
+                _ => {}
             }
-            t = pos + d;
+            if !(relative && i.rado == Rado::Linear) {
+                t = pos + d;
+            }
         }
         let (smin, smax) = i.soft_limits;
         if smin != 0 || smax != 0 {

@@ -19,6 +19,9 @@ pub(crate) struct Supervision {
     pub sync_lost: bool,
     /// Negative (−1) or positive (+1) limit switch blocks motion that way.
     pub limit_block: i8,
+    /// Past the negative (−1) or positive (+1) software limit 607Dh
+    /// ([`IoConfig::software_limit_switches`](super::IoConfig::software_limit_switches)).
+    pub soft_limit: i8,
 }
 
 /// Where a touch probe takes its trigger from.

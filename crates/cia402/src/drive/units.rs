@@ -89,6 +89,47 @@ pub struct FactorGroup {
     pub acceleration_factor: (u32, u32),
     /// 607Eh polarity: bit 7 position, bit 6 velocity.
     pub polarity: u8,
+    /// Scaling objects in force instead of the chain above (DSP 402 v2
+    /// 6093h/6094h, Technosoft iPOS §5.2): `None` for CiA 402-2's chain.
+    /// With it, 6091h/6092h/6096h/6097h are stored set-up values only.
+    pub scaling: Option<Scaling>,
+}
+
+/// Direct scaling of user units to the drive's internal units (the
+/// "factor" objects of DSP 402 v2: internal = user · num / div), and what
+/// one internal velocity and acceleration unit is. Technosoft iPOS §5.2:
+/// 6093h position factor, 6094h velocity encoder factor, 210Fh
+/// acceleration encoder factor; internal velocity = increments per 1 ms
+/// sample in 16.16, internal acceleration = increments per sample² in 16.16.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Scaling {
+    /// Increments per position unit (6093h:1 / 6093h:2).
+    pub position: (u32, u32),
+    /// Internal velocity units per velocity unit (6094h:1 / 6094h:2).
+    pub velocity: (u32, u32),
+    /// Internal acceleration units per acceleration unit.
+    pub acceleration: (u32, u32),
+    /// Increments/s per internal velocity unit.
+    pub velocity_unit: (u32, u32),
+    /// Increments/s² per internal acceleration unit.
+    pub acceleration_unit: (u32, u32),
+}
+
+impl Scaling {
+    /// 1/1 factors over internal units of `velocity_unit` increments/s and
+    /// `acceleration_unit` increments/s².
+    pub const fn unit(velocity_unit: (u32, u32), acceleration_unit: (u32, u32)) -> Self {
+        Scaling { position: (1, 1), velocity: (1, 1), acceleration: (1, 1), velocity_unit, acceleration_unit }
+    }
+
+    /// (increments per position unit, position units/s per velocity unit,
+    /// position units/s² per acceleration unit); `None` on a zero term.
+    fn ratios(&self) -> Option<(Ratio, Ratio, Ratio)> {
+        let pos = ratio(self.position)?;
+        let vel = ratio(self.velocity)?.times(ratio(self.velocity_unit)?)?.times(pos.inv())?;
+        let acc = ratio(self.acceleration)?.times(ratio(self.acceleration_unit)?)?.times(pos.inv())?;
+        Some((pos, vel, acc))
+    }
 }
 
 impl FactorGroup {
@@ -102,6 +143,7 @@ impl FactorGroup {
             velocity_factor: (1, 1),
             acceleration_factor: (1, 1),
             polarity: 0,
+            scaling: None,
         }
     }
 }
@@ -142,9 +184,14 @@ impl Units {
     /// Resolves a factor group; `None` if any numerator or denominator is 0.
     pub fn new(f: &FactorGroup) -> Option<Units> {
         let enc = ratio(f.encoder)?;
-        let pos = enc.times(ratio(f.gear)?)?.times(ratio(f.feed)?.inv())?;
-        let vel = ratio(f.velocity_factor)?;
-        let acc = ratio(f.acceleration_factor)?;
+        let (pos, vel, acc) = match &f.scaling {
+            Some(s) => s.ratios()?,
+            None => (
+                enc.times(ratio(f.gear)?)?.times(ratio(f.feed)?.inv())?,
+                ratio(f.velocity_factor)?,
+                ratio(f.acceleration_factor)?,
+            ),
+        };
         let inc_per_rad = enc.to_f64() / (2.0 * PI);
         let pos_sign_i = if f.polarity & 0x80 != 0 { -1 } else { 1 };
         Some(Units {
@@ -340,6 +387,26 @@ mod tests {
         assert_eq!(u.pos_to_inc(10), -10);
         assert_eq!(u.inc_to_pos(-10), 10);
         assert_eq!(u.vel_units_to_inc_s(5.0), -5.0);
+    }
+
+    #[test]
+    fn scaling_replaces_the_chain() {
+        // Technosoft iPOS §5.1.10.1: 6093h = 20000h / 10000h is 2:1;
+        // internal velocity 1/65536 increment per ms, acceleration per ms².
+        let s = Scaling { position: (0x2_0000, 0x1_0000), ..Scaling::unit((125, 8192), (15_625, 1024)) };
+        let f = FactorGroup { scaling: Some(s), feed: (7, 3), ..FactorGroup::increments(2000) };
+        let u = Units::new(&f).unwrap();
+        assert_eq!(u.pos_to_inc(1000), 2000);
+        assert_eq!(u.inc_to_pos(2000), 1000);
+        // 65536 internal = 1 increment/ms = 1000 increments/s = 500 units/s.
+        assert_eq!(u.vel_to_pos(65536.0), 500.0);
+        assert_eq!(u.acc_to_pos(65536.0), 500_000.0);
+        let s = Scaling { velocity: (131_072, 60), ..s };
+        let u = Units::new(&FactorGroup { scaling: Some(s), ..f }).unwrap();
+        // 6094h in rpm: 1 rpm = 2000/60 increments/s = 1000/60 units/s.
+        assert!((u.vel_to_pos(600.0) - 10_000.0).abs() < 1e-9);
+        let zero = Scaling { acceleration: (0, 1), ..s };
+        assert!(Units::new(&FactorGroup { scaling: Some(zero), ..f }).is_none());
     }
 
     #[test]

@@ -118,6 +118,7 @@ impl ModeHandler for HomingMode {
             events: events.as_slice(),
         };
         self.engine.set_return_to_home(self.return_to_home || io.params.homing_return_to_home);
+        self.engine.set_keep_position(io.params.homing_keeps_position);
         let out = self.engine.step(io.controlword, &config(io), &input, dt);
         let command = match out.command {
             HomingCommand::Position { position, velocity, acceleration } => {

@@ -177,6 +177,12 @@ pub struct Homing {
     return_pending: bool,
     /// The return move and the time into it \[s\].
     ret: Option<(Trajectory, f64)>,
+    /// The reference does not reset the position (Technosoft iPOS 210Bh
+    /// bit 12): the counter keeps its value, a return goes to the point
+    /// found.
+    keep_position: bool,
+    /// Where the return goes (the home offset, or the point found).
+    return_target: f64,
 }
 
 impl Homing {
@@ -192,7 +198,16 @@ impl Homing {
             return_to_home: false,
             return_pending: false,
             ret: None,
+            keep_position: false,
+            return_target: 0.0,
         }
+    }
+
+    /// The reference found keeps the position as it is instead of setting
+    /// it to the home offset (no position reset); applies from the next
+    /// reference found.
+    pub fn set_keep_position(&mut self, on: bool) {
+        self.keep_position = on;
     }
 
     /// After the reference is taken and the axis has stopped, move back to
@@ -346,9 +361,9 @@ impl Homing {
     fn profile_step(&mut self, config: &HomingConfig, accel: f64, dt: f64) -> HomingCommand {
         if self.return_pending && self.ret.is_none() && self.profile.at_rest() {
             let lim = Limits { velocity: config.zero_speed, acceleration: accel, deceleration: accel };
-            if lim.valid() && config.home_offset.is_finite() {
+            if lim.valid() && self.return_target.is_finite() {
                 let traj =
-                    Trajectory::plan(self.profile.position, 0.0, config.home_offset, lim, Shape::Linear);
+                    Trajectory::plan(self.profile.position, 0.0, self.return_target, lim, Shape::Linear);
                 self.ret = Some((traj, 0.0));
             } else {
                 // Parameters changed to unusable ones: stay where we are.
@@ -413,10 +428,15 @@ impl Homing {
             MethodStep::Found(reference) if reference.is_finite() => {
                 self.state = HomingState::Attained;
                 self.return_pending = self.return_to_home;
+                if self.keep_position {
+                    self.return_target = reference;
+                    return None;
+                }
                 // CiA 402-2 homing mode: the home position gets the home offset,
                 // so everything shifts by home offset − reference.
                 let shift = config.home_offset - reference;
                 self.profile.position += shift;
+                self.return_target = config.home_offset;
                 Some(ctx.position + shift)
             }
             MethodStep::Found(_) => {

@@ -3,7 +3,7 @@
 
 use anyhow::{anyhow, bail};
 use drivebus_ethercat::master::{self, AlState, AlStatus, Master, MasterError, block_on};
-use drivebus_master::Value;
+use drivebus_master::{DataType, Value};
 
 use super::{EcatLine, EcatPdoShow, EcatSdoRead, EcatSdoWrite, EcatStateArgs};
 use crate::args::Global;
@@ -33,7 +33,7 @@ pub async fn with_master<T: Send + 'static>(
     f: impl AsyncFnOnce(&Master) -> anyhow::Result<T> + Send + 'static,
 ) -> anyhow::Result<T> {
     let iface = line.iface.clone();
-    let timeout = std::time::Duration::from_millis(g.timeout.max(1));
+    let timeout = std::time::Duration::from_millis(g.timeout_ms(1000));
     tokio::task::spawn_blocking(move || {
         let m = Master::on_iface(&iface, timeout).map_err(master_err)?;
         block_on(f(&m))
@@ -124,25 +124,65 @@ pub async fn scan(g: &Global, line: &EcatLine) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `drivebus ethercat sdo read`.
+/// The CoE objects of ETG.1000.6 (§5.6.7.4) a slave has besides CiA 301's:
+/// sync manager communication types (1C00h) and PDO assignments
+/// (1C10h..1C2Fh), as arrays: (object name, entry name, entry type).
+fn etg_array(index: u16, sub: u8) -> Option<(String, String, DataType)> {
+    let (object, entry, dt) = match index {
+        0x1C00 => (
+            "Sync manager communication type".to_owned(),
+            format!("Communication type SM{}", sub.wrapping_sub(1)),
+            DataType::Unsigned8,
+        ),
+        0x1C10..=0x1C2F => (
+            format!("Sync manager {} PDO assignment", index - 0x1C10),
+            format!("PDO {sub}"),
+            DataType::Unsigned16,
+        ),
+        _ => return None,
+    };
+    Some(if sub == 0 {
+        (object, "Number of entries".into(), DataType::Unsigned8)
+    } else {
+        (object, entry, dt)
+    })
+}
+
+/// `drivebus ethercat sdo read`: a VAR, one entry, or (no sub-index) a
+/// whole array or record: every entry up to sub 0's count, named and typed
+/// from CiA 301/402 or ETG.1000.6 where known, else by size.
 pub async fn sdo_read(g: &Global, a: &EcatSdoRead) -> anyhow::Result<()> {
     let dict = Dict::default();
     let (index, sub) = dict.resolve(&a.object, a.sub.as_deref()).map_err(|e| coded("usage", e))?;
     let forced = a.ty.as_deref().map(parse_type).transpose()?;
     let entries = dict.entries(index);
+    let known = entries.is_some() || dict.data_type(index, 0).is_some() || etg_array(index, 0).is_some();
     let pos = a.slave;
     let raw = with_master(g, &a.line, async move |m: &Master| {
         m.check_position(pos).await.map_err(master_err)?;
         let group = m.init().await.map_err(master_err)?;
         let sd = m.slave(&group, pos).map_err(master_err)?;
-        let subs = match (sub, entries) {
+        let subs: Vec<u8> = match (sub, entries) {
             (Some(s), _) => vec![s],
-            (None, None) => vec![0],
-            // A whole record or array: sub 0 says how many entries there are.
             (None, Some(all)) => {
+                // A whole record or array: sub 0 says how many entries there are.
                 let n = master::sdo_read(&sd, pos, index, 0).await.map_err(master_err)?;
                 let highest = n.first().copied().unwrap_or(0);
                 all.into_iter().filter(|&s| s <= highest).collect()
+            }
+            (None, None) => {
+                // Not in the dictionary: an array or record shows by a
+                // one-byte sub 0 with entries behind it (1C13h), a VAR not.
+                let zero = master::sdo_read(&sd, pos, index, 0).await.map_err(master_err)?;
+                match zero.as_slice() {
+                    [n] if *n > 0 && (!known || etg_array(index, 0).is_some()) => {
+                        match master::sdo_read(&sd, pos, index, 1).await {
+                            Ok(_) => (0..=*n).collect(),
+                            Err(_) => vec![0],
+                        }
+                    }
+                    _ => vec![0],
+                }
             }
         };
         let mut out = Vec::new();
@@ -158,9 +198,24 @@ pub async fn sdo_read(g: &Global, a: &EcatSdoRead) -> anyhow::Result<()> {
         Ok(out)
     })
     .await?;
+    let by_size = |d: &[u8]| match d.len() {
+        1 => Some(DataType::Unsigned8),
+        2 => Some(DataType::Unsigned16),
+        4 => Some(DataType::Unsigned32),
+        8 => Some(DataType::Unsigned64),
+        _ => None,
+    };
     let rows: Vec<Row> = raw
         .into_iter()
-        .map(|(s, data)| (s, dict.name(index, s), forced.or_else(|| dict.data_type(index, s)), data))
+        .map(|(s, data)| {
+            let etg = etg_array(index, s);
+            let name = dict.name(index, s).or_else(|| etg.as_ref().map(|(o, e, _)| format!("{o} / {e}")));
+            let dt = forced
+                .or_else(|| dict.data_type(index, s))
+                .or_else(|| etg.map(|(_, _, t)| t))
+                .or_else(|| by_size(&data));
+            (s, name, dt, data)
+        })
         .collect();
     if g.json {
         let items: Vec<serde_json::Value> =

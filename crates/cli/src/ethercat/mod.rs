@@ -347,11 +347,6 @@ impl clap::Args for LineArgs {
     }
 }
 
-/// True for the master commands (they take --json and --timeout).
-pub fn is_master(cmd: &EthercatCmd) -> bool {
-    !matches!(cmd, EthercatCmd::Serve(_))
-}
-
 /// Runs a `drivebus ethercat` command.
 pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
     match cmd {

@@ -55,6 +55,8 @@ fn sdo_error(seq: u32, e: &SdoError) -> String {
         SdoError::Timeout => 0x0504_0000,
         SdoError::InvalidRequest(_) | SdoError::Decode(_) => return error(seq, code::SYNTAX),
         SdoError::Transport(_) => return error(seq, code::INTERNAL_STATE),
+        // The last attempt's failure, as a lone client would have seen it.
+        SdoError::OtherClient { cause, .. } => return sdo_error(seq, cause),
     };
     let text = drivebus_master::SdoAbort(abort).description().unwrap_or("-");
     format!("[{seq}] ERROR:0x{abort:08X} #{text}\r\n")

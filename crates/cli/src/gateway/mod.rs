@@ -76,6 +76,7 @@ async fn serve_stdio(g: &Global, conn: &Conn) -> anyhow::Result<()> {
     tokio::select! {
         r = serve_lines(s, tokio::io::stdin(), tokio::io::stdout()) => r,
         r = crate::serve::wait_for_signal() => r,
+        why = conn.master.lost() => Err(conn.lost(&why)),
     }
 }
 
@@ -101,6 +102,7 @@ async fn serve_tcp(g: &Global, conn: &Conn, addr: &str) -> anyhow::Result<()> {
                 });
             }
             r = &mut stop => return r,
+            why = conn.master.lost() => return Err(conn.lost(&why)),
         }
     }
 }
@@ -151,8 +153,17 @@ async fn shell(g: &Global, conn: &Conn) -> anyhow::Result<()> {
             Ok(())
         })?;
     let mut s = session(g, conn);
-    while let Some((line, back)) = rx.recv().await {
-        let _ = back.send(s.line(&line).await);
+    loop {
+        tokio::select! {
+            m = rx.recv() => match m {
+                Some((line, back)) => {
+                    let _ = back.send(s.line(&line).await);
+                }
+                None => break,
+            },
+            // The editor thread waits in readline; the process ends with this error.
+            why = conn.master.lost() => return Err(conn.lost(&why)),
+        }
     }
     editor.join().map_err(|_| anyhow!("the line editor failed"))??;
     Ok(())

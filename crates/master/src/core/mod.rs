@@ -169,7 +169,8 @@ impl Core {
     pub(crate) fn timer(&mut self, at: Instant) -> oneshot::Receiver<()> {
         let (tx, rx) = oneshot::channel();
         let id = self.id();
-        if at <= self.now {
+        // A lost bus has no driver left to fire timers: waits end at once.
+        if at <= self.now || self.closed.is_some() {
             let _ = tx.send(());
         } else {
             self.timers.insert((at, id), tx);
@@ -180,6 +181,10 @@ impl Core {
     /// Starts a frame-driven operation (LSS, fastscan) now.
     pub(crate) fn start_op(&mut self, mut op: Box<dyn ops::Op>) -> u64 {
         let id = self.id();
+        // No driver runs a lost bus: dropping the op ends its future now.
+        if self.closed.is_some() {
+            return id;
+        }
         let now = self.now;
         let mut out = Vec::new();
         op.start(now, &mut out);
@@ -363,11 +368,27 @@ impl Core {
     }
 
     /// The bus failed: tell every listener.
+    /// The bus failed: tell every listener, end every transfer, wake every
+    /// timer and close every channel, so nothing waits on a driver that
+    /// has stopped.
     pub(crate) fn bus_error(&mut self, reason: String) {
+        if self.closed.is_some() {
+            return;
+        }
         let _ = self.events.send(MasterEvent::BusError { reason: reason.clone() });
         self.sdo.fail_all();
         self.ops.clear();
         self.closed = Some(reason);
+        for (_, t) in std::mem::take(&mut self.timers) {
+            let _ = t.send(());
+        }
+        // Replacing the senders closes the receivers (after what was sent).
+        self.events = broadcast::channel(1).0;
+        self.frames = broadcast::channel(1).0;
+        self.sync_ticks = broadcast::channel(1).0;
+        self.pdo.clear();
+        self.sync = None;
+        self.guards.clear();
     }
 
     pub(crate) fn emcy_text(&self, node: u8, code: u16) -> Option<String> {

@@ -22,10 +22,14 @@ use tokio::sync::Notify;
 use crate::master::Master;
 
 mod motion;
+mod outcome;
 
 use crate::pdo::{PdoDir, PdoMapEntry};
 use crate::sdo::{SdoError, SdoHandle};
 pub use motion::{MotionLimits, StopAction, StopReport, human_secs};
+pub use outcome::{
+    DI_HOME_SWITCH, DI_INTERLOCK, DI_NEGATIVE_LIMIT, DI_POSITIVE_LIMIT, DriveFlags, MotionEnd, MotionReport,
+};
 
 /// Controlword 6040h.
 pub const CONTROLWORD: u16 = 0x6040;
@@ -146,11 +150,10 @@ pub enum DriveError {
         /// The statusword.
         statusword: u16,
     },
-    /// Homing ended with statusword bit 13 (homing error).
-    HomingError {
-        /// The statusword.
-        statusword: u16,
-    },
+    /// A move or homing ended anywhere but its target: a limit switch,
+    /// a software limit, a following or homing error, a fault, a quick
+    /// stop, a halt. The report says where and why.
+    Stopped(Box<MotionReport>),
     /// Streaming needs the master's SYNC producer ([`Master::start_sync`]).
     NoSync,
     /// The bus failed.
@@ -165,8 +168,13 @@ impl fmt::Display for DriveError {
                 write!(f, "timeout waiting for {waiting_for} (statusword {statusword:04X}h)")
             }
             DriveError::Fault { statusword } => write!(f, "drive fault (statusword {statusword:04X}h)"),
-            DriveError::HomingError { statusword } => {
-                write!(f, "homing error (statusword {statusword:04X}h)")
+            DriveError::Stopped(r) => {
+                write!(
+                    f,
+                    "{r} (statusword {:04X}h, {})",
+                    r.statusword,
+                    DriveState::from_statusword(r.statusword)
+                )
             }
             DriveError::NoSync => f.write_str("no SYNC producer running"),
             DriveError::Transport(s) => write!(f, "bus error: {s}"),
@@ -380,6 +388,10 @@ impl Drive {
     /// Reads an object: from the latest TPDO when mapped (and the node is
     /// not known to have left Operational), else by SDO.
     pub async fn read_raw(&self, index: u16, sub: u8) -> Result<Vec<u8>, DriveError> {
+        // A TPDO copy is stale once the bus is gone.
+        if let Some(why) = self.master.bus_lost() {
+            return Err(DriveError::Transport(why));
+        }
         let st = self.master.node_state(self.node);
         if self.tpdo_objects.contains(&(index, sub))
             && !matches!(st, Some(RemoteState::PreOperational | RemoteState::Stopped | RemoteState::BootUp))

@@ -7,12 +7,14 @@ use std::time::Duration;
 
 use tokio::sync::broadcast;
 
+use super::outcome::pp_at_rest;
 use super::{
-    Drive, DriveError, DriveState, MotionProgress, Profile, SW_BIT12, SW_BIT13, SW_TARGET_REACHED, mode,
+    Drive, DriveError, DriveState, MotionProgress, MotionReport, Profile, SW_BIT12, SW_BIT13,
+    SW_TARGET_REACHED, mode,
 };
 
 /// Controlword: halt (bit 8).
-const CW_HALT: u16 = 1 << 8;
+pub(super) const CW_HALT: u16 = 1 << 8;
 /// Controlword: enable operation.
 const CW_ENABLED: u16 = 0x0F;
 
@@ -158,7 +160,7 @@ pub fn human_secs(s: f64) -> String {
 }
 
 impl Drive {
-    async fn read_i32(&self, index: u16, sub: u8) -> Option<i32> {
+    pub(super) async fn read_i32(&self, index: u16, sub: u8) -> Option<i32> {
         let v = self.read_raw(index, sub).await.ok()?;
         (v.len() >= 4).then(|| i32::from_le_bytes([v[0], v[1], v[2], v[3]]))
     }
@@ -209,8 +211,14 @@ impl Drive {
     /// Profile position move (mode must be PP): optional profile
     /// (6081h/6083h/6084h), target 607Ah, new set-point (bit 4, change
     /// immediately bit 5, relative bit 6), waits for the acknowledge (bit
-    /// 12), clears bit 4, then waits for target reached (bit 10) within
-    /// `timeout`. The motion is not stopped on failure: see
+    /// 12), clears bit 4, then waits within `timeout` for the end of the
+    /// motion: bit 10 (target reached, or standing at a limit), bit 13
+    /// (following error) or the drive leaving operation enabled.
+    ///
+    /// `Ok` with the report when the target was reached;
+    /// [`DriveError::Stopped`] with where and why when a limit switch, a
+    /// software limit, a following error, a fault, a quick stop or a halt
+    /// ended it. The motion is not stopped on a timeout: see
     /// [`stop_motion`](Self::stop_motion).
     pub async fn move_to(
         &self,
@@ -218,23 +226,34 @@ impl Drive {
         relative: bool,
         profile: Option<Profile>,
         timeout: Duration,
-    ) -> Result<(), DriveError> {
+    ) -> Result<MotionReport, DriveError> {
+        let started = self.master.now();
         if let Some(p) = profile {
             self.sdo.write(0x6081, 0, p.velocity).await?;
             self.sdo.write(0x6083, 0, p.acceleration).await?;
             self.sdo.write(0x6084, 0, p.deceleration).await?;
         }
+        let absolute =
+            if relative { self.position().await.map(|p| p.saturating_add(target)) } else { Some(target) };
         self.write_raw(0x607A, 0, &target.to_le_bytes()).await?;
         let base = CW_ENABLED | 0x20 | if relative { 0x40 } else { 0 };
         self.controlword(base).await?;
         self.controlword(base | 0x10).await?;
-        self.wait_sw("set-point acknowledge", false, |sw| sw & SW_BIT12 != 0).await?;
+        let sw = self
+            .wait_sw("set-point acknowledge", true, |sw| {
+                sw & SW_BIT12 != 0 || Drive::ended_abnormally(sw, false)
+            })
+            .await?;
+        if Drive::ended_abnormally(sw, false) {
+            return Drive::settle(self.classify(sw, absolute, None, started).await);
+        }
         self.controlword(base).await?;
-        self.wait_sw_for("target reached", false, timeout, |sw| {
-            sw & SW_BIT12 == 0 && sw & SW_TARGET_REACHED != 0
-        })
-        .await
-        .map(|_| ())
+        let sw = self
+            .wait_sw_for("target reached", true, timeout, |sw| {
+                pp_at_rest(sw) || Drive::ended_abnormally(sw, false)
+            })
+            .await?;
+        Drive::settle(self.classify(sw, absolute, None, started).await)
     }
 
     /// Target velocity 60FFh (profile velocity / CSV).
@@ -249,13 +268,19 @@ impl Drive {
 
     /// Homing: writes 6098h, switches to homing mode, starts (bit 4 rising
     /// edge) and waits for a *fresh* homing completed (bit 12 with bit 10:
-    /// attained and at rest) or a homing error (bit 13). Bit 12 left set by an earlier homing does not count:
+    /// attained and at rest), a homing error (bit 13) or the drive leaving
+    /// operation enabled. Bit 12 left set by an earlier homing does not count:
     /// this run is only done once bit 12 was seen low after the start
     /// (homing in progress), or it was low before the start; for the
     /// methods homing on the current position (35, 37), which may finish
     /// before a low is visible, once 6064h equals the home offset 607Ch.
-    pub async fn home(&self, method: i8, timeout: Duration) -> Result<(), DriveError> {
+    ///
+    /// `Ok` with the report when homing attained; [`DriveError::Stopped`]
+    /// with the reason otherwise (a homing error names the method, the
+    /// methods 60E3h offers and the active switch inputs).
+    pub async fn home(&self, method: i8, timeout: Duration) -> Result<MotionReport, DriveError> {
         use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+        let started = self.master.now();
         self.sdo.write(0x6098, 0, method).await?;
         self.set_mode(mode::HM).await?;
         self.controlword(CW_ENABLED).await?;
@@ -268,19 +293,20 @@ impl Drive {
         let sw = loop {
             let left = deadline.saturating_duration_since(self.master.now());
             let sw = self
-                .wait_sw_for("homing attained", false, left, |sw| {
+                .wait_sw_for("homing attained", true, left, |sw| {
                     if sw & SW_BIT12 == 0 {
                         seen_low.store(true, Relaxed);
                     }
                     // CiA 402-2 homing: bit 12 with bit 10 is "completed"; bit 12
                     // alone is "attained, target not reached" (still moving).
                     sw & SW_BIT13 != 0
+                        || Drive::ended_abnormally(sw, true)
                         || (sw & SW_BIT12 != 0
                             && sw & SW_TARGET_REACHED != 0
                             && (seen_low.load(Relaxed) || offset.is_some()))
                 })
                 .await?;
-            if sw & SW_BIT13 != 0 || seen_low.load(Relaxed) {
+            if sw & SW_BIT13 != 0 || Drive::ended_abnormally(sw, true) || seen_low.load(Relaxed) {
                 break sw;
             }
             // An instant method with bit 12 still set from before: done once
@@ -293,11 +319,10 @@ impl Drive {
             }
             self.master.sleep(self.poll).await;
         };
-        self.controlword(CW_ENABLED).await?;
-        if sw & SW_BIT13 != 0 {
-            return Err(DriveError::HomingError { statusword: sw });
+        if !Drive::ended_abnormally(sw, true) {
+            self.controlword(CW_ENABLED).await?;
         }
-        Ok(())
+        Drive::settle(self.classify(sw, None, Some(method), started).await)
     }
 
     /// Stops what a command started: halt (controlword bit 8, the drive

@@ -21,6 +21,8 @@ pub enum Station {
     Plain(Node),
     /// A CiA 402 virtual drive.
     Drive(Box<NodeDevice<Drive>>),
+    /// Any other device (another master's traffic).
+    Other(Box<dyn Device + Send>),
 }
 
 impl Station {
@@ -29,6 +31,7 @@ impl Station {
         match self {
             Station::Plain(n) => Box::new(NodeDevice::new(n, NoHooks)),
             Station::Drive(d) => d,
+            Station::Other(d) => d,
         }
     }
 }

@@ -215,6 +215,13 @@ impl Behaviour for EcatBehaviour {
     }
     fn on_event(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, event: &NodeEvent) {
         self.inner.on_event(cx, od, event);
+        // A reset the drive made itself (iPOS 2080h, §4.9.8: "it does not
+        // reset the ECAT interface"): the node follows the ESM again.
+        if let NodeEvent::NmtState { to: drivebus_node::NmtState::PreOperational, .. } = event
+            && super::nmt_state(self.esm) == drivebus_node::NmtState::Operational
+        {
+            cx.request(Request::Nmt(drivebus_nmt::NmtCommand::Start));
+        }
     }
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
         self.inner.after_step(cx, od);

@@ -5,10 +5,12 @@
 //!
 //! What a master sees that differs from a plain CiA 301/402 device:
 //!
-//! * mode −1 electronic gearing (§11) follows the online master position
-//!   201Eh × 2013h on the drive's csp; −2 electronic camming (§12) is
-//!   accepted and shown in 6061h and holds the position (the cam table's
-//!   memory format is not in the manual);
+//! * mode −1 electronic gearing (§11) follows the master position (201Eh
+//!   online, or the machine's master encoder on the second encoder input)
+//!   × 2013h on the drive's csp; −2 electronic camming (§12) runs the cam
+//!   table of §18.4.1 from the drive memory 2064h–206Ah (`cam.rs`);
+//! * the factor group of §5.2 (6093h, 6094h, 210Fh; `factor.rs`) scales
+//!   the user's units to the internal ones;
 //! * ip (7): CiA 402 linear interpolation with 208Eh bit 8 = 1, the legacy
 //!   PT / PVT sub-modes 60C0h = 0 / −1 with bit 8 = 0: packed 60C1h:01/02
 //!   points, integrity counter, 2072h–207Ah, EMCY FF01h (§9); csp, csv, cst;
@@ -26,7 +28,10 @@
 //!   what a received RPDO shorter than its mapping raises (CiA 301; the
 //!   node does it). The manual gives no finer rule for the two codes;
 //! * the error register uses only bits 0 and 4 (§3.1.3 / 1001h);
-//! * no 1010h/1011h: 2076h saves, 2080h resets (§4.9.6).
+//! * no 1010h/1011h: 2076h saves, 2080h resets (§4.9.6, §4.9.8);
+//! * the status objects (2000h, 2002h, 2045h, 208Fh, 2102h, …) mirror the
+//!   drive and the machine (`status.rs`); what every object does is
+//!   `ledger.tsv`.
 
 mod emcy;
 mod facts;
@@ -38,18 +43,23 @@ pub const EDS: &str = include_str!("../../eds/ipos.eds");
 
 use crate::Profile;
 use crate::build::{Behaviour, Context, EmcyFrame, Verdict};
-use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, profile_type};
+use drivebus_cia402::drive::{DriveConfig, FactorGroup, ProbeInput, ProfileJerk, Scaling, profile_type};
 use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::{IpMode, IpMonitor};
 use drivebus_cia402::state_machine::State;
 
+mod cam;
 pub mod ecat;
+mod factor;
 pub mod foe;
 mod gearing;
 mod homing;
 mod interp;
 mod refs;
+mod status;
+mod supervise;
 
+pub use cam::{CamTable, Memory};
 use drivebus_node::{NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 use gearing::Gear;
@@ -58,6 +68,7 @@ pub use homing::MechanicalLimitHoming;
 use interp::Legacy;
 pub use interp::{AUX_LINEAR_IP, EMCY_IP_STATUS, IP_BUFFER_DEFAULT, IP_BUFFER_MAX, LegacyPoint, ip_status};
 use refs::{Refs, i64_at, u32_at};
+pub use status::{AVAILABLE_OUTPUTS, EMCY_IO_NOT_AVAILABLE};
 
 /// EMCY 8220h "PDO length exceeded" (Table 3.1.3).
 pub const EMCY_PDO_LENGTH_EXCEEDED: u16 = 0x8220;
@@ -104,6 +115,10 @@ pub const EMCY_COMMAND_ERROR: u16 = 0x9000;
 pub const EMCY_LSP: u16 = 0x5443;
 /// EMCY 5442h "negative limit switch active" (§4.3.1, Table 3.1.3).
 pub const EMCY_LSN: u16 = 0x5442;
+/// EMCY FF06h "positive software position limit triggered" (§4.3.2).
+pub const EMCY_SOFT_LIMIT_POSITIVE: u16 = 0xFF06;
+/// EMCY FF07h "negative software position limit triggered" (§4.3.2).
+pub const EMCY_SOFT_LIMIT_NEGATIVE: u16 = 0xFF07;
 
 /// The iPOS quirks around the CiA 402 drive.
 #[derive(Debug, Clone, Default)]
@@ -112,32 +127,35 @@ pub struct Ipos {
     ip: IpMonitor,
     legacy: Legacy,
     gear: Gear,
-    /// The count of a master encoder wired to the second encoder input
-    /// (simulated: set by [`Ipos::set_second_encoder`]), and the count last
-    /// taken by gearing.
-    second_encoder: Option<i64>,
+    /// The master encoder count (second encoder input) last taken by
+    /// gearing.
     second_taken: Option<i64>,
     /// Limit switches as last seen (LSN, LSP).
     limits: (bool, bool),
+    /// Software limit passed as last seen (−1, 0, +1; §4.3.2).
+    soft_limit: i8,
+    /// 6061h as shown: it takes 6060h only in Operation enabled (§4.2.4).
+    mode_shown: i8,
+    /// Profile velocity ran (enabled) at the last step (§10.1 remark 2).
+    in_pv: bool,
+    /// Since when the speed error has been beyond 60F8h \[ns\] (§10.2.8).
+    slipping_since: Option<u64>,
     /// Power-on work of the first step done.
     started: bool,
     /// Handles of the objects every step reads.
     refs: Refs,
+    /// The drive memory behind 2064h–2069h (§17.2).
+    memory: cam::Memory,
+    /// Electronic camming (§12).
+    cam: cam::Camming,
+    /// Internal velocity units per velocity unit (6094h in force).
+    velocity_iu: (u32, u32),
 }
 
 impl Ipos {
     /// The iPOS.
     pub fn new() -> Self {
-        Ipos { legacy: Legacy { counter: 1, ..Legacy::default() }, ..Ipos::default() }
-    }
-
-    /// The second encoder input (§11.1, §11.3: "the encoder from the master
-    /// drive … connected … to the second encoder input"): the emulated
-    /// drive has no such input, so its count is set here (a test, a
-    /// simulated master). With 201Dh = 3 gearing follows it, taken at the
-    /// next step.
-    pub fn set_second_encoder(&mut self, count: i64) {
-        self.second_encoder = Some(count);
+        Ipos { legacy: Legacy { counter: 1, ..Legacy::default() }, velocity_iu: (1, 1), ..Ipos::default() }
     }
 
     /// Per step: limit switch EMCYs (§4.3.1), the PVT stop on an empty
@@ -167,6 +185,31 @@ impl Ipos {
             }
         }
         self.limits = (lsn, lsp);
+        // §4.3.2: the software limits act as limit switches (the drive
+        // stops); FF06h / FF07h and 2002h bits 6 / 7 while one is passed,
+        // 0000h when it is left.
+        let soft = view.software_limit;
+        if soft != self.soft_limit {
+            for (side, code, bit) in
+                [(1i8, EMCY_SOFT_LIMIT_POSITIVE, 6u16), (-1, EMCY_SOFT_LIMIT_NEGATIVE, 7)]
+            {
+                let (now, was) = (soft == side, self.soft_limit == side);
+                if now == was {
+                    continue;
+                }
+                let der = u32_at(od, refs.detailed_errors).unwrap_or(0) as u16;
+                let der = if now { der | 1 << bit } else { der & !(1 << bit) };
+                if let Some(r) = refs.detailed_errors {
+                    od.set_le(r, &der.to_le_bytes());
+                }
+                cx.request(if now {
+                    EmcyFrame { code, register: Some(error_register(code)), bytes: [0; 5] }.raise()
+                } else {
+                    Request::ClearEmcy(code)
+                });
+            }
+            self.soft_limit = soft;
+        }
         // §9.2.3 bit 11: PVT with the buffer run empty after a point whose
         // velocity is not 0: quick stop.
         if Self::legacy_of(u32_at(od, refs.aux_settings), i64_at(od, refs.sub_mode)) == Some(true)
@@ -180,24 +223,6 @@ impl Ipos {
             let _ = cx.drive.on_write(od, 0x6040, 0, &cw.to_le_bytes());
         }
         self.publish_ip_status(cx, od, false);
-    }
-
-    /// 2023h jerk time (ms, §7.2.5: the S-curve's time to reach the
-    /// profile acceleration) → the drive's jerk = 6083h / t.
-    fn sync_jerk(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        let ms = od.get_u32(0x2023, 0).unwrap_or(0);
-        cx.drive.set_profile_jerk(od, ProfileJerk::Time(f64::from(ms) * 1e-3));
-    }
-
-    /// kₜ × 6075h: the torque the drive's ‰ refer to (§8.2.1: 6071h, 6072h,
-    /// 6074h, 6077h are ‰ of the motor rated current 6075h; the drive
-    /// computes with at least 1 mA). The iPOS has no 6076h: the drive keeps
-    /// its rated torque as a withdrawn parameter (build/conform.rs).
-    fn sync_torque_reference(cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        let ma = od.get_u32(0x6075, 0).unwrap_or(0).max(1);
-        let kt = cx.drive.config().params.motor.kt;
-        let mnm = (kt * f64::from(ma)).round().clamp(1.0, f64::from(u32::MAX)) as u32;
-        let _ = cx.drive.on_write(od, 0x6076, 0, &mnm.to_le_bytes());
     }
 }
 
@@ -226,17 +251,13 @@ impl Behaviour for Ipos {
         cfg.params.control.velocity_filter = SPEED_FILTER_S;
         // Internal units (§1.3, §5): position = increments; velocity =
         // increments per slow-loop sample (1 ms) in 16.16 fixed point;
-        // acceleration = increments per sample² in 16.16. Factors in
-        // position units/s per velocity unit: 1000/65536, 10^6/65536.
+        // acceleration = increments per sample² in 16.16. The scaling
+        // objects 6093h/6094h/210Fh (§5.2) convert to them, default 1/1;
+        // 6091h/6092h/6096h/6097h are stored set-up parameters (factor.rs).
         cfg.factor = FactorGroup {
-            velocity_factor: (125, 8192),
-            acceleration_factor: (15_625, 1024),
+            scaling: Some(Scaling::unit(factor::VELOCITY_IU, factor::ACCELERATION_IU)),
             ..FactorGroup::increments(COUNTS_PER_REV)
         };
-        // §5.2.2: the conversion is the position factor 6093h (set by
-        // EasyMotion Studio); 6091h/6092h/6096h/6097h are stored set-up
-        // parameters, default 1/1 (§5.2.5, §5.2.8, §5.2.11).
-        cfg.fixed_factor_group = true;
         cfg.initial_mode = 0;
         let p = &mut cfg.profile;
         // 133 IU = 133 increments per 1 ms sample = 4000 rpm at 2000
@@ -275,6 +296,13 @@ impl Behaviour for Ipos {
         // moves back to the home position after braking.
         cfg.homing_return_to_home = true;
         cfg.remote = true;
+        // §4.3.2: 607Dh works like LSP/LSN in every mode.
+        cfg.io.software_limit_switches = true;
+        // §4.5.1 / §4.5.3: 60FDh bits 16–31 are IN0..IN15, 60FEh bits
+        // 16–31 OUT0..OUT15: the machine's lines 1–16 (status.rs keeps the
+        // outputs the iPOS360x has).
+        cfg.io.input_lines = true;
+        cfg.io.output_lines = true;
     }
 
     fn finish(&mut self, node: &mut drivebus_node::Node) {
@@ -295,7 +323,7 @@ impl Behaviour for Ipos {
         set_default(od, 0x6099, 2, &Value::U32(0x0001_0000));
         set_default(od, 0x609A, 0, &Value::U32(0x0000_199A));
         // §5.2.5, §5.2.8, §5.2.11: feed constant, velocity and acceleration
-        // factors 1/1 (stored; `fixed_factor_group` keeps internal units).
+        // factors 1/1 (set-up values; the scaling objects are in force).
         for index in [0x6092, 0x6096, 0x6097] {
             for sub in [1, 2] {
                 set_default(od, index, sub, &Value::U32(1));
@@ -315,11 +343,9 @@ impl Behaviour for Ipos {
             // −1 gearing (§11): the drive runs csp with the reference the
             // behaviour computes from the master position 201Eh (online).
             -1 => Some(8),
-            // −2 camming (§12): accepted and displayed; the drive holds
-            // its position under profile position (cam tables are not
-            // emulated: their memory format is not in the manual,
-            // docs/personalities.md).
-            -2 => Some(1),
+            // −2 camming (§12): the drive runs csp with the reference the
+            // behaviour computes from the cam table (cam.rs).
+            -2 => Some(8),
             _ => None,
         }
     }
@@ -333,7 +359,9 @@ impl Behaviour for Ipos {
     fn hooked_objects(&self) -> &'static [u16] {
         &[
             0x1600, 0x1601, 0x1602, 0x1603, 0x1A00, 0x1A01, 0x1A02, 0x1A03, 0x6086, 0x6075, 0x60C0, 0x60C1,
-            0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8,
+            0x2073, 0x2074, 0x208E, 0x201E, 0x2013, 0x2023, 0x60B8, 0x6093, 0x6094, 0x210F, 0x2110, 0x6097,
+            0x608E, 0x2076, 0x2080, 0x2081, 0x2090, 0x2065, 0x2066, 0x2067, 0x2069, 0x2019, 0x2006, 0x2077,
+            0x6040, 0x6060, 0x6066, 0x6068, 0x2070, 0x2071, 0x210B, 0x60FE, 0x60F2, 0x605E, 0x2113, 0x2114,
         ]
     }
 
@@ -346,6 +374,19 @@ impl Behaviour for Ipos {
         data: &[u8],
     ) -> Result<Verdict, SdoAbort> {
         let le = |d: &[u8]| drivebus_od::le_u64(d);
+        if factor::refuses_zero(index, sub) && le(data) == 0 {
+            return Err(SdoAbort::VALUE_TOO_LOW);
+        }
+        // §3.2.6: with 2112h ≠ 0 the TML program has priority: 6060h and
+        // 6040h are not written (local control).
+        // (A handle: the controlword comes with every cycle's process data.)
+        if matches!(index, 0x6040 | 0x6060) && u32_at(od, self.refs.fresh(od).tml_priority).unwrap_or(0) != 0
+        {
+            return Err(SdoAbort::LOCAL_CONTROL);
+        }
+        if let Some(v) = self.object_write(cx, od, index, sub, le(data)) {
+            return v;
+        }
         match (index, sub) {
             (0x6075, 0) => {
                 // §8.2.2: default 0, set by the master; the drive computes
@@ -443,6 +484,19 @@ impl Behaviour for Ipos {
     fn after_write(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, index: u16, sub: u8) {
         match (index, sub) {
             (0x6075, 0) => Self::sync_torque_reference(cx, od),
+            // §7.2.19: the motor position := the value, in increments (not
+            // scaled); 6063h, 6064h and 6062h follow.
+            (0x2081, 0) => cx.drive.set_position_increments(od.get_i64(0x2081, 0).unwrap_or(0)),
+            (0x2090, 1 | 2) => Self::digital_outputs_8bit(cx, od, sub),
+            // §17.2.5 checksum; §12.2.1 cam table copy.
+            (0x2069 | 0x2019, 0) => {
+                let v = od.get_u32(index, 0).unwrap_or(0);
+                let _ = self.memory_write(od, index, v);
+            }
+            (i, _) if factor::OBJECTS.contains(&i) => self.sync_scaling(cx, od),
+            (0x2070 | 0x2071, _) => Self::sync_times(cx, od),
+            (0x210B | 0x60F2, 0) => Self::sync_asr2(cx, od),
+            (0x605E | 0x2113 | 0x2114, _) => Self::sync_fault_actions(cx, od),
             (0x2023, 0) => Self::sync_jerk(cx, od),
             // §16 / §4.3.1: 60B8h bit 6 = 1 frees LSP/LSN for the probes.
             (0x60B8, 0) => cx.drive.set_limit_switches(od.get_u32(0x60B8, 0).unwrap_or(0) & 0x40 == 0),
@@ -472,6 +526,8 @@ impl Behaviour for Ipos {
                 // The node forgot its errors: an active switch is reported
                 // again, as at power-on.
                 self.limits = (false, false);
+                self.soft_limit = 0;
+                self.mode_shown = 0;
                 self.started = false;
             }
             NodeEvent::NmtState { .. } => {
@@ -480,7 +536,10 @@ impl Behaviour for Ipos {
                 let aux = od.get_u32(0x208E, 0).unwrap_or(u32::from(AUX_LINEAR_IP)) as u16;
                 let _ = Self::sync_sub_mode(cx, od, od.get_i64(0x60C0, 0).unwrap_or(0) as i16, aux);
                 Self::sync_torque_reference(cx, od);
-                Self::sync_jerk(cx, od);
+                Self::sync_times(cx, od);
+                Self::sync_asr2(cx, od);
+                Self::sync_fault_actions(cx, od);
+                self.sync_scaling(cx, od);
                 if self.gear.active {
                     Self::gear_target(cx, od, self.gear.reference);
                 }
@@ -497,19 +556,31 @@ impl Behaviour for Ipos {
             let _ = cx.drive.on_write(od, 0x60C4, 2, &u64::from(IP_BUFFER_DEFAULT).to_le_bytes());
             Self::sync_torque_reference(cx, od);
             Self::sync_jerk(cx, od);
+            self.sync_scaling(cx, od);
+            Self::sync_asr2(cx, od);
+            Self::sync_fault_actions(cx, od);
+            // §4.9.7: 208Ah bit 0 = 1, a save (2076h) may be started; a
+            // save completes at once.
+            if let Ok(r) = od.find(0x208A, 0) {
+                od.set_le(r, &1u16.to_le_bytes());
+            }
         }
-        // §11.2.6: 201Dh = 3, the master is the digital input (here the
-        // second encoder; pulse & direction is not emulated).
+        // §11.2.6: 201Dh = 3, the master is the digital reference: the
+        // machine's master encoder on the second encoder input (§11.3).
         let refs = self.refs.fresh(od);
-        if u32_at(od, refs.master_source) == Some(3)
-            && let Some(m) = self.second_encoder
-            && self.second_taken != Some(m)
-        {
+        let m = cx.drive.model().master_position();
+        if u32_at(od, refs.master_source) == Some(3) && self.second_taken != Some(m) {
             self.second_taken = Some(m);
             self.gear_update(cx, od, m);
         }
+        // One snapshot for the rules below (the step is a hot path).
+        let view = cx.drive.view();
+        self.show_mode(cx, od, refs, view);
+        self.enter_pv(cx, od, view);
+        self.watch_slippage(cx, od, refs, view);
         self.gear_step(cx, od, refs);
         self.watch(cx, od, refs);
+        self.publish_status(cx, od, refs, view);
         // §7.1.2 / Table 4.4.2: a command error sets 2000h bit 14, and the
         // S-curve update refused 2002h bit 9, until the fault reset.
         let err = cx.drive.command_error().is_some();
@@ -522,6 +593,20 @@ impl Behaviour for Ipos {
                 od.set_le(r, &n.to_le_bytes());
             }
         }
+    }
+
+    fn on_read(
+        &mut self,
+        _cx: &mut Context<'_>,
+        od: &mut ObjectDictionary,
+        index: u16,
+        _sub: u8,
+    ) -> Result<(), SdoAbort> {
+        // §17.2.3: each read of 2066h moves data from the memory.
+        if index == 0x2066 {
+            self.memory_read(od)?;
+        }
+        Ok(())
     }
 
     fn emcy(&self, code: u16) -> EmcyFrame {

@@ -21,6 +21,26 @@ pub(super) struct Refs {
     pub(super) aux_settings: Option<EntryRef>,
     pub(super) sub_mode: Option<EntryRef>,
     pub(super) ip_status: Option<EntryRef>,
+    pub(super) outputs_status: Option<EntryRef>,
+    /// 208Fh:01 / :02.
+    pub(super) inputs8: [Option<EntryRef>; 2],
+    pub(super) error_code: Option<EntryRef>,
+    pub(super) demand_internal: Option<EntryRef>,
+    pub(super) velocity_sensor: Option<EntryRef>,
+    pub(super) velocity_actual: Option<EntryRef>,
+    pub(super) position_actual: Option<EntryRef>,
+    /// 2075h:01..04.
+    pub(super) triggers: [Option<EntryRef>; 4],
+    pub(super) triggered_outputs: Option<EntryRef>,
+    pub(super) inputs: Option<EntryRef>,
+    pub(super) brake: Option<EntryRef>,
+    pub(super) aux_encoder: Option<EntryRef>,
+    pub(super) max_slippage: Option<EntryRef>,
+    pub(super) slippage_time: Option<EntryRef>,
+    pub(super) velocity_demand: Option<EntryRef>,
+    /// 2046h reference, 2047h feedback analogue inputs.
+    pub(super) analog: [Option<EntryRef>; 2],
+    pub(super) tml_priority: Option<EntryRef>,
 }
 
 impl Refs {
@@ -38,6 +58,23 @@ impl Refs {
             aux_settings: f(0x208E),
             sub_mode: f(0x60C0),
             ip_status: f(0x2072),
+            outputs_status: f(0x2045),
+            inputs8: [od.find(0x208F, 1).ok(), od.find(0x208F, 2).ok()],
+            error_code: f(0x603F),
+            demand_internal: f(0x60FC),
+            velocity_sensor: f(0x6069),
+            velocity_actual: f(0x606C),
+            position_actual: f(0x6064),
+            triggers: [1, 2, 3, 4].map(|s| od.find(0x2075, s).ok()),
+            triggered_outputs: f(0x2085),
+            inputs: f(0x60FD),
+            brake: f(0x2102),
+            aux_encoder: f(0x208D),
+            max_slippage: f(0x60F8),
+            slippage_time: f(0x2005),
+            velocity_demand: f(0x606B),
+            analog: [f(0x2046), f(0x2047)],
+            tml_priority: f(0x2112),
         }
     }
 

@@ -309,3 +309,26 @@ pub fn speed_over_1s(r: &mut Rig) -> (f64, f64) {
 /// 0.2 % of 512 IU). A tighter bound is not what a 1 ms speed gives: at
 /// 20 counts per sample one count more or less in a sample is 5 %.
 pub const ONE_READING_IU: f64 = FIX;
+
+/// The rig with the examples' PDOs, started, in `mode`, enabled.
+pub fn enabled_in(mode: i8) -> Rig {
+    let mut r = Rig::new();
+    map_examples_rpdos(&mut r);
+    r.start_remote_node();
+    r.modes_of_operation(mode);
+    r.enable();
+    r
+}
+
+/// An expedited SDO download answered by an abort with `code`.
+pub fn sdo_aborts(r: &mut Rig, index: u16, sub: u8, data: &[u8], code: u32) {
+    r.sdo.clear();
+    let cmd = 0x23 | ((4 - data.len() as u8) << 2);
+    let mut b = [cmd, index as u8, (index >> 8) as u8, sub, 0, 0, 0, 0];
+    b[4..4 + data.len()].copy_from_slice(data);
+    r.send(Frame::new(0x601, &b));
+    let c = code.to_le_bytes();
+    let abort = Frame::new(0x581, &[0x80, index as u8, (index >> 8) as u8, sub, c[0], c[1], c[2], c[3]]);
+    assert_eq!(r.sdo, vec![abort], "{index:04X}h:{sub} := {data:02X?}");
+    r.sdo.clear();
+}
