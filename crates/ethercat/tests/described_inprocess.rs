@@ -77,3 +77,39 @@ fn real_devices_discovered_to_op_with_outputs_and_inputs() {
     let led = described::with_device(&host, 3, |s| s.app().dictionary().unwrap().get_u64(0x7001, 0)).unwrap();
     assert_eq!(led, Some(2), "LED_G (7001h) over CoE is the output value");
 }
+
+/// A CoE device from its EEPROM image alone (a Kollmorgen AKD): the
+/// dictionary a master reads is made from the image's PDOs, so ethercrab
+/// reads 1018h and the 1C12h/1C13h assignment (1701h, 1B01h) over CoE,
+/// goes to OP, and the controlword it writes lands in 6040h.
+#[test]
+fn coe_image_without_esi_serves_its_pdos() {
+    static S: Storage = Storage::new();
+    let akd = Member::Device(Box::new(described::load(&vector("akd.bin")).unwrap()));
+    let host =
+        Host::line(described::devices(&[akd], None).unwrap(), Clock::simulated(Instant::from_millis(1)));
+    let m = Master::on_host(&S, host.clone()).unwrap();
+    async_io::block_on(async {
+        let (found, group) = m.scan_group().await.unwrap();
+        assert_eq!(found[0].name, "AKD");
+        assert_eq!(found[0].identity, [0x6A, 0x0041_4B44, 2, 0x9983_0093]);
+        assert_eq!(found[0].coe_identity, Some(found[0].identity));
+        let md = m.main_device();
+        {
+            let sd = m.slave(&group, 1).unwrap();
+            let rx = drivebus_ethercat::master::pdo_assignment(&sd, 1, 0x1C12).await.unwrap();
+            assert_eq!(rx, [(0x1701, vec![0x60C1_0120, 0x6040_0010])]);
+        }
+        let g = group.into_safe_op(md).await.unwrap().into_op(md).await.unwrap();
+        for _ in 0..20 {
+            g.subdevice(md, 0).unwrap().outputs_raw_mut().copy_from_slice(&[0x10, 0x27, 0, 0, 0x0F, 0x00]);
+            g.tx_rx(md).await.unwrap();
+            m.pace().sleep(Duration::from_millis(1)).await;
+        }
+        assert_eq!(g.subdevice(md, 0).unwrap().inputs_raw().to_vec(), [0x10, 0x27, 0, 0, 0x0F, 0x00]);
+    });
+    let cw = described::with_device(&host, 0, |s| s.app().dictionary().unwrap().get_u64(0x6040, 0)).unwrap();
+    assert_eq!(cw, Some(0x000F));
+    let ip = described::with_device(&host, 0, |s| s.app().dictionary().unwrap().get_u64(0x60C1, 1)).unwrap();
+    assert_eq!(ip, Some(10_000));
+}

@@ -3,7 +3,7 @@
 //! Information, complete access) over the described dictionary when the
 //! description announces CoE.
 
-use drivebus_can::{Instant, earliest};
+use drivebus_can::Instant;
 use drivebus_coe::{EsmState, MailboxServer, NoFiles, ObjectAccess, access_bits};
 use drivebus_esc::slave::{AlState, MailboxOut, ProcessDataSizes, SlaveApp};
 use drivebus_od::{EntryRef, ObjectDictionary, SdoAbort};
@@ -260,7 +260,7 @@ impl SlaveApp for DescribedApp {
     fn poll(&mut self, now: Instant, out: &mut MailboxOut<'_>) -> Option<Instant> {
         let next = self.coe.as_mut().and_then(|c| c.mbx.poll(now, &mut NoFiles));
         self.drain(now, out);
-        earliest(next, None)
+        next
     }
 }
 
