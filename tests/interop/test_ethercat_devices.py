@@ -4,7 +4,7 @@ an ESI file, `tests/vectors/ethercat/`) and `--drive ipos` twice, over a
 veth pair (set-up and skip rules as `test_ethercat_pysoem.py`).
 
 Checks: the slaves sit in command-line order with the real names and
-identities; SOEM maps the process data (SII categories for the terminals,
+identities; SDO Information lists the board's ESI objects; SOEM maps the process data (SII categories for the terminals,
 CoE for the board and the drives) and takes the line to OP with the
 working counter a real line gives; the board's inputs loop its outputs
 back; a damaged file stops the command before it serves, naming the file,
@@ -82,6 +82,10 @@ def test_mixed_line_in_order_to_op(wire, served):
             ("Board", 0x6A5, 0x00DEFEDE, 0x5A01),
         ]
         assert [i[0] for i in ident[4:]] == ["iPOS360x VX-CAT"] * 2
+        # SDO Information over the ESI's dictionary (plus the 1C00h it lacks).
+        names = {o.index: o.name for o in m.slaves[3].od}
+        assert (names[0x6003], names[0x7000]) == (b"mag_x", b"LED_R"), names
+        assert 0x1C00 in names and 0x1C12 in names
         m.config_map()
         assert [(len(s.output), len(s.input)) for s in m.slaves] == [(0, 0), (1, 0), (1, 0), (3, 12), (6, 16), (6, 16)]
         assert m.state_check(pysoem.SAFEOP_STATE, 500_000) == pysoem.SAFEOP_STATE
