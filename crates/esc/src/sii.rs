@@ -303,10 +303,12 @@ pub enum SiiError {
         /// CRC stored in byte 14.
         stored: u8,
     },
-    /// A category runs past the end of the image or has no end marker.
-    CategoryOverrun(u16),
-    /// A category's content is malformed.
-    BadCategory(u16),
+    /// A category runs past the end of the image or has no end marker:
+    /// its type and the word address of its header.
+    CategoryOverrun(u16, usize),
+    /// A category's content is malformed: its type and the word address
+    /// of its header.
+    BadCategory(u16, usize),
 }
 
 impl fmt::Display for SiiError {
@@ -316,8 +318,12 @@ impl fmt::Display for SiiError {
             SiiError::Checksum { computed, stored } => {
                 write!(f, "SII configuration CRC {stored:#04x} stored, {computed:#04x} computed")
             }
-            SiiError::CategoryOverrun(t) => write!(f, "SII category {t} runs past the image"),
-            SiiError::BadCategory(t) => write!(f, "SII category {t} is malformed"),
+            SiiError::CategoryOverrun(t, w) => {
+                write!(f, "SII category {t} at word {w:#06x} (byte {:#06x}) runs past the image", w * 2)
+            }
+            SiiError::BadCategory(t, w) => {
+                write!(f, "SII category {t} at word {w:#06x} (byte {:#06x}) is malformed", w * 2)
+            }
         }
     }
 }
@@ -675,29 +681,29 @@ pub fn parse(b: &[u8]) -> Result<SiiContent, SiiError> {
     let mut w = 0x40usize;
     loop {
         if (w + 2) * 2 > b.len() {
-            return Err(SiiError::CategoryOverrun(0));
+            return Err(SiiError::CategoryOverrun(0, w));
         }
         let kind = word(b, w);
         if kind == category::END {
             break;
         }
         let len = usize::from(word(b, w + 1));
-        let data = b.get((w + 2) * 2..(w + 2 + len) * 2).ok_or(SiiError::CategoryOverrun(kind))?;
-        parse_category(&mut c, kind, data)?;
+        let data = b.get((w + 2) * 2..(w + 2 + len) * 2).ok_or(SiiError::CategoryOverrun(kind, w))?;
+        parse_category(&mut c, kind, data).map_err(|()| SiiError::BadCategory(kind, w))?;
         w += 2 + len;
     }
     Ok(c)
 }
 
-fn parse_category(c: &mut SiiContent, kind: u16, d: &[u8]) -> Result<(), SiiError> {
-    let bad = SiiError::BadCategory(kind);
+fn parse_category(c: &mut SiiContent, kind: u16, d: &[u8]) -> Result<(), ()> {
+    let bad = ();
     match kind {
         category::STRINGS => {
-            let n = *d.first().ok_or(bad.clone())?;
+            let n = *d.first().ok_or(bad)?;
             let mut p = 1;
             for _ in 0..n {
-                let l = usize::from(*d.get(p).ok_or(bad.clone())?);
-                let s = d.get(p + 1..p + 1 + l).ok_or(bad.clone())?;
+                let l = usize::from(*d.get(p).ok_or(bad)?);
+                let s = d.get(p + 1..p + 1 + l).ok_or(bad)?;
                 c.strings.push(s.iter().map(|&ch| char::from(ch)).collect());
                 p += 1 + l;
             }
@@ -756,7 +762,7 @@ fn parse_category(c: &mut SiiContent, kind: u16, d: &[u8]) -> Result<(), SiiErro
                 };
                 p += 8;
                 for _ in 0..n {
-                    let e = d.get(p..p + 8).ok_or(bad.clone())?;
+                    let e = d.get(p..p + 8).ok_or(bad)?;
                     pdo.entries.push(SiiPdoEntry {
                         index: u16::from_le_bytes([e[0], e[1]]),
                         sub_index: e[2],

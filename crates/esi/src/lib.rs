@@ -87,6 +87,8 @@
 mod check;
 mod check_ecat;
 mod description;
+mod dictionary;
+mod from_sii;
 pub mod ipos;
 mod model;
 mod pdo;
@@ -106,6 +108,8 @@ pub use description::{
     MailboxTimeouts, PREOP, Pdo, PdoEntry, Profile, SlaveDescription, SmKind, StateRule, SyncManager,
     SyncSignal, apply_rules, default_config_area, free_run,
 };
+pub use dictionary::{device_objects, dictionary, objects_from_description};
+pub use from_sii::describe_sii;
 pub use model::{EsiObject, EsiSub, ObjectKind, access_flags};
 pub use pdo::{default_assignment, mapping_values};
 pub use read::{ReadError, read, read_all};

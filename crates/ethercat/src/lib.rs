@@ -12,12 +12,15 @@
 //!   PDO mapping, a CiA 402 drive over process data), what `drivebus
 //!   ethercat scan|sdo|state|pdo|drive` and `drivebus demo --ethercat` run.
 //! * [`dio`]: a digital I/O test slave (no mailbox, SII-described PDOs).
+//! * [`described`]: slaves made from a real device's SII EEPROM image or
+//!   ESI file (`drivebus ethercat serve --device FILE`).
 //!
 //! * [`drive`]: the CiA 402 drive personalities (`ipos`, `generic`) as
 //!   CoE slaves, and [`drive::DriveLine`], the builder of a line of them.
 
 pub mod capture;
 pub mod clock;
+pub mod described;
 pub mod dio;
 pub mod drive;
 #[cfg(feature = "ethercrab")]

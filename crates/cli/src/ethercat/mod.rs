@@ -1,6 +1,7 @@
 //! `drivebus ethercat …`: the EtherCAT side of the tool. `serve` puts
-//! CiA 402 drive twins on a network interface as software EtherCAT
-//! slaves (`drivebus_ethercat::drive`); `scan`, `sdo`, `state`, `pdo` and
+//! CiA 402 drive twins and real devices (from their SII image or ESI
+//! file) on a network interface as software EtherCAT
+//! slaves (`drivebus_ethercat::drive`, `drivebus_ethercat::described`); `scan`, `sdo`, `state`, `pdo` and
 //! `drive` are an EtherCAT master on an interface
 //! (`drivebus_ethercat::master`, on ethercrab), and `demo.rs` is
 //! `drivebus demo --ethercat`.
@@ -19,7 +20,7 @@ use crate::args::Global;
 /// `drivebus ethercat` subcommands.
 #[derive(Subcommand, Debug)]
 pub enum EthercatCmd {
-    /// Serve drives as EtherCAT slaves on a network interface (AF_PACKET; root or CAP_NET_RAW).
+    /// Serve drives and real devices (SII EEPROM image, ESI file) as EtherCAT slaves on a network interface (AF_PACKET; root or CAP_NET_RAW).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(EcatServeArgs),
     /// List the slaves on the line: position, addresses, identity (SII and 1018h), AL state, mailbox.
@@ -43,8 +44,10 @@ const SERVE_EXAMPLES: &str = "\
 Examples:
   drivebus ethercat serve --iface veth0 --drive ipos
   drivebus ethercat serve --iface eth1 --drive ipos --drive ipos --drive generic --state-dir ./ecat-state --pcap line.pcapng
+  drivebus ethercat serve --iface veth0 --device ek1100.bin --device el2004.hex --device board.xml#1 --drive ipos
 
-The slaves sit on the line in the order given. Prints one line containing `ready on IFACE` once
+The slaves sit on the line in the order given (--drive and --device mixed). A --device is a real
+device's SII EEPROM image (served byte for byte) or ESI file; its inputs loop its outputs back. Prints one line containing `ready on IFACE` once
 the segment answers frames; stops on SIGINT/SIGTERM (exit 0). Any EtherCAT master on the wire
 (ethercrab, SOEM/pysoem, TwinCAT) sees them; --pcap records every frame for Wireshark.";
 
@@ -273,9 +276,9 @@ pub struct EcatServeArgs {
     /// Network interface to serve on (a NIC, or one end of a veth pair).
     #[arg(long, value_name = "IFACE")]
     pub iface: String,
-    /// A drive on the line, in order: ipos or generic (repeatable).
-    #[arg(long = "drive", value_name = "PROFILE", required = true)]
-    pub drives: Vec<String>,
+    /// The slaves, in line order (`--drive` and `--device`, repeatable).
+    #[command(flatten)]
+    pub line: LineArgs,
     /// Keep each drive's parameters (1010h stores) and FoE setup files under
     /// DIR/ecat-<position>-<profile>, so they survive a restart.
     #[arg(long, value_name = "DIR")]
@@ -283,6 +286,69 @@ pub struct EcatServeArgs {
     /// Record every frame in and out as pcapng.
     #[arg(long, value_name = "FILE")]
     pub pcap: Option<PathBuf>,
+}
+
+/// One slave of `ethercat serve`'s line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LineSlave {
+    /// `--drive PROFILE`.
+    Drive(String),
+    /// `--device FILE[#N|#PRODUCT]`.
+    Device(String),
+}
+
+/// `--drive` and `--device` in the order given on the command line (clap
+/// keeps one list per option; their indices give the order).
+#[derive(Debug, Default, Clone)]
+pub struct LineArgs {
+    /// The slaves in line order.
+    pub slaves: Vec<LineSlave>,
+}
+
+impl clap::FromArgMatches for LineArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut all: Vec<(usize, LineSlave)> = Vec::new();
+        for (id, make) in
+            [("drive", LineSlave::Drive as fn(String) -> LineSlave), ("device", LineSlave::Device)]
+        {
+            if let (Some(v), Some(i)) = (m.get_many::<String>(id), m.indices_of(id)) {
+                all.extend(i.zip(v.map(|s| make(s.clone()))));
+            }
+        }
+        all.sort_by_key(|(i, _)| *i);
+        Ok(LineArgs { slaves: all.into_iter().map(|(_, s)| s).collect() })
+    }
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for LineArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        use clap::{Arg, ArgAction, ArgGroup};
+        cmd.arg(
+            Arg::new("drive")
+                .long("drive")
+                .value_name("PROFILE")
+                .action(ArgAction::Append)
+                .help("A drive twin on the line: ipos or generic (repeatable, in line order with --device)"),
+        )
+        .arg(
+            Arg::new("device")
+                .long("device")
+                .value_name("FILE[#N]")
+                .action(ArgAction::Append)
+                .help(
+                    "A device from its SII EEPROM image (binary or Intel hex) or ESI file; FILE#N or \
+                     FILE#PRODUCT picks one of an ESI file's devices (repeatable, in line order with --drive)",
+                ),
+        )
+        .group(ArgGroup::new("slaves").args(["drive", "device"]).multiple(true).required(true))
+    }
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 /// Runs a `drivebus ethercat` command.
@@ -295,5 +361,41 @@ pub async fn run(g: &Global, cmd: &EthercatCmd) -> anyhow::Result<i32> {
         EthercatCmd::State(a) => line::state(g, a).await.map(|()| 0),
         EthercatCmd::Pdo(EcatPdoCmd::Show(a)) => line::pdo_show(g, a).await.map(|()| 0),
         EthercatCmd::Drive(a) => drive::run(g, a).await.map(|()| 0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::FromArgMatches as _;
+
+    fn line(args: &[&str]) -> Result<Vec<LineSlave>, clap::Error> {
+        let m = LineArgs::augment_args(clap::Command::new("serve")).try_get_matches_from(args)?;
+        Ok(LineArgs::from_arg_matches(&m)?.slaves)
+    }
+
+    #[test]
+    fn drives_and_devices_keep_the_command_line_order() {
+        let got = line(&[
+            "serve",
+            "--device",
+            "ek1100.bin",
+            "--drive",
+            "ipos",
+            "--device",
+            "b.xml#2",
+            "--drive=generic",
+        ]);
+        assert_eq!(
+            got.unwrap(),
+            [
+                LineSlave::Device("ek1100.bin".into()),
+                LineSlave::Drive("ipos".into()),
+                LineSlave::Device("b.xml#2".into()),
+                LineSlave::Drive("generic".into()),
+            ]
+        );
+        assert_eq!(line(&["serve", "--device", "a.bin"]).unwrap(), [LineSlave::Device("a.bin".into())]);
+        assert!(line(&["serve"]).is_err(), "a line needs a slave");
     }
 }

@@ -1,25 +1,23 @@
-//! `drivebus ethercat serve`: a line of drive twins on an interface.
+//! `drivebus ethercat serve`: a line of drive twins and described devices
+//! (SII images, ESI files) on an interface.
 
-use super::EcatServeArgs;
+use super::{EcatServeArgs, LineSlave};
 use anyhow::Context;
-use drivebus_ethercat::drive::{self, DriveLine};
-use drivebus_ethercat::{Clock, server};
+use drivebus_ethercat::described::{self, Member};
+use drivebus_ethercat::{Clock, Host, drive, server};
 use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Serves until SIGINT or SIGTERM.
 pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
-    let mut line = DriveLine::new();
-    for d in &a.drives {
-        line = line.drive(drive::profile(d)?);
-    }
+    let members = members(&a.line.slaves)?;
     if let Some(dir) = &a.state_dir {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create --state-dir {}", dir.display()))?;
-        line = line.state_dir(dir);
     }
-    let host = line.host(Clock::real())?;
+    let devices = described::devices(&members, a.state_dir.as_deref()).map_err(anyhow::Error::msg)?;
+    let host = Host::line(devices, Clock::real());
     if let Some(p) = &a.pcap {
         let f = std::fs::File::create(p).with_context(|| format!("cannot create --pcap {}", p.display()))?;
         host.set_capture(Box::new(std::io::BufWriter::new(f)), &a.iface)
@@ -40,7 +38,7 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
     };
     {
         let mut out = std::io::stdout().lock();
-        writeln!(out, "drivebus ethercat serve: ready on {} (drives {})", a.iface, a.drives.join(" "))?;
+        writeln!(out, "drivebus ethercat serve: ready on {} (line {})", a.iface, names(&members).join(" "))?;
         out.flush()?;
     }
     signals.wait().await?;
@@ -50,6 +48,28 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
     let stats = stats.with_context(|| format!("serving on {}", a.iface))?;
     tracing::info!(frames = stats.frames, ignored = stats.ignored, "stopped");
     Ok(())
+}
+
+/// The line's members, files read and checked before anything is served.
+fn members(slaves: &[LineSlave]) -> anyhow::Result<Vec<Member>> {
+    slaves
+        .iter()
+        .map(|s| match s {
+            LineSlave::Drive(p) => Ok(Member::Drive(drive::profile(p)?)),
+            LineSlave::Device(f) => Ok(Member::Device(Box::new(described::load(f)?))),
+        })
+        .collect()
+}
+
+/// What the ready line lists: profiles and device names in line order.
+fn names(members: &[Member]) -> Vec<String> {
+    members
+        .iter()
+        .map(|m| match m {
+            Member::Drive(p) => p.to_string(),
+            Member::Device(d) => d.type_name().to_owned(),
+        })
+        .collect()
 }
 
 /// SIGINT and SIGTERM, installed before the ready line so a signal right

@@ -104,7 +104,7 @@ fn parse_rejects_bad_crc_and_overruns() {
     // Corrupt the first category length so it runs past the end.
     let at = 0x41 * 2;
     img.bytes_mut()[at..at + 2].copy_from_slice(&0x7FFFu16.to_le_bytes());
-    assert_eq!(img.parse(), Err(SiiError::CategoryOverrun(category::STRINGS)));
+    assert_eq!(img.parse(), Err(SiiError::CategoryOverrun(category::STRINGS, 0x40)));
     assert_eq!(parse(&[0u8; 16]), Err(SiiError::TooShort));
 }
 

@@ -31,6 +31,13 @@
 //!   DC: at every SYNC0 the latest outputs are applied, then
 //!   [`SlaveApp::sync0`] runs, then inputs are latched.
 //!
+//! **Device emulation** (0x0141 bit 0, set from SII word 0 as on an EK1100
+//! or an EL2004 without a microcontroller): the ESC sets the AL status
+//! itself; the firmware follows that state without checks and moves the
+//! process data of the sync managers as the master configured them (an
+//! outputs SM on the digital output register 0x0F00 is read after every
+//! frame).
+//!
 //! Sync managers are found from the SII SyncManager category (types 1–4);
 //! without one, SM0/SM1 are the mailbox and SM2/SM3 the process data (or
 //! SM0/SM1 for a device without mailbox).
@@ -180,9 +187,12 @@ impl<A: SlaveApp> Slave<A> {
     /// and the application's timers. Returns the next deadline.
     pub fn poll(&mut self, now: Instant) -> Option<Instant> {
         self.esc.poll(now);
+        self.follow_emulated_state(now);
         while let Some(ev) = self.esc.pop_event() {
             self.handle(ev, now);
         }
+        self.follow_emulated_state(now);
+        self.emulated_outputs(now);
         if let Some((code, to)) = self.app.take_error() {
             self.fail(code, to, now);
         }
@@ -282,6 +292,69 @@ impl<A: SlaveApp> Slave<A> {
                 }
             }
             _ => {}
+        }
+    }
+
+    /// Device emulation (0x0141 bit 0, from SII word 0): the ESC copies AL
+    /// control into AL status itself, as on an EL2004 or an EK1100 without
+    /// a microcontroller. The firmware does no ESM checks then; it follows
+    /// the state the ESC shows and moves the process data of the sync
+    /// managers as they are configured.
+    fn follow_emulated_state(&mut self, now: Instant) {
+        if !self.esc.device_emulation() {
+            return;
+        }
+        let Some(to) = AlState::from_bits(self.esc.peek_u16(0x0130) as u8) else { return };
+        let from = self.state;
+        if to == from {
+            return;
+        }
+        if matches!(to, AlState::SafeOp | AlState::Op) && !self.process_data_active() {
+            let sizes = self.app.process_data_sizes();
+            let area = |sm: Option<(usize, u16)>, bytes: usize| {
+                sm.and_then(|(n, _)| self.esc.sync_manager(n))
+                    .filter(|s| s.enabled && bytes > 0)
+                    .map_or((0, 0), |s| (s.start, bytes))
+            };
+            let (out_addr, ob) = area(self.layout.outputs, sizes.output_bytes());
+            let (in_addr, ib) = area(self.layout.inputs, sizes.input_bytes());
+            (self.out_addr, self.in_addr) = (out_addr, in_addr);
+            self.out_buf.clear();
+            self.out_buf.resize(ob, 0);
+            self.in_buf.clear();
+            self.in_buf.resize(ib, 0);
+            self.sync = SyncConfig { outputs_len: ob as u16, inputs_len: ib as u16, ..SyncConfig::default() };
+        }
+        if to != AlState::Op {
+            self.outputs_valid = false;
+        }
+        self.state = to;
+        self.app.state_changed(from, to, now);
+        if !matches!(from, AlState::SafeOp | AlState::Op) && self.process_data_active() {
+            self.latch_inputs(now);
+        }
+    }
+
+    /// Device emulation with the outputs SM on the digital output register
+    /// (0x0F00–0x0F03, an EL2xxx): the ESC has no buffer event there, so
+    /// the value is looked at after every frame and handed on when it
+    /// changed.
+    fn emulated_outputs(&mut self, now: Instant) {
+        let n = self.out_buf.len();
+        if !self.esc.device_emulation()
+            || self.state != AlState::Op
+            || n == 0
+            || n > 4
+            || self.out_addr >= 0x1000
+        {
+            return;
+        }
+        let mut v = [0u8; 4];
+        self.esc.pdi_read(self.out_addr, &mut v[..n]);
+        if !self.outputs_valid || v[..n] != self.out_buf[..] {
+            self.out_buf.copy_from_slice(&v[..n]);
+            self.outputs_valid = true;
+            self.app.outputs(&self.out_buf, now);
         }
     }
 

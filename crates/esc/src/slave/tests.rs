@@ -460,3 +460,38 @@ fn bootstrap_uses_its_own_mailbox_and_leaves_only_to_init() {
     assert_eq!(r.request(2), (0x13, 0x0011), "BOOT -> PRE-OP is not allowed");
     assert_eq!(r.request(0x11), (0x01, 0));
 }
+
+/// An ESC in device emulation (SII word 0 high byte bit 0, like an EL2004):
+/// the AL status follows the AL control without checks, and the firmware
+/// follows it with the process data of the SMs as the master set them up.
+#[test]
+fn device_emulation_state_is_followed_with_process_data() {
+    let img = SiiImage::builder()
+        .config(crate::sii::ConfigArea { pdi_control: 0x0104, ..Default::default() })
+        .identity(2, 0x07D4_3052, 0x0010_0000, 0)
+        .fmmus(&[fmmu_usage::OUTPUTS])
+        .sync_manager(SiiSyncManager { start: 0x0F00, length: 1, control: 0x44, enable: 9, sm_type: 3 })
+        .build();
+    let esc = Esc::new(EscConfig::with_sii(img));
+    assert!(esc.device_emulation());
+    let mut r = Rig { s: Slave::new(esc, App::default(), SlaveConfig::default()), t: Instant::ZERO };
+    r.dg(Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
+    // The test app wants 2 output bytes: SM0 set up for them, no mailbox.
+    r.wr(0x0800, &[0x00, 0x0F, 2, 0, 0x44, 0, 1, 0]);
+    assert_eq!(r.request(2), (0x02, 0));
+    assert_eq!(r.request(4), (0x04, 0), "no checks: the ESC sets the state");
+    assert_eq!(r.request(8), (0x08, 0));
+    r.wr(0x0F00, &[0x5A, 0xA5]);
+    assert_eq!(r.s.app().outputs.last().map(|o| o.0.clone()), Some(vec![0x5A, 0xA5]));
+    assert_eq!(r.s.state(), AlState::Op);
+    assert_eq!(
+        r.s.app().states,
+        vec![
+            (AlState::Init, AlState::PreOp),
+            (AlState::PreOp, AlState::SafeOp),
+            (AlState::SafeOp, AlState::Op)
+        ]
+    );
+    r.request(1);
+    assert_eq!(r.s.state(), AlState::Init);
+}

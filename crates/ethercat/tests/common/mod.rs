@@ -37,6 +37,9 @@ pub struct Wire {
     pub inner: String,
     stop: Arc<AtomicBool>,
     server: Option<JoinHandle<std::io::Result<ServerStats>>>,
+    /// The served line, to look at its devices.
+    #[allow(dead_code)] // not every test looks
+    pub host: Option<Host>,
 }
 
 impl Wire {
@@ -62,7 +65,8 @@ impl Wire {
         let ns = format!("db{tag}{id}");
         let (outer, inner) = (format!("db{tag}{id}a"), format!("db{tag}{id}b"));
         ok(&["netns", "add", &ns]).map_err(|e| format!("cannot create a network namespace: {e}"))?;
-        let mut w = Wire { ns, outer, inner, stop: Arc::new(AtomicBool::new(false)), server: None };
+        let mut w =
+            Wire { ns, outer, inner, stop: Arc::new(AtomicBool::new(false)), server: None, host: None };
         for step in [
             vec!["link", "add", w.outer.as_str(), "type", "veth", "peer", "name", w.inner.as_str()],
             vec!["link", "set", w.inner.as_str(), "netns", w.ns.as_str()],
@@ -72,6 +76,7 @@ impl Wire {
             ok(&step)?;
         }
         let host = Host::line(devices, Clock::real());
+        w.host = Some(host.clone());
         // Bind before any master starts, so its first frame is not lost.
         let sock = server::RawSocket::open(&w.outer).map_err(|e| format!("AF_PACKET socket: {e}"))?;
         let stop = w.stop.clone();
