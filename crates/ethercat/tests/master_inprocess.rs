@@ -226,11 +226,6 @@ fn whole_objects_without_sdo_information_or_complete_access() {
     });
 }
 
-/// The iPOS shows a new mode in 6061h only once in operation enabled
-/// (§4.2.4): homing straight from switch on disabled (as `drivebus
-/// ethercat drive home` does after the line fell back to SAFE-OP) must
-/// enable before it waits for the mode.
-
 /// The iPOS shows a new mode in 6061h only once in Operation enabled (its
 /// manual §4.2.4): homing and a move from a drive not enabled set the mode,
 /// enable, and start once 6061h shows the mode.

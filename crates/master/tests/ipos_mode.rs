@@ -8,9 +8,7 @@ use std::time::Duration;
 
 use drivebus_bus::{Bus, BusConfig, ProbeId};
 use drivebus_master::drive::mode;
-use drivebus_master::{
-    DriveError, DriveState, Master, MasterConfig, ModeNotShown, SimBus,
-};
+use drivebus_master::{DriveError, DriveState, Master, MasterConfig, ModeNotShown, SimBus};
 use drivebus_personality::Profile as Personality;
 
 const NODE: u8 = 3;
@@ -88,5 +86,8 @@ fn a_mode_set_before_enabling_is_checked_once_enabled() {
     // was read as homing.
     let shown = sdo_at(sim.bus(), probe, true, &[0x4F, 0x61, 0x60, 0x00, mode::HM as u8]);
     let start = sdo_at(sim.bus(), probe, false, &[0x2B, 0x40, 0x60, 0x00, 0x1F, 0x00]);
-    assert!(matches!((shown, start), (Some(a), Some(b)) if a < b), "6061h = 6 at {shown:?}, start at {start:?}");
+    assert!(
+        matches!((shown, start), (Some(a), Some(b)) if a < b),
+        "6061h = 6 at {shown:?}, start at {start:?}"
+    );
 }

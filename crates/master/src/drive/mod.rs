@@ -15,8 +15,8 @@ use std::fmt;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use drivebus_cia402::codes::State;
 pub use drivebus_cia402::codes::ModeNotShown;
+use drivebus_cia402::codes::State;
 use drivebus_nmt::RemoteState;
 use tokio::sync::Notify;
 
