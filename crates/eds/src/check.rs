@@ -307,8 +307,13 @@ impl Ctx<'_> {
 
 /// `[FileInfo]` (CiA 306 §4.2): the keys that identify the file are
 /// errors when missing (an empty section passed before), the dates and
-/// authors warnings.
+/// authors warnings. A file without the section at all gets the reader's
+/// one warning "[FileInfo] missing": Lely's dcfgen writes its master.dcf
+/// so, and its own dcfchk takes it.
 fn file_info(c: &mut Ctx<'_>) {
+    if c.eds.file_info.is_empty() {
+        return;
+    }
     let has =
         |k: &str| c.eds.file_info.iter().any(|(key, v)| key.eq_ignore_ascii_case(k) && !v.trim().is_empty());
     let missing = |keys: &[&'static str]| keys.iter().copied().filter(|k| !has(k)).collect::<Vec<_>>();

@@ -270,3 +270,16 @@ fn an_empty_file_info_is_an_error() {
         check(&p.eds).into_iter().filter(|f| f.severity == Severity::Error).map(|f| f.message).collect();
     assert_eq!(errors, ["[FileInfo] lacks FileName, FileVersion (CiA 306 §4.2)"], "{errors:?}");
 }
+
+/// A DCF without `[FileInfo]` (Lely's dcfgen writes master.dcf so): one
+/// warning, no error (the interop suite checks dcfgen's output).
+#[test]
+fn a_missing_file_info_is_one_warning() {
+    let start = QUIRKS.find("[FileInfo]").unwrap();
+    let end = start + QUIRKS[start..].find("\n[").unwrap() + 1;
+    let p = parse(&format!("{}{}", &QUIRKS[..start], &QUIRKS[end..])).unwrap();
+    assert!(p.warnings.iter().any(|w| w.message == "[FileInfo] missing"), "{:?}", p.warnings);
+    let f = check(&p.eds);
+    assert!(!f.iter().any(|f| f.severity == Severity::Error), "{f:?}");
+    assert!(!f.iter().any(|f| f.message.contains("[FileInfo]")), "{f:?}");
+}
