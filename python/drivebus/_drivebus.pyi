@@ -66,8 +66,8 @@ class Simulation:
     """Drive twins on a virtual CAN bus in simulated time, deterministic.
 
     Nothing moves between calls: ``advance(seconds)`` runs the bus and the
-    drives; the same calls give the same frame log, byte for byte. Belongs
-    to the thread that made it. Raises ``ValueError`` with the CLI's message
+    drives; the same calls give the same frame log, byte for byte. Any
+    thread may use it, one call at a time. Raises ``ValueError`` with the CLI's message
     for a bad drive spec, and for a bitrate of 0 (``None``: frames take no
     time).
     """

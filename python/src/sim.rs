@@ -1,12 +1,19 @@
 //! `Simulation`: drive twins on the virtual bus in simulated time
 //! (`drivebus_bus::Bus`), as fast as the CPU allows and deterministic.
+//!
+//! The bus (its devices are not `Send`) lives on a thread of its own; the
+//! Python object sends it requests and waits for the answers with the GIL
+//! released, so any Python thread may use a `Simulation`, one call at a
+//! time, and others run meanwhile.
 
+use std::sync::Mutex;
+use std::sync::mpsc;
 use std::time::Duration;
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
-use drivebus_can::Instant;
-use drivebus_personality::{PersonalityDevice, Profile};
-use pyo3::exceptions::PyValueError;
+use drivebus_can::{Frame, Instant};
+use drivebus_personality::PersonalityDevice;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::bus::{Received, frame, received};
@@ -20,13 +27,66 @@ const MAX_ADVANCE_S: f64 = 365.0 * 86_400.0;
 
 /// Drive twins on a virtual CAN bus in simulated time. Nothing moves
 /// between calls: `advance(seconds)` runs the bus and the drives; the same
-/// calls give the same frame log, byte for byte. Belongs to the thread
-/// that made it.
-#[pyclass(unsendable, module = "drivebus._drivebus")]
+/// calls give the same frame log, byte for byte.
+#[pyclass(frozen, module = "drivebus._drivebus")]
 pub struct Simulation {
+    to_bus: Mutex<mpsc::Sender<Request>>,
+}
+
+/// What the bus thread is asked to do.
+enum Request {
+    Advance(Duration, mpsc::Sender<()>),
+    Send(Frame),
+    Received(mpsc::Sender<Vec<Received>>),
+    Log(mpsc::Sender<Vec<Logged>>),
+    LogLines(mpsc::Sender<Vec<String>>),
+    Drives(mpsc::Sender<Vec<DriveState>>),
+    Now(mpsc::Sender<f64>),
+}
+
+/// The bus and the host's station, on the bus thread.
+struct Sim {
     bus: Bus,
     probe: ProbeId,
-    drives: Vec<(Profile, u8, NodeId)>,
+    drives: Vec<NodeId>,
+}
+
+impl Sim {
+    /// Answers requests until the `Simulation` is dropped.
+    fn serve(mut self, requests: mpsc::Receiver<Request>) {
+        // A send fails only when the caller gave up waiting: nothing to do.
+        for r in requests {
+            match r {
+                Request::Advance(d, done) => {
+                    self.bus.run_for(d);
+                    let _ = done.send(());
+                }
+                Request::Send(f) => {
+                    self.bus.send_from(self.probe, f);
+                }
+                Request::Received(out) => {
+                    let _ = out.send(self.bus.take_received(self.probe).iter().map(received).collect());
+                }
+                Request::Log(out) => {
+                    let log = self.bus.log().iter().map(|e| {
+                        let (id, ext, rtr, dlc, data) = received(&e.frame);
+                        (seconds(e.time), id, ext, rtr, dlc, data)
+                    });
+                    let _ = out.send(log.collect());
+                }
+                Request::LogLines(out) => {
+                    let _ = out.send(self.bus.log_lines());
+                }
+                Request::Drives(out) => {
+                    let drives = self.drives.iter().filter_map(|&id| self.bus.node::<PersonalityDevice>(id));
+                    let _ = out.send(drives.map(DriveState::of).collect());
+                }
+                Request::Now(out) => {
+                    let _ = out.send(seconds(self.bus.now()));
+                }
+            }
+        }
+    }
 }
 
 #[pymethods]
@@ -41,33 +101,39 @@ impl Simulation {
             return Err(PyValueError::new_err("bitrate must be positive (None: frames take no time)"));
         }
         let specs = drivebus_personality::drive_specs(&drives).map_err(PyValueError::new_err)?;
-        let cfg = BusConfig { bitrate, ..BusConfig::default() };
-        let mut bus = Bus::new(cfg);
-        // The host's station, before the drives: it hears their boot-ups.
-        let probe = bus.attach_probe();
-        let mut hosted = Vec::with_capacity(specs.len());
+        let mut built = Vec::with_capacity(specs.len());
         for (profile, node) in specs {
-            let dev = crate::bus::build(profile, node)?;
-            hosted.push((profile, node, bus.attach(dev)));
+            built.push(crate::bus::build(profile, node)?);
         }
-        Ok(Simulation { bus, probe, drives: hosted })
+        let (to_bus, requests) = mpsc::channel();
+        std::thread::Builder::new()
+            .name("drivebus-sim".into())
+            .spawn(move || {
+                let mut bus = Bus::new(BusConfig { bitrate, ..BusConfig::default() });
+                // The host's station, before the drives: it hears their boot-ups.
+                let probe = bus.attach_probe();
+                let drives = built.into_iter().map(|d| bus.attach(d)).collect();
+                Sim { bus, probe, drives }.serve(requests);
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot start the simulation thread: {e}")))?;
+        Ok(Simulation { to_bus: Mutex::new(to_bus) })
     }
 
     /// Simulated time in seconds since the start.
     #[getter]
-    fn now(&self) -> f64 {
-        seconds(self.bus.now())
+    fn now(&self, py: Python<'_>) -> PyResult<f64> {
+        self.ask(py, Request::Now)
     }
 
     /// Runs the bus and the drives for `seconds` of simulated time.
-    fn advance(&mut self, seconds: f64) -> PyResult<()> {
+    fn advance(&self, py: Python<'_>, seconds: f64) -> PyResult<()> {
         if !(seconds.is_finite() && (0.0..=MAX_ADVANCE_S).contains(&seconds)) {
             return Err(PyValueError::new_err(format!(
                 "seconds must be a number from 0 to {MAX_ADVANCE_S}, not {seconds}"
             )));
         }
-        self.bus.run_for(Duration::from_secs_f64(seconds));
-        Ok(())
+        let d = Duration::from_secs_f64(seconds);
+        self.ask(py, |done| Request::Advance(d, done))
     }
 
     /// Queues a classic CAN frame from the host's station at the current
@@ -75,7 +141,7 @@ impl Simulation {
     /// Raises `ValueError` for a frame CAN cannot carry.
     #[pyo3(signature = (arbitration_id, data, is_extended_id = false, is_remote_frame = false, dlc = None))]
     fn send(
-        &mut self,
+        &self,
         arbitration_id: u32,
         data: &[u8],
         is_extended_id: bool,
@@ -83,42 +149,51 @@ impl Simulation {
         dlc: Option<u8>,
     ) -> PyResult<()> {
         let f = frame(arbitration_id, data, is_extended_id, is_remote_frame, dlc)?;
-        self.bus.send_from(self.probe, f);
-        Ok(())
+        self.request(Request::Send(f))
     }
 
     /// The frames the host's station received since the last call, as
     /// `recv` gives them, oldest first.
-    fn received(&mut self) -> Vec<Received> {
-        self.bus.take_received(self.probe).iter().map(received).collect()
+    fn received(&self, py: Python<'_>) -> PyResult<Vec<Received>> {
+        self.ask(py, Request::Received)
     }
 
     /// Every frame the bus delivered so far: `(seconds, arbitration_id,
     /// is_extended_id, is_remote_frame, dlc, data)`, in bus order.
-    fn log(&self) -> Vec<Logged> {
-        self.bus
-            .log()
-            .iter()
-            .map(|e| {
-                let (id, ext, rtr, dlc, data) = received(&e.frame);
-                (seconds(e.time), id, ext, rtr, dlc, data)
-            })
-            .collect()
+    fn log(&self, py: Python<'_>) -> PyResult<Vec<Logged>> {
+        self.ask(py, Request::Log)
     }
 
     /// The log as candump lines (`(0.001234) can0 701#00`).
-    fn log_lines(&self) -> Vec<String> {
-        self.bus.log_lines()
+    fn log_lines(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        self.ask(py, Request::LogLines)
     }
 
     /// The drives' state now, in the order they were given.
     #[getter]
-    fn drives(&self) -> Vec<DriveState> {
-        self.drives
-            .iter()
-            .filter_map(|&(_, _, id)| self.bus.node::<PersonalityDevice>(id).map(DriveState::of))
-            .collect()
+    fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
+        self.ask(py, Request::Drives)
     }
+}
+
+impl Simulation {
+    /// Hands `r` to the bus thread.
+    fn request(&self, r: Request) -> PyResult<()> {
+        let to_bus = self.to_bus.lock().map_err(|_| stopped())?;
+        to_bus.send(r).map_err(|_| stopped())
+    }
+
+    /// Asks the bus thread and waits for the answer, the GIL released.
+    fn ask<T: Send>(&self, py: Python<'_>, r: impl FnOnce(mpsc::Sender<T>) -> Request) -> PyResult<T> {
+        let (tx, rx) = mpsc::channel();
+        self.request(r(tx))?;
+        py.detach(move || rx.recv()).map_err(|_| stopped())
+    }
+}
+
+/// The bus thread ended (only a bug in a device makes it end early).
+fn stopped() -> PyErr {
+    PyRuntimeError::new_err("the simulation has stopped")
 }
 
 fn seconds(t: Instant) -> f64 {

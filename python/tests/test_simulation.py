@@ -61,3 +61,22 @@ def test_bad_arguments():
         sim.send(0x800, b"")
     sim.advance(0.01)
     assert sim.log()[0][0] == 0.0  # no bitrate: frames take no time
+
+
+def test_any_thread_may_use_a_simulation():
+    import threading
+
+    sim = drivebus.Simulation(drives=["akd:1"])
+    errors = []
+
+    def other():
+        try:
+            sim.advance(0.01)
+        except BaseException as e:  # a PanicException is a BaseException
+            errors.append(e)
+
+    t = threading.Thread(target=other)
+    t.start()
+    t.join()
+    assert errors == []
+    assert sim.now == pytest.approx(0.01)
