@@ -24,14 +24,9 @@ pub struct DriveSpec {
 }
 
 impl DriveSpec {
-    /// Parses `PROFILE:NODE`; the error says which part is wrong
-    /// ([`drivebus_personality::drive_spec`]).
-    pub fn parse(s: &str) -> anyhow::Result<DriveSpec> {
-        let (profile, node) = drivebus_personality::drive_spec(s).map_err(anyhow::Error::msg)?;
-        Ok(DriveSpec { profile, node })
-    }
-
-    /// Parses every spec and refuses two drives with one node-ID.
+    /// Parses every `PROFILE:NODE` and refuses two drives with one
+    /// node-ID; the error says which part is wrong
+    /// ([`drivebus_personality::drive_specs`]).
     pub fn parse_all(specs: &[String]) -> anyhow::Result<Vec<DriveSpec>> {
         let specs = drivebus_personality::drive_specs(specs).map_err(anyhow::Error::msg)?;
         Ok(specs.into_iter().map(|(profile, node)| DriveSpec { profile, node }).collect())
@@ -167,12 +162,13 @@ mod tests {
 
     #[test]
     fn drive_specs() {
-        assert_eq!(DriveSpec::parse("akd:1").unwrap(), DriveSpec { profile: Profile::Akd, node: 1 });
-        assert_eq!(DriveSpec::parse("SSD-630:127").unwrap().profile, Profile::Ssd630);
-        assert!(DriveSpec::parse("akd:0").is_err());
-        assert!(DriveSpec::parse("x:1").unwrap_err().to_string().contains("profiles: kc1, akd"));
+        let one = |s: &str| DriveSpec::parse_all(&[s.to_owned()]).map(|v| v[0]);
+        assert_eq!(one("akd:1").unwrap(), DriveSpec { profile: Profile::Akd, node: 1 });
+        assert_eq!(one("SSD-630:127").unwrap().profile, Profile::Ssd630);
+        assert!(one("akd:0").is_err());
+        assert!(one("x:1").unwrap_err().to_string().contains("profiles: kc1, akd"));
         let two = ["akd:1".to_owned(), "kc1:1".to_owned()];
         assert!(DriveSpec::parse_all(&two).unwrap_err().to_string().contains("already taken by akd:1"));
-        assert_eq!(DriveSpec::parse("dds6:2").unwrap().dir_name(), "dds6-2");
+        assert_eq!(one("dds6:2").unwrap().dir_name(), "dds6-2");
     }
 }
