@@ -1,6 +1,7 @@
 """Type stubs of the Rust extension ``drivebus._drivebus``."""
 
-from typing import List, Optional, Sequence, Tuple
+import os
+from typing import List, Optional, Sequence, Tuple, Union
 
 PROFILES: List[str]
 """The personalities a drive spec may name (``"kc1"``, ``"akd"``, ...)."""
@@ -35,10 +36,16 @@ class VirtualBus:
 
     Raises ``ValueError`` with the message of ``drivebus serve --drive`` for
     a bad drive spec (unknown profile, node-ID outside 1..127, a node-ID
-    taken twice).
+    taken twice), and ``path: line:column: cause`` for a bad machine file
+    (``machine``, as ``drivebus serve --machine`` takes it).
     """
 
-    def __init__(self, channel: str = "virtual", drives: Sequence[str] = ...) -> None: ...
+    def __init__(
+        self,
+        channel: str = "virtual",
+        drives: Sequence[str] = ...,
+        machine: Optional[Union[str, "os.PathLike[str]"]] = None,
+    ) -> None: ...
     @property
     def channel(self) -> str:
         """The channel (the bus's name)."""
@@ -47,7 +54,7 @@ class VirtualBus:
         """True once ``close()`` was called."""
     @property
     def drives(self) -> List[DriveState]:
-        """The hosted drives' state, read now, in the order they were given."""
+        """The hosted drives' state, read now, in the order they were given; ``OSError`` once closed."""
     def send(
         self,
         arbitration_id: int,
@@ -72,7 +79,12 @@ class Simulation:
     time).
     """
 
-    def __init__(self, drives: Sequence[str] = ..., bitrate: Optional[int] = 1_000_000) -> None: ...
+    def __init__(
+        self,
+        drives: Sequence[str] = ...,
+        bitrate: Optional[int] = 1_000_000,
+        machine: Optional[Union[str, "os.PathLike[str]"]] = None,
+    ) -> None: ...
     @property
     def now(self) -> float:
         """Simulated time in seconds since the start."""

@@ -5,8 +5,9 @@ joins the in-process virtual bus ``channel`` and hosts the drive twins
 ``drives`` on it while the bus is open.
 """
 
+import os
 import time
-from typing import Any, List, Optional, Sequence, Tuple
+from typing import Any, List, Optional, Sequence, Tuple, Union
 
 import can
 
@@ -22,7 +23,9 @@ class DrivebusBus(can.BusABC):
         channel shares one virtual bus (default ``"virtual"``).
     :param drives: drive twins to host, ``"PROFILE:NODE"`` as
         ``drivebus serve --drive`` takes them (``"akd:1"``).
-    :raises ValueError: a bad drive spec, with the CLI's message.
+    :param machine: a machine file (``drivebus serve --machine``) for the
+        drives; default: each profile's default machine.
+    :raises ValueError: a bad drive spec or machine file, with the CLI's message.
     """
 
     def __init__(
@@ -30,13 +33,14 @@ class DrivebusBus(can.BusABC):
         channel: Any = "virtual",
         can_filters: Optional[can.typechecking.CanFilters] = None,
         drives: Sequence[str] = (),
+        machine: Optional[Union[str, "os.PathLike[str]"]] = None,
         **kwargs: Any,
     ) -> None:
         name = "virtual" if channel is None else str(channel)
         if isinstance(drives, str):
             drives = [drives]
         self._channel = name
-        self._bus = VirtualBus(name, list(drives))
+        self._bus = VirtualBus(name, list(drives), machine)
         self.channel_info = f"drivebus virtual bus {name!r}"
         super().__init__(channel=name, can_filters=can_filters, **kwargs)
 

@@ -1,10 +1,12 @@
 //! `VirtualBus`: a participant of a named in-process virtual CAN bus,
 //! optionally hosting drive twins on it.
 
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Duration;
 
 use drivebus_can::{CanId, Frame};
+use drivebus_personality::machine::{Machine, MachineFile, MachineFileError};
 use drivebus_personality::{PersonalityDevice, Profile};
 use drivebus_transport::host::{self, DeviceHost};
 use drivebus_transport::{CanRx, CanTx, TrySendError};
@@ -40,16 +42,14 @@ pub struct VirtualBus {
 
 #[pymethods]
 impl VirtualBus {
-    /// Joins `channel` and starts `drives` on it. Raises `ValueError` with
-    /// the message of `drivebus serve --drive` for a bad drive.
+    /// Joins `channel` and starts `drives` on it, each on its machine
+    /// (`machine`: a machine file, as `drivebus serve --machine` takes it;
+    /// else the profile's default). Raises `ValueError` with the message
+    /// of `drivebus serve` for a bad drive or machine file.
     #[new]
-    #[pyo3(signature = (channel = "virtual", drives = Vec::new()))]
-    fn new(channel: &str, drives: Vec<String>) -> PyResult<VirtualBus> {
-        let specs = drivebus_personality::drive_specs(&drives).map_err(PyValueError::new_err)?;
-        let mut built = Vec::with_capacity(specs.len());
-        for (profile, node) in specs {
-            built.push((profile, node, build(profile, node)?));
-        }
+    #[pyo3(signature = (channel = "virtual", drives = Vec::new(), machine = None))]
+    fn new(channel: &str, drives: Vec<String>, machine: Option<PathBuf>) -> PyResult<VirtualBus> {
+        let built = build_all(&drives, machine.as_deref())?;
         let rt = runtime()?;
         let _in_runtime = rt.enter();
         let hub = drivebus_transport::hub::virtual_hub(channel);
@@ -145,8 +145,12 @@ impl VirtualBus {
     }
 
     /// The hosted drives' state, read now, in the order they were given.
+    /// Raises `OSError` once the bus is closed.
     #[getter]
     fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
+        // Stopping a drive's task takes effect at its next await: a read
+        // right after `close` could still be answered.
+        self.check_open()?;
         let rt = runtime()?;
         py.detach(|| {
             self.drives
@@ -192,12 +196,35 @@ fn closed_message() -> &'static str {
     "the virtual bus is closed"
 }
 
-/// The drive `drivebus serve --drive PROFILE:NODE` hosts: the personality
-/// on its default machine, parameters in memory.
-pub(crate) fn build(profile: Profile, node: u8) -> PyResult<PersonalityDevice> {
-    profile
-        .build_on_default_machine(node)
-        .map_err(|e| PyValueError::new_err(format!("cannot build {profile}:{node}: {e}")))
+/// The drives `drivebus serve --drive PROFILE:NODE [--machine FILE]`
+/// hosts: each personality on its machine (from `machine_file`, else the
+/// profile's default), parameters in memory. The errors are the CLI's.
+pub(crate) fn build_all(
+    drives: &[String],
+    machine_file: Option<&Path>,
+) -> PyResult<Vec<(Profile, u8, PersonalityDevice)>> {
+    let specs = drivebus_personality::drive_specs(drives).map_err(PyValueError::new_err)?;
+    let file = match machine_file {
+        None => None,
+        Some(path) => {
+            let at = |e: MachineFileError| PyValueError::new_err(format!("{}: {e}", path.display()));
+            let f = MachineFile::read(path).map_err(at)?;
+            f.check_nodes(&specs.iter().map(|s| s.1).collect::<Vec<_>>()).map_err(at)?;
+            Some((f, at))
+        }
+    };
+    let mut built = Vec::with_capacity(specs.len());
+    for (profile, node) in specs {
+        let machine = match &file {
+            None => Machine::default_for(profile),
+            Some((f, at)) => f.machine_for(profile, node).map_err(at)?,
+        };
+        let dev = profile
+            .build_on(node, &machine)
+            .map_err(|e| PyValueError::new_err(format!("cannot build {profile}:{node}: {e}")))?;
+        built.push((profile, node, dev));
+    }
+    Ok(built)
 }
 
 /// A frame as Python gets it.

@@ -6,6 +6,7 @@
 //! released, so any Python thread may use a `Simulation`, one call at a
 //! time, and others run meanwhile.
 
+use std::path::PathBuf;
 use std::sync::Mutex;
 use std::sync::mpsc;
 use std::time::Duration;
@@ -91,20 +92,18 @@ impl Sim {
 
 #[pymethods]
 impl Simulation {
-    /// Builds `drives` (`"akd:1"`) on a bus at `bitrate` bit/s (`None`:
-    /// frames take no time). Raises `ValueError` with the CLI's message
-    /// for a bad drive, and for a bitrate of 0.
+    /// Builds `drives` (`"akd:1"`, each on its machine from the machine
+    /// file `machine`, else the profile's default) on a bus at `bitrate`
+    /// bit/s (`None`: frames take no time). Raises `ValueError` with the
+    /// CLI's message for a bad drive or machine file, and for a bitrate of 0.
     #[new]
-    #[pyo3(signature = (drives = Vec::new(), bitrate = Some(1_000_000)))]
-    fn new(drives: Vec<String>, bitrate: Option<u32>) -> PyResult<Simulation> {
+    #[pyo3(signature = (drives = Vec::new(), bitrate = Some(1_000_000), machine = None))]
+    fn new(drives: Vec<String>, bitrate: Option<u32>, machine: Option<PathBuf>) -> PyResult<Simulation> {
         if bitrate == Some(0) {
             return Err(PyValueError::new_err("bitrate must be positive (None: frames take no time)"));
         }
-        let specs = drivebus_personality::drive_specs(&drives).map_err(PyValueError::new_err)?;
-        let mut built = Vec::with_capacity(specs.len());
-        for (profile, node) in specs {
-            built.push(crate::bus::build(profile, node)?);
-        }
+        let built: Vec<_> =
+            crate::bus::build_all(&drives, machine.as_deref())?.into_iter().map(|(_, _, d)| d).collect();
         let (to_bus, requests) = mpsc::channel();
         std::thread::Builder::new()
             .name("drivebus-sim".into())
