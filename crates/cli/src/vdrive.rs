@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, anyhow, bail};
+use anyhow::{Context, anyhow};
 use drivebus_node::{MemoryStorage, Storage};
 use drivebus_personality::build::BuildOptions;
 use drivebus_personality::machine::{Machine, MachineFile};
@@ -24,33 +24,12 @@ pub struct DriveSpec {
 }
 
 impl DriveSpec {
-    /// Parses `PROFILE:NODE`; the error says which part is wrong.
-    pub fn parse(s: &str) -> anyhow::Result<DriveSpec> {
-        let names = Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>().join(", ");
-        let Some((p, n)) = s.split_once(':') else {
-            bail!("bad drive `{s}`: expected PROFILE:NODE, e.g. akd:1 (profiles: {names})");
-        };
-        let Some(profile) = Profile::from_name(p) else {
-            bail!("bad drive `{s}`: unknown profile `{p}` (profiles: {names})");
-        };
-        let node = match n.trim().parse::<u32>() {
-            Ok(v @ 1..=127) => v as u8,
-            _ => bail!("bad drive `{s}`: node-ID `{n}` is not in 1..127"),
-        };
-        Ok(DriveSpec { profile, node })
-    }
-
-    /// Parses every spec and refuses two drives with one node-ID.
+    /// Parses every `PROFILE:NODE` and refuses two drives with one
+    /// node-ID; the error says which part is wrong
+    /// ([`drivebus_personality::drive_specs`]).
     pub fn parse_all(specs: &[String]) -> anyhow::Result<Vec<DriveSpec>> {
-        let mut out: Vec<DriveSpec> = Vec::new();
-        for s in specs {
-            let d = DriveSpec::parse(s)?;
-            if let Some(o) = out.iter().find(|o| o.node == d.node) {
-                bail!("bad drive `{s}`: node-ID {} is already taken by {}:{}", d.node, o.profile, o.node);
-            }
-            out.push(d);
-        }
-        Ok(out)
+        let specs = drivebus_personality::drive_specs(specs).map_err(anyhow::Error::msg)?;
+        Ok(specs.into_iter().map(|(profile, node)| DriveSpec { profile, node }).collect())
     }
 
     /// `akd-1`: the directory name under `--state-dir`.
@@ -183,12 +162,13 @@ mod tests {
 
     #[test]
     fn drive_specs() {
-        assert_eq!(DriveSpec::parse("akd:1").unwrap(), DriveSpec { profile: Profile::Akd, node: 1 });
-        assert_eq!(DriveSpec::parse("SSD-630:127").unwrap().profile, Profile::Ssd630);
-        assert!(DriveSpec::parse("akd:0").is_err());
-        assert!(DriveSpec::parse("x:1").unwrap_err().to_string().contains("profiles: kc1, akd"));
+        let one = |s: &str| DriveSpec::parse_all(&[s.to_owned()]).map(|v| v[0]);
+        assert_eq!(one("akd:1").unwrap(), DriveSpec { profile: Profile::Akd, node: 1 });
+        assert_eq!(one("SSD-630:127").unwrap().profile, Profile::Ssd630);
+        assert!(one("akd:0").is_err());
+        assert!(one("x:1").unwrap_err().to_string().contains("profiles: kc1, akd"));
         let two = ["akd:1".to_owned(), "kc1:1".to_owned()];
         assert!(DriveSpec::parse_all(&two).unwrap_err().to_string().contains("already taken by akd:1"));
-        assert_eq!(DriveSpec::parse("dds6:2").unwrap().dir_name(), "dds6-2");
+        assert_eq!(one("dds6:2").unwrap().dir_name(), "dds6-2");
     }
 }

@@ -42,6 +42,16 @@ impl NmtState {
         }
     }
 
+    /// The state's name as CiA 301 writes it, lower case ("pre-operational").
+    pub const fn name(self) -> &'static str {
+        match self {
+            NmtState::Initialisation(_) => "initialisation",
+            NmtState::PreOperational => "pre-operational",
+            NmtState::Operational => "operational",
+            NmtState::Stopped => "stopped",
+        }
+    }
+
     /// True in Initialisation (any sub-state).
     #[inline]
     pub const fn is_initialisation(self) -> bool {
@@ -270,6 +280,13 @@ impl RemoteState {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names() {
+        assert_eq!(NmtState::PreOperational.name(), "pre-operational");
+        assert_eq!(NmtState::Operational.name(), "operational");
+        assert_eq!(NmtState::Stopped.name(), "stopped");
+    }
 
     #[test]
     fn codes() {

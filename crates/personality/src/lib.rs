@@ -33,6 +33,7 @@ pub mod build;
 pub mod ecat;
 pub mod machine;
 pub mod shared;
+pub mod spec;
 
 pub mod akd;
 pub mod dds6;
@@ -47,6 +48,7 @@ pub use build::{
 };
 
 pub use drivebus_eds::Parsed;
+pub use spec::{drive_spec, drive_specs};
 
 /// One personality.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

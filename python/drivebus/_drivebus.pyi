@@ -1,0 +1,110 @@
+"""Type stubs of the Rust extension ``drivebus._drivebus``."""
+
+import os
+from typing import List, Optional, Sequence, Tuple, Union
+
+PROFILES: List[str]
+"""The personalities a drive spec may name (``"kc1"``, ``"akd"``, ...)."""
+
+class DriveState:
+    """The state of one hosted drive when it was read (``bus.drives``)."""
+
+    @property
+    def profile(self) -> str:
+        """The personality (``"akd"``)."""
+    @property
+    def node(self) -> int:
+        """The node-ID."""
+    @property
+    def nmt(self) -> str:
+        """The NMT state: ``"initialisation"``, ``"pre-operational"``, ``"operational"`` or ``"stopped"``."""
+    @property
+    def state(self) -> str:
+        """The CiA 402 state from the statusword (``"operation enabled"``); ``"unknown"`` for an undefined pattern."""
+    @property
+    def statusword(self) -> int:
+        """6041h, the statusword."""
+    @property
+    def mode(self) -> int:
+        """6061h, the mode of operation in force."""
+    @property
+    def position(self) -> int:
+        """6064h, the position actual value in position units."""
+
+class VirtualBus:
+    """A participant of the in-process virtual CAN bus ``channel``, hosting ``drives`` on it.
+
+    Raises ``ValueError`` with the message of ``drivebus serve --drive`` for
+    a bad drive spec (unknown profile, node-ID outside 1..127, a node-ID
+    taken twice), and ``path: line:column: cause`` for a bad machine file
+    (``machine``, as ``drivebus serve --machine`` takes it).
+    """
+
+    def __init__(
+        self,
+        channel: str = "virtual",
+        drives: Sequence[str] = ...,
+        machine: Optional[Union[str, "os.PathLike[str]"]] = None,
+    ) -> None: ...
+    @property
+    def channel(self) -> str:
+        """The channel (the bus's name)."""
+    @property
+    def closed(self) -> bool:
+        """True once ``close()`` was called."""
+    @property
+    def drives(self) -> List[DriveState]:
+        """The hosted drives' state, read now, in the order they were given; ``OSError`` once closed."""
+    def send(
+        self,
+        arbitration_id: int,
+        data: bytes,
+        is_extended_id: bool = False,
+        is_remote_frame: bool = False,
+        dlc: Optional[int] = None,
+    ) -> None:
+        """Sends a classic CAN frame; ``ValueError`` for a frame CAN cannot carry, ``OSError`` once closed."""
+    def recv(self, timeout: Optional[float] = None) -> Optional[Tuple[int, bool, bool, int, bytes]]:
+        """The next frame as ``(arbitration_id, is_extended_id, is_remote_frame, dlc, data)``, or ``None`` on timeout."""
+    def close(self) -> None:
+        """Stops the hosted drives and leaves the bus; closing twice is harmless."""
+
+class Simulation:
+    """Drive twins on a virtual CAN bus in simulated time, deterministic.
+
+    Nothing moves between calls: ``advance(seconds)`` runs the bus and the
+    drives; the same calls give the same frame log, byte for byte. Any
+    thread may use it, one call at a time. Raises ``ValueError`` with the CLI's message
+    for a bad drive spec, and for a bitrate of 0 (``None``: frames take no
+    time).
+    """
+
+    def __init__(
+        self,
+        drives: Sequence[str] = ...,
+        bitrate: Optional[int] = 1_000_000,
+        machine: Optional[Union[str, "os.PathLike[str]"]] = None,
+    ) -> None: ...
+    @property
+    def now(self) -> float:
+        """Simulated time in seconds since the start."""
+    @property
+    def drives(self) -> List[DriveState]:
+        """The drives' state now, in the order they were given."""
+    def advance(self, seconds: float) -> None:
+        """Runs the bus and the drives for ``seconds`` of simulated time (0 to a year)."""
+    def send(
+        self,
+        arbitration_id: int,
+        data: bytes,
+        is_extended_id: bool = False,
+        is_remote_frame: bool = False,
+        dlc: Optional[int] = None,
+    ) -> None:
+        """Queues a frame from the host's station at the current simulated time."""
+    def received(self) -> List[Tuple[int, bool, bool, int, bytes]]:
+        """The frames the host's station received since the last call, as ``VirtualBus.recv`` gives them."""
+    def log(self) -> List[Tuple[float, int, bool, bool, int, bytes]]:
+        """Every frame delivered so far: ``(seconds, arbitration_id, is_extended_id, is_remote_frame, dlc, data)``."""
+    def log_lines(self) -> List[str]:
+        """The log as candump lines (``(0.000047) can0 701#00``)."""

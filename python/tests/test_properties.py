@@ -1,0 +1,100 @@
+"""No Python-visible call crashes the interpreter: whatever the arguments,
+a call returns or raises an ordinary exception."""
+
+from __future__ import annotations
+
+import itertools
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import drivebus
+
+OK_ERRORS = (ValueError, TypeError, OverflowError)
+_n = itertools.count()
+
+anything = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(min_value=-(2**70), max_value=2**70),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=12),
+    st.binary(max_size=12),
+    st.lists(st.text(max_size=8), max_size=3),
+)
+specs = st.lists(
+    st.one_of(
+        st.text(max_size=12),
+        st.builds(lambda p, n: f"{p}:{n}", st.sampled_from(drivebus.PROFILES + ["x", ""]), st.integers(-5, 300)),
+    ),
+    max_size=3,
+)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(drives=st.one_of(specs, anything))
+def test_virtual_bus_construction(drives):
+    try:
+        bus = drivebus.VirtualBus(f"prop-{next(_n)}", drives)
+    except OK_ERRORS:
+        return
+    assert len(bus.drives) == len(drives)
+    bus.close()
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    arbitration_id=anything,
+    data=anything,
+    extended=anything,
+    remote=anything,
+    dlc=anything,
+    timeout=anything,
+)
+def test_virtual_bus_calls(arbitration_id, data, extended, remote, dlc, timeout):
+    bus = drivebus.VirtualBus(f"prop-{next(_n)}")
+    listener = drivebus.VirtualBus(bus.channel)
+    try:
+        try:
+            bus.send(arbitration_id, data, extended, remote, dlc)
+        except OK_ERRORS:
+            pass
+        else:
+            got = listener.recv(1.0)
+            assert got is not None and got[0] == arbitration_id
+        try:
+            if timeout is None or (isinstance(timeout, (int, float)) and timeout > 0.01):
+                timeout = 0.01  # None and long timeouts wait: valid, and slow
+            bus.recv(timeout)
+        except OK_ERRORS:
+            pass
+    finally:
+        bus.close()
+        listener.close()
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    drives=specs,
+    bitrate=anything,
+    seconds=anything,
+    arbitration_id=anything,
+    data=anything,
+)
+def test_simulation_calls(drives, bitrate, seconds, arbitration_id, data):
+    try:
+        sim = drivebus.Simulation(drives, bitrate)
+    except OK_ERRORS:
+        return
+    try:
+        sim.send(arbitration_id, data)
+    except OK_ERRORS:
+        pass
+    try:
+        if isinstance(seconds, (int, float)) and seconds > 0.05:
+            seconds = 0.05  # simulated time costs CPU time
+        sim.advance(seconds)
+    except OK_ERRORS:
+        pass
+    assert len(sim.drives) == len(drives)
+    sim.log_lines()

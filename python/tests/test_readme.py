@@ -1,0 +1,40 @@
+"""The in-process example of python/README.md and of the README's Python
+section runs as written."""
+
+from __future__ import annotations
+
+import os
+import re
+
+import pytest
+
+from conftest import ROOT
+
+
+def example(readme: str, heading: str) -> str:
+    text = (ROOT / readme).read_text(encoding="utf-8")
+    at = text.index(heading)
+    m = re.search(r"```python\n(.*?)```", text[at:], re.S)
+    assert m, f"no python example under {heading} in {readme}"
+    return m.group(1)
+
+
+@pytest.mark.parametrize(
+    "readme, heading",
+    [
+        ("python/README.md", "## The in-process bus"),
+        ("README.md", "## Drive twins inside Python"),
+    ],
+)
+def test_readme_example_runs(capsys, readme, heading):
+    code = example(readme, heading)
+    cwd = os.getcwd()
+    os.chdir(ROOT)  # the example names the EDS relative to the repository
+    try:
+        exec(compile(code, readme, "exec"), {})
+    finally:
+        os.chdir(cwd)
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("vendor-ID 0x")
+    assert out[1].split()[:4] == ["akd", "1", "operational", "switch"]
+    assert out[2].split()[:3] == ["dds6", "2", "pre-operational"]
