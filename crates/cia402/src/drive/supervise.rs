@@ -1,8 +1,14 @@
-//! Supervision state (following error, SYNC loss, injected faults) and the
-//! touch probe (60B8h–60BDh).
+//! Supervision (following error, limit switches, software limits, SYNC
+//! loss, injected faults: the faults a period raises) and the touch probe
+//! (60B8h–60BDh).
 
 use super::config::ProbeInput;
+use super::control::{CYCLIC, code};
+use super::mode::op;
+use super::profile::Limits;
+use super::{Drive, EmcyRequest};
 use crate::model::{Event, EventKind};
+use crate::state_machine::{DriveFunction, State};
 
 /// Supervision flags and timers.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -173,5 +179,189 @@ impl Probe {
         }
         self.pos[slot] = pos as i32;
         self.status |= 1 << (sh + st_bit);
+    }
+}
+
+impl Drive {
+    /// Faults from the model, following error, limit switches, SYNC loss,
+    /// injections (CiA 402-2 §6.2: transition 13, 603Fh, EMCY).
+    pub(super) fn supervise(&mut self) {
+        let mut fault = self.sup.pending_fault.take();
+        if fault.is_none() {
+            fault = self.model.faults().error_code();
+        }
+        // Following error (6065h/6066h) while position-controlled.
+        let enabled = self.sm.drive_function() == DriveFunction::Enabled;
+        let position_mode = matches!(self.mode, op::PP | op::HM | op::IP | op::CSP);
+        // One owner per mode: a handler that supervises 6065h itself (csp)
+        // is not second-guessed; only the injection still applies.
+        let owned = position_mode && self.handler_owns_following_error();
+        if enabled && position_mode {
+            let fe = self.dem.pos - self.actual_pos_f();
+            let w = self.params.following_error_window;
+            let out = self.sup.force_following_error || (!owned && w != u32::MAX && fe.abs() > f64::from(w));
+            if out {
+                self.sup.fe_timer += self.dt;
+                if self.sup.fe_timer * 1000.0 > f64::from(self.params.following_error_timeout) {
+                    self.sup.fe_active = true;
+                    fault = fault.or(Some(code::FOLLOWING_ERROR));
+                }
+            } else {
+                self.sup.fe_timer = 0.0;
+                self.sup.fe_active = false;
+            }
+        }
+        // Interlock input (60FDh bit 3): while active the drive function
+        // is kept off (disable voltage, CiA 402-2 §6.2 transition 9/10/7).
+        if self.cfg.io.interlock
+            && self.interlock
+            && !matches!(self.sm.state(), State::SwitchOnDisabled | State::Fault | State::FaultReactionActive)
+        {
+            let out = self.sm.controlword(self.cw & 0x80);
+            self.after_transition(out);
+        }
+        // Limit switches (60FDh bits 0/1). While homing they are the
+        // method's reference signals (CiA 402-2 §6.6: methods 1, 2, 17, 18
+        // search them), not a limit: no stop, no warning.
+        let sw = self.model.switches();
+        let homing = enabled && self.mode == op::HM;
+        self.sup.limit_block = if homing || self.limit_switches_off {
+            0
+        } else if sw.negative_limit {
+            -1
+        } else if sw.positive_limit {
+            1
+        } else {
+            0
+        };
+        // Software limits as limit switches (iPOS §4.3.2): a limit passed
+        // moving towards it stops the motion like the switch does.
+        // Once passed, the limit holds until a motion away from it (§4.3.2:
+        // "the motor will stand still until a new command is given to
+        // travel within the space defined by the limits").
+        let soft = if homing || !self.cfg.io.software_limit_switches {
+            0
+        } else {
+            match self.passed_soft_limit() {
+                0 if self.dem.vel * f64::from(self.sup.soft_limit) >= 0.0 => self.sup.soft_limit,
+                0 => 0,
+                side => side,
+            }
+        };
+        if soft != 0 && soft != self.sup.soft_limit && enabled && self.dem.vel * f64::from(soft) > 0.0 {
+            self.limit_stop();
+        }
+        self.sup.soft_limit = soft;
+        if self.sup.limit_block == 0 {
+            self.sup.limit_block = soft;
+        }
+        self.limit_active = self.sup.limit_block != 0;
+        self.warning = self.limit_active || self.sup.sync_lost;
+        for i in 0..self.events.len() {
+            let e = self.events.as_slice()[i];
+            let toward = match e.kind {
+                EventKind::NegativeLimit if e.active => self.dem.vel < 0.0,
+                EventKind::PositiveLimit if e.active => self.dem.vel > 0.0,
+                _ => false,
+            };
+            if toward && enabled && !homing && !self.limit_switches_off {
+                match self.cfg.io.limit_switch {
+                    super::LimitSwitchReaction::Fault => fault = fault.or(Some(code::LIMIT_SWITCH)),
+                    super::LimitSwitchReaction::StopAndWarn => self.limit_stop(),
+                }
+            }
+        }
+        if enabled && self.sup.sync_lost && self.cfg.sync_loss_fault && CYCLIC.contains(&self.mode) {
+            fault = fault.or(Some(code::SYNC_LOST));
+        }
+        if let Some(c) = fault
+            && !matches!(self.sm.state(), State::Fault | State::FaultReactionActive)
+        {
+            match self.fault_action(c) {
+                Some(a) => self.take_fault(c, a),
+                None => {
+                    let out = self.sm.fault(c);
+                    self.after_transition(out);
+                }
+            }
+        } else if fault.is_none()
+            && let Some(c) = self.ignored_fault.take()
+        {
+            // The condition of a fault taken without action is gone.
+            self.raised.retain(|r| *r != c);
+            self.emcy.push(EmcyRequest::Clear(c));
+        }
+    }
+
+    /// A fault with a personality's action (`Drive::set_fault_action`).
+    pub(crate) fn take_fault(&mut self, c: u16, a: super::FaultAction) {
+        match a {
+            super::FaultAction::React(r) => {
+                let out = self.sm.fault_with(c, r);
+                self.after_transition(out);
+            }
+            super::FaultAction::Warning | super::FaultAction::QuickStop => {
+                let stops = a == super::FaultAction::QuickStop && self.sm.state() == State::OperationEnabled;
+                // Each stop it causes is reported; a condition that stays
+                // is reported once (until a fault reset).
+                if stops || !self.raised.contains(&c) {
+                    if !self.raised.contains(&c) {
+                        self.raised.push(c);
+                    }
+                    self.emcy.push(EmcyRequest::Raise(c));
+                }
+                self.error_warning |= a == super::FaultAction::Warning;
+                if stops {
+                    self.sup.fe_timer = 0.0;
+                    self.sup.force_following_error = false;
+                    let out = self.sm.quick_stop();
+                    self.after_transition(out);
+                }
+            }
+            super::FaultAction::NoAction => {
+                // Signalled once; the latch is cleared so that the fault
+                // comes back only while its condition lasts.
+                self.model.clear_faults();
+                self.ignored_fault = Some(c);
+                if c != code::GUARDING && !self.raised.contains(&c) {
+                    self.raised.push(c);
+                    self.emcy.push(EmcyRequest::Raise(c));
+                }
+            }
+        }
+    }
+
+    /// −1 / +1 when the position actual value is below / above 607Dh
+    /// (both 0: no limits, as for pp targets).
+    pub(super) fn passed_soft_limit(&self) -> i8 {
+        let (lo, hi) = self.params.software_limits;
+        if lo == 0 && hi == 0 {
+            return 0;
+        }
+        let p = self.position();
+        if p < i64::from(lo) {
+            -1
+        } else if p > i64::from(hi) {
+            1
+        } else {
+            0
+        }
+    }
+
+    /// Limit switch reached moving towards it: stop on the quick-stop ramp.
+    pub(super) fn limit_stop(&mut self) {
+        if self.mode == op::PP {
+            let d = self.units.acc_to_pos(f64::from(self.params.quick_stop_deceleration));
+            let (p, v) = (self.dem.pos, self.dem.vel);
+            let stop_at = p + v * v.abs() / (2.0 * d);
+            let lim = Limits { velocity: v.abs().max(1.0), acceleration: d, deceleration: d };
+            self.pp.target = stop_at;
+            self.pp.buffered = None;
+            self.pp.traj =
+                super::profile::Trajectory::plan(p, v, stop_at, lim, super::profile::Shape::Linear);
+            self.pp.s_curve = false;
+            self.pp.t = 0.0;
+            self.pp.moving = true;
+        }
     }
 }
