@@ -72,6 +72,6 @@ pub mod timing;
 pub use bus::{Bus, BusConfig, LogSink};
 pub use candump::{CandumpRecord, LogEntry, ParseError, ParseErrorKind};
 pub use drivebus_can::{Device, LinkState};
-pub use fault::{FaultAction, FaultRule, RuleId, XorShift64};
+pub use fault::{FaultAction, FaultRule, RuleId, XorShift64, corrupt_data};
 pub use node::{NodeId, ProbeId};
 pub use stats::BusStats;
