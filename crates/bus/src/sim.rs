@@ -343,6 +343,7 @@ impl Bus {
                         received.push((now, frame));
                     }
                 }
+                Endpoint::Off => {}
             }
         }
     }
