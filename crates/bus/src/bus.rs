@@ -10,10 +10,10 @@ use core::time::Duration;
 use drivebus_can::{Device, Frame, Instant, LinkState};
 
 use crate::candump::{self, CandumpRecord, LogEntry};
-use crate::fault::{FaultRule, RuleId, XorShift64};
 use crate::node::{NodeId, ProbeId};
 use crate::stats::{BusStats, LoadWindow};
 use crate::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
+use drivebus_can::fault::{FaultRule, XorShift64};
 
 /// How the bus behaves.
 #[derive(Clone, Debug)]
@@ -71,6 +71,10 @@ impl BusConfig {
         self.bitrate.filter(|&b| b > 0)
     }
 }
+
+/// Handle of a rule added with [`Bus::add_fault`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RuleId(pub(crate) u32);
 
 pub(crate) enum Endpoint {
     /// A device and whether it was started.

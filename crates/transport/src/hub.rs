@@ -13,8 +13,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, Weak};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use drivebus_bus::{FaultAction, FaultRule, NodeId, XorShift64, corrupt_data};
 use drivebus_can::Frame;
+use drivebus_can::fault::{FaultAction, FaultRule, XorShift64, corrupt_data};
 use tokio::sync::broadcast;
 
 use crate::handle::{CanBus, hub_handle};
@@ -74,7 +74,7 @@ struct Rules {
 impl Rules {
     /// What the first rule that fires does to `frame` from `from`.
     fn verdict(&mut self, frame: &Frame, from: ParticipantId) -> (FaultVerdict, bool) {
-        let node = NodeId(u32::try_from(from).unwrap_or(u32::MAX));
+        let node = u32::try_from(from).unwrap_or(u32::MAX);
         let Rules { list, rng } = self;
         let Some(action) = list.iter_mut().find_map(|r| r.try_fire(frame, node, rng).then(|| r.action()))
         else {

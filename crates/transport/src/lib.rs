@@ -33,7 +33,7 @@ pub mod socketcand;
 pub mod stats;
 mod url;
 
-pub use drivebus_bus::{FaultAction, FaultRule};
+pub use drivebus_can::fault::{FaultAction, FaultRule};
 pub use drivebus_can::{CanId, Frame};
 pub use error::{Cause, TransportError};
 pub use handle::{CanBus, CanRx, CanTx, TrySendError};

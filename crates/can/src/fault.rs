@@ -1,16 +1,15 @@
 //! Fault injection rules and the deterministic PRNG behind probabilities.
 //!
-//! [`FaultRule`] is the one rule type of the project: the simulated bus
-//! ([`Bus::add_fault`](crate::Bus::add_fault)) and the real-time hub of
-//! `drivebus_transport` both apply it.
+//! [`FaultRule`] is the one rule type of the project, here beside the
+//! frame it matches: the simulated bus (`drivebus_bus::Bus::add_fault`)
+//! and the real-time hub of `drivebus_transport` both apply it. A rule
+//! names a transmitting station by its number on that bus.
 
+use crate::Frame;
 use alloc::boxed::Box;
 use core::fmt;
 use core::ops::{Bound, RangeBounds};
 use core::time::Duration;
-use drivebus_can::Frame;
-
-use crate::node::NodeId;
 
 /// xorshift64* PRNG.
 ///
@@ -76,10 +75,6 @@ pub enum FaultAction {
 /// handed to a hub shared by threads).
 type Predicate = Box<dyn Fn(&Frame) -> bool + Send + Sync>;
 
-/// Handle of a rule added with [`Bus::add_fault`](crate::Bus::add_fault).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct RuleId(pub(crate) u32);
-
 /// A fault injection rule: which transmissions it matches and what it does.
 ///
 /// A rule matches by identifier range, transmitting station and a
@@ -88,10 +83,10 @@ pub struct RuleId(pub(crate) u32);
 /// `times` times, each time with `probability`.
 /// Rules are tried in the order added; at most one fires per transmission.
 pub struct FaultRule {
-    pub(crate) action: FaultAction,
+    action: FaultAction,
     ids: Option<(u32, u32)>,
     extended: Option<bool>,
-    from: Option<NodeId>,
+    from: Option<u32>,
     predicate: Option<Predicate>,
     skip: u32,
     every: u32,
@@ -100,7 +95,7 @@ pub struct FaultRule {
     remaining: Option<u32>,
     /// Fires when a draw is below this; `None` means always.
     threshold: Option<u64>,
-    pub(crate) fired: u32,
+    fired: u32,
 }
 
 impl fmt::Debug for FaultRule {
@@ -186,9 +181,10 @@ impl FaultRule {
         self.extended = Some(extended);
         self
     }
-    /// Only frames transmitted by this station.
-    pub fn from(mut self, node: impl Into<NodeId>) -> Self {
-        self.from = Some(node.into());
+    /// Only frames transmitted by this station (its number on the bus:
+    /// `drivebus_bus::NodeId`/`ProbeId`, a hub participant).
+    pub fn from(mut self, station: impl Into<u32>) -> Self {
+        self.from = Some(station.into());
         self
     }
     /// Only frames for which `pred` holds.
@@ -238,7 +234,7 @@ impl FaultRule {
         self.remaining == Some(0)
     }
 
-    fn matches(&self, frame: &Frame, from: NodeId) -> bool {
+    fn matches(&self, frame: &Frame, from: u32) -> bool {
         if let Some((lo, hi)) = self.ids {
             let id = frame.id().raw();
             if id < lo || id > hi {
@@ -256,7 +252,7 @@ impl FaultRule {
 
     /// Decides whether the rule fires for this transmission by station
     /// `from`, updating its counters; `rng` draws the probability.
-    pub fn try_fire(&mut self, frame: &Frame, from: NodeId, rng: &mut XorShift64) -> bool {
+    pub fn try_fire(&mut self, frame: &Frame, from: u32, rng: &mut XorShift64) -> bool {
         if self.remaining == Some(0) || !self.matches(frame, from) {
             return false;
         }
@@ -325,9 +321,9 @@ mod tests {
         let mut always = FaultRule::drop_frames().probability(1.0);
         let mut nan = FaultRule::drop_frames().probability(f64::NAN);
         for _ in 0..50 {
-            assert!(!never.try_fire(&f, NodeId(0), &mut rng));
-            assert!(!nan.try_fire(&f, NodeId(0), &mut rng));
-            assert!(always.try_fire(&f, NodeId(0), &mut rng));
+            assert!(!never.try_fire(&f, 0, &mut rng));
+            assert!(!nan.try_fire(&f, 0, &mut rng));
+            assert!(always.try_fire(&f, 0, &mut rng));
         }
     }
 
@@ -336,9 +332,9 @@ mod tests {
         let mut rng = XorShift64::new(1);
         let mut r = FaultRule::drop_frames().ids(0x100..=0x1FF).skip(1).every(2).times(2);
         let f = Frame::new(0x180, &[1]);
-        let got: alloc::vec::Vec<bool> = (0..8).map(|_| r.try_fire(&f, NodeId(0), &mut rng)).collect();
+        let got: alloc::vec::Vec<bool> = (0..8).map(|_| r.try_fire(&f, 0, &mut rng)).collect();
         assert_eq!(got, [false, true, false, true, false, false, false, false]);
         assert!(r.is_spent());
-        assert!(!r.try_fire(&Frame::new(0x80, &[]), NodeId(0), &mut rng));
+        assert!(!r.try_fire(&Frame::new(0x80, &[]), 0, &mut rng));
     }
 }
