@@ -10,6 +10,7 @@ use drivebus_node::{MemoryStorage, Storage};
 use drivebus_personality::build::BuildOptions;
 use drivebus_personality::machine::{Machine, MachineFile};
 use drivebus_personality::{PersonalityDevice, Profile};
+use drivebus_transport::host::{Controller, DeviceHost};
 use tokio::task::JoinHandle;
 
 use crate::vdevice::DeviceSpec;
@@ -147,23 +148,34 @@ pub fn build(
         .map_err(|e| anyhow!("cannot build {spec}: {e}"))
 }
 
+/// What [`host_on_hub`] started.
+pub struct Hosted {
+    /// Each drive, its machine and its host (to reach it at run time).
+    pub drives: Vec<(DriveSpec, Machine, DeviceHost<Controller<PersonalityDevice>>)>,
+    /// The devices from files.
+    pub devices: Vec<JoinHandle<()>>,
+    /// What each device is (for the ready line).
+    pub described: Vec<String>,
+}
+
 /// Builds and starts `specs` and `devices` on `hub`, each as its own
 /// participant, each on its machine (`--machine FILE` or the profile's
-/// default); returns the hosts and what each device is (for the ready
-/// line). Every file and machine is checked before anything starts.
-pub fn spawn_on_hub(
+/// default). Every file and machine is checked before anything starts.
+pub fn host_on_hub(
     specs: &[DriveSpec],
     devices: &[DeviceSpec],
     hub: &drivebus_transport::Hub,
     state_dir: Option<&Path>,
     options: BuildOptions,
     machine_file: Option<&Path>,
-) -> anyhow::Result<(Vec<JoinHandle<()>>, Vec<String>)> {
+) -> anyhow::Result<Hosted> {
     let nodes: Vec<u8> = devices.iter().map(|d| d.node).collect();
     let machines = Machines::load_with_devices(machine_file, specs, &nodes)?;
     let mut drives = Vec::new();
     for s in specs {
-        drives.push(build(*s, state_dir, options, &machines.machine_for(*s)?)?);
+        let m = machines.machine_for(*s)?;
+        let d = build(*s, state_dir, options, &m)?;
+        drives.push((*s, m, d));
     }
     let mut built = Vec::new();
     let eds_options = drivebus_node::EdsOptions { eds_object: options.eds_object };
@@ -172,9 +184,30 @@ pub fn spawn_on_hub(
         built.push((d.describe(&dev), dev));
     }
     let (described, built): (Vec<String>, Vec<_>) = built.into_iter().unzip();
-    let hosts = drivebus_transport::host::spawn_on_hub(drives, hub).into_iter().map(|h| h.into_join_handle());
-    let more = drivebus_transport::host::spawn_on_hub(built, hub).into_iter().map(|h| h.into_join_handle());
-    Ok((hosts.chain(more).collect(), described))
+    let drives = drives
+        .into_iter()
+        .map(|(s, m, d)| (s, m, drivebus_transport::host::spawn(Controller::new(d), hub.attach())))
+        .collect();
+    let devices = drivebus_transport::host::spawn_on_hub(built, hub)
+        .into_iter()
+        .map(|h| h.into_join_handle())
+        .collect();
+    Ok(Hosted { drives, devices, described })
+}
+
+/// [`host_on_hub`], keeping only the tasks: returns the hosts and what each
+/// device is (for the ready line).
+pub fn spawn_on_hub(
+    specs: &[DriveSpec],
+    devices: &[DeviceSpec],
+    hub: &drivebus_transport::Hub,
+    state_dir: Option<&Path>,
+    options: BuildOptions,
+    machine_file: Option<&Path>,
+) -> anyhow::Result<(Vec<JoinHandle<()>>, Vec<String>)> {
+    let h = host_on_hub(specs, devices, hub, state_dir, options, machine_file)?;
+    let tasks = h.drives.into_iter().map(|(_, _, d)| d.into_join_handle()).chain(h.devices).collect();
+    Ok((tasks, h.described))
 }
 
 #[cfg(test)]

@@ -1,0 +1,371 @@
+//! The control interface of a running `drivebus serve` (`--control ADDR`,
+//! issue 17 §3): a loopback TCP port or a Unix socket taking one JSON
+//! request per line and answering one JSON line (docs/control.md), and
+//! the `drivebus control` client.
+//!
+//! Every machine input and fault goes through the drive's machine
+//! schedule (`Personality::change_machine`), the mechanism the machine
+//! file's `[[node.inputs]]` and `[[node.faults]]` use; bus rules are the
+//! hub's `FaultRule`s, the ones `--fault` installs.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, anyhow, bail};
+use drivebus_can::LinkState;
+use drivebus_personality::PersonalityDevice;
+use drivebus_personality::build::BuildOptions;
+use drivebus_personality::machine::{Change, Machine};
+use drivebus_transport::Hub;
+use drivebus_transport::host::{Controller, DeviceHost, spawn};
+use serde::{Deserialize, Serialize};
+use tokio::io::{AsyncBufReadExt, AsyncRead, AsyncWrite, AsyncWriteExt, BufReader};
+use tokio::sync::Mutex;
+
+use crate::vdrive::DriveSpec;
+
+/// One request line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Request {
+    /// An input of a drive's machine, named as in `[[node.inputs]]`.
+    Input {
+        /// Node-ID.
+        node: u8,
+        /// `digital`, `analog`, `master_velocity`, `master_position`,
+        /// `motor_temperature`, `brake`.
+        input: String,
+        /// Line (digital 1..16) or channel (analog 1..4).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        line: Option<u8>,
+        /// The value (a level 0/1, volts, counts, °C).
+        value: f64,
+        /// Seconds, then back to the machine's value.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        duration: Option<f64>,
+    },
+    /// A machine fault, named as in `[[node.faults]]`, or `clear`.
+    Fault {
+        /// Node-ID.
+        node: u8,
+        /// `encoder`, `trip`, `wire_break`, `over_current`, … or `clear`.
+        kind: String,
+        /// For `trip` and `wire_break`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        switch: Option<String>,
+        /// Seconds, then it clears.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        duration: Option<f64>,
+    },
+    /// A bus fault rule in `--fault` syntax, or `clear` to remove them all.
+    Bus {
+        /// `drop:IDS[,times=N]…`, `corrupt:IDS:MASK[,…]` or `clear`.
+        rule: String,
+    },
+    /// A drive's CAN controller goes bus-off (it hears and sends nothing)
+    /// or recovers.
+    Link {
+        /// Node-ID.
+        node: u8,
+        /// Bus-off (`true`) or back on the bus (`false`).
+        bus_off: bool,
+    },
+    /// A drive's power.
+    Power {
+        /// Node-ID.
+        node: u8,
+        /// On (boots from its stored parameters) or off.
+        on: bool,
+    },
+}
+
+/// One answer line: `{"ok":true}` or `{"ok":false,"error":"…"}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Response {
+    /// Whether the request was carried out.
+    pub ok: bool,
+    /// Why not: the cause first, then what to do.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+/// A hosted drive and what it takes to power it on again.
+struct Slot {
+    spec: DriveSpec,
+    machine: Machine,
+    host: Option<DeviceHost<Controller<PersonalityDevice>>>,
+}
+
+/// The running server as the control interface sees it (in-process use:
+/// the same calls as the socket).
+pub struct Control {
+    hub: Hub,
+    drives: Mutex<BTreeMap<u8, Slot>>,
+    state_dir: Option<std::path::PathBuf>,
+    options: BuildOptions,
+}
+
+impl Control {
+    /// Control over `drives` (with their machines) on `hub`.
+    pub fn new(
+        hub: Hub,
+        drives: Vec<(DriveSpec, Machine, DeviceHost<Controller<PersonalityDevice>>)>,
+        state_dir: Option<&Path>,
+        options: BuildOptions,
+    ) -> Control {
+        let drives = drives
+            .into_iter()
+            .map(|(spec, machine, host)| (spec.node, Slot { spec, machine, host: Some(host) }))
+            .collect();
+        Control { hub, drives: Mutex::new(drives), state_dir: state_dir.map(Path::to_owned), options }
+    }
+
+    /// Stops every drive (serve ends).
+    pub async fn stop(&self) {
+        for slot in self.drives.lock().await.values_mut() {
+            if let Some(h) = slot.host.take() {
+                h.stop();
+            }
+        }
+    }
+
+    /// Carries out `req`; the error names the cause first, then what to do.
+    pub async fn handle(&self, req: Request) -> anyhow::Result<()> {
+        match req {
+            Request::Input { node, input, line, value, duration } => {
+                let c = Change::input(&input, line, value).map_err(|e| anyhow!("input: {e}"))?;
+                self.change(node, c, duration).await
+            }
+            Request::Fault { node, kind, switch, duration } => {
+                let c = Change::fault(&kind, switch.as_deref()).map_err(|e| anyhow!("fault: {e}"))?;
+                self.change(node, c, duration).await
+            }
+            Request::Bus { rule } if rule == "clear" => {
+                self.hub.clear_faults();
+                Ok(())
+            }
+            Request::Bus { rule } => {
+                let r = crate::fault::parse(&rule)?;
+                self.hub.add_fault(r)?;
+                Ok(())
+            }
+            Request::Link { node, bus_off } => {
+                let state = if bus_off { LinkState::BusOff { recover_at: None } } else { LinkState::Active };
+                let drives = self.drives.lock().await;
+                let host = Self::running(&drives, node).map_err(|e| self.or_no_drive(e, &drives, node))?;
+                host.with_out(move |d, now, out| d.set_link(state, now, out))
+                    .await
+                    .ok_or_else(|| anyhow!("node {node} has stopped running: restart serve"))
+            }
+            Request::Power { node, on } => self.power(node, on).await,
+        }
+    }
+
+    async fn change(&self, node: u8, change: Change, duration: Option<f64>) -> anyhow::Result<()> {
+        let drives = self.drives.lock().await;
+        let host = Self::running(&drives, node).map_err(|e| self.or_no_drive(e, &drives, node))?;
+        host.with(move |d, now| d.device.app.change_machine(now, change, duration))
+            .await
+            .ok_or_else(|| anyhow!("node {node} has stopped running: restart serve"))?
+            .map_err(|e| anyhow!("node {node}: {e}"))
+    }
+
+    async fn power(&self, node: u8, on: bool) -> anyhow::Result<()> {
+        let mut drives = self.drives.lock().await;
+        let err = self.no_drive(&drives, node);
+        let slot = drives.get_mut(&node).ok_or(err)?;
+        match (on, slot.host.take()) {
+            (false, Some(h)) => h.stop(),
+            (true, None) => {
+                let dev =
+                    crate::vdrive::build(slot.spec, self.state_dir.as_deref(), self.options, &slot.machine)?;
+                slot.host = Some(spawn(Controller::new(dev), self.hub.attach()));
+            }
+            // Already as asked: nothing changes.
+            (_, h) => slot.host = h,
+        }
+        Ok(())
+    }
+
+    /// The host of `node`; `Err(true)`: no such drive, `Err(false)`: off.
+    fn running(
+        drives: &BTreeMap<u8, Slot>,
+        node: u8,
+    ) -> Result<&DeviceHost<Controller<PersonalityDevice>>, bool> {
+        drives.get(&node).ok_or(true)?.host.as_ref().ok_or(false)
+    }
+
+    fn or_no_drive(&self, missing: bool, drives: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Error {
+        if missing {
+            self.no_drive(drives, node)
+        } else {
+            anyhow!("node {node} is powered off: power it on first (drivebus control power {node} on)")
+        }
+    }
+
+    fn no_drive(&self, drives: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Error {
+        let list = drives.keys().map(u8::to_string).collect::<Vec<_>>().join(", ");
+        anyhow!("no drive with node-ID {node} is served: use one of {list}")
+    }
+
+    /// Answers one request line.
+    pub async fn answer(&self, line: &str) -> Response {
+        let r = match serde_json::from_str::<Request>(line) {
+            Ok(req) => self.handle(req).await,
+            Err(e) => Err(anyhow!("bad request: {e}: send one JSON object per line (docs/control.md)")),
+        };
+        match r {
+            Ok(()) => Response { ok: true, error: None },
+            Err(e) => Response { ok: false, error: Some(format!("{e:#}")) },
+        }
+    }
+}
+
+/// Where the control interface listens: a loopback TCP address or a Unix
+/// socket path.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Addr {
+    /// `127.0.0.1:PORT` (loopback only: the interface has no access control).
+    Tcp(std::net::SocketAddr),
+    /// A Unix socket path.
+    Unix(std::path::PathBuf),
+}
+
+impl Addr {
+    /// Parses `ADDR`: `HOST:PORT` with a loopback host, or a path.
+    pub fn parse(s: &str) -> anyhow::Result<Addr> {
+        if let Ok(a) = s.parse::<std::net::SocketAddr>() {
+            if !a.ip().is_loopback() {
+                bail!(
+                    "bad control address `{s}`: not a loopback address (the control interface has no access \
+                     control): use 127.0.0.1:PORT or a Unix socket path"
+                );
+            }
+            return Ok(Addr::Tcp(a));
+        }
+        if s.is_empty() || (!s.contains('/') && s.contains(':')) {
+            bail!("bad control address `{s}`: expected 127.0.0.1:PORT or a Unix socket path");
+        }
+        Ok(Addr::Unix(s.into()))
+    }
+}
+
+impl std::fmt::Display for Addr {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Addr::Tcp(a) => write!(f, "{a}"),
+            Addr::Unix(p) => write!(f, "{}", p.display()),
+        }
+    }
+}
+
+/// Binds `addr` and serves requests from every connection until the task
+/// is aborted; returns the task and the bound address (the real port for
+/// `:0`).
+pub async fn listen(
+    addr: &Addr,
+    control: Arc<Control>,
+) -> anyhow::Result<(tokio::task::JoinHandle<()>, Addr)> {
+    match addr {
+        Addr::Tcp(a) => {
+            let l =
+                tokio::net::TcpListener::bind(a).await.with_context(|| format!("cannot listen on {a}"))?;
+            let bound = Addr::Tcp(l.local_addr()?);
+            let task = tokio::spawn(async move {
+                while let Ok((s, _)) = l.accept().await {
+                    tokio::spawn(session(s, control.clone()));
+                }
+            });
+            Ok((task, bound))
+        }
+        #[cfg(unix)]
+        Addr::Unix(p) => {
+            // A socket file left by an earlier run would refuse the bind.
+            if std::fs::symlink_metadata(p).is_ok_and(|m| {
+                use std::os::unix::fs::FileTypeExt;
+                m.file_type().is_socket()
+            }) {
+                let _ = std::fs::remove_file(p);
+            }
+            let l = tokio::net::UnixListener::bind(p)
+                .with_context(|| format!("cannot listen on the Unix socket {}", p.display()))?;
+            let task = tokio::spawn(async move {
+                while let Ok((s, _)) = l.accept().await {
+                    tokio::spawn(session(s, control.clone()));
+                }
+            });
+            Ok((task, addr.clone()))
+        }
+        #[cfg(not(unix))]
+        Addr::Unix(p) => {
+            bail!("cannot listen on {}: Unix sockets need a Unix system; use 127.0.0.1:PORT", p.display())
+        }
+    }
+}
+
+async fn session(s: impl AsyncRead + AsyncWrite + Unpin, control: Arc<Control>) {
+    let (r, mut w) = tokio::io::split(s);
+    let mut lines = BufReader::new(r).lines();
+    while let Ok(Some(line)) = lines.next_line().await {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let resp = control.answer(&line).await;
+        let mut text = serde_json::to_string(&resp).unwrap_or_else(|_| r#"{"ok":false}"#.to_owned());
+        text.push('\n');
+        if w.write_all(text.as_bytes()).await.is_err() {
+            return;
+        }
+    }
+}
+
+/// Sends `req` to the server at `addr` and returns its answer.
+pub async fn request(addr: &Addr, req: &Request) -> anyhow::Result<Response> {
+    let mut line = serde_json::to_string(req)?;
+    line.push('\n');
+    let what = || {
+        format!("cannot reach the control interface at {addr}: is `drivebus serve --control {addr}` running?")
+    };
+    match addr {
+        Addr::Tcp(a) => exchange(tokio::net::TcpStream::connect(a).await.with_context(what)?, &line).await,
+        #[cfg(unix)]
+        Addr::Unix(p) => exchange(tokio::net::UnixStream::connect(p).await.with_context(what)?, &line).await,
+        #[cfg(not(unix))]
+        Addr::Unix(_) => bail!("{}", what()),
+    }
+    .with_context(|| format!("control interface at {addr}"))
+}
+
+async fn exchange(s: impl AsyncRead + AsyncWrite + Unpin, line: &str) -> anyhow::Result<Response> {
+    let (r, mut w) = tokio::io::split(s);
+    w.write_all(line.as_bytes()).await?;
+    let answer = BufReader::new(r).lines().next_line().await?.context("the server closed the connection")?;
+    serde_json::from_str(&answer).with_context(|| format!("not an answer: {answer}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn addresses() {
+        assert_eq!(Addr::parse("127.0.0.1:7000").unwrap(), Addr::Tcp("127.0.0.1:7000".parse().unwrap()));
+        assert_eq!(Addr::parse("/tmp/x.sock").unwrap(), Addr::Unix("/tmp/x.sock".into()));
+        assert!(Addr::parse("0.0.0.0:7000").unwrap_err().to_string().contains("not a loopback"));
+        assert!(Addr::parse("host:7000").is_err());
+    }
+
+    #[test]
+    fn requests_read_as_documented() {
+        let r: Request =
+            serde_json::from_str(r#"{"op":"input","node":5,"input":"digital","line":3,"value":1}"#).unwrap();
+        assert_eq!(
+            r,
+            Request::Input { node: 5, input: "digital".into(), line: Some(3), value: 1.0, duration: None }
+        );
+        assert!(serde_json::from_str::<Request>(r#"{"op":"input","node":5,"valu":1}"#).is_err());
+        let p: Request = serde_json::from_str(r#"{"op":"power","node":5,"on":false}"#).unwrap();
+        assert_eq!(p, Request::Power { node: 5, on: false });
+    }
+}
