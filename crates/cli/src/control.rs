@@ -9,21 +9,19 @@
 //! hub's `FaultRule`s, the ones `--fault` installs.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, anyhow, bail};
 use drivebus_can::LinkState;
 use drivebus_personality::PersonalityDevice;
-use drivebus_personality::build::BuildOptions;
-use drivebus_personality::machine::{Change, Machine};
+use drivebus_personality::build::EdsDevice;
+use drivebus_personality::machine::{Change, MachineError};
 use drivebus_transport::Hub;
 use drivebus_transport::host::{Controller, DeviceHost, spawn};
+
 use serde::{Deserialize, Serialize};
 use tokio::io::{AsyncBufReadExt, AsyncRead, AsyncWrite, AsyncWriteExt, BufReader};
 use tokio::sync::Mutex;
-
-use crate::vdrive::DriveSpec;
 
 /// One request line.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -90,40 +88,98 @@ pub struct Response {
     pub error: Option<String>,
 }
 
-/// A hosted drive and what it takes to power it on again.
-struct Slot {
-    spec: DriveSpec,
-    machine: Machine,
-    host: Option<DeviceHost<Controller<PersonalityDevice>>>,
+/// A served node's host: a drive, or a device from an EDS/DCF.
+pub enum Host {
+    /// A drive (`--drive`).
+    Drive(DeviceHost<Controller<PersonalityDevice>>),
+    /// A device from a file (`--device`).
+    Device(DeviceHost<Controller<EdsDevice>>),
+}
+
+impl Host {
+    /// Hosts a drive on `hub`.
+    pub fn drive(dev: PersonalityDevice, hub: &Hub) -> Host {
+        Host::Drive(spawn(Controller::new(dev), hub.attach()))
+    }
+
+    /// Hosts a device from a file on `hub`.
+    pub fn device(dev: EdsDevice, hub: &Hub) -> Host {
+        Host::Device(spawn(Controller::new(dev), hub.attach()))
+    }
+
+    /// `None` when the host has stopped.
+    async fn change(&self, c: Change, duration: Option<f64>) -> Option<Result<(), MachineError>> {
+        // Through the node, so the application is polled after the change
+        // (a module polls only when an input or a timer asks).
+        match self {
+            Host::Drive(h) => {
+                h.with_out(move |d, now, out| {
+                    let dev = &mut d.device;
+                    dev.node.with_app(now, &mut dev.app, out, |app, _| app.change_machine(now, c, duration))
+                })
+                .await
+            }
+            Host::Device(h) => {
+                h.with_out(move |d, now, out| {
+                    let dev = &mut d.device;
+                    dev.node.with_app(now, &mut dev.app, out, |app, _| app.change_machine(now, c, duration))
+                })
+                .await
+            }
+        }
+    }
+
+    async fn set_link(&self, state: LinkState) -> Option<()> {
+        match self {
+            Host::Drive(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
+            Host::Device(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
+        }
+    }
+
+    /// Cuts the power: the task ends.
+    pub fn stop(&self) {
+        match self {
+            Host::Drive(h) => h.stop(),
+            Host::Device(h) => h.stop(),
+        }
+    }
+
+    /// The task, to await or abort it.
+    pub fn into_join_handle(self) -> tokio::task::JoinHandle<()> {
+        match self {
+            Host::Drive(h) => h.into_join_handle(),
+            Host::Device(h) => h.into_join_handle(),
+        }
+    }
+}
+
+/// Builds a node again as at power-on and hosts it on the hub.
+pub type PowerOn = Box<dyn Fn(&Hub) -> anyhow::Result<Host> + Send + Sync>;
+
+/// A served node: its host while it has power, and how to power it on.
+pub struct Slot {
+    /// The running node, `None` while its power is off.
+    pub host: Option<Host>,
+    /// Powers it on again.
+    pub power_on: PowerOn,
 }
 
 /// The running server as the control interface sees it (in-process use:
 /// the same calls as the socket).
 pub struct Control {
     hub: Hub,
-    drives: Mutex<BTreeMap<u8, Slot>>,
-    state_dir: Option<std::path::PathBuf>,
-    options: BuildOptions,
+    nodes: Mutex<BTreeMap<u8, Slot>>,
 }
 
 impl Control {
-    /// Control over `drives` (with their machines) on `hub`.
-    pub fn new(
-        hub: Hub,
-        drives: Vec<(DriveSpec, Machine, DeviceHost<Controller<PersonalityDevice>>)>,
-        state_dir: Option<&Path>,
-        options: BuildOptions,
-    ) -> Control {
-        let drives = drives
-            .into_iter()
-            .map(|(spec, machine, host)| (spec.node, Slot { spec, machine, host: Some(host) }))
-            .collect();
-        Control { hub, drives: Mutex::new(drives), state_dir: state_dir.map(Path::to_owned), options }
+    /// Control over the `nodes` served on `hub`.
+    pub fn new(hub: Hub, nodes: Vec<(u8, Slot)>) -> Control {
+        Control { hub, nodes: Mutex::new(nodes.into_iter().collect()) }
     }
 
-    /// Stops every drive (serve ends).
+    /// Stops every node (serve ends).
     pub async fn stop(&self) {
-        for slot in self.drives.lock().await.values_mut() {
+        for slot in self.nodes.lock().await.values_mut() {
             if let Some(h) = slot.host.take() {
                 h.stop();
             }
@@ -152,61 +208,34 @@ impl Control {
             }
             Request::Link { node, bus_off } => {
                 let state = if bus_off { LinkState::BusOff { recover_at: None } } else { LinkState::Active };
-                let drives = self.drives.lock().await;
-                let host = Self::running(&drives, node).map_err(|e| self.or_no_drive(e, &drives, node))?;
-                host.with_out(move |d, now, out| d.set_link(state, now, out))
-                    .await
-                    .ok_or_else(|| anyhow!("node {node} has stopped running: restart serve"))
+                let nodes = self.nodes.lock().await;
+                let host = running(&nodes, node)?;
+                host.set_link(state).await.ok_or_else(|| stopped(node))
             }
             Request::Power { node, on } => self.power(node, on).await,
         }
     }
 
     async fn change(&self, node: u8, change: Change, duration: Option<f64>) -> anyhow::Result<()> {
-        let drives = self.drives.lock().await;
-        let host = Self::running(&drives, node).map_err(|e| self.or_no_drive(e, &drives, node))?;
-        host.with(move |d, now| d.device.app.change_machine(now, change, duration))
+        let nodes = self.nodes.lock().await;
+        let host = running(&nodes, node)?;
+        host.change(change, duration)
             .await
-            .ok_or_else(|| anyhow!("node {node} has stopped running: restart serve"))?
+            .ok_or_else(|| stopped(node))?
             .map_err(|e| anyhow!("node {node}: {e}"))
     }
 
     async fn power(&self, node: u8, on: bool) -> anyhow::Result<()> {
-        let mut drives = self.drives.lock().await;
-        let err = self.no_drive(&drives, node);
-        let slot = drives.get_mut(&node).ok_or(err)?;
+        let mut nodes = self.nodes.lock().await;
+        let err = no_node(&nodes, node);
+        let slot = nodes.get_mut(&node).ok_or(err)?;
         match (on, slot.host.take()) {
             (false, Some(h)) => h.stop(),
-            (true, None) => {
-                let dev =
-                    crate::vdrive::build(slot.spec, self.state_dir.as_deref(), self.options, &slot.machine)?;
-                slot.host = Some(spawn(Controller::new(dev), self.hub.attach()));
-            }
+            (true, None) => slot.host = Some((slot.power_on)(&self.hub)?),
             // Already as asked: nothing changes.
             (_, h) => slot.host = h,
         }
         Ok(())
-    }
-
-    /// The host of `node`; `Err(true)`: no such drive, `Err(false)`: off.
-    fn running(
-        drives: &BTreeMap<u8, Slot>,
-        node: u8,
-    ) -> Result<&DeviceHost<Controller<PersonalityDevice>>, bool> {
-        drives.get(&node).ok_or(true)?.host.as_ref().ok_or(false)
-    }
-
-    fn or_no_drive(&self, missing: bool, drives: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Error {
-        if missing {
-            self.no_drive(drives, node)
-        } else {
-            anyhow!("node {node} is powered off: power it on first (drivebus control power {node} on)")
-        }
-    }
-
-    fn no_drive(&self, drives: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Error {
-        let list = drives.keys().map(u8::to_string).collect::<Vec<_>>().join(", ");
-        anyhow!("no drive with node-ID {node} is served: use one of {list}")
     }
 
     /// Answers one request line.
@@ -220,6 +249,26 @@ impl Control {
             Err(e) => Response { ok: false, error: Some(format!("{e:#}")) },
         }
     }
+}
+
+/// The host of `node`, or why there is none (the cause, then what to do).
+fn running(nodes: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Result<&Host> {
+    match nodes.get(&node) {
+        None => Err(no_node(nodes, node)),
+        Some(Slot { host: None, .. }) => {
+            Err(anyhow!("node {node} is powered off: power it on first (drivebus control power {node} on)"))
+        }
+        Some(Slot { host: Some(h), .. }) => Ok(h),
+    }
+}
+
+fn no_node(nodes: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Error {
+    let list = nodes.keys().map(u8::to_string).collect::<Vec<_>>().join(", ");
+    anyhow!("no node with node-ID {node} is served: use one of {list}")
+}
+
+fn stopped(node: u8) -> anyhow::Error {
+    anyhow!("node {node} has stopped running: restart serve")
 }
 
 /// Where the control interface listens: a loopback TCP address or a Unix

@@ -79,10 +79,9 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     let options = BuildOptions { eds_object: a.eds_object };
     // Checked before anything starts.
     let control_addr = a.control.as_deref().map(crate::control::Addr::parse).transpose()?;
-    let hosted = host_on_hub(&specs, &devices, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
-    let described = hosted.described;
-    let control = crate::control::Control::new(hub.clone(), hosted.drives, a.state_dir.as_deref(), options);
-    let control = std::sync::Arc::new(control);
+    let (nodes, described) =
+        host_on_hub(&specs, &devices, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
+    let control = std::sync::Arc::new(crate::control::Control::new(hub.clone(), nodes));
     let control_task = match &control_addr {
         Some(addr) => Some(crate::control::listen(addr, control.clone()).await?),
         None => None,
@@ -125,9 +124,6 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         }
     }
     control.stop().await;
-    for d in hosted.devices {
-        d.abort();
-    }
     if let Some(b) = bridge {
         b.abort();
     }

@@ -80,7 +80,7 @@ async fn control_sets_inputs_faults_bus_rules_and_power() {
     // Errors: the cause first, then what to do; --json like the others.
     let out = control(sock, &["input", "9", "digital", "3", "on"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no drive with node-ID 9 is served: use one of 5"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no node with node-ID 9 is served: use one of 5"));
     let out = control(sock, &["fault", "5", "encodr"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown variant `encodr`"));
     let out = Command::new(bin())
@@ -102,4 +102,32 @@ fn control_without_a_server_says_what_to_do() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("cannot reach the control interface at 127.0.0.1:1"), "{err}");
     assert!(err.contains("drivebus serve --control 127.0.0.1:1"), "{err}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn control_sets_the_inputs_of_a_cia401_module() {
+    let dir = tempfile::tempdir().unwrap();
+    let sock = dir.path().join("control.sock");
+    let sock = sock.to_str().unwrap();
+    let eds = concat!(env!("CARGO_MANIFEST_DIR"), "/../cia401/eds/io16.eds");
+    let device = format!("{eds}:3");
+    let mut srv = Serve::start(&["--drive", "generic:5", "--device", &device, "--control", sock], None);
+    let mut bus = connect(&srv.url()).await;
+    // Line 9 is 6000h sub 2 bit 0 (docs/machine.md).
+    assert_eq!(sdo_read(&mut bus, 3, 0x6000, 2).await, Ok(0));
+    ok(sock, &["input", "3", "digital", "9", "on"]);
+    assert_eq!(sdo_read(&mut bus, 3, 0x6000, 2).await, Ok(1));
+    let out = control(sock, &["fault", "3", "encoder"]);
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("node 3: kind: a device from an EDS/DCF has no machine faults")
+    );
+    // Powered on again: its inputs as at power-on.
+    ok(sock, &["power", "3", "off"]);
+    ok(sock, &["power", "3", "on"]);
+    let boot = wait_frame(&mut bus, Duration::from_secs(3), |f| f.std_id() == Some(0x703)).await;
+    assert_eq!(boot.map(|f| f.data().to_vec()), Some(vec![0x00]));
+    assert_eq!(sdo_read(&mut bus, 3, 0x6000, 2).await, Ok(0));
+    drop(bus);
+    assert!(srv.terminate().success());
 }

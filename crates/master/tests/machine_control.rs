@@ -1,7 +1,8 @@
 //! Inputs and faults changed while the bus runs (issue 17 §3), seen by
 //! our master on the virtual bus in simulated time: a digital input in
 //! 60FDh, an encoder fault's EMCY and its recovery after the clear, a node
-//! powered off and on, frames dropped by a rule.
+//! powered off and on, a node bus-off and recovered, frames dropped or
+//! corrupted by a rule.
 
 use std::time::Duration;
 
@@ -14,7 +15,11 @@ use drivebus_personality::{PersonalityDevice, Profile};
 const NODE: u8 = 5;
 
 fn generic() -> (SimBus, ProbeId, drivebus_bus::NodeId) {
-    let mut bus = Bus::new(BusConfig::with_bitrate(1_000_000));
+    generic_on(BusConfig::with_bitrate(1_000_000))
+}
+
+fn generic_on(cfg: BusConfig) -> (SimBus, ProbeId, drivebus_bus::NodeId) {
+    let mut bus = Bus::new(cfg);
     let id = bus.attach(Profile::Generic.build_on_default_machine(NODE).unwrap());
     let probe = bus.attach_probe();
     let cfg = MasterConfig { sdo_timeout: Duration::from_millis(300), ..Default::default() };
@@ -124,6 +129,47 @@ fn dropped_responses_time_out_then_the_sdo_succeeds() {
     let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
     assert!(matches!(r, Err(SdoError::Timeout)), "{r:?}");
     assert!(sim.bus().fault(rule).is_some_and(|r| r.is_spent()));
+    let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
+    assert_eq!(r.unwrap(), 0x0002_0192);
+}
+
+#[test]
+fn a_bus_off_node_is_silent_until_it_recovers() {
+    // Recovery by hand (the default recovers after 128 × 11 recessive bits).
+    let (mut sim, probe, id) =
+        generic_on(BusConfig { auto_recovery: false, ..BusConfig::with_bitrate(1_000_000) });
+    let m = sim.master().clone();
+    sim.block_on(async { m.sdo(NODE).write::<u16>(0x1017, 0, 50).await.unwrap() }).unwrap();
+    sim.bus_mut().set_bus_off(id);
+    let off_at = sim.now();
+    let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
+    assert!(matches!(r, Err(SdoError::Timeout)), "{r:?}");
+    let heard = |bus: &Bus, from: Instant| {
+        bus.received(probe).iter().filter(|(t, f)| *t > from && f.std_id() == Some(0x705)).count()
+    };
+    assert_eq!(heard(sim.bus(), off_at), 0);
+    sim.bus_mut().recover(id);
+    let on_at = sim.now();
+    sim.run_for(Duration::from_millis(120));
+    assert!(heard(sim.bus(), on_at) >= 2, "heartbeats again");
+    let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
+    assert_eq!(r.unwrap(), 0x0002_0192);
+}
+
+#[test]
+fn a_corrupted_response_is_retransmitted_and_a_silent_one_is_refused() {
+    let (mut sim, _, _) = generic();
+    let m = sim.master().clone();
+    // A CRC error: an error frame, the controller sends it again.
+    sim.bus_mut().add_fault(FaultRule::corrupt().id(0x585).times(1));
+    let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
+    assert_eq!(r.unwrap(), 0x0002_0192);
+    assert_eq!(sim.bus().stats().error_frames, 1);
+    // Corruption the CRC misses: the command specifier becomes 0xBF, not
+    // an SDO response the master accepts.
+    sim.bus_mut().add_fault(FaultRule::corrupt_with([0xFC, 0, 0, 0, 0, 0, 0, 0]).id(0x585).times(1));
+    let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
+    assert!(r.is_err(), "{r:?}");
     let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
     assert_eq!(r.unwrap(), 0x0002_0192);
 }
