@@ -10,10 +10,10 @@ use core::time::Duration;
 use drivebus_can::{Device, Frame, Instant, LinkState};
 
 use crate::candump::{self, CandumpRecord, LogEntry};
-use crate::fault::{FaultRule, RuleId, XorShift64};
 use crate::node::{NodeId, ProbeId};
 use crate::stats::{BusStats, LoadWindow};
 use crate::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
+use drivebus_can::fault::{FaultRule, XorShift64};
 
 /// How the bus behaves.
 #[derive(Clone, Debug)]
@@ -72,6 +72,10 @@ impl BusConfig {
     }
 }
 
+/// Handle of a rule added with [`Bus::add_fault`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RuleId(pub(crate) u32);
+
 pub(crate) enum Endpoint {
     /// A device and whether it was started.
     Node(Box<dyn Device>, bool),
@@ -79,6 +83,8 @@ pub(crate) enum Endpoint {
         received: Vec<(Instant, Frame)>,
         capture: bool,
     },
+    /// A node whose power is off ([`Bus::power_off`]): no device.
+    Off,
 }
 
 pub(crate) struct Station {
@@ -238,7 +244,7 @@ impl Bus {
     pub fn node<T: 'static>(&self, id: NodeId) -> Option<&T> {
         match &self.station(id)?.endpoint {
             Endpoint::Node(n, _) => n.as_any().downcast_ref(),
-            Endpoint::Probe { .. } => None,
+            Endpoint::Probe { .. } | Endpoint::Off => None,
         }
     }
 
@@ -247,7 +253,7 @@ impl Bus {
     pub fn node_mut<T: 'static>(&mut self, id: NodeId) -> Option<&mut T> {
         match &mut self.station_mut(id)?.endpoint {
             Endpoint::Node(n, _) => n.as_any_mut().downcast_mut(),
-            Endpoint::Probe { .. } => None,
+            Endpoint::Probe { .. } | Endpoint::Off => None,
         }
     }
 
@@ -411,14 +417,51 @@ impl Bus {
         }
     }
 
-    /// Plugs a disconnected station back in.
+    /// Plugs a disconnected station back in (a node whose power is off
+    /// stays off: [`Bus::power_on`]).
     pub fn reconnect(&mut self, id: impl Into<NodeId>) {
         if let Some(i) = self.index(id.into())
             && self.stations[i].link == LinkState::Disconnected
+            && !matches!(self.stations[i].endpoint, Endpoint::Off)
         {
             self.stations[i].link = LinkState::Active;
             self.notify_link(i);
         }
+    }
+
+    /// Switches a node's power off: its device is gone with everything
+    /// volatile in it (returned, to look at), it sends and hears nothing, a
+    /// frame it has on the wire completes. `None` if `id` is not a node
+    /// with power on.
+    pub fn power_off(&mut self, id: impl Into<NodeId>) -> Option<Box<dyn Device>> {
+        let i = self.index(id.into())?;
+        let st = &mut self.stations[i];
+        if !matches!(st.endpoint, Endpoint::Node(..)) {
+            return None;
+        }
+        let Endpoint::Node(dev, _) = core::mem::replace(&mut st.endpoint, Endpoint::Off) else { return None };
+        st.link = LinkState::Disconnected;
+        st.head_is_retry = false;
+        st.deadline = None;
+        st.tec = 0;
+        st.discard_if_offline(&mut self.stats);
+        Some(dev)
+    }
+
+    /// Switches a node's power back on with `device` as it is at power-on
+    /// (built again from its description and non-volatile storage, as the
+    /// real one boots): it starts at the next step. False if `id` is not a
+    /// node whose power is off.
+    pub fn power_on<D: Device + 'static>(&mut self, id: impl Into<NodeId>, device: D) -> bool {
+        let Some(i) = self.index(id.into()) else { return false };
+        let st = &mut self.stations[i];
+        if !matches!(st.endpoint, Endpoint::Off) {
+            return false;
+        }
+        st.endpoint = Endpoint::Node(Box::new(device), false);
+        st.link = LinkState::Active;
+        st.deadline = Some(self.now);
+        true
     }
 
     pub(crate) fn go_bus_off(&mut self, i: usize) {

@@ -63,15 +63,15 @@ extern crate alloc;
 
 mod bus;
 pub mod candump;
-mod fault;
 mod node;
 mod sim;
 mod stats;
 pub mod timing;
 
+pub use bus::RuleId;
 pub use bus::{Bus, BusConfig, LogSink};
 pub use candump::{CandumpRecord, LogEntry, ParseError, ParseErrorKind};
+pub use drivebus_can::fault::{FaultAction, FaultRule, XorShift64, corrupt_data};
 pub use drivebus_can::{Device, LinkState};
-pub use fault::{FaultAction, FaultRule, RuleId, XorShift64};
 pub use node::{NodeId, ProbeId};
 pub use stats::BusStats;

@@ -43,3 +43,17 @@ impl TxSink for Outbox<'_> {
         self.queue.push_back(frame);
     }
 }
+
+impl From<NodeId> for u32 {
+    /// The station number a [`FaultRule`](crate::FaultRule) names.
+    fn from(n: NodeId) -> u32 {
+        n.0
+    }
+}
+
+impl From<ProbeId> for u32 {
+    /// The station number a [`FaultRule`](crate::FaultRule) names.
+    fn from(p: ProbeId) -> u32 {
+        NodeId::from(p).0
+    }
+}

@@ -6,10 +6,10 @@ use drivebus_can::{Frame, Instant, LinkState, earliest};
 
 use crate::bus::{Bus, Endpoint, InFlight, Outcome, Station, TimedKind};
 use crate::candump::{self, LogEntry};
-use crate::fault::{FaultAction, corrupt_data};
-use crate::node::{NodeId, Outbox};
+use crate::node::Outbox;
 use crate::stats::BusStats;
 use crate::timing::{INTERMISSION_BITS, bits_duration, frame_bits};
+use drivebus_can::fault::{FaultAction, corrupt_data};
 
 /// A transmit error counter above this makes a station error passive
 /// (ISO 11898-1 §12.1.4.2).
@@ -206,11 +206,11 @@ impl Bus {
     }
 
     fn apply_rules(&mut self, frame: &Frame, from: usize) -> Outcome {
-        let node = NodeId(u32::try_from(from).unwrap_or(u32::MAX));
+        let node = u32::try_from(from).unwrap_or(u32::MAX);
         let mut action = None;
         for rule in self.rules.iter_mut().flatten() {
             if rule.try_fire(frame, node, &mut self.rng) {
-                action = Some(rule.action);
+                action = Some(rule.action());
                 break;
             }
         }
@@ -343,6 +343,7 @@ impl Bus {
                         received.push((now, frame));
                     }
                 }
+                Endpoint::Off => {}
             }
         }
     }

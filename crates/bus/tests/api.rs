@@ -156,3 +156,54 @@ fn a_station_hears_it_went_error_passive_and_back() {
     // Error passive still transmits: the frame arrived.
     assert_eq!(bus.take_received(probe), [Frame::new(0x300, &[])]);
 }
+
+/// Sends 0x700 + its count at start and every 10 ms (a heartbeat).
+#[derive(Default)]
+struct Beater {
+    next: Option<Instant>,
+    boots: u8,
+}
+
+impl Device for Beater {
+    fn handle_frame(&mut self, _: &Frame, _: Instant, _: &mut dyn TxSink) {}
+    fn poll(&mut self, now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
+        if self.next.is_some_and(|n| n <= now) {
+            out.send(Frame::new(0x705, &[5]));
+            self.next = Some(now + Duration::from_millis(10));
+        }
+        self.next
+    }
+    fn start(&mut self, now: Instant, out: &mut dyn TxSink) {
+        self.boots += 1;
+        out.send(Frame::new(0x705, &[0]));
+        self.next = Some(now + Duration::from_millis(10));
+    }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
+
+#[test]
+fn a_node_powered_off_is_silent_and_boots_when_powered_on() {
+    let mut bus = Bus::new(BusConfig::zero_time());
+    let rx = bus.attach_probe();
+    let n = bus.attach(Beater::default());
+    bus.run_until(Instant::from_millis(35));
+    assert_eq!(bus.take_received(rx).len(), 4); // boot-up + 3 beats
+    let dev = bus.power_off(n).expect("it had power");
+    assert_eq!(dev.as_any().downcast_ref::<Beater>().map(|b| b.boots), Some(1));
+    assert!(bus.node::<Beater>(n).is_none());
+    assert!(bus.power_off(n).is_none());
+    bus.reconnect(n); // does not switch the power on
+    bus.run_until(Instant::from_millis(100));
+    assert!(bus.take_received(rx).is_empty());
+    assert!(bus.power_on(n, Beater::default()));
+    assert!(!bus.power_on(n, Beater::default()));
+    bus.run_until(Instant::from_millis(115));
+    let got = bus.take_received_timed(rx);
+    assert_eq!(got[0], (Instant::from_millis(100), Frame::new(0x705, &[0])));
+    assert_eq!(got.len(), 2);
+}

@@ -10,12 +10,14 @@ extern crate alloc;
 
 pub mod cob;
 mod device;
+pub mod fault;
 mod frame;
 #[cfg(feature = "pcap")]
 pub mod pcap;
 mod time;
 
 pub use device::{Device, LinkState};
+pub use fault::{FaultAction, FaultRule, XorShift64};
 pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
 pub use time::Instant;
 

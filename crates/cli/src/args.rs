@@ -97,6 +97,10 @@ pub enum Command {
     /// Serve virtual drives on a socketcand TCP server (python-can, canopen), or on any bus (--bus).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(ServeArgs),
+    /// Change a running `serve --control`: set inputs, trigger and clear faults, drop frames,
+    /// switch a drive's power.
+    #[command(after_help = crate::control_cmd::CONTROL_EXAMPLES)]
+    Control(crate::control_cmd::ControlArgs),
     /// Run the demo: two virtual drives, PDOs, homing, a move and a CSP sine; writes an SVG plot.
     #[command(after_help = DEMO_EXAMPLES)]
     Demo(DemoArgs),
@@ -172,7 +176,9 @@ Without --bus (or with --bus virtual) the drives sit on an in-process bus served
 Every drive moves its profile's default machine (limit and home switches, hard stops, index, load),
 changed per node by --machine FILE.
 Prints one line when ready: `listening on HOST:PORT (channel NAME)` when listening, `serving on URL`
-otherwise; stops on SIGINT/SIGTERM (exit 0).
+otherwise (ending `; control on ADDR` with --control); stops on SIGINT/SIGTERM (exit 0).
+With --control ADDR, `drivebus control --connect ADDR ...` sets inputs, triggers and clears faults,
+drops frames and switches a drive's power while it runs (docs/control.md).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
 
 /// `drivebus serve`.
@@ -204,6 +210,11 @@ pub struct ServeArgs {
     /// or `corrupt:IDS:MASK[,...]`; IDS is `0x585` or `0x180-0x1FF`, MASK is hex XORed onto the data.
     #[arg(long = "fault", value_name = "RULE")]
     pub faults: Vec<String>,
+    /// Accept control requests (inputs, machine faults, bus faults, power) on this loopback
+    /// address (127.0.0.1:PORT) or Unix socket path: `drivebus control`, docs/control.md. Off
+    /// unless given.
+    #[arg(long, value_name = "ADDR")]
+    pub control: Option<String>,
     /// Give every drive 1021h "store EDS" and 1022h (CiA 301 §7.5.2.21): its EDS, generated from
     /// its running dictionary, read by SDO upload. Without it only `generic` has them (the other
     /// manuals do not list them).

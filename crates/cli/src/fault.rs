@@ -20,7 +20,7 @@ pub fn parse(text: &str) -> anyhow::Result<FaultRule> {
     let kind = parts.next().unwrap_or_default();
     let ids = ids(parts.next().with_context(bad)?).with_context(bad)?;
     let mut rule = match kind {
-        "drop" => FaultRule::drop_ids(ids),
+        "drop" => FaultRule::drop_frames().ids(ids),
         "corrupt" => {
             let hex = parts.next().with_context(bad)?;
             if hex.is_empty() || hex.len() > 16 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
@@ -31,7 +31,7 @@ pub fn parse(text: &str) -> anyhow::Result<FaultRule> {
             for (i, m) in mask.iter_mut().enumerate() {
                 *m = u8::from_str_radix(&padded[2 * i..2 * i + 2], 16).with_context(bad)?;
             }
-            FaultRule::corrupt_ids(ids, mask)
+            FaultRule::corrupt_with(mask).ids(ids)
         }
         _ => bail!("{}", bad()),
     };
@@ -70,7 +70,7 @@ fn ids(s: &str) -> Option<std::ops::RangeInclusive<u32>> {
 /// Parse every rule and install it on the hub.
 pub fn install(hub: &Hub, rules: &[String]) -> anyhow::Result<()> {
     for r in rules {
-        hub.add_fault(parse(r)?);
+        hub.add_fault(parse(r)?)?;
     }
     Ok(())
 }

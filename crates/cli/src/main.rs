@@ -11,6 +11,8 @@ mod args_bus;
 mod args_node;
 mod canfilter;
 mod conn;
+mod control;
+mod control_cmd;
 mod csv;
 mod cyclic;
 mod decode;
@@ -242,6 +244,7 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
     let g = &cli.global;
     match &cli.cmd {
         Command::Serve(a) => serve::run(g, a).await.map(|()| 0),
+        Command::Control(a) => control_cmd::run(g, a).await.map(|()| 0),
         Command::Demo(a) => demo::run(g, a).await.map(|()| 0),
         Command::Scan(a) => nmt_cmd::scan(g, a).await.map(|()| 0),
         Command::Sdo(c) => sdo_cmd::run(g, c).await.map(|()| 0),

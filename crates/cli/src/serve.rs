@@ -9,7 +9,8 @@
 //!
 //! Contract (other tools rely on it): one stdout line once the drives are
 //! up — containing `listening on HOST:PORT (channel NAME)` when listening,
-//! `serving on URL` otherwise; runs until SIGINT or SIGTERM, then exits 0.
+//! `serving on URL` otherwise, ending `; control on ADDR` with `--control`
+//! (`crate::control`); runs until SIGINT or SIGTERM, then exits 0.
 
 use std::io::Write;
 
@@ -20,7 +21,7 @@ use drivebus_transport::{BusUrl, Hub, HubConfig};
 
 use crate::args::{DEFAULT_LISTEN, Global, ServeArgs};
 use crate::vdevice::DeviceSpec;
-use crate::vdrive::{DriveSpec, spawn_on_hub};
+use crate::vdrive::{DriveSpec, host_on_hub};
 
 /// Runs the drives until a termination signal.
 pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
@@ -76,8 +77,15 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         tokio::time::sleep(std::time::Duration::from_millis(100)).await;
     }
     let options = BuildOptions { eds_object: a.eds_object };
-    let (drives, described) =
-        spawn_on_hub(&specs, &devices, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
+    // Checked before anything starts.
+    let control_addr = a.control.as_deref().map(crate::control::Addr::parse).transpose()?;
+    let (nodes, described) =
+        host_on_hub(&specs, &devices, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
+    let control = std::sync::Arc::new(crate::control::Control::new(hub.clone(), nodes));
+    let control_task = match &control_addr {
+        Some(addr) => Some(crate::control::listen(addr, control.clone()).await?),
+        None => None,
+    };
     let drive_list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
     let list = match (specs.is_empty(), described.is_empty()) {
         (_, true) => format!("drives {drive_list}"),
@@ -90,14 +98,17 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     let stop = Signals::install()?;
     {
         let mut out = std::io::stdout().lock();
-        let on = if bridge.is_some() { format!(" on {}", g.bus) } else { String::new() };
+        let mut on = if bridge.is_some() { format!(" on {}", g.bus) } else { String::new() };
+        if let Some((_, addr)) = &control_task {
+            on.push_str(&format!("; control on {addr}"));
+        }
         match &server {
             Some((_, addr)) => writeln!(
                 out,
                 "drivebus serve: socketcand listening on {addr} (channel {}) ({pace}); {list}{on}",
                 a.channel
             )?,
-            None => writeln!(out, "drivebus serve: serving on {} ({pace}); {list}", g.bus)?,
+            None => writeln!(out, "drivebus serve: serving on {} ({pace}); {list}{on}", g.bus)?,
         }
         out.flush()?;
     }
@@ -106,9 +117,13 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     if let Some((server, _)) = &server {
         tracing::info!(clients = server.client_count(), relayed = server.hub().relayed(), "stopping");
     }
-    for d in drives {
-        d.abort();
+    if let Some((task, addr)) = control_task {
+        task.abort();
+        if let crate::control::Addr::Unix(p) = addr {
+            let _ = std::fs::remove_file(p);
+        }
     }
+    control.stop().await;
     if let Some(b) = bridge {
         b.abort();
     }

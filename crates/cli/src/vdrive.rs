@@ -12,6 +12,7 @@ use drivebus_personality::machine::{Machine, MachineFile};
 use drivebus_personality::{PersonalityDevice, Profile};
 use tokio::task::JoinHandle;
 
+use crate::control::{Host, PowerOn, Slot};
 use crate::vdevice::DeviceSpec;
 
 /// A drive to host, as given on the command line (`akd:1`).
@@ -126,10 +127,59 @@ pub fn build(
         .map_err(|e| anyhow!("cannot build {spec}: {e}"))
 }
 
+/// A served node-ID and its slot.
+pub type NodeSlot = (u8, Slot);
+
 /// Builds and starts `specs` and `devices` on `hub`, each as its own
 /// participant, each on its machine (`--machine FILE` or the profile's
-/// default); returns the hosts and what each device is (for the ready
-/// line). Every file and machine is checked before anything starts.
+/// default). Every file and machine is checked before anything starts.
+/// Returns each node's slot (its host and how to power it on again, for
+/// `serve --control`) and what each device is (for the ready line).
+pub fn host_on_hub(
+    specs: &[DriveSpec],
+    devices: &[DeviceSpec],
+    hub: &drivebus_transport::Hub,
+    state_dir: Option<&Path>,
+    options: BuildOptions,
+    machine_file: Option<&Path>,
+) -> anyhow::Result<(Vec<NodeSlot>, Vec<String>)> {
+    let nodes: Vec<u8> = devices.iter().map(|d| d.node).collect();
+    let machines = Machines::load_with_devices(machine_file, specs, &nodes)?;
+    let dir = state_dir.map(Path::to_owned);
+    let mut built: Vec<(u8, Host, PowerOn)> = Vec::new();
+    let mut drives = Vec::new();
+    for s in specs {
+        let m = machines.machine_for(*s)?;
+        drives.push((*s, build(*s, state_dir, options, &m)?, m));
+    }
+    let mut described = Vec::new();
+    let mut files = Vec::new();
+    let eds_options = drivebus_node::EdsOptions { eds_object: options.eds_object };
+    for d in devices {
+        let m = machines.io_machine_for(d.node)?;
+        let dev = d.build(state_dir, eds_options, m.as_ref())?;
+        described.push(d.describe(&dev));
+        files.push((d.clone(), dev, m));
+    }
+    for (s, dev, m) in drives {
+        let dir = dir.clone();
+        let again: PowerOn =
+            Box::new(move |hub| Ok(Host::drive(build(s, dir.as_deref(), options, &m)?, hub)));
+        built.push((s.node, Host::drive(dev, hub), again));
+    }
+    for (d, dev, m) in files {
+        let (node, dir) = (d.node, dir.clone());
+        let again: PowerOn =
+            Box::new(move |hub| Ok(Host::device(d.build(dir.as_deref(), eds_options, m.as_ref())?, hub)));
+        built.push((node, Host::device(dev, hub), again));
+    }
+    let slots =
+        built.into_iter().map(|(n, host, power_on)| (n, Slot { host: Some(host), power_on })).collect();
+    Ok((slots, described))
+}
+
+/// [`host_on_hub`], keeping only the tasks: returns the hosts and what each
+/// device is (for the ready line).
 pub fn spawn_on_hub(
     specs: &[DriveSpec],
     devices: &[DeviceSpec],
@@ -138,22 +188,9 @@ pub fn spawn_on_hub(
     options: BuildOptions,
     machine_file: Option<&Path>,
 ) -> anyhow::Result<(Vec<JoinHandle<()>>, Vec<String>)> {
-    let nodes: Vec<u8> = devices.iter().map(|d| d.node).collect();
-    let machines = Machines::load_with_devices(machine_file, specs, &nodes)?;
-    let mut drives = Vec::new();
-    for s in specs {
-        drives.push(build(*s, state_dir, options, &machines.machine_for(*s)?)?);
-    }
-    let mut built = Vec::new();
-    let eds_options = drivebus_node::EdsOptions { eds_object: options.eds_object };
-    for d in devices {
-        let dev = d.build(state_dir, eds_options, machines.io_machine_for(d.node)?.as_ref())?;
-        built.push((d.describe(&dev), dev));
-    }
-    let (described, built): (Vec<String>, Vec<_>) = built.into_iter().unzip();
-    let hosts = drivebus_transport::host::spawn_on_hub(drives, hub).into_iter().map(|h| h.into_join_handle());
-    let more = drivebus_transport::host::spawn_on_hub(built, hub).into_iter().map(|h| h.into_join_handle());
-    Ok((hosts.chain(more).collect(), described))
+    let (slots, described) = host_on_hub(specs, devices, hub, state_dir, options, machine_file)?;
+    let tasks = slots.into_iter().filter_map(|(_, s)| s.host).map(Host::into_join_handle).collect();
+    Ok((tasks, described))
 }
 
 #[cfg(test)]

@@ -154,6 +154,17 @@ fn the_io_module_section_runs_as_written() {
     assert_eq!(ran, 5);
 }
 
+/// "Inputs and faults while it runs": `serve --control` on a Unix socket
+/// and `drivebus control`, as written.
+#[test]
+fn the_control_section_runs_as_written() {
+    let lines = block(&readme(), "### Inputs and faults while it runs");
+    assert!(lines.iter().any(|l| l.contains("--control control.sock")), "{lines:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let ran = run_block(lines, common::free_port(), dir.path(), false);
+    assert_eq!(ran, 9);
+}
+
 #[test]
 fn the_install_section_and_the_command_table_match_the_tool() {
     let text = readme();
@@ -181,6 +192,7 @@ fn the_install_section_and_the_command_table_match_the_tool() {
         "produce",
         "gen",
         "stats",
+        "control",
     ] {
         assert!(text.contains(&format!("`{cmd}")), "README table lists {cmd}");
         assert!(help.contains(&format!("  {cmd} ")), "`drivebus --help` lists {cmd}");

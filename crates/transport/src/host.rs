@@ -25,7 +25,7 @@
 //! The same device runs on the virtual bus (`drivebus_bus::Bus::attach`)
 //! with the same frames; only the clock differs.
 
-use drivebus_can::{Device, Frame, Instant};
+use drivebus_can::{Device, Frame, Instant, LinkState, TxSink};
 use std::time::Duration;
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
@@ -127,6 +127,74 @@ pub fn bridge(hub: &Hub, bus: CanBus) -> JoinHandle<()> {
             () = outbound => tracing::info!("bridge: the hub side closed"),
         }
     })
+}
+
+/// A device behind a CAN controller whose link state the host's owner
+/// sets (a bus-off injected at run time, `drivebus serve --control`):
+/// off the bus it hears nothing and what it sends is lost, as on the
+/// simulated bus's stations.
+pub struct Controller<D> {
+    /// The device.
+    pub device: D,
+    link: LinkState,
+}
+
+impl<D: Device> Controller<D> {
+    /// `device` on an active link.
+    pub fn new(device: D) -> Self {
+        Controller { device, link: LinkState::Active }
+    }
+
+    /// The controller's link state.
+    pub fn link(&self) -> LinkState {
+        self.link
+    }
+
+    /// Changes the link state and tells the device
+    /// ([`Device::link_changed`]).
+    pub fn set_link(&mut self, state: LinkState, now: Instant, out: &mut dyn TxSink) {
+        self.link = state;
+        if state.is_on_bus() {
+            self.device.link_changed(state, now, out);
+        } else {
+            self.device.link_changed(state, now, &mut Lost);
+        }
+    }
+}
+
+/// What a controller off the bus sends.
+struct Lost;
+
+impl TxSink for Lost {
+    fn send(&mut self, _: Frame) {}
+}
+
+impl<D: Device + 'static> Device for Controller<D> {
+    fn start(&mut self, now: Instant, out: &mut dyn TxSink) {
+        self.device.start(now, out);
+    }
+    fn handle_frame(&mut self, frame: &Frame, now: Instant, out: &mut dyn TxSink) {
+        if self.link.is_on_bus() {
+            self.device.handle_frame(frame, now, out);
+        }
+    }
+    fn poll(&mut self, now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
+        if self.link.is_on_bus() { self.device.poll(now, out) } else { self.device.poll(now, &mut Lost) }
+    }
+    fn link_changed(&mut self, state: LinkState, now: Instant, out: &mut dyn TxSink) {
+        self.set_link(state, now, out);
+    }
+    fn handle_error_frame(&mut self, now: Instant, out: &mut dyn TxSink) {
+        if self.link.is_on_bus() {
+            self.device.handle_error_frame(now, out);
+        }
+    }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
 }
 
 /// The device's `now`: nanoseconds since the host started.

@@ -9,12 +9,12 @@
 //! disconnects such a TCP client).
 
 use std::collections::HashMap;
-use std::ops::RangeInclusive;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, LazyLock, Mutex, Weak};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use drivebus_can::Frame;
+use drivebus_can::fault::{FaultAction, FaultRule, XorShift64, corrupt_data};
 use tokio::sync::broadcast;
 
 use crate::handle::{CanBus, hub_handle};
@@ -46,69 +46,48 @@ pub enum FaultVerdict {
     Replace(Frame),
 }
 
-/// A fault injection rule: frames whose identifier is in `ids` are hit,
-/// after skipping `skip` matches, at most `times` times, then every
-/// `every`-th match.
-#[derive(Clone, Debug)]
-pub struct FaultRule {
-    ids: RangeInclusive<u32>,
-    corrupt: Option<[u8; 8]>,
-    skip: u32,
-    every: u32,
-    times: Option<u32>,
-    seen: u32,
+/// A rule the hub cannot apply: it relays frames in one synchronous step
+/// and has no error frames, so [`FaultAction::Corrupt`] (an error frame and
+/// the automatic retransmission) and [`FaultAction::Delay`] exist only on
+/// the simulated bus (`drivebus_bus::Bus`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UnsupportedFault(pub FaultAction);
+
+impl std::fmt::Display for UnsupportedFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the real-time hub cannot apply {:?}: only drop, silent corruption, duplicate and bus-off rules",
+            self.0
+        )
+    }
 }
 
-impl FaultRule {
-    /// Drops frames with an identifier in `ids`.
-    pub fn drop_ids(ids: RangeInclusive<u32>) -> Self {
-        FaultRule { ids, corrupt: None, skip: 0, every: 1, times: None, seen: 0 }
-    }
-    /// XORs `mask` onto the data of frames with an identifier in `ids`
-    /// (the CRC is assumed to miss it: receivers get altered data).
-    pub fn corrupt_ids(ids: RangeInclusive<u32>, mask: [u8; 8]) -> Self {
-        FaultRule { corrupt: Some(mask), ..FaultRule::drop_ids(ids) }
-    }
-    /// Lets the first `n` matching frames through.
-    pub fn skip(mut self, n: u32) -> Self {
-        self.skip = n;
-        self
-    }
-    /// Hits only every `n`-th match (n ≥ 1).
-    pub fn every(mut self, n: u32) -> Self {
-        self.every = n.max(1);
-        self
-    }
-    /// Hits at most `n` frames, then stays inactive.
-    pub fn times(mut self, n: u32) -> Self {
-        self.times = Some(n);
-        self
-    }
+impl std::error::Error for UnsupportedFault {}
 
-    fn apply(&mut self, frame: &Frame) -> FaultVerdict {
-        if !self.ids.contains(&frame.id().raw()) || self.times == Some(0) {
-            return FaultVerdict::Pass;
-        }
-        self.seen = self.seen.saturating_add(1);
-        if self.seen <= self.skip || !(self.seen - self.skip - 1).is_multiple_of(self.every) {
-            return FaultVerdict::Pass;
-        }
-        if let Some(t) = &mut self.times {
-            *t -= 1;
-        }
-        match self.corrupt {
-            None => FaultVerdict::Drop,
-            Some(mask) if !frame.is_rtr() => {
-                let mut data = [0u8; 8];
-                for (i, b) in frame.data().iter().enumerate() {
-                    data[i] = b ^ mask[i];
-                }
-                match Frame::try_new(frame.id(), &data[..frame.len()]) {
-                    Ok(f) => FaultVerdict::Replace(f),
-                    Err(_) => FaultVerdict::Pass,
-                }
+/// The hub's rules and the PRNG their probabilities draw from.
+struct Rules {
+    list: Vec<FaultRule>,
+    rng: XorShift64,
+}
+
+impl Rules {
+    /// What the first rule that fires does to `frame` from `from`.
+    fn verdict(&mut self, frame: &Frame, from: ParticipantId) -> (FaultVerdict, bool) {
+        let node = u32::try_from(from).unwrap_or(u32::MAX);
+        let Rules { list, rng } = self;
+        let Some(action) = list.iter_mut().find_map(|r| r.try_fire(frame, node, rng).then(|| r.action()))
+        else {
+            return (FaultVerdict::Pass, false);
+        };
+        match action {
+            FaultAction::Drop | FaultAction::BusOff => (FaultVerdict::Drop, false),
+            FaultAction::CorruptSilently { xor } => {
+                (FaultVerdict::Replace(corrupt_data(frame, xor, rng)), false)
             }
-            Some(_) => FaultVerdict::Pass,
+            FaultAction::Duplicate => (FaultVerdict::Pass, true),
+            // Refused by `add_fault`.
+            FaultAction::Corrupt | FaultAction::Delay(_) => (FaultVerdict::Pass, false),
         }
     }
 }
@@ -152,7 +131,7 @@ struct HubInner {
     next_id: AtomicU64,
     bitrate: Option<u32>,
     hook: Option<FaultHook>,
-    rules: Mutex<Vec<FaultRule>>,
+    rules: Mutex<Rules>,
     /// When the paced bus is free again.
     busy_until: Mutex<std::time::Instant>,
     relayed: AtomicU64,
@@ -187,7 +166,7 @@ impl Hub {
                 next_id: AtomicU64::new(1),
                 bitrate: cfg.bitrate.filter(|&b| b > 0),
                 hook: cfg.fault_hook,
-                rules: Mutex::new(Vec::new()),
+                rules: Mutex::new(Rules { list: Vec::new(), rng: XorShift64::new(1) }),
                 busy_until: Mutex::new(std::time::Instant::now()),
                 relayed: AtomicU64::new(0),
                 dropped: AtomicU64::new(0),
@@ -219,18 +198,34 @@ impl Hub {
         self.inner.next_id.fetch_add(1, Ordering::Relaxed)
     }
 
-    /// Adds a fault rule; rules are tried in order, the first hit applies.
-    pub fn add_fault(&self, rule: FaultRule) {
-        if let Ok(mut r) = self.inner.rules.lock() {
-            r.push(rule);
+    /// Adds a fault rule; rules are tried in order, the first that fires
+    /// applies (a rule's `from` is the sending participant's id). Drop and
+    /// bus-off rules drop the frame, silent corruption relays the altered
+    /// frame, duplicate relays it twice.
+    pub fn add_fault(&self, rule: FaultRule) -> Result<(), UnsupportedFault> {
+        if matches!(rule.action(), FaultAction::Corrupt | FaultAction::Delay(_)) {
+            return Err(UnsupportedFault(rule.action()));
         }
+        if let Ok(mut r) = self.inner.rules.lock() {
+            r.list.push(rule);
+        }
+        Ok(())
     }
 
     /// Removes every fault rule.
     pub fn clear_faults(&self) {
         if let Ok(mut r) = self.inner.rules.lock() {
-            r.clear();
+            r.list.clear();
         }
+    }
+
+    /// Removes the rules that will never fire again; returns how many are
+    /// left.
+    pub fn prune_faults(&self) -> usize {
+        self.inner.rules.lock().map_or(0, |mut r| {
+            r.list.retain(|x| !x.is_spent());
+            r.list.len()
+        })
     }
 
     /// Frames relayed so far.
@@ -274,13 +269,9 @@ impl Hub {
 
     /// Relays without pacing (fault rules still apply).
     pub fn publish_now(&self, from: ParticipantId, frame: Frame) {
-        let mut verdict = match self.inner.rules.lock() {
-            Ok(mut rules) => rules
-                .iter_mut()
-                .map(|r| r.apply(&frame))
-                .find(|v| *v != FaultVerdict::Pass)
-                .unwrap_or(FaultVerdict::Pass),
-            Err(_) => FaultVerdict::Pass,
+        let (mut verdict, twice) = match self.inner.rules.lock() {
+            Ok(mut rules) => rules.verdict(&frame, from),
+            Err(_) => (FaultVerdict::Pass, false),
         };
         if verdict == FaultVerdict::Pass
             && let Some(h) = &self.inner.hook
@@ -299,6 +290,10 @@ impl Hub {
         let timestamp_us = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_micros() as u64);
         // Err only when nobody listens, which is fine on a bus.
         let _ = self.inner.tx.send(HubFrame { from, frame, timestamp_us });
+        if twice {
+            self.inner.relayed.fetch_add(1, Ordering::Relaxed);
+            let _ = self.inner.tx.send(HubFrame { from, frame, timestamp_us });
+        }
     }
 }
 
@@ -323,14 +318,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn fault_rule_counts() {
-        let mut r = FaultRule::drop_ids(0x100..=0x1FF).skip(1).every(2).times(2);
-        let f = Frame::new(0x180, &[1]);
-        let got: Vec<_> = (0..8).map(|_| r.apply(&f)).collect();
-        use FaultVerdict::*;
-        assert_eq!(got, [Pass, Drop, Pass, Drop, Pass, Pass, Pass, Pass]);
-        assert_eq!(r.apply(&Frame::new(0x80, &[])), Pass);
-        let mut c = FaultRule::corrupt_ids(0..=0x7FF, [0xFF; 8]);
-        assert_eq!(c.apply(&Frame::new(1, &[0x0F])), Replace(Frame::new(1, &[0xF0])));
+    fn rules_drop_corrupt_and_duplicate_on_the_hub() {
+        let hub = Hub::default();
+        let mut rx = hub.subscribe();
+        hub.add_fault(FaultRule::drop_frames().ids(0x100..=0x1FF).skip(1).every(2).times(2)).unwrap();
+        hub.add_fault(FaultRule::corrupt_with([0xFF; 8]).id(0x201)).unwrap();
+        hub.add_fault(FaultRule::duplicate().id(0x301)).unwrap();
+        assert!(hub.add_fault(FaultRule::corrupt()).is_err());
+        for _ in 0..4 {
+            hub.publish_now(1, Frame::new(0x180, &[1]));
+        }
+        hub.publish_now(1, Frame::new(0x201, &[0x0F]));
+        hub.publish_now(1, Frame::new(0x301, &[]));
+        let mut got = Vec::new();
+        while let Ok(f) = rx.try_recv() {
+            got.push(f.frame);
+        }
+        let f180 = Frame::new(0x180, &[1]);
+        let dup = Frame::new(0x301, &[]);
+        assert_eq!(got, [f180, f180, Frame::new(0x201, &[0xF0]), dup, dup]);
+        assert_eq!(hub.dropped(), 2);
+        assert_eq!(hub.prune_faults(), 2);
     }
 }

@@ -33,10 +33,11 @@ pub mod socketcand;
 pub mod stats;
 mod url;
 
+pub use drivebus_can::fault::{FaultAction, FaultRule};
 pub use drivebus_can::{CanId, Frame};
 pub use error::{Cause, TransportError};
 pub use handle::{CanBus, CanRx, CanTx, TrySendError};
-pub use hub::{FaultRule, FaultVerdict, Hub, HubConfig};
+pub use hub::{FaultVerdict, Hub, HubConfig, UnsupportedFault};
 pub use stats::{BusErrors, LoadMeter, LoadReport};
 pub use url::{BusUrl, SlcanPort};
 

@@ -285,7 +285,7 @@ async fn slow_client_is_disconnected_not_stalling_the_hub() {
 async fn paced_hub_and_fault_rules() {
     // 125 kbit/s: an 8-byte standard frame is ≥ 111 bits ≈ 0.9 ms.
     let hub = Hub::new(HubConfig { bitrate: Some(125_000), ..HubConfig::default() });
-    hub.add_fault(FaultRule::drop_ids(0x700..=0x7FF));
+    hub.add_fault(FaultRule::drop_frames().ids(0x700..=0x7FF)).unwrap();
     let (srv, addr) =
         SocketcandServer::bind_with("127.0.0.1:0", ServerConfig::new("can0"), hub).await.unwrap();
     let mut client = connect(addr, "can0").await.unwrap();

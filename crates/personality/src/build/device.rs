@@ -18,7 +18,7 @@
 //! assert!(matches!(dev.app, DeviceApp::Io(_)));
 //! ```
 
-use crate::machine::{FaultSchedule, Machine};
+use crate::machine::{Change, FaultSchedule, Input, Machine, MachineError};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::Instant;
@@ -56,6 +56,33 @@ impl IoNode {
         IoNode { module, schedule: machine.fault_schedule() }
     }
 
+    /// Changes a digital or analog input at `now` for `duration` seconds
+    /// through the machine's schedule, as a `[[node.inputs]]` entry due
+    /// now (`Personality::change_machine` for a drive); a module has no
+    /// other input and no machine faults.
+    pub fn change_machine(
+        &mut self,
+        now: Instant,
+        change: Change,
+        duration: Option<f64>,
+    ) -> Result<(), MachineError> {
+        match change {
+            Change::Input(Input::Digital { .. } | Input::Analog { .. }) => {
+                self.schedule.change(now, change, duration)
+            }
+            Change::Input(_) => Err(MachineError {
+                key: "input".into(),
+                reason: "a device from an EDS/DCF has only digital and analog inputs".into(),
+                other: None,
+            }),
+            Change::Fault(_) | Change::ClearFaults => Err(MachineError {
+                key: "kind".into(),
+                reason: "a device from an EDS/DCF has no machine faults".into(),
+                other: None,
+            }),
+        }
+    }
+
     fn inject(module: &mut IoModule, i: Injection) {
         match i {
             Injection::Model(Plant::DigitalInput { line, level }) => {
@@ -77,6 +104,26 @@ pub enum DeviceApp {
     Plain,
     /// A CiA 401 generic I/O module.
     Io(Box<IoNode>),
+}
+
+impl DeviceApp {
+    /// [`IoNode::change_machine`] on a CiA 401 module; a plain device has
+    /// no inputs.
+    pub fn change_machine(
+        &mut self,
+        now: Instant,
+        change: Change,
+        duration: Option<f64>,
+    ) -> Result<(), MachineError> {
+        match self {
+            DeviceApp::Io(n) => n.change_machine(now, change, duration),
+            DeviceApp::Plain => Err(MachineError {
+                key: "input".into(),
+                reason: "the device is not a CiA 401 I/O module (1000h): it has no inputs".into(),
+                other: None,
+            }),
+        }
+    }
 }
 
 /// A device built by [`build_device`].

@@ -63,9 +63,29 @@ impl Personality {
     }
 
     /// Applies `schedule` from now on, its times counted from the drive's
-    /// boot (replaces an earlier schedule; an empty one removes it).
+    /// boot (replaces an earlier schedule; kept when empty: it holds the
+    /// machine's polarities and input values for run-time changes).
     pub fn set_fault_schedule(&mut self, schedule: crate::machine::FaultSchedule) {
-        self.faults = (!schedule.is_empty()).then_some(schedule);
+        self.faults = Some(schedule);
+    }
+
+    /// Makes `change` to the machine at `now` for `duration` seconds
+    /// (`None`: until changed again or cleared), through the machine's
+    /// schedule exactly as a `[[node.faults]]` / `[[node.inputs]]` entry
+    /// due now; it shows at the next poll (wake the device). Values out of
+    /// range are refused, naming the key.
+    pub fn change_machine(
+        &mut self,
+        now: Instant,
+        change: crate::machine::Change,
+        duration: Option<f64>,
+    ) -> Result<(), crate::machine::MachineError> {
+        use crate::machine::{FaultSchedule, Polarity};
+        // A drive built without a machine: the default wiring, inputs low.
+        let s = self.faults.get_or_insert_with(|| {
+            FaultSchedule::new(alloc::vec::Vec::new(), Polarity::default(), Polarity::NormallyOpen)
+        });
+        s.change(now, change, duration)
     }
 
     /// The behaviour as its concrete type `T` (e.g.

@@ -111,6 +111,29 @@ impl Entry {
     }
 }
 
+/// A change made while the drive runs (the control interface, a test):
+/// the schedule applies it at its next run exactly as an entry due now.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Change {
+    /// A machine fault starts.
+    Fault(FaultKind),
+    /// An input changes.
+    Input(Input),
+    /// Every machine fault that is on ends, as at the end of a duration
+    /// (a latched drive fault stays until the master's fault reset).
+    ClearFaults,
+}
+
+/// Whether a scheduled entry sets the same input as `input`.
+fn same_input(what: &What, input: &Input) -> bool {
+    match (what, input) {
+        (What::Input(Input::Digital { line: a, .. }), Input::Digital { line: b, .. }) => a == b,
+        (What::Input(Input::Analog { channel: a, .. }), Input::Analog { channel: b, .. }) => a == b,
+        (What::Input(a), b) => core::mem::discriminant(a) == core::mem::discriminant(b),
+        (What::Fault(_), _) => false,
+    }
+}
+
 /// The machine's own input values, which an input change with a duration
 /// returns to.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -141,6 +164,8 @@ pub struct FaultSchedule {
     base: InputBase,
     /// When the drive started; the schedule's time origin.
     t0: Option<Instant>,
+    /// Entries ended by [`FaultSchedule::change`], to clear at the next run.
+    ended: bool,
 }
 
 impl FaultSchedule {
@@ -165,7 +190,7 @@ impl FaultSchedule {
             inputs.into_iter().map(|c| Entry { at: c.at, duration: c.duration, what: What::Input(c.input) });
         let mut entries: Vec<(Entry, Phase)> = faults.chain(inputs).map(|e| (e, Phase::Pending)).collect();
         entries.sort_by(|a, b| a.0.at.total_cmp(&b.0.at));
-        FaultSchedule { faults: entries, limits, home, base, t0: None }
+        FaultSchedule { faults: entries, limits, home, base, t0: None, ended: false }
     }
 
     /// Whether there is nothing to apply.
@@ -176,6 +201,54 @@ impl FaultSchedule {
     /// Sets the time origin (the drive's boot) unless already set.
     pub fn start(&mut self, now: Instant) {
         self.t0.get_or_insert(now);
+    }
+
+    /// Makes `change` at `now`, for `duration` seconds (`None`: until
+    /// changed again): an entry due now, applied by the next
+    /// [`run`](Self::run) (the caller polls the device after this). An
+    /// input or duration out of range is refused, naming the key.
+    pub fn change(
+        &mut self,
+        now: Instant,
+        change: Change,
+        duration: Option<f64>,
+    ) -> Result<(), MachineError> {
+        let t0 = *self.t0.get_or_insert(now);
+        let at = now.as_nanos().saturating_sub(t0.as_nanos()) as f64 / 1e9;
+        let what = match change {
+            Change::ClearFaults => {
+                for (e, p) in &mut self.faults {
+                    if *p == Phase::Active && matches!(e.what, What::Fault(_)) {
+                        *p = Phase::Over;
+                        self.ended = true;
+                    }
+                }
+                return Ok(());
+            }
+            Change::Fault(k) => {
+                check_time(at, duration)?;
+                What::Fault(k)
+            }
+            Change::Input(input) => {
+                InputChange { at, input, duration }.check()?;
+                if duration.is_none() {
+                    // A lasting change supersedes the lasting ones of the
+                    // same input (keeps a long-running list short).
+                    for (e, p) in &mut self.faults {
+                        if *p == Phase::Active && e.duration.is_none() && same_input(&e.what, &input) {
+                            *p = Phase::Over;
+                        }
+                    }
+                }
+                What::Input(input)
+            }
+        };
+        // Ended entries are history; the inputs they touched are back at
+        // the machine's values or touched by an entry still on.
+        self.faults.retain(|(_, p)| *p != Phase::Over);
+        let i = self.faults.partition_point(|(e, _)| e.at <= at);
+        self.faults.insert(i, (Entry { at, duration, what }, Phase::Pending));
+        Ok(())
     }
 
     fn polarity(&self, s: Switch) -> Polarity {
@@ -235,7 +308,7 @@ impl FaultSchedule {
     pub fn run_with(&mut self, now: Instant, mut inject: impl FnMut(Injection)) -> Option<Instant> {
         let t0 = *self.t0.get_or_insert(now);
         let t = now.as_nanos().saturating_sub(t0.as_nanos());
-        let mut ended = false;
+        let mut ended = core::mem::take(&mut self.ended);
         for i in 0..self.faults.len() {
             let (f, phase) = self.faults[i];
             if phase == Phase::Pending && t >= f.start_ns() {
@@ -270,5 +343,62 @@ impl FaultSchedule {
             })
             .min()?;
         Some(Instant::from_nanos(t0.as_nanos().saturating_add(next)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn changes_are_named_as_in_the_machine_file() {
+        assert_eq!(Change::fault("encoder", None).unwrap(), Change::Fault(FaultKind::Encoder));
+        assert_eq!(
+            Change::fault("trip", Some("positive_limit")).unwrap(),
+            Change::Fault(FaultKind::Trip(Switch::PositiveLimit))
+        );
+        assert_eq!(Change::fault("clear", None).unwrap(), Change::ClearFaults);
+        assert_eq!(Change::fault("trip", None).unwrap_err().key, "kind");
+        assert_eq!(Change::fault("encoder", Some("home_switch")).unwrap_err().key, "switch");
+        assert!(Change::fault("encodr", None).unwrap_err().reason.contains("unknown variant"));
+        assert_eq!(
+            Change::input("digital", Some(3), 1.0).unwrap(),
+            Change::Input(Input::Digital { line: 3, level: true })
+        );
+        assert_eq!(Change::input("digital", Some(3), 0.5).unwrap_err().key, "value");
+        assert_eq!(Change::input("analog", None, 1.0).unwrap_err().key, "input");
+        assert_eq!(Change::input("brake", Some(1), 1.0).unwrap_err().key, "line");
+    }
+
+    /// The injections `run` makes at `now`.
+    fn run(s: &mut FaultSchedule, ms: u64) -> Vec<Injection> {
+        let mut got = Vec::new();
+        s.run_with(Instant::from_millis(ms), |i| got.push(i));
+        got
+    }
+
+    #[test]
+    fn run_time_changes_go_through_the_schedule() {
+        use ModelInjection as M;
+        let mut s = FaultSchedule::new(Vec::new(), Polarity::NormallyClosed, Polarity::NormallyOpen);
+        s.start(Instant::ZERO);
+        s.change(Instant::from_millis(10), Change::Fault(FaultKind::Encoder), None).unwrap();
+        assert_eq!(run(&mut s, 10), [Injection::Model(M::EncoderFailure)]);
+        // A lasting input supersedes the earlier lasting one of its line.
+        let dig = |level| Change::Input(Input::Digital { line: 2, level });
+        s.change(Instant::from_millis(20), dig(true), None).unwrap();
+        assert_eq!(run(&mut s, 20), [Injection::Model(M::DigitalInput { line: 2, level: true })]);
+        s.change(Instant::from_millis(25), dig(false), None).unwrap();
+        assert_eq!(run(&mut s, 25), [Injection::Model(M::DigitalInput { line: 2, level: false })]);
+        assert_eq!(s.faults.len(), 2, "the superseded change is gone");
+        // Clear: the model's conditions go, the inputs come back, the
+        // input change still on is put back, the fault is not.
+        s.change(Instant::from_millis(30), Change::ClearFaults, None).unwrap();
+        let got = run(&mut s, 30);
+        assert_eq!(got[0], Injection::Model(M::Clear));
+        assert!(!got.contains(&Injection::Model(M::EncoderFailure)));
+        assert_eq!(got.last(), Some(&Injection::Model(M::DigitalInput { line: 2, level: false })));
+        assert!(run(&mut s, 40).is_empty());
+        assert!(s.change(Instant::from_millis(50), dig(true), Some(0.0)).is_err());
     }
 }

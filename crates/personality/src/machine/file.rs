@@ -226,6 +226,82 @@ struct FaultSpec {
     duration: S<f64>,
 }
 
+/// The fault `kind` and `switch` name; `Err`: the wrong key and why.
+fn fault_of(kind: KindName, switch: Option<SwitchName>) -> Result<FaultKind, (&'static str, String)> {
+    let switch = switch.map(|s| match s {
+        SwitchName::NegativeLimit => Switch::NegativeLimit,
+        SwitchName::PositiveLimit => Switch::PositiveLimit,
+        SwitchName::HomeSwitch => Switch::Home,
+    });
+    Ok(match (kind, switch) {
+        (KindName::Trip, Some(s)) => FaultKind::Trip(s),
+        (KindName::WireBreak, Some(s)) => FaultKind::WireBreak(s),
+        (KindName::Encoder, None) => FaultKind::Encoder,
+        (KindName::OverCurrent, None) => FaultKind::OverCurrent,
+        (KindName::OverTemperature, None) => FaultKind::OverTemperature,
+        (KindName::OverVoltage, None) => FaultKind::OverVoltage,
+        (KindName::UnderVoltage, None) => FaultKind::UnderVoltage,
+        (KindName::Trip | KindName::WireBreak, None) => {
+            return Err(("kind", "needs `switch` (negative_limit, positive_limit or home_switch)".into()));
+        }
+        _ => return Err(("switch", "only `trip` and `wire_break` take a switch".into())),
+    })
+}
+
+/// The input `name` with `line` and `value`; `Err`: the wrong key and why.
+fn input_of(name: InputName, line: Option<u8>, v: f64) -> Result<Input, (&'static str, String)> {
+    let takes_line = matches!(name, InputName::Digital | InputName::Analog);
+    let line = match (line, takes_line) {
+        (Some(l), true) => l,
+        (None, true) => return Err(("input", "needs `line`".into())),
+        (Some(_), false) => return Err(("line", "only `digital` and `analog` take a line".into())),
+        (None, false) => 0,
+    };
+    let level = || {
+        if v == 0.0 || v == 1.0 {
+            Ok(v == 1.0)
+        } else {
+            Err(("value", format!("{v} is not a level (0 or 1)")))
+        }
+    };
+    Ok(match name {
+        InputName::Digital => Input::Digital { line, level: level()? },
+        InputName::Analog => Input::Analog { channel: line, volts: v },
+        InputName::MasterVelocity => Input::MasterVelocity(v),
+        InputName::MasterPosition => Input::MasterPosition(v),
+        InputName::MotorTemperature => Input::MotorTemperature(v),
+        InputName::Brake => Input::Brake(level()?),
+    })
+}
+
+/// A name of the machine file's lists (`kind`, `switch`, `input`).
+fn name<'de, T: Deserialize<'de>>(key: &str, text: &'de str) -> Result<T, MachineError> {
+    use serde::de::IntoDeserializer;
+    T::deserialize(IntoDeserializer::<serde::de::value::Error>::into_deserializer(text))
+        .map_err(|e| super::err(key, e.to_string()))
+}
+
+impl super::Change {
+    /// The fault named as in a `[[node.faults]]` entry (`kind`, and
+    /// `switch` for `trip` and `wire_break`), or `kind = "clear"` for
+    /// [`Change::ClearFaults`](super::Change::ClearFaults).
+    pub fn fault(kind: &str, switch: Option<&str>) -> Result<Self, MachineError> {
+        if kind == "clear" && switch.is_none() {
+            return Ok(super::Change::ClearFaults);
+        }
+        let switch = switch.map(|s| name("switch", s)).transpose()?;
+        fault_of(name("kind", kind)?, switch).map(super::Change::Fault).map_err(|(k, why)| super::err(k, why))
+    }
+
+    /// The input change named as in a `[[node.inputs]]` entry (`input`,
+    /// `line` for `digital` and `analog`, `value`).
+    pub fn input(input: &str, line: Option<u8>, value: f64) -> Result<Self, MachineError> {
+        input_of(name("input", input)?, line, value)
+            .map(super::Change::Input)
+            .map_err(|(k, why)| super::err(k, why))
+    }
+}
+
 /// Where each key of a node's table is, to place an error on it.
 #[derive(Debug, Default)]
 struct Spans(BTreeMap<String, Range<usize>>);
@@ -420,27 +496,12 @@ impl MachineFile {
             }
             let switch = f.switch.as_ref().map(|s| {
                 sp.0.insert(key("switch"), s.span());
-                match *s.get_ref() {
-                    SwitchName::NegativeLimit => Switch::NegativeLimit,
-                    SwitchName::PositiveLimit => Switch::PositiveLimit,
-                    SwitchName::HomeSwitch => Switch::Home,
-                }
+                *s.get_ref()
             });
-            let needs_switch = matches!(f.kind.get_ref(), KindName::Trip | KindName::WireBreak);
-            let kind = match (*f.kind.get_ref(), switch) {
-                (KindName::Trip, Some(s)) => FaultKind::Trip(s),
-                (KindName::WireBreak, Some(s)) => FaultKind::WireBreak(s),
-                (KindName::Encoder, None) => FaultKind::Encoder,
-                (KindName::OverCurrent, None) => FaultKind::OverCurrent,
-                (KindName::OverTemperature, None) => FaultKind::OverTemperature,
-                (KindName::OverVoltage, None) => FaultKind::OverVoltage,
-                (KindName::UnderVoltage, None) => FaultKind::UnderVoltage,
-                _ => {
-                    let (k, why) = if needs_switch {
-                        (key("kind"), "needs `switch` (negative_limit, positive_limit or home_switch)")
-                    } else {
-                        (key("switch"), "only `trip` and `wire_break` take a switch")
-                    };
+            let kind = match fault_of(*f.kind.get_ref(), switch) {
+                Ok(k) => k,
+                Err((k, why)) => {
+                    let k = key(k);
                     let at = sp.0.get(&k).map_or(f_span.start, |r| r.start);
                     let (line, column) = line_col(&self.text, at);
                     return Err(MachineFileError {
@@ -599,35 +660,15 @@ impl MachineFile {
             if let Some(l) = &c.line {
                 sp.0.insert(key("line"), l.span());
             }
-            let name = *c.input.get_ref();
-            let takes_line = matches!(name, InputName::Digital | InputName::Analog);
-            let line = match (&c.line, takes_line) {
-                (Some(l), true) => *l.get_ref(),
-                (None, true) => {
-                    return Err(at(c.input.span(), format!("{}: needs `line`", key("input"))));
-                }
-                (Some(l), false) => {
-                    let why = "only `digital` and `analog` take a line";
-                    return Err(at(l.span(), format!("{}: {why}", key("line"))));
-                }
-                (None, false) => 0,
-            };
-            let v = *c.value.get_ref();
-            let level = || {
-                if v == 0.0 || v == 1.0 {
-                    Ok(v == 1.0)
-                } else {
-                    Err(at(c.value.span(), format!("{}: {v} is not a level (0 or 1)", key("value"))))
-                }
-            };
-            let input = match name {
-                InputName::Digital => Input::Digital { line, level: level()? },
-                InputName::Analog => Input::Analog { channel: line, volts: v },
-                InputName::MasterVelocity => Input::MasterVelocity(v),
-                InputName::MasterPosition => Input::MasterPosition(v),
-                InputName::MotorTemperature => Input::MotorTemperature(v),
-                InputName::Brake => Input::Brake(level()?),
-            };
+            let line = c.line.as_ref().map(|l| *l.get_ref());
+            let input = input_of(*c.input.get_ref(), line, *c.value.get_ref()).map_err(|(k, why)| {
+                let span = match k {
+                    "line" => c.line.as_ref().map_or(c.input.span(), |l| l.span()),
+                    "value" => c.value.span(),
+                    _ => c.input.span(),
+                };
+                at(span, format!("{}: {why}", key(k)))
+            })?;
             m.inputs.push(InputChange {
                 at: *c.at.get_ref(),
                 input,

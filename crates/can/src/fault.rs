@@ -1,12 +1,15 @@
 //! Fault injection rules and the deterministic PRNG behind probabilities.
+//!
+//! [`FaultRule`] is the one rule type of the project, here beside the
+//! frame it matches: the simulated bus (`drivebus_bus::Bus::add_fault`)
+//! and the real-time hub of `drivebus_transport` both apply it. A rule
+//! names a transmitting station by its number on that bus.
 
+use crate::Frame;
 use alloc::boxed::Box;
 use core::fmt;
 use core::ops::{Bound, RangeBounds};
 use core::time::Duration;
-use drivebus_can::Frame;
-
-use crate::node::NodeId;
 
 /// xorshift64* PRNG.
 ///
@@ -68,30 +71,31 @@ pub enum FaultAction {
     BusOff,
 }
 
-/// A frame predicate for [`FaultRule::when`].
-type Predicate = Box<dyn Fn(&Frame) -> bool>;
-
-/// Handle of a rule added with [`Bus::add_fault`](crate::Bus::add_fault).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct RuleId(pub(crate) u32);
+/// A frame predicate for [`FaultRule::when`] (`Send` so a rule can be
+/// handed to a hub shared by threads).
+type Predicate = Box<dyn Fn(&Frame) -> bool + Send + Sync>;
 
 /// A fault injection rule: which transmissions it matches and what it does.
 ///
 /// A rule matches by identifier range, transmitting station and a
 /// predicate (all optional, all must hold), then skips the first `skip`
-/// matches, fires at most `times` times, each time with `probability`.
+/// matches, takes only every `every`-th match after them, fires at most
+/// `times` times, each time with `probability`.
 /// Rules are tried in the order added; at most one fires per transmission.
 pub struct FaultRule {
-    pub(crate) action: FaultAction,
+    action: FaultAction,
     ids: Option<(u32, u32)>,
     extended: Option<bool>,
-    from: Option<NodeId>,
+    from: Option<u32>,
     predicate: Option<Predicate>,
     skip: u32,
+    every: u32,
+    /// Matches seen after the skipped ones (for `every`).
+    seen: u32,
     remaining: Option<u32>,
     /// Fires when a draw is below this; `None` means always.
     threshold: Option<u64>,
-    pub(crate) fired: u32,
+    fired: u32,
 }
 
 impl fmt::Debug for FaultRule {
@@ -117,6 +121,8 @@ impl FaultRule {
             from: None,
             predicate: None,
             skip: 0,
+            every: 1,
+            seen: 0,
             remaining: None,
             threshold: None,
             fired: 0,
@@ -175,19 +181,26 @@ impl FaultRule {
         self.extended = Some(extended);
         self
     }
-    /// Only frames transmitted by this station.
-    pub fn from(mut self, node: impl Into<NodeId>) -> Self {
-        self.from = Some(node.into());
+    /// Only frames transmitted by this station (its number on the bus:
+    /// `drivebus_bus::NodeId`/`ProbeId`, a hub participant).
+    pub fn from(mut self, station: impl Into<u32>) -> Self {
+        self.from = Some(station.into());
         self
     }
     /// Only frames for which `pred` holds.
-    pub fn when(mut self, pred: impl Fn(&Frame) -> bool + 'static) -> Self {
+    pub fn when(mut self, pred: impl Fn(&Frame) -> bool + Send + Sync + 'static) -> Self {
         self.predicate = Some(Box::new(pred));
         self
     }
     /// Let the first `n` matching transmissions through.
     pub fn skip(mut self, n: u32) -> Self {
         self.skip = n;
+        self
+    }
+    /// After the skipped matches, take only every `n`-th match (`n` ≥ 1:
+    /// the 1st, the `n+1`-th, …).
+    pub fn every(mut self, n: u32) -> Self {
+        self.every = n.max(1);
         self
     }
     /// Fire at most `n` times.
@@ -212,8 +225,16 @@ impl FaultRule {
     pub fn fired(&self) -> u32 {
         self.fired
     }
+    /// What the rule does when it fires.
+    pub fn action(&self) -> FaultAction {
+        self.action
+    }
+    /// Whether the rule will never fire again (`times` used up).
+    pub fn is_spent(&self) -> bool {
+        self.remaining == Some(0)
+    }
 
-    fn matches(&self, frame: &Frame, from: NodeId) -> bool {
+    fn matches(&self, frame: &Frame, from: u32) -> bool {
         if let Some((lo, hi)) = self.ids {
             let id = frame.id().raw();
             if id < lo || id > hi {
@@ -229,13 +250,18 @@ impl FaultRule {
         self.predicate.as_ref().is_none_or(|p| p(frame))
     }
 
-    /// Decides whether the rule fires for this transmission, updating counters.
-    pub(crate) fn try_fire(&mut self, frame: &Frame, from: NodeId, rng: &mut XorShift64) -> bool {
+    /// Decides whether the rule fires for this transmission by station
+    /// `from`, updating its counters; `rng` draws the probability.
+    pub fn try_fire(&mut self, frame: &Frame, from: u32, rng: &mut XorShift64) -> bool {
         if self.remaining == Some(0) || !self.matches(frame, from) {
             return false;
         }
         if self.skip > 0 {
             self.skip -= 1;
+            return false;
+        }
+        self.seen = self.seen.wrapping_add(1);
+        if !(self.seen - 1).is_multiple_of(self.every) {
             return false;
         }
         if let Some(t) = self.threshold
@@ -251,8 +277,10 @@ impl FaultRule {
     }
 }
 
-/// Applies a silent corruption to `frame`.
-pub(crate) fn corrupt_data(frame: &Frame, xor: Option<[u8; 8]>, rng: &mut XorShift64) -> Frame {
+/// `frame` with [`FaultAction::CorruptSilently`] applied: `xor` onto its
+/// data, or one bit drawn from `rng` when `None`; frames without data
+/// come back unaltered.
+pub fn corrupt_data(frame: &Frame, xor: Option<[u8; 8]>, rng: &mut XorShift64) -> Frame {
     let data = frame.data();
     if data.is_empty() {
         return *frame;
@@ -293,9 +321,20 @@ mod tests {
         let mut always = FaultRule::drop_frames().probability(1.0);
         let mut nan = FaultRule::drop_frames().probability(f64::NAN);
         for _ in 0..50 {
-            assert!(!never.try_fire(&f, NodeId(0), &mut rng));
-            assert!(!nan.try_fire(&f, NodeId(0), &mut rng));
-            assert!(always.try_fire(&f, NodeId(0), &mut rng));
+            assert!(!never.try_fire(&f, 0, &mut rng));
+            assert!(!nan.try_fire(&f, 0, &mut rng));
+            assert!(always.try_fire(&f, 0, &mut rng));
         }
+    }
+
+    #[test]
+    fn skip_every_times_count_matches() {
+        let mut rng = XorShift64::new(1);
+        let mut r = FaultRule::drop_frames().ids(0x100..=0x1FF).skip(1).every(2).times(2);
+        let f = Frame::new(0x180, &[1]);
+        let got: alloc::vec::Vec<bool> = (0..8).map(|_| r.try_fire(&f, 0, &mut rng)).collect();
+        assert_eq!(got, [false, true, false, true, false, false, false, false]);
+        assert!(r.is_spent());
+        assert!(!r.try_fire(&Frame::new(0x80, &[]), 0, &mut rng));
     }
 }

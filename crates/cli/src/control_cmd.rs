@@ -1,0 +1,215 @@
+//! `drivebus control --connect ADDR …`: one request to a running
+//! `drivebus serve --control ADDR` (docs/control.md).
+
+use anyhow::bail;
+use clap::{Args, Subcommand};
+
+use crate::args::Global;
+use crate::control::{Addr, Request, request};
+
+/// `drivebus control`.
+#[derive(Args, Debug)]
+pub struct ControlArgs {
+    /// The server's control address: 127.0.0.1:PORT or a Unix socket path (serve --control).
+    #[arg(long, value_name = "ADDR")]
+    pub connect: String,
+    /// What to do.
+    #[command(subcommand)]
+    pub cmd: ControlCmd,
+}
+
+/// A control request.
+#[derive(Subcommand, Debug)]
+pub enum ControlCmd {
+    /// Set a machine input of a drive: digital LINE on|off, analog CHANNEL VOLTS, master_velocity,
+    /// master_position, motor_temperature VALUE, brake on|off (docs/machine.md).
+    Input {
+        /// Node-ID of the drive.
+        #[arg(value_name = "NODE")]
+        drive: u8,
+        /// digital, analog, master_velocity, master_position, motor_temperature or brake.
+        input: String,
+        /// [LINE] VALUE: a line for digital (1..16) and analog (1..4), then the value (on/off,
+        /// 1/0, volts, counts, °C).
+        #[arg(num_args = 1..=2, required = true, allow_negative_numbers = true)]
+        args: Vec<String>,
+        /// Only this long (seconds), then back to the machine's value.
+        #[arg(long = "for", value_name = "SECONDS")]
+        duration: Option<f64>,
+    },
+    /// Trigger a machine fault of a drive (encoder, over_current, over_temperature, over_voltage,
+    /// under_voltage, trip SWITCH, wire_break SWITCH) or `clear` them.
+    Fault {
+        /// Node-ID of the drive.
+        #[arg(value_name = "NODE")]
+        drive: u8,
+        /// The kind, or `clear`.
+        kind: String,
+        /// For trip and wire_break: negative_limit, positive_limit or home_switch.
+        switch: Option<String>,
+        /// Only this long (seconds), then it clears.
+        #[arg(long = "for", value_name = "SECONDS")]
+        duration: Option<f64>,
+    },
+    /// Drop or corrupt frames on the server's bus, clear the rules, or put a drive bus-off
+    /// (`bus off NODE`) and back (`bus on NODE`).
+    Bus {
+        /// drop, corrupt, clear, rule (then --rule in `serve --fault` syntax), off or on.
+        action: String,
+        /// off, on: the drive's node-ID.
+        #[arg(value_name = "NODE")]
+        drive: Option<u8>,
+        /// The CAN-ID, or a range LOW-HIGH (hex with 0x or decimal).
+        #[arg(long, value_name = "IDS")]
+        id: Option<String>,
+        /// Hit at most this many frames.
+        #[arg(long, value_name = "N")]
+        count: Option<u32>,
+        /// corrupt: hex digits XORed onto the data.
+        #[arg(long, value_name = "HEX")]
+        mask: Option<String>,
+        /// rule: a whole `--fault` rule, e.g. drop:0x180-0x1FF,every=2.
+        #[arg(long, value_name = "RULE")]
+        rule: Option<String>,
+    },
+    /// Switch a drive's power off or on (it boots from its stored parameters).
+    Power {
+        /// Node-ID of the drive.
+        #[arg(value_name = "NODE")]
+        drive: u8,
+        /// on or off.
+        state: String,
+    },
+}
+
+/// Examples of `drivebus control`.
+pub const CONTROL_EXAMPLES: &str = "\
+Examples:
+  drivebus control --connect 127.0.0.1:29537 input 5 digital 3 on
+  drivebus control --connect 127.0.0.1:29537 input 5 analog 1 2.5 --for 0.5
+  drivebus control --connect 127.0.0.1:29537 fault 5 encoder
+  drivebus control --connect 127.0.0.1:29537 fault 5 clear
+  drivebus control --connect 127.0.0.1:29537 bus drop --id 0x185 --count 5
+  drivebus control --connect 127.0.0.1:29537 bus off 5
+  drivebus control --connect 127.0.0.1:29537 power 5 off";
+
+fn level(s: &str) -> Option<f64> {
+    match s {
+        "on" | "high" => Some(1.0),
+        "off" | "low" => Some(0.0),
+        _ => s.parse().ok(),
+    }
+}
+
+/// The request `cmd` makes.
+pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<Request> {
+    Ok(match cmd {
+        ControlCmd::Input { drive: node, input, args, duration } => {
+            let (line, value) = match args.as_slice() {
+                [v] => (None, v),
+                [l, v] => match l.parse::<u8>() {
+                    Ok(l) => (Some(l), v),
+                    Err(_) => bail!("bad line `{l}`: expected a number, e.g. `input {node} digital 3 on`"),
+                },
+                _ => bail!("expected [LINE] VALUE after the input, e.g. `input {node} digital 3 on`"),
+            };
+            let Some(value) = level(value) else {
+                bail!("bad value `{value}`: expected on, off or a number");
+            };
+            Request::Input { node: *node, input: input.clone(), line, value, duration: *duration }
+        }
+        ControlCmd::Fault { drive: node, kind, switch, duration } => {
+            Request::Fault { node: *node, kind: kind.clone(), switch: switch.clone(), duration: *duration }
+        }
+        ControlCmd::Bus { action, drive: Some(node), id: None, count: None, mask: None, rule: None }
+            if action == "off" || action == "on" =>
+        {
+            Request::Link { node: *node, bus_off: action == "off" }
+        }
+        ControlCmd::Bus { action, drive: None, id, count, mask, rule } => {
+            let times = count.map_or_else(String::new, |n| format!(",times={n}"));
+            let rule = match (action.as_str(), id, mask, rule) {
+                ("clear", None, None, None) => "clear".to_owned(),
+                ("rule", None, None, Some(r)) if count.is_none() => r.clone(),
+                ("drop", Some(id), None, None) => format!("drop:{id}{times}"),
+                ("corrupt", Some(id), Some(m), None) => format!("corrupt:{id}:{m}{times}"),
+                ("drop" | "corrupt", None, _, _) => bail!("bus {action} needs --id, e.g. --id 0x185"),
+                ("corrupt", _, None, _) => bail!("bus corrupt needs --mask, e.g. --mask FF"),
+                ("rule", _, _, None) => bail!("bus rule needs --rule, e.g. --rule drop:0x185,times=3"),
+                _ => bail!(
+                    "bad bus request `{action}`: use drop --id IDS [--count N], corrupt --id IDS --mask HEX \
+                     [--count N], rule --rule RULE, clear, off NODE or on NODE"
+                ),
+            };
+            Request::Bus { rule }
+        }
+        ControlCmd::Bus { action, .. } => {
+            bail!("bad bus request `{action}` with a node-ID: use `bus off NODE` or `bus on NODE`")
+        }
+        ControlCmd::Power { drive: node, state } => match state.as_str() {
+            "on" => Request::Power { node: *node, on: true },
+            "off" => Request::Power { node: *node, on: false },
+            s => bail!("bad power state `{s}`: expected on or off"),
+        },
+    })
+}
+
+/// Sends the request and reports the answer.
+pub async fn run(g: &Global, a: &ControlArgs) -> anyhow::Result<()> {
+    let addr = Addr::parse(&a.connect)?;
+    let req = to_request(&a.cmd)?;
+    let resp = request(&addr, &req).await?;
+    if let Some(e) = resp.error {
+        bail!("{e}");
+    }
+    crate::output::emit(g.json, serde_json::json!({ "ok": true, "request": req }), || "ok".to_owned());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn commands_make_the_documented_requests() {
+        let input = ControlCmd::Input {
+            drive: 5,
+            input: "digital".into(),
+            args: vec!["3".into(), "on".into()],
+            duration: None,
+        };
+        assert_eq!(
+            to_request(&input).unwrap(),
+            Request::Input { node: 5, input: "digital".into(), line: Some(3), value: 1.0, duration: None }
+        );
+        let off = ControlCmd::Bus {
+            action: "off".into(),
+            drive: Some(5),
+            id: None,
+            count: None,
+            mask: None,
+            rule: None,
+        };
+        assert_eq!(to_request(&off).unwrap(), Request::Link { node: 5, bus_off: true });
+        let bus = ControlCmd::Bus {
+            action: "drop".into(),
+            drive: None,
+            id: Some("0x181".into()),
+            count: Some(5),
+            mask: None,
+            rule: None,
+        };
+        assert_eq!(to_request(&bus).unwrap(), Request::Bus { rule: "drop:0x181,times=5".into() });
+        let bad = ControlCmd::Bus {
+            action: "drop".into(),
+            drive: None,
+            id: None,
+            count: None,
+            mask: None,
+            rule: None,
+        };
+        assert!(to_request(&bad).unwrap_err().to_string().contains("needs --id"));
+        let p = ControlCmd::Power { drive: 5, state: "of".into() };
+        assert!(to_request(&p).is_err());
+    }
+}
