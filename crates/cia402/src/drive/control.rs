@@ -5,7 +5,7 @@ use super::mode::{ModeCommand, ModeIo, op};
 use super::pp::{PpIn, wrap};
 use super::profile::{Limits, Ramp};
 use super::{Drive, EmcyRequest};
-use crate::model::{Command, EventKind};
+use crate::model::Command;
 use crate::state_machine::{DriveFunction, Outcome, Reaction, State};
 use core::f64::consts::PI;
 use drivebus_od::ObjectDictionary;
@@ -125,7 +125,7 @@ impl Drive {
         }
     }
 
-    fn actual_pos_f(&self) -> f64 {
+    pub(super) fn actual_pos_f(&self) -> f64 {
         self.units.inc_to_pos_f(self.model.position_counts() as f64 + self.inc_offset_f())
     }
 
@@ -222,7 +222,7 @@ impl Drive {
     }
 
     /// Whether the active mode's handler supervises the following error.
-    fn handler_owns_following_error(&self) -> bool {
+    pub(super) fn handler_owns_following_error(&self) -> bool {
         let bit = op::supported_bit(self.mode);
         self.handlers
             .iter()
