@@ -11,12 +11,14 @@ extern crate alloc;
 pub mod cob;
 mod device;
 mod frame;
+mod identity;
 #[cfg(feature = "pcap")]
 pub mod pcap;
 mod time;
 
 pub use device::{Device, LinkState};
 pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
+pub use identity::Identity;
 pub use time::Instant;
 
 pub use core::time::Duration;

@@ -90,18 +90,9 @@ pub struct ConfigArea {
     pub station_alias: u16,
 }
 
-/// Identity words 0x08–0x0F.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Identity {
-    /// Vendor ID.
-    pub vendor_id: u32,
-    /// Product code.
-    pub product_code: u32,
-    /// Revision number.
-    pub revision: u32,
-    /// Serial number.
-    pub serial: u32,
-}
+/// Identity words 0x08–0x0F: the 1018h identity, one type with the
+/// CANopen node's and the LSS address.
+pub use drivebus_can::Identity;
 
 /// Mailbox offsets and sizes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -36,7 +36,9 @@ mod requests;
 pub mod storage;
 
 pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
-pub use config::{Identity, NodeConfig};
+pub use config::NodeConfig;
+/// 1018h identity (also the LSS address): the one type of `drivebus-can`.
+pub use drivebus_can::Identity;
 pub use device::NodeDevice;
 pub use dictionary::build_dictionary;
 #[cfg(feature = "std")]
