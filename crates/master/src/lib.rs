@@ -28,7 +28,6 @@
 //! simulated time); `master` (events, NMT, heartbeat/guarding, EMCY,
 //! SYNC/TIME); [`sdo`]; [`scan`]; [`lss`]; [`pdo`]; [`drive`] (CiA 402).
 
-mod clock;
 mod core;
 pub mod dcf;
 pub mod drive;

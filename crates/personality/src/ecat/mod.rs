@@ -37,7 +37,7 @@ use crate::{Personality, Profile};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::{Instant, TxSink};
-use drivebus_coe::{AlState, FileHandler, FoeError, FoeProgress};
+use drivebus_coe::{AlState, FileHandler, NoFiles};
 use drivebus_node::{NmtState, Storage};
 use drivebus_od::ObjectDictionary;
 use drivebus_pdo::{Granularity, PdoConfig};
@@ -162,26 +162,8 @@ pub trait DriveFiles: FileHandler + Send {
     fn as_any_mut(&mut self) -> &mut dyn core::any::Any;
 }
 
-/// A drive without FoE.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct NoDriveFiles;
-
-impl FileHandler for NoDriveFiles {
-    fn supported(&self) -> bool {
-        false
-    }
-    fn begin_write(&mut self, _: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
-        Err(FoeError::ACCESS_DENIED)
-    }
-    fn write(&mut self, _: u32, _: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
-        Err(FoeError::ILLEGAL)
-    }
-    fn finish_write(&mut self, _: Instant) -> Result<FoeProgress, FoeError> {
-        Err(FoeError::ILLEGAL)
-    }
-}
-
-impl DriveFiles for NoDriveFiles {
+// A drive without FoE is CoE's own `NoFiles`.
+impl DriveFiles for NoFiles {
     fn as_any_mut(&mut self) -> &mut dyn core::any::Any {
         self
     }
@@ -200,7 +182,7 @@ pub fn files(profile: Profile, dir: Option<std::path::PathBuf>) -> Box<dyn Drive
                 None => f,
             })
         }
-        _ => Box::new(NoDriveFiles),
+        _ => Box::new(NoFiles),
     }
 }
 
