@@ -27,8 +27,8 @@
 //! - A new RRQ/WRQ ends a running transfer and starts the new one.
 //! - A timeout between two packets ends the transfer silently.
 
-use crate::coe::Out;
 use crate::AlState;
+use crate::coe::Out;
 use crate::mailbox::{MailboxErrorCode, MailboxType, Put};
 use drivebus_can::{Duration, Instant};
 

@@ -1,9 +1,9 @@
 //! The mailbox server: one request mailbox in, response mailboxes out.
 
+use crate::AlState;
 use crate::access::ObjectAccess;
 use crate::coe::emergency::{Emergency, EmergencyQueue, EmergencyQueueFull};
 use crate::coe::{CoeConfig, CoeServer, Out};
-use crate::AlState;
 use crate::foe::{FileHandler, FoeEnd, FoeServer};
 use crate::mailbox::{
     HEADER_LEN, MAX_MAILBOX_SIZE, MIN_MAILBOX_SIZE, MailboxErrorCode, MailboxHeader, MailboxType,

@@ -5,7 +5,7 @@ mod support;
 
 use drivebus_can::Duration;
 use drivebus_coe::mailbox::{MAX_MAILBOX_SIZE, MIN_MAILBOX_SIZE};
-use drivebus_coe::{ConfigError, AlState, MailboxConfig, MailboxServer, NoFiles};
+use drivebus_coe::{AlState, ConfigError, MailboxConfig, MailboxServer, NoFiles};
 use drivebus_od::NoHooks;
 use support::{Dev, Rig, body, ethercrab, header, mbx, test_od};
 

@@ -9,8 +9,8 @@
 //! [`crate::dictionary`]).
 
 use crate::description::{
-    CoeDetails, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, Pdo, PdoEntry, Profile,
-    SlaveDescription, SmKind, SyncManager, SyncSignal,
+    CoeDetails, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, Pdo, PdoEntry, Profile, SlaveDescription,
+    SmKind, SyncManager, SyncSignal,
 };
 use crate::read::ReadError;
 use drivebus_esc::sii::{SiiContent, SiiPdo, fmmu_usage, protocols, sm_type};

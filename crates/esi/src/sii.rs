@@ -5,8 +5,7 @@
 
 use crate::description::{Pdo, SlaveDescription, SmKind};
 use drivebus_esc::sii::{
-    General, MailboxConfig, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry,
-    SiiSyncManager,
+    General, MailboxConfig, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry, SiiSyncManager,
 };
 
 /// ETG.2000 PDO attributes as SII PDO flags (ETG.1000.6 Table 26).

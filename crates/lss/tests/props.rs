@@ -2,9 +2,7 @@
 //! the codec round-trips, and fastscan always finds the lowest address.
 
 use drivebus_can::{CanId, Duration, Frame, Instant};
-use drivebus_lss::{
-    FastScan, FastScanOutcome, Identity, LssMode, LssRequest, LssResponse, LssSlave, master,
-};
+use drivebus_lss::{FastScan, FastScanOutcome, Identity, LssMode, LssRequest, LssResponse, LssSlave, master};
 use proptest::prelude::*;
 
 /// Frames biased towards LSS: mostly 7E5h/7E4h with known command

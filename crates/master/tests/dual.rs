@@ -10,8 +10,8 @@ use std::time::Duration;
 use common::dual::{Station, on_both};
 use common::{identity, node};
 use drivebus_master::{
-    FastScan, Identity, LssField, LssMode, MasterEvent, NmtCommand, PdoDir, PdoMapEntry, PdoRecord,
-    Protocol, RemoteState, ScanOptions, SdoAbort, SdoError,
+    FastScan, Identity, LssField, LssMode, MasterEvent, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, Protocol,
+    RemoteState, ScanOptions, SdoAbort, SdoError,
 };
 use drivebus_node::{Node, NodeConfig};
 use tokio::sync::broadcast;

@@ -37,10 +37,10 @@ pub mod storage;
 
 pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
 pub use config::NodeConfig;
-/// 1018h identity (also the LSS address): the one type of `drivebus-can`.
-pub use drivebus_can::Identity;
 pub use device::NodeDevice;
 pub use dictionary::build_dictionary;
+/// 1018h identity (also the LSS address): the one type of `drivebus-can`.
+pub use drivebus_can::Identity;
 #[cfg(feature = "std")]
 pub use eds_device::EdsOptions;
 pub use node::{Node, NodeTemplate};

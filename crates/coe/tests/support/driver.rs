@@ -21,8 +21,7 @@ use drivebus_coe::{AlState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxC
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectCode, ObjectDictionary, SubObject, Value};
 
 const SIZES: [usize; 6] = [32, 40, 64, 128, 256, 1486];
-const STATES: [AlState; 5] =
-    [AlState::PreOp, AlState::SafeOp, AlState::Op, AlState::Boot, AlState::Init];
+const STATES: [AlState; 5] = [AlState::PreOp, AlState::SafeOp, AlState::Op, AlState::Boot, AlState::Init];
 
 fn od() -> ObjectDictionary {
     let mut od = ObjectDictionary::new();

@@ -23,7 +23,8 @@ pub enum AlState {
 
 impl AlState {
     /// Every state, in code order.
-    pub const ALL: [AlState; 5] = [AlState::Init, AlState::PreOp, AlState::Boot, AlState::SafeOp, AlState::Op];
+    pub const ALL: [AlState; 5] =
+        [AlState::Init, AlState::PreOp, AlState::Boot, AlState::SafeOp, AlState::Op];
 
     /// Decodes AL control/status bits 3:0 (the error bit 4 is ignored),
     /// `None` for a code that names no state.
@@ -262,7 +263,9 @@ mod tests {
 
     #[test]
     fn states_parse_as_users_type_them() {
-        for (t, s) in [("init", Init), ("PRE-OP", PreOp), ("bootstrap", Boot), ("safe_op", SafeOp), ("Op", Op)] {
+        for (t, s) in
+            [("init", Init), ("PRE-OP", PreOp), ("bootstrap", Boot), ("safe_op", SafeOp), ("Op", Op)]
+        {
             assert_eq!(AlState::parse(t), Some(s), "{t}");
         }
         for t in ["run", "", "preoperational", "o-p-x"] {

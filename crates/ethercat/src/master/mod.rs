@@ -387,7 +387,9 @@ impl Master {
         loop {
             let s = self.al_status(position).await?;
             if s.error {
-                let _ = Command::apwr(p, 0x0120).send(&self.md, u16::from(s.state.map_or_else(|x| x, AlState::code) | 0x10)).await;
+                let _ = Command::apwr(p, 0x0120)
+                    .send(&self.md, u16::from(s.state.map_or_else(|x| x, AlState::code) | 0x10))
+                    .await;
                 return Err(MasterError::Refused { position, requested: want, state: s.state, code: s.code });
             }
             if s.state == Ok(want) {
@@ -457,11 +459,7 @@ impl Master {
                 name: sd.name().to_owned(),
                 identity: [id.vendor_id, id.product_id, id.revision, id.serial],
                 coe_identity,
-                found: found.get(i).copied().unwrap_or(AlStatus {
-                    state: Err(0),
-                    error: false,
-                    code: 0,
-                }),
+                found: found.get(i).copied().unwrap_or(AlStatus { state: Err(0), error: false, code: 0 }),
                 mailbox,
                 dc: sd.dc_support().any(),
             });

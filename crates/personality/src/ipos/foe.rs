@@ -304,8 +304,7 @@ mod tests {
     fn names_passwords_and_states() {
         let mut f = IposFiles::new();
         let t = Instant::ZERO;
-        let e =
-            |f: &mut IposFiles, n: &str, pw: u32, s: AlState| f.begin_write(n.as_bytes(), pw, s, t).err();
+        let e = |f: &mut IposFiles, n: &str, pw: u32, s: AlState| f.begin_write(n.as_bytes(), pw, s, t).err();
         assert_eq!(e(&mut f, "FOESW_12345678.efw", 0, AlState::Op), None, "14 characters");
         assert_eq!(e(&mut f, "FOESW_123456789.bin", 0, AlState::Op), Some(FoeError::NOT_FOUND));
         assert_eq!(e(&mut f, "FOESW_A.sw", 0, AlState::Op), Some(FoeError::NOT_FOUND));
