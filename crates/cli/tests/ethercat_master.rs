@@ -295,3 +295,27 @@ fn a_missing_interface_is_an_error_that_says_what_to_do() {
     let e: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(e["error"]["code"], "usage");
 }
+
+/// Each `drive` command is a new master: the line left OP when the last one
+/// ended, so the next `enable` resets the iPOS's fault, and the drive (in
+/// DC mode) puts the emergency of that reset into its send mailbox on a
+/// SYNC0 step, any time between ethercrab's check that the mailbox is
+/// empty and the SDO that follows. ethercrab 0.7.1 reads the emergency as
+/// the SDO's answer ("Invalid decoded value"); the master sends the SDO
+/// again. Failed about one time in three before that, so it runs eight
+/// times.
+#[test]
+fn enable_then_home_survives_the_emergency_of_the_fault_reset() {
+    let line = match Line::new(&["ipos"]) {
+        Ok(l) => l,
+        Err(why) => {
+            println!("SKIPPED enable_then_home_survives_the_emergency_of_the_fault_reset: {why}");
+            return;
+        }
+    };
+    for _ in 0..8 {
+        line.ok(&["drive", "--slave", "1", "enable"]);
+        let text = line.ok(&["drive", "--slave", "1", "home", "--method", "35"]);
+        assert!(text.contains("homing attained (method 35)"), "{text}");
+    }
+}

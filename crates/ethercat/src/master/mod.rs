@@ -524,7 +524,28 @@ pub async fn sdo_read<S: Deref<Target = SubDevice>>(
     index: u16,
     sub: u8,
 ) -> Result<Vec<u8>, MasterError> {
-    sd.sdo_read::<Raw>(index, sub).await.map(|r| r.0).map_err(|e| coe_error(e, position, index, sub, false))
+    let mut tries = 0;
+    loop {
+        match sd.sdo_read::<Raw>(index, sub).await {
+            Ok(r) => return Ok(r.0),
+            Err(e) if mailbox_held_another_message(&e) && tries < MAILBOX_RETRIES => tries += 1,
+            Err(e) => return Err(coe_error(e, position, index, sub, false)),
+        }
+    }
+}
+
+/// How often an SDO is sent again after the answer read was another message.
+const MAILBOX_RETRIES: u32 = 3;
+
+/// Whether ethercrab read something other than the SDO answer from the send
+/// mailbox: a slave may put an unsolicited CoE emergency there between
+/// ethercrab's check that the mailbox is empty and its request (ETG.1000.6
+/// §5.6.4; a drive in DC mode raises one on its SYNC0 step, e.g. at a fault
+/// reset), and ethercrab 0.7.1 then fails to decode it as an SDO header.
+/// The answer follows it, and ethercrab empties the mailbox before the
+/// next request, so the SDO can be sent again.
+fn mailbox_held_another_message(e: &Error) -> bool {
+    matches!(e, Error::Wire(_) | Error::Mailbox(MailboxError::Emergency { .. }))
 }
 
 /// Writes `data` to `index`:`sub` of a slave (ethercrab 0.7.1 downloads
@@ -542,7 +563,16 @@ pub async fn sdo_write<S: Deref<Target = SubDevice>>(
             data.len()
         )));
     }
-    sd.sdo_write(index, sub, data).await.map_err(|e| coe_error(e, position, index, sub, true))
+    let mut tries = 0;
+    loop {
+        match sd.sdo_write(index, sub, data).await {
+            Ok(()) => return Ok(()),
+            // The download was taken (its answer was behind the other
+            // message): the same value is written once more.
+            Err(e) if mailbox_held_another_message(&e) && tries < MAILBOX_RETRIES => tries += 1,
+            Err(e) => return Err(coe_error(e, position, index, sub, true)),
+        }
+    }
 }
 
 fn coe_error(e: Error, position: usize, index: u16, sub: u8, write: bool) -> MasterError {
