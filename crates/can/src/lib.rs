@@ -12,6 +12,7 @@ pub mod cob;
 mod device;
 pub mod fault;
 mod frame;
+mod identity;
 #[cfg(feature = "pcap")]
 pub mod pcap;
 mod time;
@@ -19,6 +20,7 @@ mod time;
 pub use device::{Device, LinkState};
 pub use fault::{FaultAction, FaultRule, XorShift64};
 pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
+pub use identity::Identity;
 pub use time::Instant;
 
 pub use core::time::Duration;

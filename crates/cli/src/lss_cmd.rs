@@ -5,7 +5,7 @@
 use std::time::Duration;
 
 use anyhow::{anyhow, bail};
-use drivebus_master::{LssAddress, LssError, OnlySlave};
+use drivebus_master::{Identity, LssError, OnlySlave};
 
 use crate::args::{Global, LssCmd, LssSetArgs};
 use crate::conn::Conn;
@@ -13,18 +13,18 @@ use crate::dict::number;
 use crate::error::coded;
 use crate::output::emit;
 
-fn addr_json(a: &LssAddress) -> serde_json::Value {
+fn addr_json(a: &Identity) -> serde_json::Value {
     serde_json::json!({"vendor_id": a.vendor_id, "product_code": a.product_code, "revision": a.revision, "serial": a.serial})
 }
 
-fn addr_text(a: &LssAddress) -> String {
+fn addr_text(a: &Identity) -> String {
     format!(
         "vendor 0x{:08X} product 0x{:08X} revision 0x{:08X} serial 0x{:08X}",
         a.vendor_id, a.product_code, a.revision, a.serial
     )
 }
 
-fn addr_flags(a: &LssAddress) -> String {
+fn addr_flags(a: &Identity) -> String {
     format!(
         "--vendor 0x{:X} --product 0x{:X} --revision 0x{:X} --serial 0x{:X}",
         a.vendor_id, a.product_code, a.revision, a.serial
@@ -121,7 +121,7 @@ async fn set_node_id(g: &Global, conn: &Conn, a: &LssSetArgs) -> anyhow::Result<
     let stored = if a.store { " and stored" } else { "" };
     let address = if parts.iter().all(|p| p.is_some()) {
         let num = |s: &Option<String>| number(s.as_deref().unwrap_or("0")).map_err(|e| coded("usage", e));
-        Some(LssAddress {
+        Some(Identity {
             vendor_id: num(&a.vendor)?,
             product_code: num(&a.product)?,
             revision: num(&a.revision)?,
@@ -146,7 +146,7 @@ async fn set_node_id(g: &Global, conn: &Conn, a: &LssSetArgs) -> anyhow::Result<
                 conn.timeout,
             ))?;
         }
-        Some(LssAddress::new(v[0], v[1], v[2], v[3]))
+        Some(Identity::new(v[0], v[1], v[2], v[3]))
     } else {
         None
     };

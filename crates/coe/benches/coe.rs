@@ -13,7 +13,7 @@
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use drivebus_can::{Duration, Instant};
-use drivebus_coe::{EsmState, MailboxConfig, MailboxServer, NoFiles};
+use drivebus_coe::{AlState, MailboxConfig, MailboxServer, NoFiles};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectDictionary, Value};
 
 /// A dictionary of a small drive's size, so lookups are not trivially short.
@@ -48,7 +48,7 @@ impl Bench {
         self.cnt = if self.cnt >= 7 { 1 } else { self.cnt + 1 };
         req[5] = (req[5] & 0x0F) | (self.cnt << 4);
         self.now += Duration::from_micros(100);
-        self.server.handle_request(req, self.now, EsmState::Op, &mut self.dev, &mut NoFiles);
+        self.server.handle_request(req, self.now, AlState::Op, &mut self.dev, &mut NoFiles);
         self.server.next_response(self.now).map_or(0, <[u8]>::len)
     }
 }

@@ -27,8 +27,8 @@
 //! - A new RRQ/WRQ ends a running transfer and starts the new one.
 //! - A timeout between two packets ends the transfer silently.
 
+use crate::AlState;
 use crate::coe::Out;
-use crate::esm::EsmState;
 use crate::mailbox::{MailboxErrorCode, MailboxType, Put};
 use drivebus_can::{Duration, Instant};
 
@@ -145,7 +145,7 @@ pub trait FileHandler {
         &mut self,
         name: &[u8],
         password: u32,
-        state: EsmState,
+        state: AlState,
         now: Instant,
     ) -> Result<(), FoeError>;
     /// The next `data` of the file, at byte `offset`. `Busy` leaves it
@@ -160,7 +160,7 @@ pub trait FileHandler {
         &mut self,
         name: &[u8],
         password: u32,
-        state: EsmState,
+        state: AlState,
         now: Instant,
     ) -> Result<(), FoeError> {
         let _ = (name, password, state, now);
@@ -186,7 +186,7 @@ impl FileHandler for NoFiles {
     fn supported(&self) -> bool {
         false
     }
-    fn begin_write(&mut self, _: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+    fn begin_write(&mut self, _: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
         Err(FoeError::ACCESS_DENIED)
     }
     fn write(&mut self, _: u32, _: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
@@ -287,7 +287,7 @@ impl FoeServer {
         &mut self,
         body: &[u8],
         now: Instant,
-        esm: EsmState,
+        esm: AlState,
         rx_cap: usize,
         files: &mut F,
         out: &mut Out<'_>,
@@ -444,7 +444,7 @@ mod tests {
     #[derive(Default)]
     struct Keep(Vec<u8>, Vec<FoeEnd>);
     impl FileHandler for Keep {
-        fn begin_write(&mut self, name: &[u8], pw: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+        fn begin_write(&mut self, name: &[u8], pw: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
             if name == b"ok" && pw == 7 { Ok(()) } else { Err(FoeError::NO_RIGHTS) }
         }
         fn write(&mut self, _: u32, data: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
@@ -461,7 +461,7 @@ mod tests {
 
     fn run(s: &mut FoeServer, k: &mut Keep, body: &[u8]) -> Vec<u8> {
         let mut q = ResponseQueue::new(4, 32);
-        s.handle(body, Instant::ZERO, EsmState::PreOp, 26, k, &mut Out { q: &mut q, cap: 26 });
+        s.handle(body, Instant::ZERO, AlState::PreOp, 26, k, &mut Out { q: &mut q, cap: 26 });
         let mut m = Vec::new();
         q.pop_into(&mut m);
         m.get(6..).map(<[u8]>::to_vec).unwrap_or_default()

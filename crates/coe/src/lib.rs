@@ -83,14 +83,15 @@ extern crate alloc;
 
 mod access;
 pub mod coe;
-mod esm;
 pub mod foe;
 pub mod mailbox;
 mod server;
 
 pub use access::{ObjectAccess, OdAccess, access_bits, default_object_access};
 pub use coe::emergency::{Emergency, EmergencyQueueFull};
-pub use esm::EsmState;
+/// The EtherCAT state the ESC layer passes in: the slave controller's one
+/// state type.
+pub use drivebus_esc::slave::AlState;
 pub use foe::{FileHandler, FoeEnd, FoeError, FoeProgress, NoFiles};
 pub use mailbox::{MailboxErrorCode, MailboxHeader, MailboxType};
 pub use server::{ConfigError, MailboxConfig, MailboxServer, MailboxStats};

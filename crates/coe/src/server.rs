@@ -1,9 +1,9 @@
 //! The mailbox server: one request mailbox in, response mailboxes out.
 
+use crate::AlState;
 use crate::access::ObjectAccess;
 use crate::coe::emergency::{Emergency, EmergencyQueue, EmergencyQueueFull};
 use crate::coe::{CoeConfig, CoeServer, Out};
-use crate::esm::EsmState;
 use crate::foe::{FileHandler, FoeEnd, FoeServer};
 use crate::mailbox::{
     HEADER_LEN, MAX_MAILBOX_SIZE, MIN_MAILBOX_SIZE, MailboxErrorCode, MailboxHeader, MailboxType,
@@ -122,7 +122,7 @@ pub struct MailboxServer {
     tx_counter: u8,
     /// ESM state of the last request: in BOOT no CoE goes out, emergencies
     /// included.
-    state: EsmState,
+    state: AlState,
     stats: MailboxStats,
 }
 
@@ -148,7 +148,7 @@ impl MailboxServer {
             foe: FoeServer::new(config.foe_timeout),
             rx_counter: 0,
             tx_counter: 0,
-            state: EsmState::Init,
+            state: AlState::Init,
             stats: MailboxStats::default(),
         })
     }
@@ -207,7 +207,7 @@ impl MailboxServer {
     }
 
     fn emergency_due(&self) -> bool {
-        self.emergencies.len() > 0 && !self.coe.busy() && self.state != EsmState::Boot
+        self.emergencies.len() > 0 && !self.coe.busy() && self.state != AlState::Boot
     }
 
     /// Queue a CoE emergency. It is handed out by [`Self::next_response`]
@@ -240,7 +240,7 @@ impl MailboxServer {
         &mut self,
         request: &[u8],
         now: Instant,
-        state: EsmState,
+        state: AlState,
         objects: &mut A,
         files: &mut F,
     ) where
@@ -284,7 +284,7 @@ impl MailboxServer {
         let mut out = Out { q: &mut self.responses, cap: self.config.tx_size - HEADER_LEN };
         match h.mailbox_type {
             // BOOT offers FoE only (ETG.1000.6 §6.4.1; iPOS manual §3.1).
-            MailboxType::Coe if state != EsmState::Boot => self.coe.handle(body, now, objects, &mut out),
+            MailboxType::Coe if state != AlState::Boot => self.coe.handle(body, now, objects, &mut out),
             MailboxType::Foe if files.supported() => {
                 let rx_cap = self.config.rx_size - HEADER_LEN;
                 self.foe.handle(body, now, state, rx_cap, files, &mut out);
@@ -385,7 +385,7 @@ mod tests {
         let mut dev = (ObjectDictionary::new(), NoHooks);
         dev.0.insert(Object::var(0x1000, "t", DataType::Unsigned8, Access::Ro, Value::U8(5)));
         let req = [10, 0, 0, 0, 0, 0x03, 0x00, 0x20, 0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0];
-        s.handle_request(&req, Instant::ZERO, EsmState::PreOp, &mut dev, &mut NoFiles);
+        s.handle_request(&req, Instant::ZERO, AlState::PreOp, &mut dev, &mut NoFiles);
         let m = s.next_response(Instant::ZERO).unwrap();
         assert_eq!(m, [10, 0, 0, 0, 0, 0x23, 0x00, 0x30, 0x4F, 0x00, 0x10, 0x00, 5, 0, 0, 0]);
         assert_eq!(s.stats().requests, 1);

@@ -9,7 +9,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use drivebus_can::{Duration, Instant};
-use drivebus_coe::{EsmState, FileHandler, FoeError, FoeProgress, MailboxConfig, MailboxServer, NoFiles};
+use drivebus_coe::{AlState, FileHandler, FoeError, FoeProgress, MailboxConfig, MailboxServer, NoFiles};
 use drivebus_od::{NoHooks, ObjectDictionary};
 use support::{mbx, pattern, test_od};
 
@@ -64,7 +64,7 @@ impl Wire {
     /// of the answer (no allocation here: the answer is only inspected).
     fn x<F: FileHandler>(&mut self, req: &[u8], files: &mut F) -> u8 {
         self.now += Duration::from_micros(100);
-        self.s.handle_request(req, self.now, EsmState::PreOp, &mut self.dev, files);
+        self.s.handle_request(req, self.now, AlState::PreOp, &mut self.dev, files);
         self.s.next_response(self.now).map_or(0xFF, |m| m[8])
     }
 }
@@ -131,7 +131,7 @@ fn segments_and_fragments_never_allocate() {
     // An OD list in fragments (32-byte mailbox), and an emergency.
     let mut s = MailboxServer::new(MailboxConfig::with_sizes(32, 32)).unwrap();
     let req = mbx(3, 4, &[0x00, 0x80, 0x01, 0, 0, 0, 0x01, 0x00]);
-    s.handle_request(&req, w.now, EsmState::PreOp, &mut w.dev, &mut NoFiles);
+    s.handle_request(&req, w.now, AlState::PreOp, &mut w.dev, &mut NoFiles);
     s.queue_emergency(0x1000, 1, [0; 5]).unwrap();
     let before = allocations();
     let mut n = 0;
@@ -145,7 +145,7 @@ fn segments_and_fragments_never_allocate() {
 /// Takes a file into a buffer reserved up front.
 struct Sink(Vec<u8>);
 impl FileHandler for Sink {
-    fn begin_write(&mut self, _: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+    fn begin_write(&mut self, _: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
         self.0.clear();
         Ok(())
     }

@@ -6,7 +6,7 @@
 mod support;
 
 use drivebus_can::{Duration, Instant};
-use drivebus_coe::{EsmState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxConfig};
+use drivebus_coe::{AlState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxConfig};
 use drivebus_od::NoHooks;
 use support::{Dev, Fail, Rig, body, mbx, pattern, soem, test_od};
 
@@ -65,7 +65,7 @@ impl FileHandler for IposFiles {
         &mut self,
         name: &[u8],
         password: u32,
-        state: EsmState,
+        state: AlState,
         now: Instant,
     ) -> Result<(), FoeError> {
         let name = core::str::from_utf8(name).map_err(|_| FoeError::NOT_FOUND)?;
@@ -80,14 +80,14 @@ impl FileHandler for IposFiles {
             if password != 0 {
                 return Err(FoeError::ACCESS_DENIED);
             }
-            if state == EsmState::Boot && !self.sw_in_boot {
+            if state == AlState::Boot && !self.sw_in_boot {
                 return Err(FoeError::NOT_BOOTSTRAP);
             }
             Kind::Setup
         } else if name.starts_with("FOEFW_") {
             // §17.4.6: only in BOOT, with the password of the firmware
             // generation; 210Ch = 0 selects firmware in BOOT (§17.2.7).
-            if state != EsmState::Boot {
+            if state != AlState::Boot {
                 return Err(FoeError::BOOTSTRAP_ONLY);
             }
             if password != self.firmware_password {
@@ -149,7 +149,7 @@ fn write(r: &mut Rig<Dev, IposFiles>, name: &str, password: u32, data: &[u8]) ->
 
 #[test]
 fn setup_file_in_the_operational_states() {
-    for state in [EsmState::PreOp, EsmState::SafeOp, EsmState::Op] {
+    for state in [AlState::PreOp, AlState::SafeOp, AlState::Op] {
         let mut r = rig(IposFiles::new(F515X));
         r.state = state;
         let file = pattern(1000, 4);
@@ -176,7 +176,7 @@ fn setup_file_refusals() {
         assert_eq!(write(&mut r, name, pw, b"data"), Err(Fail::FoeError(e.0)), "{name}");
     }
     // In BOOT only with 210Ch = 1 (§17.4.5).
-    r.state = EsmState::Boot;
+    r.state = AlState::Boot;
     assert_eq!(write(&mut r, "FOESW_SETUP.bin", 0, b"data"), Err(Fail::FoeError(0x8009)));
     r.files.sw_in_boot = true;
     assert_eq!(write(&mut r, "FOESW_SETUP.bin", 0, b"data"), Ok(0));
@@ -189,7 +189,7 @@ fn firmware_only_in_boot_with_its_password() {
     let mut r = rig(IposFiles::new(F515X));
     let fw = pattern(5000, 7);
     assert_eq!(write(&mut r, "FOEFW_F515G", F515X, &fw), Err(Fail::FoeError(0x8008)));
-    r.state = EsmState::Boot;
+    r.state = AlState::Boot;
     assert_eq!(write(&mut r, "FOEFW_F515G", FA0XX, &fw), Err(Fail::FoeError(0x8002)));
     r.files.sw_in_boot = true;
     assert_eq!(write(&mut r, "FOEFW_F515G", F515X, &fw), Err(Fail::FoeError(0x8004)));
@@ -202,7 +202,7 @@ fn firmware_only_in_boot_with_its_password() {
     assert_eq!(r.files.ends, [FoeEnd::Completed]);
     // An FA0xx drive has the other password.
     let mut r = rig(IposFiles::new(FA0XX));
-    r.state = EsmState::Boot;
+    r.state = AlState::Boot;
     // 3 BUSY while erasing (30 ms, SOEM retrying every 10 ms), 2 while
     // programming (20 ms).
     assert_eq!(write(&mut r, "FOEFW_FA00G", FA0XX, b"fw"), Ok(5));
@@ -238,7 +238,7 @@ fn frames() {
 #[test]
 fn busy_frame_and_exact_multiple_file() {
     let mut r = rig(IposFiles::new(F515X));
-    r.state = EsmState::Boot;
+    r.state = AlState::Boot;
     let mut wrq = vec![2, 0];
     wrq.extend_from_slice(&F515X.to_le_bytes());
     wrq.extend_from_slice(b"FOEFW_X");
@@ -285,7 +285,7 @@ fn master_error_timeout_reset_and_new_request() {
 /// A device that serves one file for reading.
 struct Log(Vec<u8>, Vec<FoeEnd>);
 impl FileHandler for Log {
-    fn begin_write(&mut self, _: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+    fn begin_write(&mut self, _: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
         Err(FoeError::ACCESS_DENIED)
     }
     fn write(&mut self, _: u32, _: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
@@ -294,7 +294,7 @@ impl FileHandler for Log {
     fn finish_write(&mut self, _: Instant) -> Result<FoeProgress, FoeError> {
         Err(FoeError::ILLEGAL)
     }
-    fn begin_read(&mut self, name: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+    fn begin_read(&mut self, name: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
         if name == b"log.txt" { Ok(()) } else { Err(FoeError::NOT_FOUND) }
     }
     fn read(&mut self, offset: u32, buf: &mut [u8], _: Instant) -> Result<usize, FoeError> {

@@ -9,7 +9,7 @@ mod support;
 
 use drivebus_coe::access_bits::*;
 use drivebus_coe::coe::abort;
-use drivebus_coe::{EsmState, MailboxConfig, NoFiles, ObjectAccess, default_object_access};
+use drivebus_coe::{AlState, MailboxConfig, NoFiles, ObjectAccess, default_object_access};
 use drivebus_od::{Access, DataType, NoHooks, ObjectDictionary, SdoAbort, SubObject, Value};
 use support::{Fail, Rig, body, ethercrab, ipos_od, soem};
 
@@ -17,7 +17,7 @@ use support::{Fail, Rig, body, ethercrab, ipos_od, soem};
 /// PDO rules of the manual.
 struct Ipos {
     od: ObjectDictionary,
-    esm: EsmState,
+    esm: AlState,
 }
 
 impl Ipos {
@@ -61,7 +61,7 @@ impl Ipos {
         // §2.3.9: SM3 is process data input (4); the printed default says 3.
         let r = od.find(0x1C00, 4).unwrap();
         od.set_raw(r, &[4]);
-        Ipos { od, esm: EsmState::PreOp }
+        Ipos { od, esm: AlState::PreOp }
     }
 
     fn is_assign(index: u16) -> bool {
@@ -75,7 +75,7 @@ impl Ipos {
     /// PRE-OP, entries only while sub 0 is 0, a count only over valid
     /// entries; a PDO carries at most 64 bits (§1.6.3.1).
     fn check(&self, index: u16, sub: u8, data: &[u8]) -> Result<(), SdoAbort> {
-        if self.esm != EsmState::PreOp {
+        if self.esm != AlState::PreOp {
             return Err(SdoAbort::DEVICE_STATE);
         }
         let n = self.od.get_u64(index, 0).unwrap_or(0);
@@ -271,8 +271,8 @@ fn txpdo_mapping_example_e11_and_the_device_rules() {
     write(&mut r, 0x1C13, 0, &[4]).unwrap();
     assert_eq!(r.dev.od.get_u64(0x1C13, 0), Some(4));
     // Outside PRE-OP nothing changes.
-    r.dev.esm = EsmState::SafeOp;
-    r.state = EsmState::SafeOp;
+    r.dev.esm = AlState::SafeOp;
+    r.state = AlState::SafeOp;
     assert_eq!(write(&mut r, 0x1C13, 0, &[0]), Err(SdoAbort::DEVICE_STATE));
 }
 
@@ -289,7 +289,7 @@ fn complete_access_writes_in_the_order_the_rules_need() {
         soem::sdo_write(&mut r, 0x1C13, 0, true, &[1, 0, 0x00, 0x16]),
         Err(Fail::Abort(SdoAbort::INVALID_VALUE.0))
     );
-    r.dev.esm = EsmState::Op;
+    r.dev.esm = AlState::Op;
     assert_eq!(
         soem::sdo_write(&mut r, 0x1C13, 0, true, &[1, 0, 0x00, 0x1A]),
         Err(Fail::Abort(SdoAbort::DEVICE_STATE.0))

@@ -5,7 +5,7 @@ mod support;
 
 use drivebus_can::Duration;
 use drivebus_coe::mailbox::{MAX_MAILBOX_SIZE, MIN_MAILBOX_SIZE};
-use drivebus_coe::{ConfigError, EsmState, MailboxConfig, MailboxServer, NoFiles};
+use drivebus_coe::{AlState, ConfigError, MailboxConfig, MailboxServer, NoFiles};
 use drivebus_od::NoHooks;
 use support::{Dev, Rig, body, ethercrab, header, mbx, test_od};
 
@@ -141,16 +141,16 @@ fn full_queue_refuses_with_no_more_memory() {
 #[test]
 fn esm_state_gates_the_mailbox() {
     let mut r = rig();
-    r.state = EsmState::Init;
+    r.state = AlState::Init;
     r.send(&ethercrab::upload(1, 0x1000, Some(0)));
     assert_eq!(r.read(), None);
     assert_eq!(r.server.stats().ignored, 1);
     // BOOT: FoE only, emergencies wait.
-    r.state = EsmState::Boot;
+    r.state = AlState::Boot;
     r.server.queue_emergency(0x5000, 0, [0; 5]).unwrap();
     assert_eq!(r.one(&ethercrab::upload(2, 0x1000, Some(0))), mbx_error(1, 0x02));
     assert_eq!(r.read(), None);
-    for s in [EsmState::PreOp, EsmState::SafeOp, EsmState::Op] {
+    for s in [AlState::PreOp, AlState::SafeOp, AlState::Op] {
         r.state = s;
         let c = r.counter();
         assert_eq!(body(&r.one(&ethercrab::upload(c, 0x1000, Some(0))))[2], 0x43);

@@ -75,7 +75,8 @@ pub mod category {
     pub const END: u16 = 0xFFFF;
 }
 
-/// Words 0x00–0x06 of the configuration area.
+/// Words 0x00–0x06 of the configuration area (words 0x05–0x06 are
+/// reserved and written 0); the ESI's `ConfigData` holds the same words.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct ConfigArea {
     /// Word 0: PDI control (low byte → 0x0140) and ESC configuration (high byte → 0x0141).
@@ -90,18 +91,36 @@ pub struct ConfigArea {
     pub station_alias: u16,
 }
 
-/// Identity words 0x08–0x0F.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Identity {
-    /// Vendor ID.
-    pub vendor_id: u32,
-    /// Product code.
-    pub product_code: u32,
-    /// Revision number.
-    pub revision: u32,
-    /// Serial number.
-    pub serial: u32,
+impl ConfigArea {
+    /// The 14 bytes of words 0–6, little-endian (the ESI's `ConfigData`).
+    pub fn bytes(&self) -> [u8; 14] {
+        let mut b = [0u8; 14];
+        for (i, w) in
+            [self.pdi_control, self.pdi_config, self.sync_impulse_len, self.pdi_config2, self.station_alias]
+                .into_iter()
+                .enumerate()
+        {
+            b[2 * i..2 * i + 2].copy_from_slice(&w.to_le_bytes());
+        }
+        b
+    }
+
+    /// From `ConfigData` bytes (missing words are 0).
+    pub fn from_bytes(b: &[u8]) -> ConfigArea {
+        let w = |i: usize| b.get(2 * i..2 * i + 2).map_or(0, |x| u16::from_le_bytes([x[0], x[1]]));
+        ConfigArea {
+            pdi_control: w(0),
+            pdi_config: w(1),
+            sync_impulse_len: w(2),
+            pdi_config2: w(3),
+            station_alias: w(4),
+        }
+    }
 }
+
+/// Identity words 0x08–0x0F: the 1018h identity, one type with the
+/// CANopen node's and the LSS address.
+pub use drivebus_can::Identity;
 
 /// Mailbox offsets and sizes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -272,46 +272,8 @@ pub struct Eeprom {
     pub bootstrap: Option<MailboxArea>,
 }
 
-/// SII words 0x00–0x04 (words 0x05–0x06 are reserved and written 0).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub struct ConfigArea {
-    /// Word 0: PDI control (→ 0x0140) and ESC configuration (→ 0x0141).
-    pub pdi_control: u16,
-    /// Word 1: PDI configuration (→ 0x0150–0x0151, SYNC/LATCH pins).
-    pub pdi_config: u16,
-    /// Word 2: SYNC impulse length in 10 ns (→ 0x0982).
-    pub sync_impulse_len: u16,
-    /// Word 3: extended PDI configuration (→ 0x0152).
-    pub pdi_config2: u16,
-    /// Word 4: configured station alias (→ 0x0012).
-    pub station_alias: u16,
-}
-
-impl ConfigArea {
-    /// The 14 bytes of `ConfigData` (words 0–6, little-endian).
-    pub fn bytes(&self) -> [u8; 14] {
-        let mut b = [0u8; 14];
-        for (i, w) in
-            [self.pdi_control, self.pdi_config, self.sync_impulse_len, self.pdi_config2, self.station_alias]
-                .into_iter()
-                .enumerate()
-        {
-            b[2 * i..2 * i + 2].copy_from_slice(&w.to_le_bytes());
-        }
-        b
-    }
-    /// From `ConfigData` bytes (missing words are 0).
-    pub fn from_bytes(b: &[u8]) -> ConfigArea {
-        let w = |i: usize| b.get(2 * i..2 * i + 2).map_or(0, |x| u16::from_le_bytes([x[0], x[1]]));
-        ConfigArea {
-            pdi_control: w(0),
-            pdi_config: w(1),
-            sync_impulse_len: w(2),
-            pdi_config2: w(3),
-            station_alias: w(4),
-        }
-    }
-}
+/// SII words 0x00–0x06, the ESI's `ConfigData`: the SII's own type.
+pub use drivebus_esc::sii::ConfigArea;
 
 /// Mailbox offsets and sizes (`BootStrap`: receive start, size, send start, size).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -9,8 +9,8 @@
 //! [`crate::dictionary`]).
 
 use crate::description::{
-    CoeDetails, ConfigArea, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, Pdo, PdoEntry, Profile,
-    SlaveDescription, SmKind, SyncManager, SyncSignal,
+    CoeDetails, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, Pdo, PdoEntry, Profile, SlaveDescription,
+    SmKind, SyncManager, SyncSignal,
 };
 use crate::read::ReadError;
 use drivebus_esc::sii::{SiiContent, SiiPdo, fmmu_usage, protocols, sm_type};
@@ -88,7 +88,6 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
         eoe: c.mailbox_protocols & protocols::EOE != 0,
     });
     let b = c.bootstrap_mailbox;
-    let cfg = c.config;
     Ok(SlaveDescription {
         vendor_id: c.identity.vendor_id,
         vendor_name: String::new(),
@@ -148,13 +147,7 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
             .collect(),
         eeprom: Eeprom {
             byte_size: u32::from(c.size_kbit) * 128,
-            config: ConfigArea {
-                pdi_control: cfg.pdi_control,
-                pdi_config: cfg.pdi_config,
-                sync_impulse_len: cfg.sync_impulse_len,
-                pdi_config2: cfg.pdi_config2,
-                station_alias: cfg.station_alias,
-            },
+            config: c.config,
             bootstrap: (b.rx_size > 0).then_some(MailboxArea {
                 rx_start: b.rx_offset,
                 rx_size: b.rx_size,

@@ -5,8 +5,7 @@
 
 use crate::description::{Pdo, SlaveDescription, SmKind};
 use drivebus_esc::sii::{
-    ConfigArea, General, MailboxConfig, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry,
-    SiiSyncManager,
+    General, MailboxConfig, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry, SiiSyncManager,
 };
 
 /// ETG.2000 PDO attributes as SII PDO flags (ETG.1000.6 Table 26).
@@ -65,7 +64,6 @@ fn pdo(b: &mut SiiBuilder, p: &Pdo, direction_sm: u8) -> SiiPdo {
 /// The SII builder of `d`, ready to [`SiiBuilder::build`].
 impl From<&SlaveDescription> for SiiBuilder {
     fn from(d: &SlaveDescription) -> SiiBuilder {
-        let c = &d.eeprom.config;
         let boot = d.eeprom.bootstrap.map_or(MailboxConfig::default(), |m| MailboxConfig {
             rx_offset: m.rx_start,
             rx_size: m.rx_size,
@@ -73,13 +71,7 @@ impl From<&SlaveDescription> for SiiBuilder {
             tx_size: m.tx_size,
         });
         let content = SiiContent {
-            config: ConfigArea {
-                pdi_control: c.pdi_control,
-                pdi_config: c.pdi_config,
-                sync_impulse_len: c.sync_impulse_len,
-                pdi_config2: c.pdi_config2,
-                station_alias: c.station_alias,
-            },
+            config: d.eeprom.config,
             bootstrap_mailbox: boot,
             mailbox: mailbox(d),
             mailbox_protocols: d.sii_mailbox_protocols(),

@@ -17,6 +17,11 @@ enum Source {
 }
 
 /// A shared clock handle (cheap to clone).
+///
+/// Not `drivebus_transport::clock::TokioClock`: the EtherCAT host runs on
+/// plain threads without tokio, its time can be simulated (moved only by
+/// the host or a test, shared by every handle) and it carries a wall-clock
+/// origin for pcapng timestamps.
 #[derive(Debug, Clone)]
 pub struct Clock(Arc<Source>);
 

@@ -57,8 +57,8 @@ impl Default for DriveScenario {
     }
 }
 
-/// One PDO as read over CoE: its mapping object and entries.
-pub type PdoMapping = (u16, Vec<u32>);
+/// One PDO as read over CoE: the master's type.
+pub use crate::master::PdoMapping;
 
 /// A discovered drive.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -65,7 +65,7 @@ fn real_devices_discovered_to_op_with_outputs_and_inputs() {
         for i in 0..5 {
             assert_eq!(
                 m.al_status(i + 1).await.unwrap().state,
-                drivebus_ethercat::master::AlState::Op,
+                Ok(drivebus_ethercat::master::AlState::Op),
                 "slave {i}"
             );
         }

@@ -87,7 +87,7 @@ async fn one_ipos_free_run() {
     assert_eq!((f.outputs, f.inputs), (6, 16));
     let (state, outputs) =
         with_drive(&host, 0, |d| (d.app().esm(), d.app().stats().outputs_applied)).unwrap();
-    assert_eq!(state, drivebus_coe::EsmState::SafeOp, "back in SAFE-OP at the end");
+    assert_eq!(state, drivebus_coe::AlState::SafeOp, "back in SAFE-OP at the end");
     assert!(outputs >= 5_000);
 }
 

@@ -31,13 +31,13 @@ fn scan_coe_state_and_pdos() {
     async_io::block_on(async {
         assert_eq!(m.count().await.unwrap(), 2);
         let s = m.al_status(1).await.unwrap();
-        assert_eq!((s.state, s.error), (AlState::Init, false));
+        assert_eq!((s.state, s.error), (Ok(AlState::Init), false));
         // INIT -> SAFE-OP is not a transition (ETG.1000.6 Table 9): refused with 0x0011.
         match m.request_state(1, AlState::SafeOp).await {
             Err(MasterError::Refused {
                 position: 1,
                 requested: AlState::SafeOp,
-                state: AlState::Init,
+                state: Ok(AlState::Init),
                 code,
             }) => {
                 assert_eq!(code, 0x0011)
@@ -49,11 +49,11 @@ fn scan_coe_state_and_pdos() {
         assert_eq!(found.len(), 2);
         assert_eq!(found[0].identity[0], 0x1A3, "Technosoft");
         assert_eq!(found[0].coe_identity, Some(found[0].identity));
-        assert_eq!(found[0].found.state, AlState::Init);
+        assert_eq!(found[0].found.state, Ok(AlState::Init));
         assert_eq!(found[1].position, 2);
         assert_eq!(found[1].address, 0x1001);
         assert!(master::mailbox_protocols(found[0].mailbox).contains(&"CoE"));
-        assert_eq!(m.al_status(2).await.unwrap().state, AlState::PreOp);
+        assert_eq!(m.al_status(2).await.unwrap().state, Ok(AlState::PreOp));
         let g = m.init().await.unwrap();
         let sd = m.slave(&g, 1).unwrap();
         let v = master::sdo_read(&sd, 1, 0x1018, 1).await.unwrap();

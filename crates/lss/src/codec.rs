@@ -5,7 +5,7 @@
 //! COB-ID, an RTR bit or a DLC other than 8, and unknown command specifiers.
 //! Reserved bytes are written as 0 and not checked on receipt.
 
-use drivebus_can::Frame;
+use drivebus_can::{Frame, Identity};
 
 use crate::{LssMode, MASTER_TO_SLAVE, SLAVE_TO_MASTER};
 
@@ -119,6 +119,28 @@ impl LssField {
     #[inline]
     pub const fn index(self) -> u8 {
         self as u8
+    }
+
+    /// This field's part of an LSS address.
+    #[inline]
+    pub const fn get(self, addr: &Identity) -> u32 {
+        match self {
+            LssField::Vendor => addr.vendor_id,
+            LssField::Product => addr.product_code,
+            LssField::Revision => addr.revision,
+            LssField::Serial => addr.serial,
+        }
+    }
+
+    /// Set this field's part of an LSS address.
+    #[inline]
+    pub fn set(self, addr: &mut Identity, value: u32) {
+        match self {
+            LssField::Vendor => addr.vendor_id = value,
+            LssField::Product => addr.product_code = value,
+            LssField::Revision => addr.revision = value,
+            LssField::Serial => addr.serial = value,
+        }
     }
 }
 

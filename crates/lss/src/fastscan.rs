@@ -23,7 +23,7 @@
 
 use drivebus_can::{Duration, Frame, Instant, TxSink};
 
-use crate::LssAddress;
+use crate::Identity;
 use crate::codec::{LssField, LssResponse};
 use crate::master;
 
@@ -32,7 +32,7 @@ use crate::master;
 pub enum FastScanOutcome {
     /// This slave's address; it is now in LSS configuration, alone, so the
     /// master can configure its node-ID and store.
-    Found(LssAddress),
+    Found(Identity),
     /// Nobody answered the reset: no non-configured slave is in LSS waiting.
     NoneFound,
     /// The confirm of this part went unanswered (a slave left, a known part
@@ -204,7 +204,7 @@ impl FastScan {
                 }
                 if self.sub >= 3 {
                     let [vendor_id, product_code, revision, serial] = self.id;
-                    return self.finish(FastScanOutcome::Found(LssAddress {
+                    return self.finish(FastScanOutcome::Found(Identity {
                         vendor_id,
                         product_code,
                         revision,

@@ -47,9 +47,9 @@
 //!
 //! ```
 //! use drivebus_can::Instant;
-//! use drivebus_lss::{LssAddress, LssEvent, LssMode, LssSlave, StoreStatus, master};
+//! use drivebus_lss::{Identity, LssEvent, LssMode, LssSlave, StoreStatus, master};
 //!
-//! let addr = LssAddress::new(0x30C, 0x0060_4100, 0x0001_0002, 42);
+//! let addr = Identity::new(0x30C, 0x0060_4100, 0x0001_0002, 42);
 //! let mut slave = LssSlave::new(addr, 0xFF, 4); // stored node-ID: none, 125 kbit/s
 //! assert!(slave.is_lss_only()); // no boot-up, no other service yet
 //! let (now, mut out) = (Instant::ZERO, Vec::new());
@@ -172,58 +172,21 @@ impl LssMode {
     }
 }
 
-/// The 128-bit LSS address: the four entries of the identity object 1018h.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct LssAddress {
-    /// 1018h:01 vendor-ID.
-    pub vendor_id: u32,
-    /// 1018h:02 product code.
-    pub product_code: u32,
-    /// 1018h:03 revision number.
-    pub revision: u32,
-    /// 1018h:04 serial number.
-    pub serial: u32,
-}
+/// The 128-bit LSS address is the identity object 1018h: one type,
+/// [`Identity`], shared with the node, SII and ESI. Its field order (and
+/// `Ord`) is the LSS address order.
+pub use drivebus_can::Identity;
 
-impl LssAddress {
-    /// The address from its four parts.
-    pub const fn new(vendor_id: u32, product_code: u32, revision: u32, serial: u32) -> Self {
-        LssAddress { vendor_id, product_code, revision, serial }
-    }
-
-    /// One of the four parts.
-    #[inline]
-    pub const fn get(&self, field: LssField) -> u32 {
-        match field {
-            LssField::Vendor => self.vendor_id,
-            LssField::Product => self.product_code,
-            LssField::Revision => self.revision,
-            LssField::Serial => self.serial,
-        }
-    }
-
-    /// Set one of the four parts.
-    #[inline]
-    pub fn set(&mut self, field: LssField, value: u32) {
-        match field {
-            LssField::Vendor => self.vendor_id = value,
-            LssField::Product => self.product_code = value,
-            LssField::Revision => self.revision = value,
-            LssField::Serial => self.serial = value,
-        }
-    }
-
-    /// The address stored in the identity object 1018h sub 1..4 of `od`,
-    /// `None` if 1018h has no serial number (sub 4): CiA 305 requires all
-    /// four parts for a unique LSS address.
-    pub fn from_od(od: &ObjectDictionary) -> Option<LssAddress> {
-        Some(LssAddress {
-            vendor_id: od.get_u32(0x1018, 1)?,
-            product_code: od.get_u32(0x1018, 2)?,
-            revision: od.get_u32(0x1018, 3)?,
-            serial: od.get_u32(0x1018, 4)?,
-        })
-    }
+/// The LSS address stored in the identity object 1018h sub 1..4 of `od`,
+/// `None` if 1018h has no serial number (sub 4): CiA 305 requires all four
+/// parts for a unique LSS address.
+pub fn address_from_od(od: &ObjectDictionary) -> Option<Identity> {
+    Some(Identity {
+        vendor_id: od.get_u32(0x1018, 1)?,
+        product_code: od.get_u32(0x1018, 2)?,
+        revision: od.get_u32(0x1018, 3)?,
+        serial: od.get_u32(0x1018, 4)?,
+    })
 }
 
 /// The address range "identify remote slave" asks about: vendor-ID and
@@ -247,7 +210,7 @@ pub struct LssAddressRange {
 
 impl LssAddressRange {
     /// True when `addr` lies in the range.
-    pub const fn contains(&self, addr: &LssAddress) -> bool {
+    pub const fn contains(&self, addr: &Identity) -> bool {
         addr.vendor_id == self.vendor_id
             && addr.product_code == self.product_code
             && self.revision_low <= addr.revision
@@ -301,7 +264,7 @@ mod tests {
             obj = obj.with_sub(SubObject::new(sub, "x", DataType::Unsigned32, Access::Ro, Value::U32(v)));
         }
         od.insert(obj);
-        assert_eq!(LssAddress::from_od(&od), Some(LssAddress::new(0x30C, 0x0060_4100, 0x0001_0000, 1234)));
-        assert_eq!(LssAddress::from_od(&ObjectDictionary::new()), None);
+        assert_eq!(address_from_od(&od), Some(Identity::new(0x30C, 0x0060_4100, 0x0001_0000, 1234)));
+        assert_eq!(address_from_od(&ObjectDictionary::new()), None);
     }
 }

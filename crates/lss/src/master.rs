@@ -11,7 +11,7 @@
 use drivebus_can::Frame;
 
 use crate::codec::{FASTSCAN_CONFIRM, IdentifyStep, LssField, LssRequest, LssResponse, cs};
-use crate::{LssAddress, LssAddressRange, LssMode, STANDARD_TABLE};
+use crate::{Identity, LssAddressRange, LssMode, STANDARD_TABLE};
 
 /// Switch state global (04h): every slave enters `mode`. No response.
 pub fn switch_state_global(mode: LssMode) -> Frame {
@@ -20,8 +20,8 @@ pub fn switch_state_global(mode: LssMode) -> Frame {
 
 /// Switch state selective (40h..43h): the four frames, to be sent in order.
 /// The one slave with this address answers the last with 44h.
-pub fn switch_state_selective(addr: &LssAddress) -> [Frame; 4] {
-    LssField::ALL.map(|field| LssRequest::SwitchStateSelective { field, value: addr.get(field) }.to_frame())
+pub fn switch_state_selective(addr: &Identity) -> [Frame; 4] {
+    LssField::ALL.map(|field| LssRequest::SwitchStateSelective { field, value: field.get(addr) }.to_frame())
 }
 
 /// Configure node-ID (11h). Answered with [`LssResponse::ConfigureNodeId`].
@@ -121,7 +121,7 @@ mod tests {
     fn builders_are_frame_exact() {
         assert_eq!(format!("{}", switch_state_global(LssMode::Configuration)), "7E5#0401000000000000");
         assert_eq!(format!("{}", switch_state_global(LssMode::Waiting)), "7E5#0400000000000000");
-        let sel = switch_state_selective(&LssAddress::new(0x30C, 0x0060_4100, 0x0001_0002, 0xA0B0_C0D0));
+        let sel = switch_state_selective(&Identity::new(0x30C, 0x0060_4100, 0x0001_0002, 0xA0B0_C0D0));
         assert_eq!(
             sel.map(|f| format!("{f}")),
             ["7E5#400C030000000000", "7E5#4100416000000000", "7E5#4202000100000000", "7E5#43D0C0B0A0000000"]

@@ -9,7 +9,7 @@
 use drivebus_can::{Frame, Instant, TxSink};
 
 use crate::codec::{FASTSCAN_CONFIRM, IdentifyStep, LssField, LssRequest, LssResponse, err};
-use crate::{LssAddress, LssMode, STANDARD_TABLE, UNCONFIGURED, is_configurable_node_id, is_valid_node_id};
+use crate::{Identity, LssMode, STANDARD_TABLE, UNCONFIGURED, is_configurable_node_id, is_valid_node_id};
 
 /// What the node must do after a frame was handled. The slave has already
 /// sent whatever response the service needs (except for store, see
@@ -80,7 +80,7 @@ const DEFAULT_BIT_TIMINGS: u16 = 0b1_1101_1111;
 /// The LSS slave of one CANopen device.
 #[derive(Clone, Debug)]
 pub struct LssSlave {
-    identity: LssAddress,
+    identity: Identity,
     mode: LssMode,
     active_node_id: u8,
     pending_node_id: u8,
@@ -102,7 +102,7 @@ impl LssSlave {
     /// (`0xFF` = unconfigured: see the crate docs) and the index of its
     /// current bit timing in the standard table. An out-of-range node-ID
     /// (0, 128..=254) is treated as unconfigured.
-    pub fn new(identity: LssAddress, node_id: u8, bit_timing_index: u8) -> LssSlave {
+    pub fn new(identity: Identity, node_id: u8, bit_timing_index: u8) -> LssSlave {
         let node_id = if is_valid_node_id(node_id) { node_id } else { UNCONFIGURED };
         LssSlave {
             identity,
@@ -136,7 +136,7 @@ impl LssSlave {
 
     /// The LSS address.
     #[inline]
-    pub fn identity(&self) -> &LssAddress {
+    pub fn identity(&self) -> &Identity {
         &self.identity
     }
     /// The LSS FSA state.
@@ -264,7 +264,7 @@ impl LssSlave {
     /// and all match; any mismatch or out-of-order frame restarts the sequence.
     fn switch_selective(&mut self, field: LssField, value: u32, out: &mut impl TxSink) -> Option<LssEvent> {
         let in_order = field == LssField::Vendor || field.index() == self.selective_matched;
-        if !in_order || self.identity.get(field) != value {
+        if !in_order || field.get(&self.identity) != value {
             self.selective_matched = 0;
             return None;
         }
@@ -328,7 +328,7 @@ impl LssSlave {
             return None;
         }
         let mask = u32::MAX << bit_checked;
-        if (self.identity.get(field) ^ id_number) & mask != 0 {
+        if (field.get(&self.identity) ^ id_number) & mask != 0 {
             return None;
         }
         self.fastscan_pos = next;
@@ -400,7 +400,7 @@ impl LssSlave {
             }
             // Fig. 37..40.
             LssRequest::InquireIdentity(field) => {
-                out.send(LssResponse::Identity { field, value: self.identity.get(field) }.to_frame());
+                out.send(LssResponse::Identity { field, value: field.get(&self.identity) }.to_frame());
                 None
             }
             // Fig. 41: the active node-ID; while LSS-only (still in NMT

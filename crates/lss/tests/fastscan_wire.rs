@@ -5,17 +5,17 @@
 
 use drivebus_can::{Duration, Frame, Instant};
 use drivebus_lss::codec::LssField;
-use drivebus_lss::{FastScan, FastScanOutcome, LssAddress, LssEvent, LssMode, LssSlave, master};
+use drivebus_lss::{FastScan, FastScanOutcome, Identity, LssEvent, LssMode, LssSlave, master};
 
 const TIMEOUT: Duration = Duration::from_millis(10);
 
 // DDS6041 (DC) units with consecutive serial numbers, a DDS6278A (AC) unit
 // (`seed004-dds6-objects.tsv` 1018h) and a Kollmorgen KC1 (vendor 6Ah,
 // product "M006", `seed000-kc1-objects.tsv` 1018h).
-const DDS6_A: LssAddress = LssAddress::new(0x0000_030C, 0x0060_4100, 0x0001_0002, 0x0000_1234);
-const DDS6_B: LssAddress = LssAddress::new(0x0000_030C, 0x0060_4100, 0x0001_0002, 0x0000_1235);
-const DDS6_AC: LssAddress = LssAddress::new(0x0000_030C, 0x0062_7801, 0x0001_0000, 0x0000_0001);
-const KC1: LssAddress = LssAddress::new(0x0000_006A, u32::from_le_bytes(*b"M006"), 0x0014_0000, 0x0A21_5678);
+const DDS6_A: Identity = Identity::new(0x0000_030C, 0x0060_4100, 0x0001_0002, 0x0000_1234);
+const DDS6_B: Identity = Identity::new(0x0000_030C, 0x0060_4100, 0x0001_0002, 0x0000_1235);
+const DDS6_AC: Identity = Identity::new(0x0000_030C, 0x0062_7801, 0x0001_0000, 0x0000_0001);
+const KC1: Identity = Identity::new(0x0000_006A, u32::from_le_bytes(*b"M006"), 0x0014_0000, 0x0A21_5678);
 
 struct Wire {
     slaves: Vec<LssSlave>,
@@ -77,12 +77,12 @@ impl Wire {
         answers
     }
 
-    fn in_configuration(&self) -> Vec<LssAddress> {
+    fn in_configuration(&self) -> Vec<Identity> {
         self.slaves.iter().filter(|s| s.mode() == LssMode::Configuration).map(|s| *s.identity()).collect()
     }
 }
 
-fn unconfigured(addr: LssAddress) -> LssSlave {
+fn unconfigured(addr: Identity) -> LssSlave {
     LssSlave::new(addr, 0xFF, 4)
 }
 

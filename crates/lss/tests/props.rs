@@ -2,9 +2,7 @@
 //! the codec round-trips, and fastscan always finds the lowest address.
 
 use drivebus_can::{CanId, Duration, Frame, Instant};
-use drivebus_lss::{
-    FastScan, FastScanOutcome, LssAddress, LssMode, LssRequest, LssResponse, LssSlave, master,
-};
+use drivebus_lss::{FastScan, FastScanOutcome, Identity, LssMode, LssRequest, LssResponse, LssSlave, master};
 use proptest::prelude::*;
 
 /// Frames biased towards LSS: mostly 7E5h/7E4h with known command
@@ -32,10 +30,10 @@ fn frame() -> impl Strategy<Value = Frame> {
     })
 }
 
-fn address() -> impl Strategy<Value = LssAddress> {
+fn address() -> impl Strategy<Value = Identity> {
     // Small values too, so slaves share prefixes and parts.
     let part = prop_oneof![any::<u32>(), 0u32..4];
-    (part.clone(), part.clone(), part.clone(), part).prop_map(|(v, p, r, s)| LssAddress::new(v, p, r, s))
+    (part.clone(), part.clone(), part.clone(), part).prop_map(|(v, p, r, s)| Identity::new(v, p, r, s))
 }
 
 proptest! {

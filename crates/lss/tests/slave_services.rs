@@ -6,10 +6,10 @@
 
 use drivebus_can::{Frame, Instant};
 use drivebus_lss::codec::LssField;
-use drivebus_lss::{LssAddress, LssAddressRange, LssEvent, LssMode, LssSlave, StoreStatus, master};
+use drivebus_lss::{Identity, LssAddressRange, LssEvent, LssMode, LssSlave, StoreStatus, master};
 
-const DDS6: LssAddress = LssAddress::new(0x0000_030C, 0x0060_4100, 0x0001_0002, 0x0000_1234);
-const KC1: LssAddress = LssAddress::new(0x0000_006A, u32::from_le_bytes(*b"M006"), 0x0014_0000, 0x0A21_5678);
+const DDS6: Identity = Identity::new(0x0000_030C, 0x0060_4100, 0x0001_0002, 0x0000_1234);
+const KC1: Identity = Identity::new(0x0000_006A, u32::from_le_bytes(*b"M006"), 0x0014_0000, 0x0A21_5678);
 
 const T: Instant = Instant::ZERO;
 
@@ -72,7 +72,7 @@ fn switch_state_selective_partial_and_wrong_matches() {
     // Each single wrong part prevents the switch.
     for field in LssField::ALL {
         let mut wrong = DDS6;
-        wrong.set(field, DDS6.get(field) ^ 1);
+        field.set(&mut wrong, field.get(&DDS6) ^ 1);
         for f in master::switch_state_selective(&wrong) {
             assert_eq!(feed(&mut s, f), (None, vec![]), "{field:?}");
         }
@@ -231,7 +231,7 @@ fn inquire_identity_and_node_id() {
     assert_eq!(feed(&mut u, master::inquire_node_id()).1, vec![rsp([0x5E, 33, 0, 0, 0, 0, 0, 0])]);
 }
 
-fn range(addr: &LssAddress, rev: (u32, u32), serial: (u32, u32)) -> LssAddressRange {
+fn range(addr: &Identity, rev: (u32, u32), serial: (u32, u32)) -> LssAddressRange {
     LssAddressRange {
         vendor_id: addr.vendor_id,
         product_code: addr.product_code,

@@ -28,7 +28,6 @@
 //! simulated time); `master` (events, NMT, heartbeat/guarding, EMCY,
 //! SYNC/TIME); [`sdo`]; [`scan`]; [`lss`]; [`pdo`]; [`drive`] (CiA 402).
 
-mod clock;
 mod core;
 pub mod dcf;
 pub mod drive;
@@ -57,7 +56,7 @@ pub use drivebus_bus::{Bus as VirtualBus, BusConfig as VirtualBusConfig, candump
 pub use drivebus_can::{CanId, Frame, Instant};
 pub use drivebus_emcy::describe as emcy_description;
 pub use drivebus_lss::codec::LssField;
-pub use drivebus_lss::{FastScan, LssAddress, LssAddressRange, LssMode};
+pub use drivebus_lss::{FastScan, Identity, LssAddressRange, LssMode};
 pub use drivebus_nmt::{NmtCommand, RemoteState};
 pub use drivebus_od::{DataType, SdoAbort, Value};
 pub use drivebus_sdo::client::Protocol;

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use drivebus_can::Frame;
 use drivebus_lss::codec::{LssField, LssResponse, err};
-use drivebus_lss::{FastScan, FastScanOutcome, LssAddress, LssAddressRange, LssMode, master};
+use drivebus_lss::{FastScan, FastScanOutcome, Identity, LssAddressRange, LssMode, master};
 
 use crate::core::ops::{Exchange, FastScanOp, Matcher};
 use crate::master::Master;
@@ -53,12 +53,12 @@ impl std::error::Error for LssError {}
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OnlySlave {
     /// The one non-configured slave, now with the node-ID (and stored if asked).
-    Configured(LssAddress),
+    Configured(Identity),
     /// No non-configured slave answered.
     NoneFound,
     /// More than one non-configured slave is on the bus: nothing was
     /// configured (the first one found is given, for a selective switch).
-    Several(LssAddress),
+    Several(Identity),
 }
 
 /// The LSS master; from [`Master::lss`].
@@ -132,14 +132,14 @@ impl LssMaster {
     }
 
     /// Switch state selective: the slave with `addr` enters configuration.
-    pub async fn switch_selective(&self, addr: &LssAddress) -> Result<(), LssError> {
+    pub async fn switch_selective(&self, addr: &Identity) -> Result<(), LssError> {
         let frames = master::switch_state_selective(addr);
         self.request(&frames, |r| (r == LssResponse::SwitchStateSelective).then_some(())).await
     }
 
     /// Inquires the LSS address of the slave in configuration.
-    pub async fn inquire_identity(&self) -> Result<LssAddress, LssError> {
-        let mut addr = LssAddress::default();
+    pub async fn inquire_identity(&self) -> Result<Identity, LssError> {
+        let mut addr = Identity::default();
         for field in LssField::ALL {
             let v = self
                 .request(&[master::inquire_identity(field)], move |r| match r {
@@ -147,7 +147,7 @@ impl LssMaster {
                     _ => None,
                 })
                 .await?;
-            addr.set(field, v);
+            field.set(&mut addr, v);
         }
         Ok(addr)
     }
@@ -232,7 +232,7 @@ impl LssMaster {
     /// Each of the up to 133 questions waits for this handle's timeout.
     /// A scan that loses its slave (an answer later than the timeout flips
     /// a bit) is repeated up to twice.
-    pub async fn fastscan(&self) -> Result<Option<LssAddress>, LssError> {
+    pub async fn fastscan(&self) -> Result<Option<Identity>, LssError> {
         let mut tries = 0;
         loop {
             match self.fastscan_with(FastScan::new(self.timeout)).await {
@@ -243,7 +243,7 @@ impl LssMaster {
     }
 
     /// Fastscan with a prepared scanner (known parts, early advance).
-    pub async fn fastscan_with(&self, scan: FastScan) -> Result<Option<LssAddress>, LssError> {
+    pub async fn fastscan_with(&self, scan: FastScan) -> Result<Option<Identity>, LssError> {
         let _one = self.master.inner.lss_lock.lock().await;
         let (op, rx) = FastScanOp::new(scan);
         let id = self.master.inner.with_core(|c| c.start_op(Box::new(op)));
@@ -298,7 +298,7 @@ impl LssMaster {
     /// Finds the non-configured slave with the lowest LSS address (fastscan)
     /// and whether others are on the bus, leaving every slave as it was
     /// (the found one is given node-ID 1 for the check, then FFh again).
-    pub async fn probe_unconfigured(&self) -> Result<Option<(LssAddress, bool)>, LssError> {
+    pub async fn probe_unconfigured(&self) -> Result<Option<(Identity, bool)>, LssError> {
         let Some(addr) = self.fastscan().await? else { return Ok(None) };
         self.configure_node_id(1).await?;
         let more = self.identify_non_configured().await;
@@ -312,7 +312,7 @@ impl LssMaster {
     /// effect at its next NMT reset communication.
     pub async fn configure_selected(
         &self,
-        addr: &LssAddress,
+        addr: &Identity,
         node_id: u8,
         store: bool,
     ) -> Result<(), LssError> {
@@ -332,7 +332,7 @@ impl LssMaster {
     /// Fastscan, then configure `node_id` on the found slave, optionally
     /// store, and return it to waiting (it starts with the new node-ID
     /// after a reset communication / power cycle, CiA 305).
-    pub async fn assign_node_id(&self, node_id: u8, store: bool) -> Result<Option<LssAddress>, LssError> {
+    pub async fn assign_node_id(&self, node_id: u8, store: bool) -> Result<Option<Identity>, LssError> {
         self.assign_node_id_with(FastScan::new(self.timeout), node_id, store).await
     }
 
@@ -343,7 +343,7 @@ impl LssMaster {
         scan: FastScan,
         node_id: u8,
         store: bool,
-    ) -> Result<Option<LssAddress>, LssError> {
+    ) -> Result<Option<Identity>, LssError> {
         let Some(addr) = self.fastscan_with(scan).await? else { return Ok(None) };
         self.configure_node_id(node_id).await?;
         if store {

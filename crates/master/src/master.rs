@@ -133,7 +133,7 @@ impl std::error::Error for WaitError {}
 pub(crate) enum Driver {
     /// A tokio task on a transport (`driver::tokio`).
     Tokio {
-        clock: crate::clock::Clock,
+        clock: drivebus_transport::clock::TokioClock,
         tx: CanTx,
         /// Wakes the driver task: frames queued or an earlier deadline.
         kick: Arc<Notify>,

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use drivebus_node::Identity;
+use drivebus_can::Identity;
 
 use crate::master::Master;
 

@@ -10,8 +10,8 @@ use std::time::Duration;
 use common::dual::{Station, on_both};
 use common::{identity, node};
 use drivebus_master::{
-    FastScan, LssAddress, LssField, LssMode, MasterEvent, NmtCommand, PdoDir, PdoMapEntry, PdoRecord,
-    Protocol, RemoteState, ScanOptions, SdoAbort, SdoError,
+    FastScan, Identity, LssField, LssMode, MasterEvent, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, Protocol,
+    RemoteState, ScanOptions, SdoAbort, SdoError,
 };
 use drivebus_node::{Node, NodeConfig};
 use tokio::sync::broadcast;
@@ -171,7 +171,7 @@ fn lss_fastscan_and_node_id_assignment() {
             };
             // Fastscan converges on the lowest address first.
             let a = lss.assign_node_id_with(scan(), 40, false).await.unwrap().unwrap();
-            assert_eq!(a, LssAddress::new(0xABC, 0x77, 3, 0x10));
+            assert_eq!(a, Identity::new(0xABC, 0x77, 3, 0x10));
             let b = lss.assign_node_id_with(scan(), 41, false).await.unwrap().unwrap();
             assert_eq!(b.serial, 0x20);
             assert!(!lss.identify_non_configured().await.unwrap());
@@ -395,7 +395,7 @@ fn lss_set_node_id_refuses_two_unconfigured_slaves() {
             let r = lss.configure_only_slave(9, false).await.unwrap();
             assert_eq!(
                 r,
-                drivebus_master::OnlySlave::Several(LssAddress::new(0xABC, 0x77, 3, 0x10)),
+                drivebus_master::OnlySlave::Several(Identity::new(0xABC, 0x77, 3, 0x10)),
                 "{which:?}"
             );
             // Nothing changed: both still unconfigured, no node 9.
@@ -404,12 +404,12 @@ fn lss_set_node_id_refuses_two_unconfigured_slaves() {
             let (first, more) = lss.probe_unconfigured().await.unwrap().unwrap();
             assert_eq!((first.serial, more), (0x10, true));
             // The selective path configures exactly one.
-            lss.configure_selected(&LssAddress::new(0xABC, 0x77, 3, 0x20), 9, false).await.unwrap();
+            lss.configure_selected(&Identity::new(0xABC, 0x77, 3, 0x20), 9, false).await.unwrap();
             m.sleep(Duration::from_millis(20)).await;
             assert_eq!(m.sdo(9).read::<u32>(0x1018, 4).await.unwrap(), 0x20);
             // One unconfigured slave left: now the global path works.
             let r = lss.configure_only_slave(10, false).await.unwrap();
-            assert_eq!(r, drivebus_master::OnlySlave::Configured(LssAddress::new(0xABC, 0x77, 3, 0x10)));
+            assert_eq!(r, drivebus_master::OnlySlave::Configured(Identity::new(0xABC, 0x77, 3, 0x10)));
             m.sleep(Duration::from_millis(20)).await;
             assert_eq!(m.sdo(10).read::<u32>(0x1018, 4).await.unwrap(), 0x10);
             assert_eq!(

@@ -5,7 +5,7 @@ mod common;
 use std::time::Duration;
 
 use common::{bounded, host, identity, master, node};
-use drivebus_master::{FastScan, LssAddress, LssField, LssMode, ScanOptions};
+use drivebus_master::{FastScan, Identity, LssField, LssMode, ScanOptions};
 use drivebus_node::{Node, NodeConfig};
 use drivebus_transport::Hub;
 
@@ -51,7 +51,7 @@ async fn fastscan_finds_unconfigured_node_and_assigns_id() {
         let lss = m.lss().timeout(Duration::from_millis(20));
         assert!(lss.identify_non_configured().await.unwrap());
         let addr = lss.fastscan().await.unwrap().expect("found");
-        assert_eq!(addr, LssAddress::new(0xABC, 0x77, 3, 0x1234_5678));
+        assert_eq!(addr, Identity::new(0xABC, 0x77, 3, 0x1234_5678));
         // The found slave is in configuration: inquire and configure it.
         assert_eq!(lss.inquire_node_id().await.unwrap(), 0xFF);
         assert_eq!(lss.inquire_identity().await.unwrap(), addr);
@@ -76,7 +76,7 @@ async fn fastscan_finds_unconfigured_node_and_assigns_id() {
         lss.switch_selective(&addr).await.unwrap();
         assert_eq!(lss.inquire_node_id().await.unwrap(), 20);
         lss.switch_global(LssMode::Waiting).await.unwrap();
-        assert!(lss.switch_selective(&LssAddress::new(1, 2, 3, 4)).await.is_err());
+        assert!(lss.switch_selective(&Identity::new(1, 2, 3, 4)).await.is_err());
     })
     .await;
 }

@@ -1,22 +1,10 @@
 //! What a device is: identity, which services it has, and their sizes.
 
 use alloc::string::String;
+use drivebus_can::Identity;
 use drivebus_nmt::NmtConfig;
 use drivebus_pdo::PdoConfig;
 use drivebus_sdo::server::ServerConfig;
-
-/// 1018h identity (also the LSS address, CiA 305).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Identity {
-    /// 1018h:1 vendor-ID.
-    pub vendor_id: u32,
-    /// 1018h:2 product code.
-    pub product_code: u32,
-    /// 1018h:3 revision number.
-    pub revision: u32,
-    /// 1018h:4 serial number.
-    pub serial: u32,
-}
 
 /// Everything fixed when a device is built.
 #[derive(Clone, Debug, PartialEq)]

@@ -36,9 +36,11 @@ mod requests;
 pub mod storage;
 
 pub use app::{AppContext, Application, FrameFilter, NodeEvent, Request};
-pub use config::{Identity, NodeConfig};
+pub use config::NodeConfig;
 pub use device::NodeDevice;
 pub use dictionary::build_dictionary;
+/// 1018h identity (also the LSS address): the one type of `drivebus-can`.
+pub use drivebus_can::Identity;
 #[cfg(feature = "std")]
 pub use eds_device::EdsOptions;
 pub use node::{Node, NodeTemplate};

@@ -9,7 +9,7 @@ use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::{CanId, Frame, Instant, TxSink, earliest};
 use drivebus_emcy::{Emcy, register_bit_for};
-use drivebus_lss::{LssAddress, LssSlave};
+use drivebus_lss::LssSlave;
 use drivebus_nmt::{InitSubState, Nmt, NmtCommand, NmtState, Service};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 use drivebus_pdo::{Pdo, PdoRx};
@@ -262,19 +262,7 @@ impl Node {
                 file: cfg.eds_text.clone(),
             },
         };
-        let lss = cfg.lss.then(|| {
-            let id = cfg.identity;
-            LssSlave::new(
-                LssAddress {
-                    vendor_id: id.vendor_id,
-                    product_code: id.product_code,
-                    revision: id.revision,
-                    serial: id.serial,
-                },
-                node_id,
-                0,
-            )
-        });
+        let lss = cfg.lss.then(|| LssSlave::new(cfg.identity, node_id, 0));
         let mut node = Node {
             cfg,
             od,

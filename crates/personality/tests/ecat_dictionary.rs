@@ -4,7 +4,7 @@
 //! path with the ESM state the EtherCAT layer reports.
 
 use drivebus_can::{Frame, Instant};
-use drivebus_coe::EsmState;
+use drivebus_coe::AlState;
 use drivebus_node::{MemoryStorage, NmtState};
 use drivebus_od::SdoAbort;
 use drivebus_personality::Profile;
@@ -17,7 +17,7 @@ fn build(p: Profile) -> drivebus_personality::PersonalityDevice {
     d
 }
 
-fn state(d: &mut drivebus_personality::PersonalityDevice, from: EsmState, to: EsmState) -> Vec<Frame> {
+fn state(d: &mut drivebus_personality::PersonalityDevice, from: AlState, to: AlState) -> Vec<Frame> {
     let mut out = Vec::new();
     ecat::esm_event(d, EsmEvent::Changed { from, to }, Instant::from_millis(1), &mut out);
     out
@@ -66,7 +66,7 @@ fn assignment_changes_only_in_pre_op_with_sub_0_zero() {
         };
         // INIT: no writes (no mailbox; a local tool is refused too).
         assert_eq!(w(&mut d, 0x1C12, 0, &[0]), Err(SdoAbort::DEVICE_STATE), "{p}");
-        state(&mut d, EsmState::Init, EsmState::PreOp);
+        state(&mut d, AlState::Init, AlState::PreOp);
         assert_eq!(d.node.nmt_state(), NmtState::PreOperational);
         assert_eq!(w(&mut d, 0x1C12, 1, &0x1601u16.to_le_bytes()), Err(SdoAbort(0x0601_0003)), "{p}");
         w(&mut d, 0x1C12, 0, &[0]).unwrap();
@@ -81,7 +81,7 @@ fn assignment_changes_only_in_pre_op_with_sub_0_zero() {
         assert_eq!(w(&mut d, 0x1601, 1, &0x6040_0008u32.to_le_bytes()), Err(SdoAbort::NOT_MAPPABLE), "{p}");
         w(&mut d, 0x1601, 1, &0x6040_0010u32.to_le_bytes()).unwrap();
         w(&mut d, 0x1601, 0, &[1]).unwrap();
-        state(&mut d, EsmState::PreOp, EsmState::SafeOp);
+        state(&mut d, AlState::PreOp, AlState::SafeOp);
         assert_eq!(d.node.nmt_state(), NmtState::Operational);
         assert_eq!(w(&mut d, 0x1C12, 0, &[0]), Err(SdoAbort::DEVICE_STATE), "{p}");
         assert_eq!(w(&mut d, 0x1601, 0, &[0]), Err(SdoAbort::DEVICE_STATE), "{p}");
@@ -92,7 +92,7 @@ fn assignment_changes_only_in_pre_op_with_sub_0_zero() {
 #[test]
 fn ipos_mapping_over_64_bits_sends_8220h_and_is_ignored() {
     let mut d = build(Profile::Ipos);
-    state(&mut d, EsmState::Init, EsmState::PreOp);
+    state(&mut d, AlState::Init, AlState::PreOp);
     let mut out: Vec<Frame> = Vec::new();
     let t = Instant::from_millis(2);
     d.write_object(0x1A03, 0, &[0], t, &mut out).unwrap();
@@ -106,7 +106,7 @@ fn ipos_mapping_over_64_bits_sends_8220h_and_is_ignored() {
     assert!(out.iter().any(|f| f.std_id() == Some(0x81) && f.data()[..2] == [0x20, 0x82]), "{out:?}");
     // The generic servo refuses it.
     let mut g = build(Profile::Generic);
-    state(&mut g, EsmState::Init, EsmState::PreOp);
+    state(&mut g, AlState::Init, AlState::PreOp);
     g.write_object(0x1A03, 0, &[0], t, &mut out).unwrap();
     for (s, e) in [(1u8, 0x6064_0020u32), (2, 0x606C_0020), (3, 0x6041_0010)] {
         g.write_object(0x1A03, s, &e.to_le_bytes(), t, &mut out).unwrap();
@@ -117,7 +117,7 @@ fn ipos_mapping_over_64_bits_sends_8220h_and_is_ignored() {
 #[test]
 fn communication_error_reporting() {
     let mut d = build(Profile::Ipos);
-    state(&mut d, EsmState::Init, EsmState::PreOp);
+    state(&mut d, AlState::Init, AlState::PreOp);
     let mut out: Vec<Frame> = Vec::new();
     // A refused transition: EMCY A0xxh with the AL code.
     ecat::esm_event(&mut d, EsmEvent::Error(0x001D), Instant::from_millis(3), &mut out);

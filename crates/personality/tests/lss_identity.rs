@@ -10,7 +10,7 @@ mod replay_rig;
 
 use drivebus_can::Frame;
 use drivebus_lss::master;
-use drivebus_lss::{LssAddress, LssAddressRange, LssField, LssMode};
+use drivebus_lss::{Identity, LssAddressRange, LssField, LssMode};
 use drivebus_personality::Profile;
 use replay_rig::Rig;
 
@@ -27,21 +27,21 @@ fn lss(r: &mut Rig, frames: &[Frame]) -> Vec<Frame> {
 }
 
 /// 1018h:01h–04h as an SDO client reads them.
-fn identity_by_sdo(r: &mut Rig) -> LssAddress {
-    let mut a = LssAddress::default();
+fn identity_by_sdo(r: &mut Rig) -> Identity {
+    let mut a = Identity::default();
     for (sub, field) in (1u8..).zip(LssField::ALL) {
-        a.set(field, r.read_u32(NODE, 0x1018, sub));
+        field.set(&mut a, r.read_u32(NODE, 0x1018, sub));
     }
     a
 }
 
 /// Fastscan (CiA 305 §8.4.2.6) as a master runs it: bit by bit from the
 /// top, a bit is 1 when no slave confirms it as 0.
-fn fastscan(r: &mut Rig) -> Option<LssAddress> {
+fn fastscan(r: &mut Rig) -> Option<Identity> {
     if lss(r, &[master::fastscan_reset()]).len() != 1 {
         return None;
     }
-    let mut found = LssAddress::default();
+    let mut found = Identity::default();
     for field in LssField::ALL {
         let sub = field.index();
         let mut id = 0u32;
@@ -54,7 +54,7 @@ fn fastscan(r: &mut Rig) -> Option<LssAddress> {
         if lss(r, &[master::fastscan(id, 0, sub, next)]).len() != 1 {
             return None;
         }
-        found.set(field, id);
+        field.set(&mut found, id);
     }
     Some(found)
 }
@@ -74,7 +74,7 @@ fn the_lss_address_is_the_identity_object() {
         lss(&mut r, &[master::switch_state_global(LssMode::Configuration)]);
         for field in LssField::ALL {
             let got = lss(&mut r, &[master::inquire_identity(field)]);
-            let want = drivebus_lss::LssResponse::Identity { field, value: id.get(field) }.to_frame();
+            let want = drivebus_lss::LssResponse::Identity { field, value: field.get(&id) }.to_frame();
             assert_eq!(got, vec![want], "{p}: inquire {field:?}");
         }
         lss(&mut r, &[master::switch_state_global(LssMode::Waiting)]);

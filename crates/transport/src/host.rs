@@ -30,6 +30,7 @@ use std::time::Duration;
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
+use crate::clock::TokioClock;
 use crate::{CanBus, Hub};
 
 type Command<D> = Box<dyn FnOnce(&mut D, Instant, &mut Vec<Frame>) + Send>;
@@ -197,22 +198,6 @@ impl<D: Device + 'static> Device for Controller<D> {
     }
 }
 
-/// The device's `now`: nanoseconds since the host started.
-#[derive(Clone, Copy)]
-struct Clock {
-    start: tokio::time::Instant,
-}
-
-impl Clock {
-    fn now(&self) -> Instant {
-        Instant::from_nanos(u64::try_from(self.start.elapsed().as_nanos()).unwrap_or(u64::MAX))
-    }
-    /// The tokio instant of a deadline, far ones capped at a year.
-    fn at(&self, t: Instant) -> tokio::time::Instant {
-        self.start + Duration::from_nanos(t.as_nanos()).min(Duration::from_secs(365 * 86_400))
-    }
-}
-
 async fn flush(bus: &CanBus, out: &mut Vec<Frame>) -> bool {
     for f in out.drain(..) {
         if let Err(e) = bus.send(f).await {
@@ -224,7 +209,7 @@ async fn flush(bus: &CanBus, out: &mut Vec<Frame>) -> bool {
 }
 
 async fn run<D: Device>(mut dev: D, mut bus: CanBus, mut cmds: mpsc::UnboundedReceiver<Command<D>>) {
-    let clock = Clock { start: tokio::time::Instant::now() };
+    let clock = TokioClock::start();
     let mut out: Vec<Frame> = Vec::new();
     dev.start(clock.now(), &mut out);
     let mut cmds_open = true;

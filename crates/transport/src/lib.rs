@@ -22,6 +22,7 @@
 //! [`host`] runs any sans-IO `drivebus_can::Device` in real time on a
 //! [`CanBus`] (and [`host::bridge`] puts a hub's devices on a real bus).
 
+pub mod clock;
 mod error;
 mod handle;
 pub mod host;

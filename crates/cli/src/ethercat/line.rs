@@ -43,7 +43,7 @@ pub async fn with_master<T: Send + 'static>(
 }
 
 fn status_json(s: &AlStatus) -> serde_json::Value {
-    serde_json::json!({"state": s.state.to_string(), "error": s.error, "al_status_code": s.code,
+    serde_json::json!({"state": master::state_text(s.state), "error": s.error, "al_status_code": s.code,
         "al_status_text": master::al_status_text(s.code)})
 }
 
@@ -51,13 +51,13 @@ fn status_text(s: &AlStatus) -> String {
     if s.error || s.code != 0 {
         format!(
             "{}{} (AL status code 0x{:04X} {})",
-            s.state,
+            master::state_text(s.state),
             if s.error { " + ERROR" } else { "" },
             s.code,
             master::al_status_text(s.code)
         )
     } else {
-        s.state.to_string()
+        master::state_text(s.state)
     }
 }
 

@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use drivebus_master::{
-    DataType, FastScan, Frame, LssAddress, LssError, LssField, LssMode, Master, PdoCallback, Protocol,
+    DataType, FastScan, Frame, Identity, LssError, LssField, LssMode, Master, PdoCallback, Protocol,
     SdoError, Value,
 };
 
@@ -397,7 +397,7 @@ impl Session {
     async fn lss(&mut self, seq: u32, cmd: &str, a: &[String]) -> String {
         let arg = |i: usize| a.get(i).and_then(|s| c_number(s));
         let lss = self.master.lss().timeout(self.sdo_timeout.min(Duration::from_millis(500)));
-        let addr_text = |x: &LssAddress| {
+        let addr_text = |x: &Identity| {
             format!("0x{:08X} 0x{:08X} 0x{:08X} 0x{:08X}", x.vendor_id, x.product_code, x.revision, x.serial)
         };
         match (cmd, a.len()) {
@@ -416,7 +416,7 @@ impl Session {
                 let v: Option<Vec<u32>> =
                     (0..4).map(|i| arg(i).and_then(|v| u32::try_from(v).ok())).collect();
                 let Some(v) = v else { return error(seq, code::SYNTAX) };
-                match lss.switch_selective(&LssAddress::new(v[0], v[1], v[2], v[3])).await {
+                match lss.switch_selective(&Identity::new(v[0], v[1], v[2], v[3])).await {
                     Ok(()) => ok(seq),
                     Err(e) => lss_error(seq, e, code::INTERNAL_STATE),
                 }
@@ -463,7 +463,7 @@ impl Session {
                     _ => return error(seq, code::SYNTAX),
                 };
                 match lss.inquire_identity().await {
-                    Ok(x) => value(seq, &format!("0x{:08X}", x.get(field))),
+                    Ok(x) => value(seq, &format!("0x{:08X}", field.get(&x))),
                     Err(e) => lss_error(seq, e, code::INTERNAL_STATE),
                 }
             }

@@ -17,12 +17,11 @@
 //! a fresh expedited upload gets the exact expected answer.
 
 use drivebus_can::{Duration, Instant};
-use drivebus_coe::{EsmState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxConfig, MailboxServer};
+use drivebus_coe::{AlState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxConfig, MailboxServer};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectCode, ObjectDictionary, SubObject, Value};
 
 const SIZES: [usize; 6] = [32, 40, 64, 128, 256, 1486];
-const STATES: [EsmState; 5] =
-    [EsmState::PreOp, EsmState::SafeOp, EsmState::Op, EsmState::Boot, EsmState::Init];
+const STATES: [AlState; 5] = [AlState::PreOp, AlState::SafeOp, AlState::Op, AlState::Boot, AlState::Init];
 
 fn od() -> ObjectDictionary {
     let mut od = ObjectDictionary::new();
@@ -69,7 +68,7 @@ struct Files {
 }
 
 impl FileHandler for Files {
-    fn begin_write(&mut self, name: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+    fn begin_write(&mut self, name: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
         assert!(!self.open, "end() before a new transfer");
         if name.first() != Some(&b'F') {
             return Err(FoeError::NOT_FOUND);
@@ -98,7 +97,7 @@ impl FileHandler for Files {
             Ok(FoeProgress::Ready)
         }
     }
-    fn begin_read(&mut self, name: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
+    fn begin_read(&mut self, name: &[u8], _: u32, _: AlState, _: Instant) -> Result<(), FoeError> {
         assert!(!self.open, "end() before a new transfer");
         if name.first() != Some(&b'F') {
             return Err(FoeError::NOT_FOUND);
@@ -181,7 +180,7 @@ pub fn drive(input: &[u8]) -> Vec<Vec<u8>> {
     assert!(!files.open);
     s.reset(&mut files);
     let req = [0x0a, 0, 0, 0, 0, 0x13, 0x00, 0x20, 0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0];
-    s.handle_request(&req, now, EsmState::PreOp, &mut dev, &mut files);
+    s.handle_request(&req, now, AlState::PreOp, &mut dev, &mut files);
     let want = [0x0a, 0, 0, 0, 0, 0x13, 0x00, 0x30, 0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x06, 0x00];
     assert_eq!(s.next_response(now), Some(&want[..]));
     seen

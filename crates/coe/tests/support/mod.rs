@@ -9,7 +9,7 @@
 #![allow(dead_code)]
 
 use drivebus_can::{Duration, Instant};
-use drivebus_coe::{EsmState, FileHandler, MailboxConfig, MailboxServer, ObjectAccess};
+use drivebus_coe::{AlState, FileHandler, MailboxConfig, MailboxServer, ObjectAccess};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectCode, ObjectDictionary, SubObject, Value};
 
 pub type Dev = (ObjectDictionary, NoHooks);
@@ -19,7 +19,7 @@ pub struct Rig<A: ObjectAccess, F: FileHandler> {
     pub dev: A,
     pub files: F,
     pub now: Instant,
-    pub state: EsmState,
+    pub state: AlState,
     /// The master's mailbox counter (SOEM's `ec_nextmbxcnt`: 1..=7).
     cnt: u8,
 }
@@ -31,7 +31,7 @@ impl<A: ObjectAccess, F: FileHandler> Rig<A, F> {
             dev,
             files,
             now: Instant::from_millis(1),
-            state: EsmState::PreOp,
+            state: AlState::PreOp,
             cnt: 0,
         }
     }

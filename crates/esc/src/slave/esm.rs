@@ -3,25 +3,32 @@
 
 use core::fmt;
 
-/// EtherCAT application-layer states (AL control/status bits 3:0).
+/// EtherCAT application-layer states (AL control/status bits 3:0): the one
+/// EtherCAT state type of drivebus, used by the slave controller, the CoE
+/// server (`drivebus-coe`) and the master (`drivebus-ethercat`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[repr(u8)]
 pub enum AlState {
-    /// INIT (1).
+    /// INIT (1): no mailbox.
     Init = 1,
     /// PRE-OPERATIONAL (2): mailbox only.
     PreOp = 2,
-    /// BOOTSTRAP (3): firmware update over the bootstrap mailbox.
+    /// BOOTSTRAP (3): mailbox with FoE only, for firmware download.
     Boot = 3,
-    /// SAFE-OPERATIONAL (4): inputs delivered, outputs held safe.
+    /// SAFE-OPERATIONAL (4): mailbox, inputs; outputs held safe.
     SafeOp = 4,
-    /// OPERATIONAL (8).
+    /// OPERATIONAL (8): mailbox, inputs and outputs.
     Op = 8,
 }
 
 impl AlState {
-    /// Decodes AL control/status bits 3:0.
-    pub const fn from_bits(v: u8) -> Option<AlState> {
+    /// Every state, in code order.
+    pub const ALL: [AlState; 5] =
+        [AlState::Init, AlState::PreOp, AlState::Boot, AlState::SafeOp, AlState::Op];
+
+    /// Decodes AL control/status bits 3:0 (the error bit 4 is ignored),
+    /// `None` for a code that names no state.
+    pub const fn from_code(v: u8) -> Option<AlState> {
         Some(match v & 0x0F {
             1 => AlState::Init,
             2 => AlState::PreOp,
@@ -30,6 +37,35 @@ impl AlState {
             8 => AlState::Op,
             _ => return None,
         })
+    }
+
+    /// The AL control/status code (bits 3:0).
+    pub const fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Whether the mailbox runs in this state (every state but INIT).
+    pub const fn has_mailbox(self) -> bool {
+        !matches!(self, AlState::Init)
+    }
+
+    /// As a user types it: `init`, `preop`, `boot` (or `bootstrap`),
+    /// `safeop`, `op`; any case, `-` and `_` ignored (`PRE-OP`, `safe_op`).
+    pub fn parse(s: &str) -> Option<AlState> {
+        let mut buf = [0u8; 9];
+        let mut n = 0;
+        for b in s.bytes().filter(|b| !matches!(b, b'-' | b'_')) {
+            *buf.get_mut(n)? = b.to_ascii_lowercase();
+            n += 1;
+        }
+        match &buf[..n] {
+            b"init" => Some(AlState::Init),
+            b"preop" => Some(AlState::PreOp),
+            b"boot" | b"bootstrap" => Some(AlState::Boot),
+            b"safeop" => Some(AlState::SafeOp),
+            b"op" => Some(AlState::Op),
+            _ => None,
+        }
     }
 
     /// Rank for "going down": INIT < PRE-OP/BOOT < SAFE-OP < OP.
@@ -226,9 +262,25 @@ mod tests {
     }
 
     #[test]
+    fn states_parse_as_users_type_them() {
+        for (t, s) in
+            [("init", Init), ("PRE-OP", PreOp), ("bootstrap", Boot), ("safe_op", SafeOp), ("Op", Op)]
+        {
+            assert_eq!(AlState::parse(t), Some(s), "{t}");
+        }
+        for t in ["run", "", "preoperational", "o-p-x"] {
+            assert_eq!(AlState::parse(t), None, "{t}");
+        }
+    }
+
+    #[test]
     fn codes_and_states_decode() {
-        assert_eq!(AlState::from_bits(0x18), Some(Op));
-        assert_eq!(AlState::from_bits(5), None);
+        assert_eq!(AlState::from_code(0x18), Some(Op));
+        assert_eq!(AlState::from_code(5), None);
+        for s in AlState::ALL {
+            assert_eq!(AlState::from_code(s.code()), Some(s));
+            assert_eq!(s.has_mailbox(), s != Init);
+        }
         assert_eq!(AlStatusCode::SM_WATCHDOG.0, 0x001B);
         assert_eq!(AlStatusCode(0x0029).description(), "Free run needs 3-buffer mode");
         assert_eq!(

@@ -304,7 +304,7 @@ impl<A: SlaveApp> Slave<A> {
         if !self.esc.device_emulation() {
             return;
         }
-        let Some(to) = AlState::from_bits(self.esc.peek_u16(0x0130) as u8) else { return };
+        let Some(to) = AlState::from_code(self.esc.peek_u16(0x0130) as u8) else { return };
         let from = self.state;
         if to == from {
             return;
@@ -401,7 +401,7 @@ impl<A: SlaveApp> Slave<A> {
 
     fn al_control(&mut self, v: u8, now: Instant) {
         let ack = v & 0x10 != 0;
-        let requested = AlState::from_bits(v);
+        let requested = AlState::from_code(v);
         if self.error.is_some() {
             if !ack && requested != Some(AlState::Init) {
                 return;

@@ -4,7 +4,7 @@
 //! description announces CoE.
 
 use drivebus_can::Instant;
-use drivebus_coe::{EsmState, MailboxServer, NoFiles, ObjectAccess, access_bits};
+use drivebus_coe::{MailboxServer, NoFiles, ObjectAccess, access_bits};
 use drivebus_esc::slave::{AlState, MailboxOut, ProcessDataSizes, SlaveApp};
 use drivebus_od::{EntryRef, ObjectDictionary, SdoAbort};
 use drivebus_pdo::unpack_bits;
@@ -72,7 +72,7 @@ pub struct DescribedApp {
     pub(crate) inputs: Vec<u8>,
     pub(crate) source: Box<dyn InputSource>,
     pub(crate) coe: Option<Coe>,
-    pub(crate) esm: EsmState,
+    pub(crate) esm: AlState,
     pub(crate) stats: DescribedStats,
 }
 
@@ -118,7 +118,7 @@ impl DescribedApp {
     }
 
     /// The ESM state the application runs in.
-    pub fn esm(&self) -> EsmState {
+    pub fn esm(&self) -> AlState {
         self.esm
     }
 
@@ -148,15 +148,15 @@ impl DescribedApp {
 struct Access<'a> {
     od: &'a mut ObjectDictionary,
     words: &'a HashMap<(u16, u8), u16>,
-    esm: EsmState,
+    esm: AlState,
 }
 
 impl Access<'_> {
     /// The access bits that count in the current state: (read, write).
     fn state_bits(&self) -> (u16, u16) {
         match self.esm {
-            EsmState::SafeOp => (access_bits::READ_SAFEOP, access_bits::WRITE_SAFEOP),
-            EsmState::Op => (access_bits::READ_OP, access_bits::WRITE_OP),
+            AlState::SafeOp => (access_bits::READ_SAFEOP, access_bits::WRITE_SAFEOP),
+            AlState::Op => (access_bits::READ_OP, access_bits::WRITE_OP),
             _ => (access_bits::READ_PREOP, access_bits::WRITE_PREOP),
         }
     }
@@ -193,23 +193,13 @@ impl ObjectAccess for Access<'_> {
     }
 }
 
-fn esm_of(s: AlState) -> EsmState {
-    match s {
-        AlState::Init => EsmState::Init,
-        AlState::PreOp => EsmState::PreOp,
-        AlState::Boot => EsmState::Boot,
-        AlState::SafeOp => EsmState::SafeOp,
-        AlState::Op => EsmState::Op,
-    }
-}
-
 impl SlaveApp for DescribedApp {
     fn process_data_sizes(&self) -> ProcessDataSizes {
         self.sizes
     }
 
     fn state_changed(&mut self, from: AlState, to: AlState, _now: Instant) {
-        self.esm = esm_of(to);
+        self.esm = to;
         if to != AlState::Op {
             self.outputs.fill(0);
         }

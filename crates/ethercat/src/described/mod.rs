@@ -304,7 +304,7 @@ pub fn slave(d: &Described, serial: u32, inputs: Box<dyn InputSource>) -> Result
         inputs: vec![0; sizes.input_bytes()],
         source: inputs,
         coe,
-        esm: drivebus_coe::EsmState::Init,
+        esm: drivebus_coe::AlState::Init,
         stats: DescribedStats::default(),
     };
     Ok(Slave::new(Esc::new(EscConfig::with_sii(sii)), app, SlaveConfig::default()))

@@ -5,7 +5,7 @@ use super::access::DriveAccess;
 use super::image::{Image, al_code};
 use super::sync::SyncParams;
 use drivebus_can::{Device, Duration, Frame, Instant, earliest};
-use drivebus_coe::{EsmState, MailboxServer};
+use drivebus_coe::MailboxServer;
 use drivebus_esc::slave::{
     AlState, AlStatusCode, MailboxOut, ProcessDataSizes, SlaveApp, SyncConfig, SyncMode, SyncSupport,
     Transition,
@@ -43,7 +43,7 @@ pub struct DriveApp {
     files: Box<dyn DriveFiles>,
     frames: Vec<Frame>,
     emcy_id: u16,
-    esm: EsmState,
+    esm: AlState,
     rx: Image,
     tx: Image,
     sync: SyncConfig,
@@ -64,16 +64,6 @@ impl core::fmt::Debug for DriveApp {
     }
 }
 
-fn esm_of(s: AlState) -> EsmState {
-    match s {
-        AlState::Init => EsmState::Init,
-        AlState::PreOp => EsmState::PreOp,
-        AlState::Boot => EsmState::Boot,
-        AlState::SafeOp => EsmState::SafeOp,
-        AlState::Op => EsmState::Op,
-    }
-}
-
 impl DriveApp {
     pub(crate) fn new(
         dev: PersonalityDevice,
@@ -91,7 +81,7 @@ impl DriveApp {
             files,
             frames: Vec::with_capacity(8),
             emcy_id,
-            esm: EsmState::Init,
+            esm: AlState::Init,
             rx: Image::default(),
             tx: Image::default(),
             sync: SyncConfig::default(),
@@ -120,7 +110,7 @@ impl DriveApp {
     }
 
     /// The ESM state the drive runs in.
-    pub fn esm(&self) -> EsmState {
+    pub fn esm(&self) -> AlState {
         self.esm
     }
 
@@ -270,8 +260,7 @@ impl SlaveApp for DriveApp {
 
     fn state_changed(&mut self, from: AlState, to: AlState, now: Instant) {
         self.run_to(now);
-        let (f, t) = (esm_of(from), esm_of(to));
-        self.esm = t;
+        self.esm = to;
         // ETG.1000.6: the mailbox stops and starts with INIT.
         if from == AlState::Init || to == AlState::Init {
             self.mbx.reset(&mut *self.files);
@@ -284,7 +273,7 @@ impl SlaveApp for DriveApp {
         if !matches!(to, AlState::SafeOp | AlState::Op) {
             self.pulse = None;
         }
-        self.esm_event(EsmEvent::Changed { from: f, to: t }, now);
+        self.esm_event(EsmEvent::Changed { from, to }, now);
     }
 
     fn al_error(&mut self, code: Option<AlStatusCode>, now: Instant) {
@@ -352,7 +341,7 @@ impl SlaveApp for DriveApp {
         // the slave latches next are its actual values.
         self.run_to_pulse(now);
         self.stats.sync0_pulses += 1;
-        if self.esm == EsmState::Op {
+        if self.esm == AlState::Op {
             self.params.pulse(&mut self.dev);
             self.dev.node.foreign_sync(now, &mut self.dev.app, &mut self.frames);
             self.take_frames();

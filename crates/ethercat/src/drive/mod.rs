@@ -17,7 +17,7 @@
 //!     .host(Clock::simulated(Instant::ZERO))
 //!     .unwrap();
 //! let state = drivebus_ethercat::drive::with_drive(&host, 2, |d| d.app().esm()).unwrap();
-//! assert_eq!(state, drivebus_coe::EsmState::Init);
+//! assert_eq!(state, drivebus_coe::AlState::Init);
 //! ```
 //!
 //! The path of a frame: the host ([`crate::Host`]) passes it through the

@@ -87,8 +87,8 @@ pub enum MasterError {
         position: usize,
         /// The requested state.
         requested: AlState,
-        /// The state it stayed in.
-        state: AlState,
+        /// The state it stayed in (the code when it names no state).
+        state: Result<AlState, u8>,
         /// The AL status code (0x0134).
         code: u16,
     },
@@ -125,7 +125,8 @@ impl fmt::Display for MasterError {
             ),
             MasterError::Refused { position, requested, state, code } => write!(
                 f,
-                "slave {position}: {requested} refused, stays in {state}: AL status code 0x{code:04X} {}",
+                "slave {position}: {requested} refused, stays in {}: AL status code 0x{code:04X} {}",
+                state_text(*state),
                 al_status_text(*code)
             ),
             MasterError::Unsupported(s) => f.write_str(s),
@@ -146,79 +147,24 @@ pub fn al_status_text(code: u16) -> &'static str {
     drivebus_esc::slave::AlStatusCode(code).description()
 }
 
-/// An AL state as in 0x0120/0x0130 (ETG.1000.6 §6.4.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum AlState {
-    /// INIT (1).
-    Init,
-    /// PRE-OP (2).
-    PreOp,
-    /// BOOT (3).
-    Boot,
-    /// SAFE-OP (4).
-    SafeOp,
-    /// OP (8).
-    Op,
-    /// Anything else the register held.
-    Other(u8),
-}
+/// An AL state as in 0x0120/0x0130 (ETG.1000.6 §6.4.1): the one EtherCAT
+/// state type, the slave controller's.
+pub use drivebus_esc::slave::AlState;
 
-impl AlState {
-    /// From the low nibble of 0x0130.
-    pub fn from_code(c: u8) -> AlState {
-        match c & 0x0F {
-            1 => AlState::Init,
-            2 => AlState::PreOp,
-            3 => AlState::Boot,
-            4 => AlState::SafeOp,
-            8 => AlState::Op,
-            x => AlState::Other(x),
-        }
-    }
-
-    /// The 0x0120 code.
-    pub fn code(self) -> u8 {
-        match self {
-            AlState::Init => 1,
-            AlState::PreOp => 2,
-            AlState::Boot => 3,
-            AlState::SafeOp => 4,
-            AlState::Op => 8,
-            AlState::Other(x) => x,
-        }
-    }
-
-    /// As a user types it: init, preop, boot, safeop, op.
-    pub fn parse(s: &str) -> Option<AlState> {
-        match s.to_ascii_lowercase().replace(['-', '_'], "").as_str() {
-            "init" => Some(AlState::Init),
-            "preop" => Some(AlState::PreOp),
-            "boot" | "bootstrap" => Some(AlState::Boot),
-            "safeop" => Some(AlState::SafeOp),
-            "op" => Some(AlState::Op),
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for AlState {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            AlState::Init => f.write_str("INIT"),
-            AlState::PreOp => f.write_str("PRE-OP"),
-            AlState::Boot => f.write_str("BOOT"),
-            AlState::SafeOp => f.write_str("SAFE-OP"),
-            AlState::Op => f.write_str("OP"),
-            AlState::Other(x) => write!(f, "state {x:#x}"),
-        }
+/// How a state read from 0x0130 prints: its name, or the code when bits
+/// 3:0 named no state.
+pub fn state_text(state: Result<AlState, u8>) -> String {
+    match state {
+        Ok(s) => s.to_string(),
+        Err(x) => format!("state {x:#x}"),
     }
 }
 
 /// AL status of one slave (0x0130, 0x0134).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AlStatus {
-    /// The state.
-    pub state: AlState,
+    /// The state, or the code of bits 3:0 when they name no state.
+    pub state: Result<AlState, u8>,
     /// Error indicator (0x0130 bit 4).
     pub error: bool,
     /// AL status code.
@@ -421,7 +367,8 @@ impl Master {
             .receive(&self.md)
             .await
             .map_err(self.err("reading the AL status code"))?;
-        Ok(AlStatus { state: AlState::from_code(s as u8), error: s & 0x10 != 0, code })
+        let bits = s as u8 & 0x0F;
+        Ok(AlStatus { state: AlState::from_code(bits).ok_or(bits), error: s & 0x10 != 0, code })
     }
 
     /// Writes AL control of one slave and waits (up to 5 s) until it is in
@@ -440,10 +387,12 @@ impl Master {
         loop {
             let s = self.al_status(position).await?;
             if s.error {
-                let _ = Command::apwr(p, 0x0120).send(&self.md, u16::from(s.state.code() | 0x10)).await;
+                let _ = Command::apwr(p, 0x0120)
+                    .send(&self.md, u16::from(s.state.map_or_else(|x| x, AlState::code) | 0x10))
+                    .await;
                 return Err(MasterError::Refused { position, requested: want, state: s.state, code: s.code });
             }
-            if s.state == want {
+            if s.state == Ok(want) {
                 return Ok(s);
             }
             if start.elapsed() > std::time::Duration::from_secs(5) {
@@ -510,11 +459,7 @@ impl Master {
                 name: sd.name().to_owned(),
                 identity: [id.vendor_id, id.product_id, id.revision, id.serial],
                 coe_identity,
-                found: found.get(i).copied().unwrap_or(AlStatus {
-                    state: AlState::Other(0),
-                    error: false,
-                    code: 0,
-                }),
+                found: found.get(i).copied().unwrap_or(AlStatus { state: Err(0), error: false, code: 0 }),
                 mailbox,
                 dc: sd.dc_support().any(),
             });
@@ -686,12 +631,8 @@ mod tests {
 
     #[test]
     fn states_parse_and_print() {
-        for (s, st) in [("init", AlState::Init), ("PRE-OP", AlState::PreOp), ("safeop", AlState::SafeOp)] {
-            assert_eq!(AlState::parse(s), Some(st));
-            assert_eq!(AlState::from_code(st.code()), st);
-        }
-        assert_eq!(AlState::parse("run"), None);
-        assert_eq!(AlState::Op.to_string(), "OP");
+        assert_eq!(state_text(Ok(AlState::Op)), "OP");
+        assert_eq!(state_text(Err(5)), "state 0x5");
         assert_eq!(mailbox_protocols(0x000C), ["CoE", "FoE"]);
         assert_eq!(abort_text(0x0602_0000), "Object does not exist in the object dictionary");
         assert_eq!(al_status_text(0x0011), "Invalid requested state change");

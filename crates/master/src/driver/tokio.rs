@@ -6,16 +6,16 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Weak};
 
 use drivebus_can::Frame;
+use drivebus_transport::clock::TokioClock;
 use drivebus_transport::{CanBus, CanRx, CanTx};
 use tokio::sync::Notify;
 
-use crate::clock::Clock;
 use crate::master::{Driver, Master, MasterConfig, Shared};
 
 /// Starts the driver task for `bus` and returns the master on it.
 pub(crate) fn spawn(bus: CanBus, config: MasterConfig) -> Master {
     let (tx, rx) = bus.split();
-    let clock = Clock::new();
+    let clock = TokioClock::start();
     let kick = Arc::new(Notify::new());
     let driver = Driver::Tokio {
         clock,
@@ -32,7 +32,7 @@ pub(crate) fn spawn(bus: CanBus, config: MasterConfig) -> Master {
     Master { inner: shared }
 }
 
-async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, clock: Clock) {
+async fn run(shared: Weak<Shared>, mut rx: CanRx, tx: CanTx, kick: Arc<Notify>, clock: TokioClock) {
     let mut out: Vec<Frame> = Vec::with_capacity(64);
     let sleep = tokio::time::sleep(std::time::Duration::from_secs(3600));
     tokio::pin!(sleep);

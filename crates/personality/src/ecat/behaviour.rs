@@ -12,7 +12,7 @@ use drivebus_can::Frame;
 use drivebus_cia402::drive::DriveConfig;
 use drivebus_cia402::homing::HomingMethod;
 use drivebus_cia402::interp::IpMode;
-use drivebus_coe::EsmState;
+use drivebus_coe::AlState;
 use drivebus_node::{Node, NodeConfig, NodeEvent, Request};
 use drivebus_od::{ObjectDictionary, SdoAbort};
 use drivebus_pdo::PdoConfig;
@@ -40,7 +40,7 @@ pub struct EcatBehaviour {
     inner: Box<dyn Behaviour>,
     facts: &'static EcatFacts,
     pdo: PdoConfig,
-    esm: EsmState,
+    esm: AlState,
     /// A communication error (watchdog, lost SYNC0) is being reported.
     comm_error: bool,
     /// Controlword as last written (fault reset = bit 7 rising).
@@ -60,11 +60,11 @@ impl core::fmt::Debug for EcatBehaviour {
 impl EcatBehaviour {
     /// `inner` on EtherCAT with `facts` and the PDO limits `pdo`.
     pub fn new(inner: Box<dyn Behaviour>, facts: &'static EcatFacts, pdo: PdoConfig) -> Self {
-        EcatBehaviour { inner, facts, pdo, esm: EsmState::Init, comm_error: false, controlword: 0 }
+        EcatBehaviour { inner, facts, pdo, esm: AlState::Init, comm_error: false, controlword: 0 }
     }
 
     /// The ESM state the rules run in.
-    pub fn esm(&self) -> EsmState {
+    pub fn esm(&self) -> AlState {
         self.esm
     }
 
@@ -84,7 +84,7 @@ impl EcatBehaviour {
         &self.pdo
     }
 
-    pub(crate) fn set_esm(&mut self, esm: EsmState) {
+    pub(crate) fn set_esm(&mut self, esm: AlState) {
         self.esm = esm;
     }
 

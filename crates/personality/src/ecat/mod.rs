@@ -37,7 +37,7 @@ use crate::{Personality, Profile};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use drivebus_can::{Instant, TxSink};
-use drivebus_coe::{EsmState, FileHandler, FoeError, FoeProgress};
+use drivebus_coe::{AlState, FileHandler, NoFiles};
 use drivebus_node::{NmtState, Storage};
 use drivebus_od::ObjectDictionary;
 use drivebus_pdo::{Granularity, PdoConfig};
@@ -162,26 +162,8 @@ pub trait DriveFiles: FileHandler + Send {
     fn as_any_mut(&mut self) -> &mut dyn core::any::Any;
 }
 
-/// A drive without FoE.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct NoDriveFiles;
-
-impl FileHandler for NoDriveFiles {
-    fn supported(&self) -> bool {
-        false
-    }
-    fn begin_write(&mut self, _: &[u8], _: u32, _: EsmState, _: Instant) -> Result<(), FoeError> {
-        Err(FoeError::ACCESS_DENIED)
-    }
-    fn write(&mut self, _: u32, _: &[u8], _: Instant) -> Result<FoeProgress, FoeError> {
-        Err(FoeError::ILLEGAL)
-    }
-    fn finish_write(&mut self, _: Instant) -> Result<FoeProgress, FoeError> {
-        Err(FoeError::ILLEGAL)
-    }
-}
-
-impl DriveFiles for NoDriveFiles {
+// A drive without FoE is CoE's own `NoFiles`.
+impl DriveFiles for NoFiles {
     fn as_any_mut(&mut self) -> &mut dyn core::any::Any {
         self
     }
@@ -200,7 +182,7 @@ pub fn files(profile: Profile, dir: Option<std::path::PathBuf>) -> Box<dyn Drive
                 None => f,
             })
         }
-        _ => Box::new(NoDriveFiles),
+        _ => Box::new(NoFiles),
     }
 }
 
@@ -210,9 +192,9 @@ pub enum EsmEvent {
     /// The slave went from one ESM state to another.
     Changed {
         /// Previous state.
-        from: EsmState,
+        from: AlState,
         /// New state.
-        to: EsmState,
+        to: AlState,
     },
     /// The AL status shows this error code (ETG.1000.6 Table 11).
     Error(u16),
@@ -222,9 +204,9 @@ pub enum EsmEvent {
 
 /// The NMT state the drive sees in an ESM state: SAFE-OP and OP are
 /// operational (process data runs), the others pre-operational.
-pub fn nmt_state(esm: EsmState) -> NmtState {
+pub fn nmt_state(esm: AlState) -> NmtState {
     match esm {
-        EsmState::SafeOp | EsmState::Op => NmtState::Operational,
+        AlState::SafeOp | AlState::Op => NmtState::Operational,
         _ => NmtState::PreOperational,
     }
 }
@@ -234,7 +216,7 @@ pub fn nmt_state(esm: EsmState) -> NmtState {
 pub fn esm_event(dev: &mut PersonalityDevice, ev: EsmEvent, now: Instant, out: &mut impl TxSink) {
     match ev {
         EsmEvent::Changed { from, to } => {
-            if from == EsmState::Op && to != EsmState::Op {
+            if from == AlState::Op && to != AlState::Op {
                 // ETG.6010 / CiA 402-2 6007h: outputs are no longer valid;
                 // the drive's abort connection option, with the EtherCAT
                 // code (CAN uses 8130h).
@@ -253,7 +235,7 @@ pub fn esm_event(dev: &mut PersonalityDevice, ev: EsmEvent, now: Instant, out: &
 
 /// The ESM state the personality's EtherCAT rules run in; `None` for a
 /// personality not built by [`build`].
-pub fn esm_state(dev: &mut PersonalityDevice) -> Option<EsmState> {
+pub fn esm_state(dev: &mut PersonalityDevice) -> Option<AlState> {
     wrapper(&mut dev.app.behaviour).map(|w| w.esm())
 }
 

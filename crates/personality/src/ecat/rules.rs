@@ -18,7 +18,7 @@
 //!   and shift written only in PRE-OP; the type is one the device
 //!   supports (free run, SM event, DC SYNC0; `0609 0030`).
 
-use drivebus_coe::EsmState;
+use drivebus_coe::AlState;
 use drivebus_coe::coe::abort;
 use drivebus_od::{ObjectDictionary, SdoAbort, le_u64};
 use drivebus_pdo::{PdoConfig, PdoKind, validate_entry};
@@ -69,14 +69,14 @@ fn highest_sub(od: &ObjectDictionary, index: u16) -> u8 {
 /// Checks a write of `(index, sub)` in ESM state `esm`; `Ok` for objects
 /// the rules do not cover.
 pub fn check(
-    esm: EsmState,
+    esm: AlState,
     pdo: &PdoConfig,
     od: &ObjectDictionary,
     index: u16,
     sub: u8,
     data: &[u8],
 ) -> Result<(), SdoAbort> {
-    if preop_only(index, sub) && esm != EsmState::PreOp {
+    if preop_only(index, sub) && esm != AlState::PreOp {
         return Err(SdoAbort::DEVICE_STATE);
     }
     let value = le_u64(data);
@@ -201,11 +201,11 @@ mod tests {
         let od = od();
         let cfg = PdoConfig::default();
         let c = |esm, sub, v: &[u8]| check(esm, &cfg, &od, 0x1C12, sub, v);
-        assert_eq!(c(EsmState::SafeOp, 0, &[0]), Err(SdoAbort::DEVICE_STATE));
-        assert_eq!(c(EsmState::PreOp, 1, &[0x00, 0x16]), Err(abort::SI0_MUST_BE_ZERO));
-        assert_eq!(c(EsmState::PreOp, 0, &[1]), Ok(()));
-        assert_eq!(c(EsmState::PreOp, 0, &[2]), Err(SdoAbort::INVALID_VALUE), "sub 2 is empty");
-        assert_eq!(c(EsmState::PreOp, 0, &[3]), Err(SdoAbort::VALUE_TOO_HIGH));
+        assert_eq!(c(AlState::SafeOp, 0, &[0]), Err(SdoAbort::DEVICE_STATE));
+        assert_eq!(c(AlState::PreOp, 1, &[0x00, 0x16]), Err(abort::SI0_MUST_BE_ZERO));
+        assert_eq!(c(AlState::PreOp, 0, &[1]), Ok(()));
+        assert_eq!(c(AlState::PreOp, 0, &[2]), Err(SdoAbort::INVALID_VALUE), "sub 2 is empty");
+        assert_eq!(c(AlState::PreOp, 0, &[3]), Err(SdoAbort::VALUE_TOO_HIGH));
         assert_eq!(assigned(&od, 0x1C12), [0x1600]);
     }
 
@@ -214,10 +214,10 @@ mod tests {
         let od = od();
         let cfg = PdoConfig::default();
         let c = |esm, sub, v: &[u8]| check(esm, &cfg, &od, 0x1600, sub, v);
-        assert_eq!(c(EsmState::Op, 0, &[0]), Err(SdoAbort::DEVICE_STATE));
-        assert_eq!(c(EsmState::PreOp, 2, &0x6040_0010u32.to_le_bytes()), Err(abort::SI0_MUST_BE_ZERO));
-        assert_eq!(c(EsmState::PreOp, 0, &[2]), Err(SdoAbort::NOT_MAPPABLE), "entry 2 is empty");
-        assert_eq!(c(EsmState::PreOp, 0, &[9]), Err(SdoAbort::VALUE_TOO_HIGH));
+        assert_eq!(c(AlState::Op, 0, &[0]), Err(SdoAbort::DEVICE_STATE));
+        assert_eq!(c(AlState::PreOp, 2, &0x6040_0010u32.to_le_bytes()), Err(abort::SI0_MUST_BE_ZERO));
+        assert_eq!(c(AlState::PreOp, 0, &[2]), Err(SdoAbort::NOT_MAPPABLE), "entry 2 is empty");
+        assert_eq!(c(AlState::PreOp, 0, &[9]), Err(SdoAbort::VALUE_TOO_HIGH));
         assert_eq!(entries(&od, 0x1600), [0x6040_0010]);
         assert_eq!(check_length(&od, 0x1600, 1, 8), Err(SdoAbort::PDO_TOO_LONG));
         assert!(preop_only(0x1A03, 4) && !preop_only(0x1C32, 5) && preop_only(0x1C33, 2));

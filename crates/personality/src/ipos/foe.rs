@@ -30,7 +30,7 @@ use crate::ecat::DriveFiles;
 use alloc::string::String;
 use alloc::vec::Vec;
 use drivebus_can::{Duration, Instant};
-use drivebus_coe::{EsmState, FileHandler, FoeEnd, FoeError, FoeProgress};
+use drivebus_coe::{AlState, FileHandler, FoeEnd, FoeError, FoeProgress};
 use drivebus_od::ObjectDictionary;
 
 extern crate alloc;
@@ -196,7 +196,7 @@ impl FileHandler for IposFiles {
         &mut self,
         name: &[u8],
         password: u32,
-        state: EsmState,
+        state: AlState,
         now: Instant,
     ) -> Result<(), FoeError> {
         let name = core::str::from_utf8(name).map_err(|_| FoeError::NOT_FOUND)?;
@@ -209,12 +209,12 @@ impl FileHandler for IposFiles {
             if password != 0 {
                 return Err(FoeError::ACCESS_DENIED);
             }
-            if state == EsmState::Boot && !self.sw_in_boot {
+            if state == AlState::Boot && !self.sw_in_boot {
                 return Err(FoeError::NOT_BOOTSTRAP);
             }
             FileKind::Setup
         } else if name.starts_with("FOEFW_") {
-            if state != EsmState::Boot {
+            if state != AlState::Boot {
                 return Err(FoeError::BOOTSTRAP_ONLY);
             }
             if password != FA0XX_PASSWORD {
@@ -304,17 +304,16 @@ mod tests {
     fn names_passwords_and_states() {
         let mut f = IposFiles::new();
         let t = Instant::ZERO;
-        let e =
-            |f: &mut IposFiles, n: &str, pw: u32, s: EsmState| f.begin_write(n.as_bytes(), pw, s, t).err();
-        assert_eq!(e(&mut f, "FOESW_12345678.efw", 0, EsmState::Op), None, "14 characters");
-        assert_eq!(e(&mut f, "FOESW_123456789.bin", 0, EsmState::Op), Some(FoeError::NOT_FOUND));
-        assert_eq!(e(&mut f, "FOESW_A.sw", 0, EsmState::Op), Some(FoeError::NOT_FOUND));
-        assert_eq!(e(&mut f, "FOESW_A.bin", 7, EsmState::Op), Some(FoeError::ACCESS_DENIED));
-        assert_eq!(e(&mut f, "FOESW_A.bin", 0, EsmState::Boot), Some(FoeError::NOT_BOOTSTRAP));
-        assert_eq!(e(&mut f, "FOEFW_FA00H", FA0XX_PASSWORD, EsmState::PreOp), Some(FoeError::BOOTSTRAP_ONLY));
-        assert_eq!(e(&mut f, "FOEFW_FA00H", F515X_PASSWORD, EsmState::Boot), Some(FoeError::ACCESS_DENIED));
+        let e = |f: &mut IposFiles, n: &str, pw: u32, s: AlState| f.begin_write(n.as_bytes(), pw, s, t).err();
+        assert_eq!(e(&mut f, "FOESW_12345678.efw", 0, AlState::Op), None, "14 characters");
+        assert_eq!(e(&mut f, "FOESW_123456789.bin", 0, AlState::Op), Some(FoeError::NOT_FOUND));
+        assert_eq!(e(&mut f, "FOESW_A.sw", 0, AlState::Op), Some(FoeError::NOT_FOUND));
+        assert_eq!(e(&mut f, "FOESW_A.bin", 7, AlState::Op), Some(FoeError::ACCESS_DENIED));
+        assert_eq!(e(&mut f, "FOESW_A.bin", 0, AlState::Boot), Some(FoeError::NOT_BOOTSTRAP));
+        assert_eq!(e(&mut f, "FOEFW_FA00H", FA0XX_PASSWORD, AlState::PreOp), Some(FoeError::BOOTSTRAP_ONLY));
+        assert_eq!(e(&mut f, "FOEFW_FA00H", F515X_PASSWORD, AlState::Boot), Some(FoeError::ACCESS_DENIED));
         f.set_sw_in_boot(true);
-        assert_eq!(e(&mut f, "FOESW_A.bin", 0, EsmState::Boot), None);
-        assert_eq!(e(&mut f, "FOEFW_FA00H", FA0XX_PASSWORD, EsmState::Boot), Some(FoeError::ILLEGAL));
+        assert_eq!(e(&mut f, "FOESW_A.bin", 0, AlState::Boot), None);
+        assert_eq!(e(&mut f, "FOEFW_FA00H", FA0XX_PASSWORD, AlState::Boot), Some(FoeError::ILLEGAL));
     }
 }
