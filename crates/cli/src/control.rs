@@ -89,22 +89,22 @@ pub struct Response {
 }
 
 /// A served node's host: a drive, or a device from an EDS/DCF.
-pub enum Host {
+pub enum NodeHost {
     /// A drive (`--drive`).
     Drive(DeviceHost<Controller<PersonalityDevice>>),
     /// A device from a file (`--device`).
     Device(DeviceHost<Controller<EdsDevice>>),
 }
 
-impl Host {
+impl NodeHost {
     /// Hosts a drive on `hub`.
-    pub fn drive(dev: PersonalityDevice, hub: &Hub) -> Host {
-        Host::Drive(spawn(Controller::new(dev), hub.attach()))
+    pub fn drive(dev: PersonalityDevice, hub: &Hub) -> NodeHost {
+        NodeHost::Drive(spawn(Controller::new(dev), hub.attach()))
     }
 
     /// Hosts a device from a file on `hub`.
-    pub fn device(dev: EdsDevice, hub: &Hub) -> Host {
-        Host::Device(spawn(Controller::new(dev), hub.attach()))
+    pub fn device(dev: EdsDevice, hub: &Hub) -> NodeHost {
+        NodeHost::Device(spawn(Controller::new(dev), hub.attach()))
     }
 
     /// `None` when the host has stopped.
@@ -112,14 +112,14 @@ impl Host {
         // Through the node, so the application is polled after the change
         // (a module polls only when an input or a timer asks).
         match self {
-            Host::Drive(h) => {
+            NodeHost::Drive(h) => {
                 h.with_out(move |d, now, out| {
                     let dev = &mut d.device;
                     dev.node.with_app(now, &mut dev.app, out, |app, _| app.change_machine(now, c, duration))
                 })
                 .await
             }
-            Host::Device(h) => {
+            NodeHost::Device(h) => {
                 h.with_out(move |d, now, out| {
                     let dev = &mut d.device;
                     dev.node.with_app(now, &mut dev.app, out, |app, _| app.change_machine(now, c, duration))
@@ -131,35 +131,35 @@ impl Host {
 
     async fn set_link(&self, state: LinkState) -> Option<()> {
         match self {
-            Host::Drive(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
-            Host::Device(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
+            NodeHost::Drive(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
+            NodeHost::Device(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
         }
     }
 
     /// Cuts the power: the task ends.
     pub fn stop(&self) {
         match self {
-            Host::Drive(h) => h.stop(),
-            Host::Device(h) => h.stop(),
+            NodeHost::Drive(h) => h.stop(),
+            NodeHost::Device(h) => h.stop(),
         }
     }
 
     /// The task, to await or abort it.
     pub fn into_join_handle(self) -> tokio::task::JoinHandle<()> {
         match self {
-            Host::Drive(h) => h.into_join_handle(),
-            Host::Device(h) => h.into_join_handle(),
+            NodeHost::Drive(h) => h.into_join_handle(),
+            NodeHost::Device(h) => h.into_join_handle(),
         }
     }
 }
 
 /// Builds a node again as at power-on and hosts it on the hub.
-pub type PowerOn = Box<dyn Fn(&Hub) -> anyhow::Result<Host> + Send + Sync>;
+pub type PowerOn = Box<dyn Fn(&Hub) -> anyhow::Result<NodeHost> + Send + Sync>;
 
 /// A served node: its host while it has power, and how to power it on.
-pub struct Slot {
+pub struct ServedNode {
     /// The running node, `None` while its power is off.
-    pub host: Option<Host>,
+    pub host: Option<NodeHost>,
     /// Powers it on again.
     pub power_on: PowerOn,
 }
@@ -168,12 +168,12 @@ pub struct Slot {
 /// the same calls as the socket).
 pub struct Control {
     hub: Hub,
-    nodes: Mutex<BTreeMap<u8, Slot>>,
+    nodes: Mutex<BTreeMap<u8, ServedNode>>,
 }
 
 impl Control {
     /// Control over the `nodes` served on `hub`.
-    pub fn new(hub: Hub, nodes: Vec<(u8, Slot)>) -> Control {
+    pub fn new(hub: Hub, nodes: Vec<(u8, ServedNode)>) -> Control {
         Control { hub, nodes: Mutex::new(nodes.into_iter().collect()) }
     }
 
@@ -252,17 +252,17 @@ impl Control {
 }
 
 /// The host of `node`, or why there is none (the cause, then what to do).
-fn running(nodes: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Result<&Host> {
+fn running(nodes: &BTreeMap<u8, ServedNode>, node: u8) -> anyhow::Result<&NodeHost> {
     match nodes.get(&node) {
         None => Err(no_node(nodes, node)),
-        Some(Slot { host: None, .. }) => {
+        Some(ServedNode { host: None, .. }) => {
             Err(anyhow!("node {node} is powered off: power it on first (drivebus control power {node} on)"))
         }
-        Some(Slot { host: Some(h), .. }) => Ok(h),
+        Some(ServedNode { host: Some(h), .. }) => Ok(h),
     }
 }
 
-fn no_node(nodes: &BTreeMap<u8, Slot>, node: u8) -> anyhow::Error {
+fn no_node(nodes: &BTreeMap<u8, ServedNode>, node: u8) -> anyhow::Error {
     let list = nodes.keys().map(u8::to_string).collect::<Vec<_>>().join(", ");
     anyhow!("no node with node-ID {node} is served: use one of {list}")
 }

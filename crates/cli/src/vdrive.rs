@@ -12,7 +12,7 @@ use drivebus_personality::machine::{Machine, MachineFile};
 use drivebus_personality::{PersonalityDevice, Profile};
 use tokio::task::JoinHandle;
 
-use crate::control::{Host, PowerOn, Slot};
+use crate::control::{NodeHost, PowerOn, ServedNode};
 use crate::vdevice::DeviceSpec;
 
 /// A drive to host, as given on the command line (`akd:1`).
@@ -128,7 +128,7 @@ pub fn build(
 }
 
 /// A served node-ID and its slot.
-pub type NodeSlot = (u8, Slot);
+pub type NodeSlot = (u8, ServedNode);
 
 /// Builds and starts `specs` and `devices` on `hub`, each as its own
 /// participant, each on its machine (`--machine FILE` or the profile's
@@ -146,7 +146,7 @@ pub fn host_on_hub(
     let nodes: Vec<u8> = devices.iter().map(|d| d.node).collect();
     let machines = Machines::load_with_devices(machine_file, specs, &nodes)?;
     let dir = state_dir.map(Path::to_owned);
-    let mut built: Vec<(u8, Host, PowerOn)> = Vec::new();
+    let mut built: Vec<(u8, NodeHost, PowerOn)> = Vec::new();
     let mut drives = Vec::new();
     for s in specs {
         let m = machines.machine_for(*s)?;
@@ -164,17 +164,17 @@ pub fn host_on_hub(
     for (s, dev, m) in drives {
         let dir = dir.clone();
         let again: PowerOn =
-            Box::new(move |hub| Ok(Host::drive(build(s, dir.as_deref(), options, &m)?, hub)));
-        built.push((s.node, Host::drive(dev, hub), again));
+            Box::new(move |hub| Ok(NodeHost::drive(build(s, dir.as_deref(), options, &m)?, hub)));
+        built.push((s.node, NodeHost::drive(dev, hub), again));
     }
     for (d, dev, m) in files {
         let (node, dir) = (d.node, dir.clone());
         let again: PowerOn =
-            Box::new(move |hub| Ok(Host::device(d.build(dir.as_deref(), eds_options, m.as_ref())?, hub)));
-        built.push((node, Host::device(dev, hub), again));
+            Box::new(move |hub| Ok(NodeHost::device(d.build(dir.as_deref(), eds_options, m.as_ref())?, hub)));
+        built.push((node, NodeHost::device(dev, hub), again));
     }
     let slots =
-        built.into_iter().map(|(n, host, power_on)| (n, Slot { host: Some(host), power_on })).collect();
+        built.into_iter().map(|(n, host, power_on)| (n, ServedNode { host: Some(host), power_on })).collect();
     Ok((slots, described))
 }
 
@@ -189,7 +189,7 @@ pub fn spawn_on_hub(
     machine_file: Option<&Path>,
 ) -> anyhow::Result<(Vec<JoinHandle<()>>, Vec<String>)> {
     let (slots, described) = host_on_hub(specs, devices, hub, state_dir, options, machine_file)?;
-    let tasks = slots.into_iter().filter_map(|(_, s)| s.host).map(Host::into_join_handle).collect();
+    let tasks = slots.into_iter().filter_map(|(_, s)| s.host).map(NodeHost::into_join_handle).collect();
     Ok((tasks, described))
 }
 

@@ -113,4 +113,3 @@ impl Clone for ObjectDictionary {
         self.generation = *generation;
     }
 }
-
