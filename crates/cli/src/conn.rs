@@ -25,6 +25,9 @@ impl Drop for Hosted {
     }
 }
 
+/// How long hosted `--sim` devices may take to send their boot-up.
+const HOSTED_BOOT_LIMIT: Duration = Duration::from_secs(5);
+
 /// Set when a command opened the in-process bus with nothing on it: a
 /// timeout then says so.
 static EMPTY_BUS: std::sync::OnceLock<String> = std::sync::OnceLock::new();
@@ -70,7 +73,7 @@ impl Conn {
         // The transport's message already names the URL and the cause.
         let parsed =
             drivebus_transport::BusUrl::parse(&g.bus).map_err(|e| crate::error::coded("bus", e.into()))?;
-        let mut drives = Vec::new();
+        let mut hub = None;
         let none = specs.is_empty() && devices.is_empty();
         if none && g.machine.is_some() {
             return Err(crate::error::coded(
@@ -85,10 +88,8 @@ impl Conn {
                     anyhow!("--sim hosts drives only on the `virtual` bus, not on `{}`", g.bus),
                 ));
             };
-            let hub = drivebus_transport::hub::virtual_hub(name);
-            drives = spawn_on_hub(&specs, &devices, &hub, None, Default::default(), g.machine.as_deref())?.0;
+            hub = Some(drivebus_transport::hub::virtual_hub(name));
         }
-        let hosted = Hosted(drives);
         if none && matches!(parsed, drivebus_transport::BusUrl::Virtual { .. }) {
             let _ = EMPTY_BUS.set(format!(
                 "; nothing is on the bus: `{}` is this process's own in-process bus and no --sim drive was given. Give --bus URL (or set DRIVEBUS_BUS, e.g. socketcand://127.0.0.1:29536/can0 for `drivebus serve`), or --sim PROFILE:NODE",
@@ -102,15 +103,45 @@ impl Conn {
                     crate::error::coded("bus", anyhow!("timed out after 10 s: cannot open `{}`", g.bus))
                 })?
                 .map_err(|e| crate::error::coded("bus", open_error(&g.bus, e)))?;
-        if !none {
-            // Let the hosted drives boot before the first request.
-            tokio::time::sleep(Duration::from_millis(20)).await;
-        }
         let timeout = Duration::from_millis(g.timeout_ms(1000));
         let master = Master::with_config(
             bus,
             MasterConfig { sdo_timeout: timeout, sdo_retries: g.retries, ..MasterConfig::default() },
         );
+        let mut drives = Vec::new();
+        if let Some(hub) = &hub {
+            // The master listens before the drives start, so their power-on
+            // boot-ups are over before the command's first frame and never
+            // read as an answer to it (a reset waiting for a boot-up).
+            let mut events = master.subscribe_events();
+            drives = spawn_on_hub(&specs, &devices, hub, None, Default::default(), g.machine.as_deref())?.0;
+            let mut waiting: std::collections::BTreeSet<u8> =
+                specs.iter().map(|s| s.node).chain(devices.iter().map(|d| d.node)).collect();
+            let booted = tokio::time::timeout(HOSTED_BOOT_LIMIT, async {
+                while !waiting.is_empty() {
+                    match events.recv().await {
+                        Ok(drivebus_master::MasterEvent::Bootup { node }) => {
+                            waiting.remove(&node);
+                        }
+                        Ok(_) | Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => {}
+                        Err(tokio::sync::broadcast::error::RecvError::Closed) => break,
+                    }
+                }
+            })
+            .await;
+            if booted.is_err() || !waiting.is_empty() {
+                let nodes: Vec<String> = waiting.iter().map(u8::to_string).collect();
+                return Err(crate::error::coded(
+                    "bus",
+                    anyhow!(
+                        "the --sim device(s) at node {} sent no boot-up within {} s; the virtual bus is not carrying their frames",
+                        nodes.join(", "),
+                        HOSTED_BOOT_LIMIT.as_secs()
+                    ),
+                ));
+            }
+        }
+        let hosted = Hosted(drives);
         if let Some(eds) = &dict.eds
             && let Some(node) = g.node
             && let Ok(od) = drivebus_eds::to_od(eds, node)
@@ -153,5 +184,34 @@ fn open_error(url: &str, e: drivebus_transport::TransportError) -> anyhow::Error
             anyhow!("{io}: cannot open `{url}`{hint}")
         }
         _ => e.into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    /// The hosted drives' power-on boot-ups are over when `open` returns:
+    /// a command's first frame is never answered by one (a `nmt reset`
+    /// of an absent node once took node 1's late boot-up for its own).
+    #[tokio::test]
+    async fn open_returns_after_the_hosted_drives_booted() {
+        let cli = crate::args::Cli::parse_from([
+            "drivebus",
+            "--bus",
+            "virtual://conn-boot-test",
+            "--sim",
+            "akd:1",
+            "--sim",
+            "kc1:2",
+            "nmt",
+            "start",
+            "--all",
+        ]);
+        let conn = Conn::open(&cli.global).await.unwrap();
+        assert_eq!(conn.master.seen_nodes(), vec![1, 2]);
+        conn.close().await.unwrap();
     }
 }
