@@ -108,3 +108,36 @@ class Simulation:
         """Every frame delivered so far: ``(seconds, arbitration_id, is_extended_id, is_remote_frame, dlc, data)``."""
     def log_lines(self) -> List[str]:
         """The log as candump lines (``(0.000047) can0 701#00``)."""
+
+class Server:
+    """Drive twins on a socketcand server in this process (what ``drivebus serve`` runs).
+
+    ``drivebus.serve(...)`` makes one; use it as a context manager. Raises
+    ``ValueError`` with the CLI's message for a bad drive spec, machine
+    file or channel, ``OSError`` when it cannot listen.
+    """
+
+    def __init__(
+        self,
+        drives: Sequence[str] = ...,
+        machine: Optional[Union[str, "os.PathLike[str]"]] = None,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        channel: str = "can0",
+    ) -> None: ...
+    @property
+    def url(self) -> str:
+        """``socketcand://HOST:PORT/CHANNEL``."""
+    @property
+    def port(self) -> int:
+        """The port it listens on (a free one when 0 was asked)."""
+    @property
+    def closed(self) -> bool:
+        """True once ``close()`` was called."""
+    @property
+    def drives(self) -> List[DriveState]:
+        """The hosted drives' state, read now; ``OSError`` once closed."""
+    def close(self) -> None:
+        """Stops the drives and the server; the port is closed when it returns."""
+    def __enter__(self) -> "Server": ...
+    def __exit__(self, *args: object) -> bool: ...

@@ -9,7 +9,7 @@ use drivebus_can::{CanId, Frame};
 use drivebus_personality::machine::{Machine, MachineFile, MachineFileError};
 use drivebus_personality::{PersonalityDevice, Profile};
 use drivebus_transport::host::{self, DeviceHost};
-use drivebus_transport::{CanRx, CanTx, TrySendError};
+use drivebus_transport::{CanRx, CanTx, Hub, TrySendError};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use tokio::sync::watch;
@@ -20,11 +20,45 @@ use crate::state::DriveState;
 /// A received frame: identifier, extended, remote, DLC, data.
 pub(crate) type Received = (u32, bool, bool, u8, Vec<u8>);
 
-/// One drive this bus hosts.
-struct Hosted {
+/// One drive hosted in real time (by a `VirtualBus` or a `Server`).
+pub(crate) struct Hosted {
     profile: Profile,
     node: u8,
     host: DeviceHost<PersonalityDevice>,
+}
+
+impl Hosted {
+    /// Starts the drives `built` as participants of `hub` (inside the runtime).
+    pub(crate) fn spawn_all(built: Vec<(Profile, u8, PersonalityDevice)>, hub: &Hub) -> Vec<Hosted> {
+        built
+            .into_iter()
+            .map(|(profile, node, dev)| Hosted { profile, node, host: host::spawn(dev, hub.attach()) })
+            .collect()
+    }
+
+    /// `akd:1`.
+    pub(crate) fn spec(&self) -> String {
+        format!("{}:{}", self.profile, self.node)
+    }
+
+    /// The drives' state, read now, with the GIL released.
+    pub(crate) fn states(py: Python<'_>, drives: &[Hosted]) -> PyResult<Vec<DriveState>> {
+        let rt = runtime()?;
+        py.detach(|| {
+            drives
+                .iter()
+                .map(|h| {
+                    rt.block_on(h.host.with(|d, _| DriveState::of(d)))
+                        .ok_or_else(|| PyOSError::new_err(format!("drive {} is not running", h.spec())))
+                })
+                .collect()
+        })
+    }
+
+    /// Stops the drive (it falls silent, like a power cut).
+    pub(crate) fn stop(&self) {
+        self.host.stop();
+    }
 }
 
 /// A connection to the in-process virtual CAN bus `channel` (every
@@ -55,10 +89,7 @@ impl VirtualBus {
         let hub = drivebus_transport::hub::virtual_hub(channel);
         // Joined before the drives start: their boot-ups reach this bus.
         let (tx, rx) = hub.attach().split();
-        let drives = built
-            .into_iter()
-            .map(|(profile, node, dev)| Hosted { profile, node, host: host::spawn(dev, hub.attach()) })
-            .collect();
+        let drives = Hosted::spawn_all(built, &hub);
         Ok(VirtualBus {
             channel: channel.to_owned(),
             tx,
@@ -151,17 +182,7 @@ impl VirtualBus {
         // Stopping a drive's task takes effect at its next await: a read
         // right after `close` could still be answered.
         self.check_open()?;
-        let rt = runtime()?;
-        py.detach(|| {
-            self.drives
-                .iter()
-                .map(|h| {
-                    rt.block_on(h.host.with(|d, _| DriveState::of(d))).ok_or_else(|| {
-                        PyOSError::new_err(format!("drive {}:{} is not running", h.profile, h.node))
-                    })
-                })
-                .collect()
-        })
+        Hosted::states(py, &self.drives)
     }
 
     /// Stops the hosted drives (they fall silent, like a power cut) and
@@ -170,12 +191,12 @@ impl VirtualBus {
     fn close(&self) {
         self.closed.send_replace(true);
         for h in &self.drives {
-            h.host.stop();
+            h.stop();
         }
     }
 
     fn __repr__(&self) -> String {
-        let drives: Vec<String> = self.drives.iter().map(|h| format!("{}:{}", h.profile, h.node)).collect();
+        let drives: Vec<String> = self.drives.iter().map(Hosted::spec).collect();
         format!("VirtualBus(channel={:?}, drives={:?})", self.channel, drives)
     }
 }

@@ -9,6 +9,9 @@
 //! participant ([`bus::VirtualBus`]); `drivebus/can_interface.py` puts
 //! python-can's `BusABC` on top of it.
 //!
+//! `Server` ([`serve`]) puts the same drives on a socketcand server in
+//! the process (`drivebus.serve()`), for code that must use TCP.
+//!
 //! `Simulation` ([`sim`]) hosts the same drives on the virtual bus in
 //! simulated time instead (`drivebus_bus::Bus`): deterministic.
 //!
@@ -22,6 +25,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 mod bus;
+mod serve;
 mod sim;
 mod state;
 
@@ -30,7 +34,7 @@ static RUNTIME: LazyLock<Result<tokio::runtime::Runtime, String>> = LazyLock::ne
     tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .thread_name("drivebus")
-        .enable_time()
+        .enable_all()
         .build()
         .map_err(|e| format!("cannot start the drivebus runtime: {e}"))
 });
@@ -46,6 +50,7 @@ fn _drivebus(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<bus::VirtualBus>()?;
     m.add_class::<state::DriveState>()?;
     m.add_class::<sim::Simulation>()?;
+    m.add_class::<serve::Server>()?;
     m.add("PROFILES", drivebus_personality::Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>())?;
     Ok(())
 }

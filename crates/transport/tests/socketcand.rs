@@ -370,3 +370,14 @@ async fn close_delivers_everything_sent_before_it() {
     }
     assert_eq!(n, 20 * 6, "every frame sent before close reached the hub");
 }
+
+#[tokio::test]
+async fn close_returns_with_the_port_closed() {
+    let (srv, addr) = server().await;
+    let _client = raw_client(addr).await;
+    srv.close().await;
+    // A blocking connect, no yield to the runtime: the listener must be
+    // gone when `close` returns, not at the runtime's next turn.
+    let r = std::net::TcpStream::connect(addr);
+    assert!(r.is_err(), "connected to {addr} after close");
+}

@@ -96,6 +96,15 @@ impl SocketcandServer {
     pub fn client_count(&self) -> usize {
         self.clients.load(Ordering::Relaxed)
     }
+
+    /// Stops the server and returns once the listener is closed (a
+    /// connection attempt afterwards is refused); dropping the server
+    /// closes it a moment later instead.
+    pub async fn close(mut self) {
+        self.task.abort();
+        // Cancelled (or finished): the accept loop and its listener are gone.
+        let _ = (&mut self.task).await;
+    }
 }
 
 impl Drop for SocketcandServer {

@@ -1,0 +1,135 @@
+//! `Server`: drives on a socketcand server inside the Python process (what
+//! `drivebus serve` runs), for code that must reach them over TCP.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
+use drivebus_transport::{Hub, HubConfig};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+
+use crate::bus::Hosted;
+use crate::runtime;
+use crate::state::DriveState;
+
+/// A socketcand server hosting drive twins, running until `close()` (or
+/// the end of its `with` block).
+#[pyclass(frozen, module = "drivebus._drivebus")]
+pub struct Server {
+    url: String,
+    port: u16,
+    server: Mutex<Option<SocketcandServer>>,
+    drives: Vec<Hosted>,
+}
+
+#[pymethods]
+impl Server {
+    /// Listens on `host`:`port` (port 0: a free one) for socketcand clients
+    /// of bus `channel` and starts `drives` on that bus, as `drivebus serve
+    /// --listen HOST:PORT --channel CHANNEL --drive ... [--machine FILE]`
+    /// does. Raises `ValueError` with the CLI's message for a bad drive,
+    /// machine file or channel, `OSError` when it cannot listen.
+    #[new]
+    #[pyo3(signature = (drives = Vec::new(), machine = None, host = "127.0.0.1", port = 0, channel = "can0"))]
+    fn new(
+        py: Python<'_>,
+        drives: Vec<String>,
+        machine: Option<PathBuf>,
+        host: &str,
+        port: u16,
+        channel: &str,
+    ) -> PyResult<Server> {
+        if channel.is_empty() || channel.contains(char::is_whitespace) || channel.contains(['<', '>']) {
+            return Err(PyValueError::new_err(format!(
+                "bad --channel `{channel}`: a bus name without spaces or angle brackets"
+            )));
+        }
+        let built = crate::bus::build_all(&drives, machine.as_deref())?;
+        let rt = runtime()?;
+        let cfg = ServerConfig::new(channel);
+        let (server, addr, drives) = py
+            .detach(|| {
+                rt.block_on(async {
+                    // As `drivebus serve`: the hub, its listener, then the drives.
+                    let hub = Hub::new(HubConfig::default());
+                    let (server, addr) = SocketcandServer::bind_with((host, port), cfg, hub.clone()).await?;
+                    Ok::<_, std::io::Error>((server, addr, Hosted::spawn_all(built, &hub)))
+                })
+            })
+            .map_err(|e| PyOSError::new_err(format!("cannot listen on {host}:{port}: {e}")))?;
+        Ok(Server {
+            url: format!("socketcand://{addr}/{channel}"),
+            port: addr.port(),
+            server: Mutex::new(Some(server)),
+            drives,
+        })
+    }
+
+    /// `socketcand://HOST:PORT/CHANNEL`, as `drivebus --bus` and python-can's
+    /// `socketcand` interface (`host`, `port`, `channel`) take it.
+    #[getter]
+    fn url(&self) -> &str {
+        &self.url
+    }
+
+    /// The port it listens on.
+    #[getter]
+    fn port(&self) -> u16 {
+        self.port
+    }
+
+    /// True once `close()` was called.
+    #[getter]
+    fn closed(&self) -> bool {
+        self.server.lock().map_or(true, |s| s.is_none())
+    }
+
+    /// The hosted drives' state, read now, in the order they were given.
+    /// Raises `OSError` once closed.
+    #[getter]
+    fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
+        if self.closed() {
+            return Err(PyOSError::new_err("the socketcand server is closed"));
+        }
+        Hosted::states(py, &self.drives)
+    }
+
+    /// Stops the drives and the server; the port is closed when it returns
+    /// (clients lose their connection). Closing twice is harmless.
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        for h in &self.drives {
+            h.stop();
+        }
+        let server = self.server.lock().ok().and_then(|mut s| s.take());
+        if let Some(server) = server {
+            let rt = runtime()?;
+            py.detach(|| rt.block_on(server.close()));
+        }
+        Ok(())
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        self.close(py)?;
+        Ok(false)
+    }
+
+    fn __repr__(&self) -> String {
+        let drives: Vec<String> = self.drives.iter().map(Hosted::spec).collect();
+        format!("Server(url={:?}, drives={:?})", self.url, drives)
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        for h in &self.drives {
+            h.stop();
+        }
+        // Dropping the server closes its listener on the runtime.
+    }
+}
