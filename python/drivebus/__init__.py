@@ -12,16 +12,41 @@ free loopback port instead (``with drivebus.serve(["akd:1"]) as s:
 s.url``), for code that must use socketcand.
 
 ``Simulation(drives, bitrate)`` hosts the same twins on a virtual bus in
-simulated time: ``advance(seconds)``, ``send``, and the frame log with
-simulated timestamps, the same for the same calls.
+simulated time: ``advance(seconds)``, ``send``, ``run_until``, the frame
+log with simulated timestamps, the same for the same calls, and
+``master()``, the ``drivebus`` tool's master (scan, SDO by index or name,
+NMT, CiA 402 enable / home / move) running in simulated time.
 """
 
 import os
 from typing import Optional, Sequence, Union
 
-from ._drivebus import PROFILES, DriveState, Server, Simulation, VirtualBus
+from ._drivebus import (
+    PROFILES,
+    Drive,
+    DriveError,
+    DrivebusError,
+    DriveState,
+    Master,
+    SdoError,
+    Server,
+    Simulation,
+    VirtualBus,
+)
 
-__all__ = ["PROFILES", "DriveState", "Server", "Simulation", "VirtualBus", "serve"]
+__all__ = [
+    "PROFILES",
+    "Drive",
+    "DriveError",
+    "DrivebusError",
+    "DriveState",
+    "Master",
+    "SdoError",
+    "Server",
+    "Simulation",
+    "VirtualBus",
+    "serve",
+]
 
 
 def serve(

@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension ``drivebus._drivebus``."""
 
 import os
-from typing import List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 PROFILES: List[str]
 """The personalities a drive spec may name (``"kc1"``, ``"akd"``, ...)."""
@@ -108,6 +108,78 @@ class Simulation:
         """Every frame delivered so far: ``(seconds, arbitration_id, is_extended_id, is_remote_frame, dlc, data)``."""
     def log_lines(self) -> List[str]:
         """The log as candump lines (``(0.000047) can0 701#00``)."""
+    def master(self) -> "Master":
+        """The ``drivebus`` tool's CANopen master on this bus; its calls run in simulated time."""
+    def run_until(self, predicate: Callable[[], object], timeout: float, step: float = 0.001) -> float:
+        """Advances simulated time by ``step`` until ``predicate()`` is true; returns the simulated time then.
+
+        Raises ``TimeoutError`` naming the simulated time reached when
+        ``timeout`` seconds of simulated time pass first.
+        """
+
+class DrivebusError(Exception):
+    """A CANopen operation failed on the bus."""
+
+class SdoError(DrivebusError):
+    """An SDO transfer failed (aborted by the device, timed out), with the ``drivebus sdo`` message."""
+
+class DriveError(DrivebusError):
+    """A CiA 402 drive command failed (fault, a move stopped short, a timeout), with the ``drivebus drive`` message."""
+
+Obj = Union[int, str]
+"""An object: an index, or text as the tool takes it (``"6041"``, ``"1018:01"``, ``"statusword"``)."""
+
+class Master:
+    """The ``drivebus`` tool's CANopen master on a ``Simulation``'s bus (``sim.master()``).
+
+    Each call returns when its work is done on the simulated bus, however
+    long that took there; ``TimeoutError`` when it did not finish within an
+    hour of simulated time.
+    """
+
+    def scan(self, timeout: float = 0.1) -> List[Dict[str, Optional[int]]]:
+        """Active scan of 1..127: dicts ``node``, ``device_type``, ``vendor_id``, ``product_code``, ``revision``, ``serial``."""
+    def sdo_read(self, node: int, index: Obj, sub: Optional[Obj] = None, *, type: Optional[str] = None) -> Any:
+        """Reads an object (``drivebus sdo read``), decoded by ``type``, the drive's EDS or the standard type.
+
+        A record or array without a sub-index reads as a dict of its
+        entries; ``bytes`` when the type is unknown. ``SdoError`` with the
+        tool's message; ``ValueError`` for an object written wrongly.
+        """
+    def sdo_write(self, node: int, index: Obj, *args: Any, type: Optional[str] = None) -> None:
+        """Writes an object: ``sdo_write(node, index, value)`` or ``sdo_write(node, index, sub, value)`` (``drivebus sdo write``)."""
+    def nmt(self, node: int, command: str) -> None:
+        """``start``, ``stop``, ``preop``, ``reset`` or ``reset-comm`` to ``node`` (0: all); a reset waits for the boot-up."""
+    def drive(self, node: int) -> "Drive":
+        """The CiA 402 drive at ``node``."""
+
+class Drive:
+    """A CiA 402 drive of a simulation (``master.drive(node)``); each call runs the ``drivebus drive`` procedure."""
+
+    @property
+    def node(self) -> int:
+        """The node-ID."""
+    @property
+    def state(self) -> str:
+        """The CiA 402 state from the statusword (``"operation enabled"``)."""
+    @property
+    def position(self) -> Optional[int]:
+        """6064h, the position actual value."""
+    def enable(self) -> None:
+        """To operation enabled (fault reset first when faulted); ``DriveError`` otherwise."""
+    def disable(self) -> None:
+        """To ready to switch on."""
+    def home(self, method: Optional[int] = None, timeout: float = 60.0) -> Dict[str, Any]:
+        """Homing with ``method`` (default: the drive's 6098h); the report (``end``, ``position``, ``target``, ``statusword``, ``duration``)."""
+    def move_to(
+        self,
+        position: int,
+        relative: bool = False,
+        velocity: Optional[int] = None,
+        acceleration: Optional[int] = None,
+        timeout: float = 60.0,
+    ) -> Dict[str, Any]:
+        """A profile-position move; the report, or ``DriveError`` when it stopped anywhere but the target."""
 
 class Server:
     """Drive twins on a socketcand server in this process (what ``drivebus serve`` runs).

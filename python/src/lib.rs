@@ -25,6 +25,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 mod bus;
+mod master;
 mod serve;
 mod sim;
 mod state;
@@ -51,6 +52,9 @@ fn _drivebus(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<state::DriveState>()?;
     m.add_class::<sim::Simulation>()?;
     m.add_class::<serve::Server>()?;
+    m.add_class::<master::Master>()?;
+    m.add_class::<master::Drive>()?;
+    master::add_exceptions(m)?;
     m.add("PROFILES", drivebus_personality::Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>())?;
     Ok(())
 }

@@ -4,20 +4,24 @@
 //! The bus (its devices are not `Send`) lives on a thread of its own; the
 //! Python object sends it requests and waits for the answers with the GIL
 //! released, so any Python thread may use a `Simulation`, one call at a
-//! time, and others run meanwhile.
+//! time, and others run meanwhile. The master of `drivebus_master` is a
+//! station of the same bus (`SimBus`); `sim.master()` ([`crate::master`])
+//! runs its procedures there.
 
 use std::path::PathBuf;
-use std::sync::Mutex;
 use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Frame, Instant};
-use drivebus_personality::PersonalityDevice;
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use drivebus_master::{MasterConfig, SimBus};
+use drivebus_personality::{PersonalityDevice, Profile};
+use pyo3::exceptions::{PyRuntimeError, PyTimeoutError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::bus::{Received, frame, received};
+use crate::master::Master;
 use crate::state::DriveState;
 
 /// One frame of the log: simulated time in seconds, then as `recv`.
@@ -31,8 +35,13 @@ const MAX_ADVANCE_S: f64 = 365.0 * 86_400.0;
 /// calls give the same frame log, byte for byte.
 #[pyclass(frozen, module = "drivebus._drivebus")]
 pub struct Simulation {
-    to_bus: Mutex<mpsc::Sender<Request>>,
+    link: Arc<Link>,
+    /// Each drive's node-ID and personality (its EDS names the objects).
+    drives: Vec<(u8, Profile)>,
 }
+
+/// Work for the bus thread, with the simulation in hand.
+pub(crate) type Job = Box<dyn FnOnce(&mut Sim) + Send>;
 
 /// What the bus thread is asked to do.
 enum Request {
@@ -43,11 +52,15 @@ enum Request {
     LogLines(mpsc::Sender<Vec<String>>),
     Drives(mpsc::Sender<Vec<DriveState>>),
     Now(mpsc::Sender<f64>),
+    Run(Job),
 }
 
-/// The bus and the host's station, on the bus thread.
-struct Sim {
-    bus: Bus,
+/// The bus with the drives, the master (`drivebus_master::SimBus`: the
+/// same master as the `drivebus` tool's, in simulated time) and the
+/// host's station, on the bus thread.
+pub(crate) struct Sim {
+    /// The bus and the master.
+    pub(crate) sim: SimBus,
     probe: ProbeId,
     drives: Vec<NodeId>,
 }
@@ -59,34 +72,68 @@ impl Sim {
         for r in requests {
             match r {
                 Request::Advance(d, done) => {
-                    self.bus.run_for(d);
+                    self.sim.run_for(d);
                     let _ = done.send(());
                 }
                 Request::Send(f) => {
-                    self.bus.send_from(self.probe, f);
+                    self.sim.bus_mut().send_from(self.probe, f);
                 }
                 Request::Received(out) => {
-                    let _ = out.send(self.bus.take_received(self.probe).iter().map(received).collect());
+                    let _ =
+                        out.send(self.sim.bus_mut().take_received(self.probe).iter().map(received).collect());
                 }
                 Request::Log(out) => {
-                    let log = self.bus.log().iter().map(|e| {
+                    let log = self.sim.bus().log().iter().map(|e| {
                         let (id, ext, rtr, dlc, data) = received(&e.frame);
                         (seconds(e.time), id, ext, rtr, dlc, data)
                     });
                     let _ = out.send(log.collect());
                 }
                 Request::LogLines(out) => {
-                    let _ = out.send(self.bus.log_lines());
+                    let _ = out.send(self.sim.bus().log_lines());
                 }
                 Request::Drives(out) => {
-                    let drives = self.drives.iter().filter_map(|&id| self.bus.node::<PersonalityDevice>(id));
+                    let bus = self.sim.bus();
+                    let drives = self.drives.iter().filter_map(|&id| bus.node::<PersonalityDevice>(id));
                     let _ = out.send(drives.map(DriveState::of).collect());
                 }
                 Request::Now(out) => {
-                    let _ = out.send(seconds(self.bus.now()));
+                    let _ = out.send(seconds(self.sim.now()));
                 }
+                Request::Run(job) => job(&mut self),
             }
         }
+    }
+}
+
+/// The way to the bus thread, shared by a `Simulation` and its masters.
+pub(crate) struct Link(Mutex<mpsc::Sender<Request>>);
+
+impl Link {
+    /// Hands `r` to the bus thread.
+    fn request(&self, r: Request) -> PyResult<()> {
+        let to_bus = self.0.lock().map_err(|_| stopped())?;
+        to_bus.send(r).map_err(|_| stopped())
+    }
+
+    /// Asks the bus thread and waits for the answer, the GIL released.
+    fn ask<T: Send>(&self, py: Python<'_>, r: impl FnOnce(mpsc::Sender<T>) -> Request) -> PyResult<T> {
+        let (tx, rx) = mpsc::channel();
+        self.request(r(tx))?;
+        py.detach(move || rx.recv()).map_err(|_| stopped())
+    }
+
+    /// Runs `f` on the bus thread and waits for its result, the GIL released.
+    pub(crate) fn run<T: Send + 'static>(
+        &self,
+        py: Python<'_>,
+        f: impl FnOnce(&mut Sim) -> T + Send + 'static,
+    ) -> PyResult<T> {
+        self.ask(py, |tx| {
+            Request::Run(Box::new(move |s| {
+                let _ = tx.send(f(s));
+            }))
+        })
     }
 }
 
@@ -102,8 +149,8 @@ impl Simulation {
         if bitrate == Some(0) {
             return Err(PyValueError::new_err("bitrate must be positive (None: frames take no time)"));
         }
-        let built: Vec<_> =
-            crate::bus::build_all(&drives, machine.as_deref())?.into_iter().map(|(_, _, d)| d).collect();
+        let built = crate::bus::build_all(&drives, machine.as_deref())?;
+        let specs = built.iter().map(|(profile, node, _)| (*node, *profile)).collect();
         let (to_bus, requests) = mpsc::channel();
         std::thread::Builder::new()
             .name("drivebus-sim".into())
@@ -111,11 +158,13 @@ impl Simulation {
                 let mut bus = Bus::new(BusConfig { bitrate, ..BusConfig::default() });
                 // The host's station, before the drives: it hears their boot-ups.
                 let probe = bus.attach_probe();
-                let drives = built.into_iter().map(|d| bus.attach(d)).collect();
-                Sim { bus, probe, drives }.serve(requests);
+                let drives = built.into_iter().map(|(_, _, d)| bus.attach(d)).collect();
+                // The master's station joins last, as in `drivebus demo`.
+                let sim = SimBus::with_config(bus, MasterConfig::default());
+                Sim { sim, probe, drives }.serve(requests);
             })
             .map_err(|e| PyRuntimeError::new_err(format!("cannot start the simulation thread: {e}")))?;
-        Ok(Simulation { to_bus: Mutex::new(to_bus) })
+        Ok(Simulation { link: Arc::new(Link(Mutex::new(to_bus))), drives: specs })
     }
 
     /// Simulated time in seconds since the start.
@@ -173,20 +222,61 @@ impl Simulation {
     fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
         self.ask(py, Request::Drives)
     }
+
+    /// The CANopen master on this bus (the `drivebus` tool's), whose calls
+    /// run in simulated time: each returns when its work is done on the
+    /// simulated bus, however long that took there.
+    fn master(&self) -> Master {
+        Master::new(self.link.clone(), &self.drives)
+    }
+
+    /// Advances simulated time in steps of `step` seconds until
+    /// `predicate()` is true, and returns the simulated time then. Raises
+    /// `TimeoutError` naming the simulated time reached when `timeout`
+    /// seconds of simulated time pass first.
+    #[pyo3(signature = (predicate, timeout, step = 0.001))]
+    fn run_until(
+        &self,
+        py: Python<'_>,
+        predicate: &Bound<'_, PyAny>,
+        timeout: f64,
+        step: f64,
+    ) -> PyResult<f64> {
+        if !(timeout.is_finite() && (0.0..=MAX_ADVANCE_S).contains(&timeout)) {
+            return Err(PyValueError::new_err(format!(
+                "timeout must be a number of seconds from 0 to {MAX_ADVANCE_S}, not {timeout}"
+            )));
+        }
+        if !(step.is_finite() && step > 0.0 && step <= MAX_ADVANCE_S) {
+            return Err(PyValueError::new_err(format!(
+                "step must be a positive number of seconds up to {MAX_ADVANCE_S}, not {step}"
+            )));
+        }
+        let start = self.now(py)?;
+        let end = start + timeout;
+        loop {
+            if predicate.call0()?.is_truthy()? {
+                return self.now(py);
+            }
+            let now = self.now(py)?;
+            if now >= end {
+                return Err(PyTimeoutError::new_err(format!(
+                    "the condition was still false after {timeout} s of simulated time (simulated time {now:.6} s)"
+                )));
+            }
+            let d = Duration::from_secs_f64(step.min(end - now).max(1e-9));
+            self.ask(py, |done| Request::Advance(d, done))?;
+        }
+    }
 }
 
 impl Simulation {
-    /// Hands `r` to the bus thread.
     fn request(&self, r: Request) -> PyResult<()> {
-        let to_bus = self.to_bus.lock().map_err(|_| stopped())?;
-        to_bus.send(r).map_err(|_| stopped())
+        self.link.request(r)
     }
 
-    /// Asks the bus thread and waits for the answer, the GIL released.
     fn ask<T: Send>(&self, py: Python<'_>, r: impl FnOnce(mpsc::Sender<T>) -> Request) -> PyResult<T> {
-        let (tx, rx) = mpsc::channel();
-        self.request(r(tx))?;
-        py.detach(move || rx.recv()).map_err(|_| stopped())
+        self.link.ask(py, r)
     }
 }
 

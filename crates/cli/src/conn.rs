@@ -71,8 +71,7 @@ impl Conn {
         let specs = DriveSpec::parse_all(&drives_given)?;
         let devices = DeviceSpec::parse_all(&files, &specs.iter().map(|s| s.node).collect::<Vec<_>>())?;
         // The transport's message already names the URL and the cause.
-        let parsed =
-            drivebus_transport::BusUrl::parse(&g.bus).map_err(|e| crate::error::coded("bus", e.into()))?;
+        let parsed = drivebus_transport::BusUrl::parse(&g.bus).map_err(|e| crate::error::coded("bus", e))?;
         let mut hub = None;
         let none = specs.is_empty() && devices.is_empty();
         if none && g.machine.is_some() {

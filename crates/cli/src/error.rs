@@ -5,7 +5,7 @@
 use std::fmt;
 use std::time::Duration;
 
-use drivebus_master::{DriveError, LssError, SdoAbort, SdoError};
+use drivebus_master::{DriveError, LssError, SdoError};
 
 /// An error with a code for `--json`.
 #[derive(Debug)]
@@ -27,8 +27,8 @@ impl fmt::Display for Coded {
 impl std::error::Error for Coded {}
 
 /// Tags `e` with `code`.
-pub fn coded(code: &'static str, e: anyhow::Error) -> anyhow::Error {
-    anyhow::Error::new(Coded { code, error: e, fields: None })
+pub fn coded(code: &'static str, e: impl Into<anyhow::Error>) -> anyhow::Error {
+    anyhow::Error::new(Coded { code, error: e.into(), fields: None })
 }
 
 /// Tags `e` with `code` and the `--json` fields `fields`.
@@ -45,54 +45,8 @@ pub fn seconds(option: &str, secs: f64) -> anyhow::Result<Duration> {
     Ok(Duration::from_secs_f64(secs))
 }
 
-/// An SDO transfer that failed, with everything needed to explain it.
-#[derive(Debug)]
-pub struct SdoFailure {
-    /// Node-ID.
-    pub node: u8,
-    /// Object.
-    pub index: u16,
-    /// Sub-index.
-    pub sub: u8,
-    /// Read or write.
-    pub write: bool,
-    /// The failure.
-    pub error: SdoError,
-    /// The timeout in force.
-    pub timeout: Duration,
-}
-
-impl SdoFailure {
-    /// The abort code, if the server sent one.
-    pub fn abort(&self) -> Option<SdoAbort> {
-        self.error.abort_code()
-    }
-}
-
-impl fmt::Display for SdoFailure {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let what = if self.write { "write" } else { "read" };
-        write!(f, "node {}: SDO {what} {:04X}h:{:02X} ", self.node, self.index, self.sub)?;
-        match &self.error {
-            SdoError::Abort { code, text } => write!(
-                f,
-                "aborted by the device with code 0x{:08X}: {}",
-                code.0,
-                text.unwrap_or("unknown abort code")
-            ),
-            SdoError::Timeout => write!(
-                f,
-                "timed out: no response within {} ms (is node {} on the bus and in pre-operational or operational?)",
-                self.timeout.as_millis(),
-                self.node
-            ),
-            SdoError::Transport(why) => write!(f, "failed: the bus was lost: {why}"),
-            e => write!(f, "failed: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for SdoFailure {}
+/// An SDO transfer that failed, explained (the master's, so every front end says the same).
+pub use drivebus_master::SdoFailure;
 
 /// Wraps an SDO error of `node` at `index`/`sub`.
 pub fn sdo(
@@ -174,6 +128,7 @@ pub fn describe(e: &anyhow::Error) -> (&'static str, serde_json::Value) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use drivebus_master::SdoAbort;
 
     #[test]
     fn the_cause_comes_first_and_once() {

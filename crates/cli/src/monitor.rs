@@ -85,7 +85,7 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
     let watches = a
         .watch
         .iter()
-        .map(|w| conn.dict.resolve(w, None).map(|(index, sub)| Watch { index, sub: sub.unwrap_or(0) }))
+        .map(|w| Ok(conn.dict.resolve(w, None).map(|(index, sub)| Watch { index, sub: sub.unwrap_or(0) })?))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let labels: Vec<String> = watches
         .iter()

@@ -26,10 +26,11 @@
 //!
 //! Modules: [`driver`] (tokio,
 //! simulated time); `master` (events, NMT, heartbeat/guarding, EMCY,
-//! SYNC/TIME); [`sdo`]; [`scan`]; [`lss`]; [`pdo`]; [`drive`] (CiA 402).
+//! SYNC/TIME); [`sdo`]; [`dict`] (objects by name); [`scan`]; [`lss`]; [`pdo`]; [`drive`] (CiA 402).
 
 mod core;
 pub mod dcf;
+pub mod dict;
 pub mod drive;
 pub mod driver;
 pub mod lss;
@@ -49,7 +50,7 @@ pub use lss::{LssError, LssMaster, OnlySlave};
 pub use master::{Master, MasterConfig, MasterEvent, NodeStatus, PdoCallback, SyncTick, WaitError};
 pub use pdo::{ConfigError, PdoDir, PdoMapEntry, PdoRecord, PdoWriteError};
 pub use scan::{ScanOptions, ScannedNode};
-pub use sdo::{SdoError, SdoHandle, SdoValue};
+pub use sdo::{SdoError, SdoFailure, SdoHandle, SdoValue};
 
 /// Re-exports so users need one dependency.
 pub use drivebus_bus::{Bus as VirtualBus, BusConfig as VirtualBusConfig, candump};

@@ -407,3 +407,52 @@ mod tests {
         assert!(e.to_string().contains("manufacturer-specific"), "{e}");
     }
 }
+
+/// An SDO transfer that failed, with everything needed to explain it.
+#[derive(Debug)]
+pub struct SdoFailure {
+    /// Node-ID.
+    pub node: u8,
+    /// Object.
+    pub index: u16,
+    /// Sub-index.
+    pub sub: u8,
+    /// Read or write.
+    pub write: bool,
+    /// The failure.
+    pub error: SdoError,
+    /// The timeout in force.
+    pub timeout: Duration,
+}
+
+impl SdoFailure {
+    /// The abort code, if the server sent one.
+    pub fn abort(&self) -> Option<SdoAbort> {
+        self.error.abort_code()
+    }
+}
+
+impl fmt::Display for SdoFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = if self.write { "write" } else { "read" };
+        write!(f, "node {}: SDO {what} {:04X}h:{:02X} ", self.node, self.index, self.sub)?;
+        match &self.error {
+            SdoError::Abort { code, text } => write!(
+                f,
+                "aborted by the device with code 0x{:08X}: {}",
+                code.0,
+                text.unwrap_or("unknown abort code")
+            ),
+            SdoError::Timeout => write!(
+                f,
+                "timed out: no response within {} ms (is node {} on the bus and in pre-operational or operational?)",
+                self.timeout.as_millis(),
+                self.node
+            ),
+            SdoError::Transport(why) => write!(f, "failed: the bus was lost: {why}"),
+            e => write!(f, "failed: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for SdoFailure {}

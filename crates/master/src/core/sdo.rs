@@ -12,7 +12,7 @@
 //! protocol state, so did not store), up to [`OTHER_CLIENT_RETRIES`]
 //! times; if it still fails, its outcome says another client was there.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 
 use drivebus_can::{CanId, Frame, Instant};
@@ -137,12 +137,15 @@ struct Server {
 }
 
 /// Every server the master talks to, keyed by its response COB-ID.
+/// Ordered maps: transfers due at the same instant (a scan's timed-out
+/// probes) send their frames in COB-ID order, so a simulated run repeats
+/// frame for frame.
 #[derive(Default)]
 pub(crate) struct SdoPool {
-    servers: HashMap<CanId, Server>,
+    servers: BTreeMap<CanId, Server>,
     /// Request COB-ID → response COB-ID of the servers in `servers`:
     /// another client's requests show there.
-    requests: HashMap<CanId, CanId>,
+    requests: BTreeMap<CanId, CanId>,
     /// Transfers started (for reports).
     pub started: u64,
 }
