@@ -11,6 +11,9 @@ ROOT = Path(__file__).resolve().parents[2]
 EDS_DIR = ROOT / "crates" / "personality" / "eds"
 _channels = itertools.count()
 
+# test_plugin.py runs the plugin in fresh pytest runs.
+pytest_plugins = ["pytester"]
+
 
 @pytest.fixture
 def channel(request) -> str:
