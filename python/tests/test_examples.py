@@ -1,0 +1,32 @@
+"""Every example of python/examples runs, as its docstring says to run it."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_akd_profile_position_example_moves_to_the_target():
+    r = subprocess.run(
+        [sys.executable, str(EXAMPLES / "akd_profile_position.py")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stderr
+    position = int(r.stdout.split("position", 1)[1].split()[0])
+    assert abs(position - 90_000) <= 100, r.stdout
+
+
+def test_emcy_fault_handling_example_passes():
+    r = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(EXAMPLES / "test_emcy_fault_handling.py")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "1 passed" in r.stdout, r.stdout
