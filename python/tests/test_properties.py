@@ -98,3 +98,59 @@ def test_simulation_calls(drives, bitrate, seconds, arbitration_id, data):
         pass
     assert len(sim.drives) == len(drives)
     sim.log_lines()
+
+
+MASTER_ERRORS = OK_ERRORS + (drivebus.DrivebusError, TimeoutError)
+objects = st.one_of(
+    anything,
+    st.integers(0, 0x10000),
+    st.sampled_from(["statusword", "identity/vendor-id", "6041:00", "1018sub2", "0x1A00", "controlword", "6060h"]),
+)
+_sim = None
+
+
+def _master():
+    """One simulation for all examples: its state carries over, as a script's would."""
+    global _sim
+    if _sim is None:
+        _sim = drivebus.Simulation(["akd:1"])
+    return _sim.master()
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    node=st.one_of(st.integers(-2, 130), anything),
+    index=objects,
+    sub=st.one_of(st.none(), st.integers(-1, 300), anything),
+    value=anything,
+    kind=st.one_of(st.none(), st.sampled_from(["u8", "i32", "str", "bytes", "nope"]), anything),
+    command=st.one_of(st.sampled_from(["start", "stop", "preop", "reset", "reset-comm", "x"]), anything),
+)
+def test_master_calls(node, index, sub, value, kind, command):
+    m = _master()
+    # Node 1 is the drive; others cost an SDO timeout of simulated time only.
+    for call in (
+        lambda: m.sdo_read(node, index, sub, type=kind),
+        lambda: m.sdo_write(node, index, value, type=kind),
+        lambda: m.sdo_write(node, index, sub, value, type=kind),
+        lambda: m.nmt(node, command),
+        lambda: m.drive(node).move_to(value, timeout=0.05),
+    ):
+        try:
+            call()
+        except MASTER_ERRORS:
+            pass
+
+
+@settings(max_examples=40, deadline=None)
+@given(drives=st.one_of(specs, anything), channel=anything, port=anything)
+def test_serve_calls(drives, channel, port):
+    if isinstance(port, int) and port != 0:
+        port = 0  # never a port of another program
+    try:
+        server = drivebus.serve(drives, channel=channel, port=port)
+    except OK_ERRORS + (OSError,):
+        return
+    with server:
+        assert server.url.startswith("socketcand://127.0.0.1:")
+        server.drives
