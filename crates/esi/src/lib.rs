@@ -101,7 +101,7 @@ mod write;
 mod write_dict;
 mod xml;
 
-pub use check::{CheckOptions, Finding, Source, check_dictionary, check_eds};
+pub use check::{CheckOptions, Disagreement, Source, check_dictionary, check_eds};
 pub use check_ecat::check_ethercat;
 pub use description::{
     ALL_STATES, CoeDetails, ConfigArea, DcOpMode, DeviceFacts, Eeprom, FmmuUsage, Mailbox, MailboxArea,

@@ -19,7 +19,7 @@ pub mod option {
 /// Engage, Shared release / engage" with only "0 = None" numbered; the
 /// others are taken as 1–6 in the printed order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Action {
+pub enum ManualBrakeAction {
     /// 0: the signal does nothing.
     None,
     /// 1: active signal, always released.
@@ -36,17 +36,17 @@ pub enum Action {
     SharedReleaseEngage,
 }
 
-impl Action {
+impl ManualBrakeAction {
     /// Bits 8–11 of 2360h:01; an unknown code acts as None.
-    pub fn of(option: u16) -> Action {
+    pub fn of(option: u16) -> ManualBrakeAction {
         match (option >> 8) & 0x0F {
-            1 => Action::Release,
-            2 => Action::Engage,
-            3 => Action::ReleaseEngage,
-            4 => Action::SharedRelease,
-            5 => Action::SharedEngage,
-            6 => Action::SharedReleaseEngage,
-            _ => Action::None,
+            1 => ManualBrakeAction::Release,
+            2 => ManualBrakeAction::Engage,
+            3 => ManualBrakeAction::ReleaseEngage,
+            4 => ManualBrakeAction::SharedRelease,
+            5 => ManualBrakeAction::SharedEngage,
+            6 => ManualBrakeAction::SharedReleaseEngage,
+            _ => ManualBrakeAction::None,
         }
     }
 }
@@ -120,17 +120,19 @@ impl Brake {
         let release = if self.option & option::MANUAL != 0 {
             signal
         } else {
-            match Action::of(self.option) {
-                Action::None => auto,
-                Action::Release => signal || auto,
-                Action::Engage => !signal && auto,
-                Action::ReleaseEngage => signal,
-                Action::SharedRelease | Action::SharedEngage | Action::SharedReleaseEngage => {
-                    let a = Action::of(self.option);
-                    if rising && a != Action::SharedEngage {
+            match ManualBrakeAction::of(self.option) {
+                ManualBrakeAction::None => auto,
+                ManualBrakeAction::Release => signal || auto,
+                ManualBrakeAction::Engage => !signal && auto,
+                ManualBrakeAction::ReleaseEngage => signal,
+                ManualBrakeAction::SharedRelease
+                | ManualBrakeAction::SharedEngage
+                | ManualBrakeAction::SharedReleaseEngage => {
+                    let a = ManualBrakeAction::of(self.option);
+                    if rising && a != ManualBrakeAction::SharedEngage {
                         self.shared = Some(true);
-                    } else if (rising && a == Action::SharedEngage)
-                        || (falling && a == Action::SharedReleaseEngage)
+                    } else if (rising && a == ManualBrakeAction::SharedEngage)
+                        || (falling && a == ManualBrakeAction::SharedReleaseEngage)
                     {
                         self.shared = Some(false);
                     }
@@ -207,12 +209,12 @@ mod tests {
         // Manual: 3360h:01 bit 0 releases.
         let mut b = Brake { option: option::HANDLED | option::MANUAL, control: 1, ..Brake::default() };
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Released);
-        // Action 2 "Engage": an active input (DI4 per 2810h:0Ah = 0204h)
+        // ManualBrakeAction 2 "Engage": an active input (DI4 per 2810h:0Ah = 0204h)
         // engages an enabled motor's brake.
         let mut b = Brake { option: option::HANDLED | 2 << 8, input: 0x0204, ..Brake::default() };
         assert_eq!(run(&mut b, true, true, 0, 5), BrakeControl::Auto);
         assert_eq!(run(&mut b, true, true, 1 << 4, 5), BrakeControl::Engaged);
-        // Action 4 "Shared release": an edge releases a disabled motor's
+        // ManualBrakeAction 4 "Shared release": an edge releases a disabled motor's
         // brake until the drive commands again.
         let mut b = Brake { option: option::HANDLED | 4 << 8, ..Brake::default() };
         b.control = 1;
@@ -221,6 +223,6 @@ mod tests {
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Released, "latched");
         run(&mut b, true, true, 0, 5);
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Auto, "the drive engaged it");
-        assert_eq!(Action::of(0x0F00), Action::None);
+        assert_eq!(ManualBrakeAction::of(0x0F00), ManualBrakeAction::None);
     }
 }
