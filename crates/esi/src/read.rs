@@ -3,7 +3,7 @@
 //! file can be compared with the dictionary and EDS it came from.
 
 use crate::description::{
-    CoeDetails, ConfigArea, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, MailboxTimeouts, Pdo,
+    CoeDetails, ConfigArea, DcOpMode, Eeprom, EsiPdo, FmmuUsage, Mailbox, MailboxArea, MailboxTimeouts,
     PdoEntry, Profile, SlaveDescription, SmKind, SyncManager, SyncSignal,
 };
 use crate::model::{EsiObject, EsiSub, ObjectKind, parse_states};
@@ -187,7 +187,7 @@ fn sync_manager(s: &Element) -> Result<SyncManager, ReadError> {
     })
 }
 
-fn pdo(p: &Element, tag: &str) -> Result<Pdo, ReadError> {
+fn pdo(p: &Element, tag: &str) -> Result<EsiPdo, ReadError> {
     let at = format!("Device/{tag} {}", p.child_text("Index").unwrap_or("?"));
     let entries = p
         .all("Entry")
@@ -202,7 +202,7 @@ fn pdo(p: &Element, tag: &str) -> Result<Pdo, ReadError> {
             })
         })
         .collect::<Result<_, ReadError>>()?;
-    Ok(Pdo {
+    Ok(EsiPdo {
         index: num(p.child_text("Index"), &format!("{at}/Index"))?,
         name: p.child_text("Name").unwrap_or_default().to_string(),
         sm: p.attr("Sm").map(|s| num(Some(s), &format!("{at}@Sm"))).transpose()?,
