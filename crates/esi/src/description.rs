@@ -44,7 +44,7 @@ pub struct SlaveDescription {
     /// the master's defaults.
     pub mailbox_timeouts: Option<MailboxTimeouts>,
     /// `Profile/ProfileNo` (402) and `Profile/AddInfo`.
-    pub profile: Profile,
+    pub profile: EsiProfile,
     /// `Profile/Dictionary/Objects`: the object dictionary as ETG.2000 can
     /// describe it, in index order.
     pub objects: Vec<EsiObject>,
@@ -67,7 +67,7 @@ pub struct SlaveDescription {
 
 /// `Profile`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Profile {
+pub struct EsiProfile {
     /// `ProfileNo`: the device profile (402 for CiA 402 drives), 1000h bits 0–15.
     pub number: u16,
     /// `AddInfo`: 1000h bits 16–31 (the CiA 402 drive type).
@@ -501,7 +501,7 @@ impl SlaveDescription {
             url: facts.url.clone(),
             physics: facts.physics.clone(),
             mailbox_timeouts: facts.mailbox_timeouts,
-            profile: Profile {
+            profile: EsiProfile {
                 number: facts.profile_no.unwrap_or(device_type as u16),
                 add_info: (device_type >> 16) as u16,
             },

@@ -9,7 +9,7 @@
 //! [`crate::dictionary`]).
 
 use crate::description::{
-    CoeDetails, DcOpMode, Eeprom, EsiPdo, FmmuUsage, Mailbox, MailboxArea, PdoEntry, Profile,
+    CoeDetails, DcOpMode, Eeprom, EsiPdo, EsiProfile, FmmuUsage, Mailbox, MailboxArea, PdoEntry,
     SlaveDescription, SmKind, SyncManager, SyncSignal,
 };
 use crate::read::ReadError;
@@ -110,7 +110,7 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
             .trim_end()
             .to_string(),
         mailbox_timeouts: None,
-        profile: Profile { number: if g.ds402_channels > 0 { 402 } else { 0 }, add_info: 0 },
+        profile: EsiProfile { number: if g.ds402_channels > 0 { 402 } else { 0 }, add_info: 0 },
         objects: Vec::new(),
         fmmus: c
             .fmmus

@@ -104,8 +104,8 @@ mod xml;
 pub use check::{CheckOptions, Disagreement, Source, check_dictionary, check_eds};
 pub use check_ecat::check_ethercat;
 pub use description::{
-    ALL_STATES, CoeDetails, ConfigArea, DcOpMode, DeviceFacts, Eeprom, EsiPdo, FmmuUsage, Mailbox,
-    MailboxArea, MailboxTimeouts, PREOP, PdoEntry, Profile, SlaveDescription, SmKind, StateRule, SyncManager,
+    ALL_STATES, CoeDetails, ConfigArea, DcOpMode, DeviceFacts, Eeprom, EsiPdo, EsiProfile, FmmuUsage,
+    Mailbox, MailboxArea, MailboxTimeouts, PREOP, PdoEntry, SlaveDescription, SmKind, StateRule, SyncManager,
     SyncSignal, apply_rules, default_config_area, free_run,
 };
 pub use dictionary::{device_objects, dictionary, objects_from_description};

@@ -3,8 +3,8 @@
 //! file can be compared with the dictionary and EDS it came from.
 
 use crate::description::{
-    CoeDetails, ConfigArea, DcOpMode, Eeprom, EsiPdo, FmmuUsage, Mailbox, MailboxArea, MailboxTimeouts,
-    PdoEntry, Profile, SlaveDescription, SmKind, SyncManager, SyncSignal,
+    CoeDetails, ConfigArea, DcOpMode, Eeprom, EsiPdo, EsiProfile, FmmuUsage, Mailbox, MailboxArea,
+    MailboxTimeouts, PdoEntry, SlaveDescription, SmKind, SyncManager, SyncSignal,
 };
 use crate::model::{EsiObject, EsiSub, ObjectKind, parse_states};
 use crate::types::{parse_hex_bytes, parse_hex_dec, parse_number, parse_type_name};
@@ -141,7 +141,7 @@ fn device(
         url: d.child_text("URL").map(str::to_string),
         physics: d.attr("Physics").unwrap_or_default().to_string(),
         mailbox_timeouts,
-        profile: Profile {
+        profile: EsiProfile {
             number: num(profile.and_then(|p| p.child_text("ProfileNo")).or(Some("0")), "Profile/ProfileNo")?,
             add_info: num(profile.and_then(|p| p.child_text("AddInfo")).or(Some("0")), "Profile/AddInfo")?,
         },
