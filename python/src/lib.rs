@@ -13,7 +13,9 @@
 //! the process (`drivebus.serve()`), for code that must use TCP.
 //!
 //! `Simulation` ([`sim`]) hosts the same drives on the virtual bus in
-//! simulated time instead (`drivebus_bus::Bus`): deterministic.
+//! simulated time instead (`drivebus_bus::Bus`): deterministic. Its
+//! `master()` ([`master`]) is the master of `drivebus_master` (the tool's)
+//! as a station of that bus, run in simulated time.
 //!
 //! The tasks run on one tokio runtime per process; Python threads block on
 //! it with the GIL released, so a python-can `Notifier` thread and the
