@@ -420,6 +420,15 @@ impl Esc {
         }
     }
 
+    /// Counts a frame with a bad FCS received on port `p` (0..=3): the
+    /// invalid frame counter (0x0300 + 2p), or the forwarded RX error
+    /// counter (0x0308 + p) when an earlier ESC had marked it already.
+    /// Both stop at 0xFF (ESC data sheet Section II, 0x0300–0x030B).
+    pub fn count_rx_error(&mut self, p: usize, forwarded: bool) {
+        let at = if forwarded { 0x0308 + p.min(3) } else { 0x0300 + 2 * p.min(3) };
+        self.mem[at] = self.mem[at].saturating_add(1);
+    }
+
     /// True if frames leave through port `p` (link up and the loop not
     /// closed by DL control 0x0101: 00/01 auto, 10 open, 11 closed).
     pub fn port_open(&self, p: usize) -> bool {
