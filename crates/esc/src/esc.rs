@@ -393,6 +393,13 @@ impl Esc {
         self.clock.instant_of(sys.wrapping_sub(self.system_time_offset()))
     }
 
+    /// Sets the local oscillator's frequency error (ppb, positive: fast)
+    /// from the latest `now` on, as a drifting clock would; the local time
+    /// stays continuous. [`EscConfig::clock`] keeps the one it was built with.
+    pub fn set_clock_drift(&mut self, drift_ppb: i32) {
+        self.clock.set_drift(self.now, drift_ppb);
+    }
+
     /// Frequency correction of the time control loop, in ppb.
     pub fn clock_correction_ppb(&self) -> i64 {
         self.clock.correction_ppb()

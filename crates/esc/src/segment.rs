@@ -228,13 +228,26 @@ impl<D: Device> Segment<D> {
 
     /// Adds a fault of the line; it acts on every frame from now on.
     pub fn add_fault(&mut self, f: LineFault) {
+        if let LineFault::Drift { slave, ppb } = f
+            && let Some(d) = self.devices.get_mut(slave)
+        {
+            d.esc_mut().set_clock_drift(ppb);
+        }
         self.faults.push(f);
         self.update_links();
     }
 
-    /// Ends every fault of the line (power stays as it is).
+    /// Ends every fault of the line (power stays as it is); a drifting
+    /// clock gets its own drift back.
     pub fn clear_faults(&mut self) {
-        self.faults.clear();
+        for f in self.faults.drain(..) {
+            if let LineFault::Drift { slave, .. } = f
+                && let Some(d) = self.devices.get_mut(slave)
+            {
+                let own = d.esc().config().clock.drift_ppb;
+                d.esc_mut().set_clock_drift(own);
+            }
+        }
         self.update_links();
     }
 

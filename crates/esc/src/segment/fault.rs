@@ -40,6 +40,16 @@ pub enum LineFault {
         /// Added to each of its increments (wrapping).
         skew: i16,
     },
+    /// Slave `slave`'s (0-based) oscillator runs off by `ppb` (positive:
+    /// fast) instead of its own drift: its DC control loop corrects up to
+    /// ±500 ppm (`dc::MAX_FREQ_PPB`), beyond that its system time
+    /// difference (0x092C) grows and SYNC0 wanders off the cycle.
+    Drift {
+        /// The slave.
+        slave: usize,
+        /// Frequency error in parts per billion.
+        ppb: i32,
+    },
 }
 
 impl LineFault {

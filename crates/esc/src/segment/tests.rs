@@ -234,3 +234,23 @@ fn a_power_cycled_slave_comes_back_reset_with_its_eeprom() {
     let alias = send(&mut s, Command::Aprd, position_address(1, 0x0012), &[0, 0], 0).0;
     assert_eq!(alias, send(&mut s, Command::Aprd, position_address(0, 0x0012), &[0, 0], 0).0);
 }
+
+#[test]
+fn a_drift_fault_changes_the_rate_of_one_clock_until_cleared() {
+    let mut s = line(2);
+    address_all(&mut s);
+    let time = |s: &mut Segment<Esc>, a, us| {
+        let d = send(s, Command::Fprd, station_address(a, 0x0910), &[0; 8], us).0;
+        u64::from_le_bytes(d.try_into().unwrap())
+    };
+    let rate = |s: &mut Segment<Esc>, a, from| {
+        let t0 = time(s, a, from);
+        time(s, a, from + 1000) - t0
+    };
+    assert_eq!(rate(&mut s, 0x1001, 0), 1_000_000);
+    s.add_fault(LineFault::Drift { slave: 1, ppb: 1_000_000 });
+    assert_eq!(rate(&mut s, 0x1001, 2000), 1_001_000, "1000 ppm fast");
+    assert_eq!(rate(&mut s, 0x1000, 4000), 1_000_000, "the other clock as before");
+    s.clear_faults();
+    assert_eq!(rate(&mut s, 0x1001, 6000), 1_000_000);
+}
