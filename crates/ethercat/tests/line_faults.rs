@@ -241,3 +241,37 @@ fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_t
         assert_eq!(d.bad_wkc, 0);
     });
 }
+
+#[test]
+fn a_drifting_clock_shows_in_its_system_time_difference_and_settles_when_cleared() {
+    static S: Storage = Storage::new();
+    let host = drives();
+    let m = Master::on_host(&S, host.clone()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        d.enable(Duration::from_secs(2)).await.unwrap();
+        // 0x092C: sign and magnitude of the system time difference (ns).
+        let diff = || async {
+            let v: u32 = ethercrab::Command::aprd(1, 0x092C).receive(m.main_device()).await.unwrap();
+            v & 0x7FFF_FFFF
+        };
+        for _ in 0..200 {
+            d.cycle().await.unwrap();
+        }
+        let settled = diff().await;
+        // 2000 ppm: four times what the ESC's control loop can correct.
+        fault(&host, LineFault::Drift { slave: 1, ppb: 2_000_000 });
+        for _ in 0..100 {
+            d.cycle().await.unwrap();
+        }
+        let drifted = diff().await;
+        assert!(drifted > 10_000 && drifted > 10 * settled, "{settled} ns, then {drifted} ns");
+        clear(&host);
+        for _ in 0..1000 {
+            d.cycle().await.unwrap();
+        }
+        let after = diff().await;
+        assert!(after < drifted / 4, "{drifted} ns, then {after} ns");
+    });
+}
