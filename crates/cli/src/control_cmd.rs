@@ -198,11 +198,9 @@ pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<Request> {
         ControlCmd::Fault { drive: node, kind, switch, duration } => {
             Request::Fault { node: *node, kind: kind.clone(), switch: switch.clone(), duration: *duration }
         }
-        ControlCmd::Bus { action, drive: Some(node), id: None, count: None, mask: None, rule: None, .. }
-            if action == "off" || action == "on" =>
-        {
-            Request::Link { node: *node, bus_off: action == "off" }
-        }
+        ControlCmd::Bus {
+            action, drive: Some(node), id: None, count: None, mask: None, rule: None, ..
+        } if action == "off" || action == "on" => Request::Link { node: *node, bus_off: action == "off" },
         ControlCmd::Bus { action, drive: None, id, count, mask, rule, line } => {
             if let Some(rule) = line_rule(action, id.is_some() || mask.is_some(), *count, line)? {
                 return Ok(Request::Bus { rule });
@@ -308,7 +306,10 @@ mod tests {
         assert_eq!(rule(ecat("break", LineOpts { after: Some(2), ..LineOpts::default() })), "break:2");
         let lose = LineOpts { probability: Some(0.25), seed: Some(7), ..LineOpts::default() };
         assert_eq!(rule(ecat("lose", lose)), "lose,probability=0.25,seed=7");
-        assert_eq!(rule(ecat("corrupt", LineOpts { every: Some(4), ..LineOpts::default() })), "corrupt,every=4");
+        assert_eq!(
+            rule(ecat("corrupt", LineOpts { every: Some(4), ..LineOpts::default() })),
+            "corrupt,every=4"
+        );
         let wkc = LineOpts { slave: Some(2), skew: Some(-1), ..LineOpts::default() };
         assert_eq!(rule(ecat("wkc", wkc)), "wkc:2:-1");
         let drift = LineOpts { slave: Some(1), ppm: Some(800.0), ..LineOpts::default() };

@@ -192,7 +192,17 @@ mod tests {
         let (f, seed) = parse_line("lose,probability=0.1,seed=7", 3).unwrap();
         assert!(matches!(f, LineFault::Lose(_)));
         assert_eq!(seed, Some(7));
-        for bad in ["", "break", "break:3", "break:0", "lose,every=0", "lose,probability=2", "wkc:4:1", "drift:1:1e9", "flip"] {
+        for bad in [
+            "",
+            "break",
+            "break:3",
+            "break:0",
+            "lose,every=0",
+            "lose,probability=2",
+            "wkc:4:1",
+            "drift:1:1e9",
+            "flip",
+        ] {
             let e = parse_line(bad, 3).unwrap_err().to_string();
             assert!(e.contains("bad EtherCAT fault"), "{bad}: {e}");
         }

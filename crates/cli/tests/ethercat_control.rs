@@ -56,7 +56,11 @@ fn count(sock: &RawSocket) -> Option<u16> {
 }
 
 fn control(sock: &str, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_drivebus")).args(["control", "--connect", sock]).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_drivebus"))
+        .args(["control", "--connect", sock])
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn ok(sock: &str, args: &[&str]) {
@@ -88,7 +92,9 @@ fn control_breaks_loses_skews_and_power_cycles_the_line() {
     let sock = dir.join("control.sock");
     let sock = sock.to_str().unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_drivebus"))
-        .args(["ethercat", "serve", "--iface", &a, "--drive", "ipos", "--drive", "ipos", "--drive", "generic"])
+        .args([
+            "ethercat", "serve", "--iface", &a, "--drive", "ipos", "--drive", "ipos", "--drive", "generic",
+        ])
         .args(["--control", sock])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -115,6 +121,7 @@ fn control_breaks_loses_skews_and_power_cycles_the_line() {
 
     ok(sock, &["bus", "wkc", "--slave", "2", "--skew", "1"]);
     assert_eq!(count(&raw), Some(4));
+    ok(sock, &["bus", "drift", "--slave", "3", "--ppm", "2000"]);
     ok(sock, &["bus", "clear"]);
 
     ok(sock, &["power", "2", "off"]);

@@ -141,7 +141,11 @@ async fn ethercrab_finds_a_power_cycled_slave_in_init_and_brings_it_back_to_op()
 }
 
 fn drives() -> Host {
-    Line::new().drive(Profile::Ipos).drive(Profile::Ipos).host(Clock::simulated(Instant::from_millis(1))).unwrap()
+    Line::new()
+        .drive(Profile::Ipos)
+        .drive(Profile::Ipos)
+        .host(Clock::simulated(Instant::from_millis(1)))
+        .unwrap()
 }
 
 #[test]
@@ -198,9 +202,11 @@ fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
         let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         let now = host.clock().now();
-        with_drive(&host, 1, |s| s.app_mut().change_machine(now, Change::fault("encoder", None).unwrap(), None))
-            .unwrap()
-            .unwrap();
+        with_drive(&host, 1, |s| {
+            s.app_mut().change_machine(now, Change::fault("encoder", None).unwrap(), None)
+        })
+        .unwrap()
+        .unwrap();
         let mut seen = false;
         for _ in 0..200 {
             if d.cycle().await.unwrap().state() == Some(drivebus_cia402::codes::State::Fault) {
@@ -210,7 +216,9 @@ fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
         }
         assert!(seen, "statusword {:04X}h", d.fb.statusword);
         let now = host.clock().now();
-        with_drive(&host, 1, |s| s.app_mut().change_machine(now, Change::ClearFaults, None)).unwrap().unwrap();
+        with_drive(&host, 1, |s| s.app_mut().change_machine(now, Change::ClearFaults, None))
+            .unwrap()
+            .unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         assert_eq!(d.fb.state(), Some(drivebus_cia402::codes::State::OperationEnabled));
     });

@@ -53,7 +53,9 @@ pub fn handle(host: &Host, req: Request) -> anyhow::Result<()> {
 /// The 0-based index of the slave at `node` (from 1).
 fn position(slaves: usize, node: u8) -> anyhow::Result<usize> {
     if node == 0 || usize::from(node) > slaves {
-        bail!("no slave {node} on the line: use 1..{slaves} (positions from 1, as drivebus ethercat scan lists them)");
+        bail!(
+            "no slave {node} on the line: use 1..{slaves} (positions from 1, as drivebus ethercat scan lists them)"
+        );
     }
     Ok(usize::from(node) - 1)
 }
@@ -108,6 +110,8 @@ mod tests {
         assert!(e.to_string().contains("no slave 3 on the line: use 1..2"), "{e}");
         let e = ask(&host, r#"{"op":"link","node":1,"bus_off":true}"#).unwrap_err();
         assert!(e.to_string().contains("no bus-off"), "{e}");
-        assert!(ask(&host, r#"{"op":"bus","rule":"break:2"}"#).unwrap_err().to_string().contains("bad EtherCAT"));
+        assert!(
+            ask(&host, r#"{"op":"bus","rule":"break:2"}"#).unwrap_err().to_string().contains("bad EtherCAT")
+        );
     }
 }

@@ -6,12 +6,12 @@
 //! (`drivebus_ethercat::master`, on ethercrab), and `demo.rs` is
 //! `drivebus demo --ethercat`.
 
+pub mod control;
 pub mod demo;
 mod drive;
 mod line;
 mod read;
 mod serve;
-pub mod control;
 
 use clap::{Args, Subcommand};
 use std::path::PathBuf;

@@ -46,7 +46,8 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
     };
     {
         let mut out = std::io::stdout().lock();
-        let control = control_task.as_ref().map_or_else(String::new, |(_, addr)| format!("; control on {addr}"));
+        let control =
+            control_task.as_ref().map_or_else(String::new, |(_, addr)| format!("; control on {addr}"));
         let line = names(&members).join(" ");
         writeln!(out, "drivebus ethercat serve: ready on {} (line {line}){control}", a.iface)?;
         out.flush()?;

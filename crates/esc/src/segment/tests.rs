@@ -2,8 +2,8 @@ use super::*;
 use crate::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
 use crate::tests::image;
 use crate::{ClockConfig, EscConfig};
-use drivebus_can::fault::Recurrence;
 use alloc::vec::Vec;
+use drivebus_can::fault::Recurrence;
 
 fn line(n: usize) -> Segment<Esc> {
     let escs = (0..n)
@@ -198,7 +198,8 @@ fn a_corrupted_frame_is_lost_unexecuted_behind_the_damage_and_counted() {
     let fmmu = |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0600), &[0, 0], 0).0;
     assert_eq!(fmmu(&mut s, 0x1000), [0x21, 0x43]);
     assert_eq!(fmmu(&mut s, 0x1001), [0, 0]);
-    let counters = |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0300), &[0; 12], 0).0;
+    let counters =
+        |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0300), &[0; 12], 0).0;
     assert_eq!(counters(&mut s, 0x1000)[8..10], [0, 1], "forwarded on the way back (port 1)");
     assert_eq!(counters(&mut s, 0x1001)[0], 1, "invalid frame on port 0");
     assert_eq!(counters(&mut s, 0x1002)[8], 1, "forwarded RX error on port 0");

@@ -140,7 +140,12 @@ impl DriveApp {
     /// the machine schedule the machine file fills (as `drivebus serve
     /// --control` does on CAN, docs/control.md); the application is
     /// polled right after, through the node.
-    pub fn change_machine(&mut self, now: Instant, change: Change, duration: Option<f64>) -> Result<(), MachineError> {
+    pub fn change_machine(
+        &mut self,
+        now: Instant,
+        change: Change,
+        duration: Option<f64>,
+    ) -> Result<(), MachineError> {
         let dev = &mut self.dev;
         let r = dev.node.with_app(now, &mut dev.app, &mut self.frames, |app, _| {
             app.change_machine(now, change, duration)
