@@ -3,7 +3,7 @@
 //! ships with say the same (the table in the crate docs says which field
 //! feeds which word or category).
 
-use crate::description::{Pdo, SlaveDescription, SmKind};
+use crate::description::{EsiPdo, SlaveDescription, SmKind};
 use drivebus_esc::sii::{
     General, MailboxConfig, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry, SiiSyncManager,
 };
@@ -25,7 +25,7 @@ fn mailbox(d: &SlaveDescription) -> MailboxConfig {
     MailboxConfig { rx_offset, rx_size, tx_offset, tx_size }
 }
 
-fn pdo(b: &mut SiiBuilder, p: &Pdo, direction_sm: u8) -> SiiPdo {
+fn pdo(b: &mut SiiBuilder, p: &EsiPdo, direction_sm: u8) -> SiiPdo {
     let name_idx = b.add_string(&p.name);
     let entries = p
         .entries
