@@ -1,5 +1,6 @@
 //! `drivebus control --connect ADDR …`: one request to a running
-//! `drivebus serve --control ADDR` (docs/control.md).
+//! `drivebus serve --control ADDR` or `drivebus ethercat serve --control
+//! ADDR` (docs/control.md).
 
 use anyhow::bail;
 use clap::{Args, Subcommand};
@@ -10,7 +11,8 @@ use crate::control::{Addr, Request, request};
 /// `drivebus control`.
 #[derive(Args, Debug)]
 pub struct ControlArgs {
-    /// The server's control address: 127.0.0.1:PORT or a Unix socket path (serve --control).
+    /// The server's control address: 127.0.0.1:PORT or a Unix socket path (serve --control or
+    /// ethercat serve --control).
     #[arg(long, value_name = "ADDR")]
     pub connect: String,
     /// What to do.
