@@ -200,6 +200,66 @@ impl Command {
     }
 }
 
+/// The master's next step on the way to Operation enabled, from the state
+/// the drive reports (CiA 402-2 §6.2.1, transitions 2, 3, 4, 12 and 15).
+/// The one enable sequence of every master: the CANopen master's
+/// `Drive::enable`, the EtherCAT master's and the cyclic probes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EnableStep {
+    /// Operation enabled: nothing to do.
+    Done,
+    /// Write `controlword`; the drive answers with state `expect`.
+    Write {
+        /// The command to write (6040h bits 0–3).
+        controlword: u16,
+        /// The state it leads to.
+        expect: State,
+    },
+    /// Fault: a rising edge of bit 7 ([`cw::DISABLE_VOLTAGE`] then
+    /// [`cw::FAULT_RESET`]) leads to Switch on disabled.
+    FaultReset,
+    /// Not ready to switch on, fault reaction active or a pattern no state
+    /// has: the drive leaves it by itself; wait (a cyclic master keeps
+    /// writing [`cw::DISABLE_VOLTAGE`], which no transition out of these
+    /// states needs).
+    Wait,
+}
+
+impl EnableStep {
+    /// The step from `state` (`None`: a statusword no state matches).
+    /// Quick stop active goes back through Switch on disabled (transition
+    /// 12), which every quick stop option allows; transition 16 exists only
+    /// for options 5–8.
+    pub const fn from(state: Option<State>) -> EnableStep {
+        let (controlword, expect) = match state {
+            Some(State::OperationEnabled) => return EnableStep::Done,
+            Some(State::Fault) => return EnableStep::FaultReset,
+            Some(State::NotReadyToSwitchOn | State::FaultReactionActive) | None => return EnableStep::Wait,
+            Some(State::SwitchOnDisabled) => (cw::SHUTDOWN, State::ReadyToSwitchOn),
+            Some(State::ReadyToSwitchOn) => (cw::SWITCH_ON, State::SwitchedOn),
+            Some(State::SwitchedOn) => (cw::ENABLE_OPERATION, State::OperationEnabled),
+            Some(State::QuickStopActive) => (cw::DISABLE_VOLTAGE, State::SwitchOnDisabled),
+        };
+        EnableStep::Write { controlword, expect }
+    }
+
+    /// The step for a statusword.
+    pub const fn from_statusword(sw: u16) -> EnableStep {
+        EnableStep::from(State::from_statusword(sw))
+    }
+
+    /// The controlword a cyclic master writes in this step; for a fault
+    /// reset, `edge_high` picks the second half of the edge.
+    pub const fn cyclic_controlword(self, edge_high: bool) -> u16 {
+        match self {
+            EnableStep::Done => cw::ENABLE_OPERATION,
+            EnableStep::Write { controlword, .. } => controlword,
+            EnableStep::FaultReset if edge_high => cw::FAULT_RESET,
+            EnableStep::FaultReset | EnableStep::Wait => cw::DISABLE_VOLTAGE,
+        }
+    }
+}
+
 /// Modes of operation (6060h / 6061h values, CiA 402-2 §6.3.2).
 pub mod mode {
     /// Profile position.
@@ -310,6 +370,48 @@ impl core::fmt::Display for ModeNotShown {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Following the steps from every state reaches Operation enabled on a
+    /// drive that obeys the CiA 402 state table, in at most four writes.
+    #[test]
+    fn the_enable_steps_reach_operation_enabled_from_every_state() {
+        for start in State::ALL {
+            let mut state = start;
+            let mut writes = 0;
+            loop {
+                match EnableStep::from(Some(state)) {
+                    EnableStep::Done => break,
+                    EnableStep::Write { controlword, expect } => {
+                        let cmd = Command::decode(controlword).unwrap();
+                        let allowed = matches!(
+                            (state, cmd),
+                            (State::SwitchOnDisabled, Command::Shutdown)
+                                | (State::ReadyToSwitchOn, Command::SwitchOn)
+                                | (State::SwitchedOn, Command::EnableOperation)
+                                | (State::QuickStopActive, Command::DisableVoltage)
+                        );
+                        assert!(allowed, "{state:?}: {cmd:?} is no transition of the table");
+                        state = expect;
+                    }
+                    EnableStep::FaultReset => state = State::SwitchOnDisabled,
+                    // The drive moves on by itself (initialisation, the fault reaction).
+                    EnableStep::Wait => {
+                        state = if state == State::FaultReactionActive {
+                            State::Fault
+                        } else {
+                            State::SwitchOnDisabled
+                        }
+                    }
+                }
+                writes += 1;
+                assert!(writes <= 5, "{start:?}: no end");
+            }
+        }
+        assert_eq!(EnableStep::from_statusword(0x0000), EnableStep::Wait);
+        assert_eq!(EnableStep::from_statusword(0x0237), EnableStep::Done);
+        assert_eq!(EnableStep::from_statusword(0x0008).cyclic_controlword(false), cw::DISABLE_VOLTAGE);
+        assert_eq!(EnableStep::from_statusword(0x0008).cyclic_controlword(true), cw::FAULT_RESET);
+    }
 
     #[test]
     fn every_state_decodes_from_its_own_pattern_only() {

@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{anyhow, bail};
 use drivebus_master::{
     Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
-    Profile, SdoError, StopAction, drive::human_secs, drive::mode, mode_name,
+    Profile, SdoError, StopAction, drive::human_secs, drive::mode, drive::sw as bit, mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -280,8 +280,8 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             let active = inputs.map(DriveFlags::inputs_text).unwrap_or_default();
             let json = serde_json::json!({"node": node, "statusword": sw, "state": state_name(sw), "mode": mode,
                 "mode_name": mode.map(mode_name), "position": pos, "velocity": vel, "error_code": err, "error_register": reg,
-                "target_reached": sw & 0x400 != 0, "warning": sw & 0x80 != 0, "internal_limit": sw & 0x800 != 0,
-                "bit13": sw & 0x2000 != 0, "statusword_flags": bits, "inputs": inputs,
+                "target_reached": sw & bit::TARGET_REACHED != 0, "warning": sw & bit::WARNING != 0,
+                "internal_limit": sw & bit::INTERNAL_LIMIT != 0, "bit13": sw & bit::MODE_13 != 0, "statusword_flags": bits, "inputs": inputs,
                 "negative_limit_switch": inputs.map(|i| i & 1 != 0), "positive_limit_switch": inputs.map(|i| i & 2 != 0),
                 "home_switch": inputs.map(|i| i & 4 != 0)});
             let mut t = format!("node {node}: {} (statusword {sw:04X}h)", state_name(sw));

@@ -327,9 +327,9 @@ mod tests {
         let od = od(4, &[0x6041_0010]);
         let mut f = DeviceFacts::new(1, "v", 1, 1, "p");
         f.mailbox_area = Some(crate::description::MailboxArea {
-            rx_start: 0x1000,
+            rx_offset: 0x1000,
             rx_size: 16,
-            tx_start: 0x1100,
+            tx_offset: 0x1100,
             tx_size: 20,
         });
         let d = SlaveDescription::new(&od, &f);

@@ -275,29 +275,8 @@ pub struct Eeprom {
 /// SII words 0x00–0x06, the ESI's `ConfigData`: the SII's own type.
 pub use drivebus_esc::sii::ConfigArea;
 
-/// Mailbox offsets and sizes (`BootStrap`: receive start, size, send start, size).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MailboxArea {
-    /// Receive mailbox (master → slave) start.
-    pub rx_start: u16,
-    /// Receive mailbox size.
-    pub rx_size: u16,
-    /// Send mailbox (slave → master) start.
-    pub tx_start: u16,
-    /// Send mailbox size.
-    pub tx_size: u16,
-}
-
-impl MailboxArea {
-    /// The 8 bytes of `BootStrap`.
-    pub fn bytes(&self) -> [u8; 8] {
-        let mut b = [0u8; 8];
-        for (i, w) in [self.rx_start, self.rx_size, self.tx_start, self.tx_size].into_iter().enumerate() {
-            b[2 * i..2 * i + 2].copy_from_slice(&w.to_le_bytes());
-        }
-        b
-    }
-}
+/// Mailbox offsets and sizes (`BootStrap`): the SII's own type.
+pub use drivebus_esc::sii::MailboxArea;
 
 /// Restricts the ESM states in which entries may be read or written
 /// (ETG.2000 `ReadRestrictions`/`WriteRestrictions`, SDO Information
@@ -374,7 +353,7 @@ impl DeviceFacts {
     /// detail the `drivebus-coe` server implements, no FoE, free run only,
     /// a 2 KiB EEPROM.
     pub fn new(vendor_id: u32, vendor_name: &str, product_code: u32, revision: u32, product: &str) -> Self {
-        let mbx = MailboxArea { rx_start: 0x1000, rx_size: 512, tx_start: 0x1200, tx_size: 512 };
+        let mbx = MailboxArea { rx_offset: 0x1000, rx_size: 512, tx_offset: 0x1200, tx_size: 512 };
         DeviceFacts {
             vendor_id,
             vendor_name: vendor_name.into(),
@@ -463,14 +442,14 @@ impl SlaveDescription {
         if let Some(m) = facts.mailbox_area {
             sync_managers.push(SyncManager {
                 kind: SmKind::MBoxOut,
-                start: m.rx_start,
+                start: m.rx_offset,
                 default_size: Some(m.rx_size),
                 control: 0x26,
                 enable: true,
             });
             sync_managers.push(SyncManager {
                 kind: SmKind::MBoxIn,
-                start: m.tx_start,
+                start: m.tx_offset,
                 default_size: Some(m.tx_size),
                 control: 0x22,
                 enable: true,

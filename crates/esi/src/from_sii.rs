@@ -9,8 +9,8 @@
 //! [`crate::dictionary`]).
 
 use crate::description::{
-    CoeDetails, DcOpMode, Eeprom, EsiPdo, EsiProfile, FmmuUsage, Mailbox, MailboxArea, PdoEntry,
-    SlaveDescription, SmKind, SyncManager, SyncSignal,
+    CoeDetails, DcOpMode, Eeprom, EsiPdo, EsiProfile, FmmuUsage, Mailbox, PdoEntry, SlaveDescription, SmKind,
+    SyncManager, SyncSignal,
 };
 use crate::read::ReadError;
 use drivebus_esc::sii::{SiiContent, SiiPdo, fmmu_usage, protocols, sm_type};
@@ -148,12 +148,7 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
         eeprom: Eeprom {
             byte_size: u32::from(c.size_kbit) * 128,
             config: c.config,
-            bootstrap: (b.rx_size > 0).then_some(MailboxArea {
-                rx_start: b.rx_offset,
-                rx_size: b.rx_size,
-                tx_start: b.tx_offset,
-                tx_size: b.tx_size,
-            }),
+            bootstrap: (b.rx_size > 0).then_some(b),
         },
     })
 }

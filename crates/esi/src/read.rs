@@ -250,7 +250,7 @@ fn eeprom(e: Option<&Element>) -> Result<Eeprom, ReadError> {
     };
     let bootstrap = bytes("BootStrap")?.map(|b| {
         let w = |i: usize| b.get(2 * i..2 * i + 2).map_or(0, |x| u16::from_le_bytes([x[0], x[1]]));
-        MailboxArea { rx_start: w(0), rx_size: w(1), tx_start: w(2), tx_size: w(3) }
+        MailboxArea { rx_offset: w(0), rx_size: w(1), tx_offset: w(2), tx_size: w(3) }
     });
     Ok(Eeprom {
         byte_size: num(e.child_text("ByteSize").or(Some("0")), "Eeprom/ByteSize")?,

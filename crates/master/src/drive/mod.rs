@@ -16,7 +16,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 pub use drivebus_cia402::codes::ModeNotShown;
-use drivebus_cia402::codes::State;
+use drivebus_cia402::codes::{EnableStep, State};
 use drivebus_nmt::RemoteState;
 use tokio::sync::Notify;
 
@@ -50,6 +50,8 @@ pub const SW_BIT13: u16 = 1 << 13;
 
 /// Modes of operation (6060h) values (`drivebus_cia402::codes::mode`).
 pub use drivebus_cia402::codes::mode;
+/// Statusword (6041h) bits (`drivebus_cia402::codes::sw`).
+pub use drivebus_cia402::codes::sw;
 
 /// The name of a mode of operation (6060h/6061h), CiA 402-2 §6.3.2.
 pub fn mode_name(m: i8) -> &'static str {
@@ -553,33 +555,25 @@ impl Drive {
     /// state; then waits for 6061h to show a mode
     /// [`set_mode`](Self::set_mode) wrote before.
     pub async fn enable(&self) -> Result<(), DriveError> {
+        // The one enable sequence (`cia402::codes::EnableStep`), one
+        // confirmed step at a time.
         for _ in 0..8 {
             let sw = self.statusword().await?;
-            match DriveState::from_statusword(sw) {
-                DriveState::OperationEnabled => return self.confirm_mode().await,
-                DriveState::Fault | DriveState::FaultReactionActive => {
+            match EnableStep::from_statusword(sw) {
+                EnableStep::Done => return self.confirm_mode().await,
+                EnableStep::FaultReset => {
                     self.fault_reset().await?;
                 }
-                DriveState::NotReadyToSwitchOn | DriveState::Unknown => {
-                    self.wait_sw("leaving not ready to switch on", true, |sw| {
-                        !matches!(
-                            DriveState::from_statusword(sw),
-                            DriveState::NotReadyToSwitchOn | DriveState::Unknown
-                        )
-                    })
-                    .await?;
+                EnableStep::Wait => {
+                    let from = State::from_statusword(sw);
+                    let what = match from {
+                        Some(State::FaultReactionActive) => "leaving fault reaction active",
+                        _ => "leaving not ready to switch on",
+                    };
+                    self.wait_sw(what, true, move |now| State::from_statusword(now) != from).await?;
                 }
-                DriveState::SwitchOnDisabled => {
-                    self.transition(0x06, DriveState::ReadyToSwitchOn, "ready to switch on").await?;
-                }
-                DriveState::ReadyToSwitchOn => {
-                    self.transition(0x07, DriveState::SwitchedOn, "switched on").await?;
-                }
-                DriveState::SwitchedOn => {
-                    self.transition(0x0F, DriveState::OperationEnabled, "operation enabled").await?;
-                }
-                DriveState::QuickStopActive => {
-                    self.transition(0x00, DriveState::SwitchOnDisabled, "switch on disabled").await?;
+                EnableStep::Write { controlword, expect } => {
+                    self.transition(controlword, expect.into(), expect.name()).await?;
                 }
             }
         }
