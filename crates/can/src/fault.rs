@@ -75,19 +75,13 @@ pub enum FaultAction {
 /// handed to a hub shared by threads).
 type Predicate = Box<dyn Fn(&Frame) -> bool + Send + Sync>;
 
-/// A fault injection rule: which transmissions it matches and what it does.
-///
-/// A rule matches by identifier range, transmitting station and a
-/// predicate (all optional, all must hold), then skips the first `skip`
-/// matches, takes only every `every`-th match after them, fires at most
-/// `times` times, each time with `probability`.
-/// Rules are tried in the order added; at most one fires per transmission.
-pub struct FaultRule {
-    action: FaultAction,
-    ids: Option<(u32, u32)>,
-    extended: Option<bool>,
-    from: Option<u32>,
-    predicate: Option<Predicate>,
+/// Which of the matching events a rule fires on: it skips the first
+/// `skip`, takes only every `every`-th after them, fires at most `times`
+/// times, each time with a probability drawn from a seeded
+/// [`XorShift64`]. The counting half of [`FaultRule`], also used by the
+/// EtherCAT line's faults (`drivebus_esc::segment::LineFault`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Recurrence {
     skip: u32,
     every: u32,
     /// Matches seen after the skipped ones (for `every`).
@@ -98,15 +92,102 @@ pub struct FaultRule {
     fired: u32,
 }
 
+impl Default for Recurrence {
+    fn default() -> Self {
+        Recurrence::always()
+    }
+}
+
+impl Recurrence {
+    /// Every match, forever.
+    pub const fn always() -> Self {
+        Recurrence { skip: 0, every: 1, seen: 0, remaining: None, threshold: None, fired: 0 }
+    }
+    /// Let the first `n` matches through.
+    pub fn skip(mut self, n: u32) -> Self {
+        self.skip = n;
+        self
+    }
+    /// After the skipped matches, only every `n`-th (`n` ≥ 1: the 1st, the
+    /// `n+1`-th, …).
+    pub fn every(mut self, n: u32) -> Self {
+        self.every = n.max(1);
+        self
+    }
+    /// At most `n` times.
+    pub fn times(mut self, n: u32) -> Self {
+        self.remaining = Some(n);
+        self
+    }
+    /// With probability `p` (clamped to 0..=1) on each match.
+    pub fn probability(mut self, p: f64) -> Self {
+        self.threshold = if p >= 1.0 {
+            None
+        } else if p > 0.0 {
+            // 2^64 · p; `as` saturates, NaN maps to 0 (never fires).
+            Some((p * 18_446_744_073_709_551_616.0) as u64)
+        } else {
+            Some(0)
+        };
+        self
+    }
+    /// How many times it has fired.
+    pub fn fired(&self) -> u32 {
+        self.fired
+    }
+    /// Whether it will never fire again (`times` used up).
+    pub fn is_spent(&self) -> bool {
+        self.remaining == Some(0)
+    }
+    /// One more match: whether it fires, updating the counters; `rng`
+    /// draws the probability.
+    pub fn fire(&mut self, rng: &mut XorShift64) -> bool {
+        if self.remaining == Some(0) {
+            return false;
+        }
+        if self.skip > 0 {
+            self.skip -= 1;
+            return false;
+        }
+        self.seen = self.seen.wrapping_add(1);
+        if !(self.seen - 1).is_multiple_of(self.every) {
+            return false;
+        }
+        if let Some(t) = self.threshold
+            && rng.next_u64() >= t
+        {
+            return false;
+        }
+        if let Some(r) = &mut self.remaining {
+            *r -= 1;
+        }
+        self.fired = self.fired.saturating_add(1);
+        true
+    }
+}
+
+/// A fault injection rule: which transmissions it matches and what it does.
+///
+/// A rule matches by identifier range, transmitting station and a
+/// predicate (all optional, all must hold); its [`Recurrence`] then
+/// decides which matches it fires on.
+/// Rules are tried in the order added; at most one fires per transmission.
+pub struct FaultRule {
+    action: FaultAction,
+    ids: Option<(u32, u32)>,
+    extended: Option<bool>,
+    from: Option<u32>,
+    predicate: Option<Predicate>,
+    pick: Recurrence,
+}
+
 impl fmt::Debug for FaultRule {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("FaultRule")
             .field("action", &self.action)
             .field("ids", &self.ids)
             .field("from", &self.from)
-            .field("skip", &self.skip)
-            .field("remaining", &self.remaining)
-            .field("fired", &self.fired)
+            .field("pick", &self.pick)
             .finish_non_exhaustive()
     }
 }
@@ -120,12 +201,7 @@ impl FaultRule {
             extended: None,
             from: None,
             predicate: None,
-            skip: 0,
-            every: 1,
-            seen: 0,
-            remaining: None,
-            threshold: None,
-            fired: 0,
+            pick: Recurrence::always(),
         }
     }
     /// See [`FaultAction::Drop`].
@@ -194,36 +270,29 @@ impl FaultRule {
     }
     /// Let the first `n` matching transmissions through.
     pub fn skip(mut self, n: u32) -> Self {
-        self.skip = n;
+        self.pick = self.pick.skip(n);
         self
     }
     /// After the skipped matches, take only every `n`-th match (`n` ≥ 1:
     /// the 1st, the `n+1`-th, …).
     pub fn every(mut self, n: u32) -> Self {
-        self.every = n.max(1);
+        self.pick = self.pick.every(n);
         self
     }
     /// Fire at most `n` times.
     pub fn times(mut self, n: u32) -> Self {
-        self.remaining = Some(n);
+        self.pick = self.pick.times(n);
         self
     }
     /// Fire with probability `p` (clamped to 0..=1) on each match, drawn from
     /// the bus's seeded PRNG.
     pub fn probability(mut self, p: f64) -> Self {
-        self.threshold = if p >= 1.0 {
-            None
-        } else if p > 0.0 {
-            // 2^64 · p; `as` saturates, NaN maps to 0 (never fires).
-            Some((p * 18_446_744_073_709_551_616.0) as u64)
-        } else {
-            Some(0)
-        };
+        self.pick = self.pick.probability(p);
         self
     }
     /// How many times the rule has fired.
     pub fn fired(&self) -> u32 {
-        self.fired
+        self.pick.fired()
     }
     /// What the rule does when it fires.
     pub fn action(&self) -> FaultAction {
@@ -231,7 +300,7 @@ impl FaultRule {
     }
     /// Whether the rule will never fire again (`times` used up).
     pub fn is_spent(&self) -> bool {
-        self.remaining == Some(0)
+        self.pick.is_spent()
     }
 
     fn matches(&self, frame: &Frame, from: u32) -> bool {
@@ -253,27 +322,10 @@ impl FaultRule {
     /// Decides whether the rule fires for this transmission by station
     /// `from`, updating its counters; `rng` draws the probability.
     pub fn try_fire(&mut self, frame: &Frame, from: u32, rng: &mut XorShift64) -> bool {
-        if self.remaining == Some(0) || !self.matches(frame, from) {
+        if self.pick.is_spent() || !self.matches(frame, from) {
             return false;
         }
-        if self.skip > 0 {
-            self.skip -= 1;
-            return false;
-        }
-        self.seen = self.seen.wrapping_add(1);
-        if !(self.seen - 1).is_multiple_of(self.every) {
-            return false;
-        }
-        if let Some(t) = self.threshold
-            && rng.next_u64() >= t
-        {
-            return false;
-        }
-        if let Some(r) = &mut self.remaining {
-            *r -= 1;
-        }
-        self.fired = self.fired.saturating_add(1);
-        true
+        self.pick.fire(rng)
     }
 }
 

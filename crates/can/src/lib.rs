@@ -18,7 +18,7 @@ pub mod pcap;
 mod time;
 
 pub use device::{Device, LinkState};
-pub use fault::{FaultAction, FaultRule, XorShift64};
+pub use fault::{FaultAction, FaultRule, Recurrence, XorShift64};
 pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
 pub use identity::Identity;
 pub use time::Instant;

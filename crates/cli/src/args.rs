@@ -97,8 +97,8 @@ pub enum Command {
     /// Serve virtual drives on a socketcand TCP server (python-can, canopen), or on any bus (--bus).
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(ServeArgs),
-    /// Change a running `serve --control`: set inputs, trigger and clear faults, drop frames,
-    /// switch a drive's power.
+    /// Change a running `serve --control` or `ethercat serve --control`: set inputs, trigger and
+    /// clear faults, drop or corrupt frames, break an EtherCAT line, switch a node's power.
     #[command(after_help = crate::control_cmd::CONTROL_EXAMPLES)]
     Control(crate::control_cmd::ControlArgs),
     /// Run the demo: two virtual drives, PDOs, homing, a move and a CSP sine; writes an SVG plot.

@@ -29,7 +29,7 @@ use tokio::sync::Mutex;
 pub enum Request {
     /// An input of a drive's machine, named as in `[[node.inputs]]`.
     Input {
-        /// Node-ID.
+        /// Node-ID (CAN) or the slave's position from 1 (EtherCAT).
         node: u8,
         /// `digital`, `analog`, `master_velocity`, `master_position`,
         /// `motor_temperature`, `brake`.
@@ -45,7 +45,7 @@ pub enum Request {
     },
     /// A machine fault, named as in `[[node.faults]]`, or `clear`.
     Fault {
-        /// Node-ID.
+        /// Node-ID (CAN) or the slave's position from 1 (EtherCAT).
         node: u8,
         /// `encoder`, `trip`, `wire_break`, `over_current`, … or `clear`.
         kind: String,
@@ -64,14 +64,14 @@ pub enum Request {
     /// A drive's CAN controller goes bus-off (it hears and sends nothing)
     /// or recovers.
     Link {
-        /// Node-ID.
+        /// Node-ID (CAN) or the slave's position from 1 (EtherCAT).
         node: u8,
         /// Bus-off (`true`) or back on the bus (`false`).
         bus_off: bool,
     },
     /// A drive's power.
     Power {
-        /// Node-ID.
+        /// Node-ID (CAN) or the slave's position from 1 (EtherCAT).
         node: u8,
         /// On (boots from its stored parameters) or off.
         on: bool,
@@ -165,21 +165,35 @@ pub struct ServedNode {
 }
 
 /// The running server as the control interface sees it (in-process use:
-/// the same calls as the socket).
-pub struct Control {
-    hub: Hub,
-    nodes: Mutex<BTreeMap<u8, ServedNode>>,
+/// the same calls as the socket): a CAN bus (`serve`) or an EtherCAT line
+/// (`ethercat serve`, where `node` is a slave's position from 1).
+pub enum Control {
+    /// Nodes on a CAN hub.
+    Can {
+        /// The bus.
+        hub: Hub,
+        /// The nodes by node-ID.
+        nodes: Mutex<BTreeMap<u8, ServedNode>>,
+    },
+    /// An EtherCAT line (`crate::ethercat::control`).
+    Ethercat(drivebus_ethercat::Host),
 }
 
 impl Control {
     /// Control over the `nodes` served on `hub`.
     pub fn new(hub: Hub, nodes: Vec<(u8, ServedNode)>) -> Control {
-        Control { hub, nodes: Mutex::new(nodes.into_iter().collect()) }
+        Control::Can { hub, nodes: Mutex::new(nodes.into_iter().collect()) }
+    }
+
+    /// Control over an EtherCAT line.
+    pub fn ethercat(host: drivebus_ethercat::Host) -> Control {
+        Control::Ethercat(host)
     }
 
     /// Stops every node (serve ends).
     pub async fn stop(&self) {
-        for slot in self.nodes.lock().await.values_mut() {
+        let Control::Can { nodes, .. } = self else { return };
+        for slot in nodes.lock().await.values_mut() {
             if let Some(h) = slot.host.take() {
                 h.stop();
             }
@@ -188,6 +202,10 @@ impl Control {
 
     /// Carries out `req`; the error names the cause first, then what to do.
     pub async fn handle(&self, req: Request) -> anyhow::Result<()> {
+        let (hub, nodes) = match self {
+            Control::Can { hub, nodes } => (hub, nodes),
+            Control::Ethercat(host) => return crate::ethercat::control::handle(host, req),
+        };
         match req {
             Request::Input { node, input, line, value, duration } => {
                 let c = Change::input(&input, line, value).map_err(|e| anyhow!("input: {e}"))?;
@@ -198,26 +216,27 @@ impl Control {
                 self.change(node, c, duration).await
             }
             Request::Bus { rule } if rule == "clear" => {
-                self.hub.clear_faults();
+                hub.clear_faults();
                 Ok(())
             }
             Request::Bus { rule } => {
                 let r = crate::fault::parse(&rule)?;
-                self.hub.add_fault(r)?;
+                hub.add_fault(r)?;
                 Ok(())
             }
             Request::Link { node, bus_off } => {
                 let state = if bus_off { LinkState::BusOff { recover_at: None } } else { LinkState::Active };
-                let nodes = self.nodes.lock().await;
+                let nodes = nodes.lock().await;
                 let host = running(&nodes, node)?;
                 host.set_link(state).await.ok_or_else(|| stopped(node))
             }
-            Request::Power { node, on } => self.power(node, on).await,
+            Request::Power { node, on } => Self::power(hub, nodes, node, on).await,
         }
     }
 
     async fn change(&self, node: u8, change: Change, duration: Option<f64>) -> anyhow::Result<()> {
-        let nodes = self.nodes.lock().await;
+        let Control::Can { nodes, .. } = self else { bail!("not a CAN server") };
+        let nodes = nodes.lock().await;
         let host = running(&nodes, node)?;
         host.change(change, duration)
             .await
@@ -225,13 +244,18 @@ impl Control {
             .map_err(|e| anyhow!("node {node}: {e}"))
     }
 
-    async fn power(&self, node: u8, on: bool) -> anyhow::Result<()> {
-        let mut nodes = self.nodes.lock().await;
+    async fn power(
+        hub: &Hub,
+        nodes: &Mutex<BTreeMap<u8, ServedNode>>,
+        node: u8,
+        on: bool,
+    ) -> anyhow::Result<()> {
+        let mut nodes = nodes.lock().await;
         let err = no_node(&nodes, node);
         let slot = nodes.get_mut(&node).ok_or(err)?;
         match (on, slot.host.take()) {
             (false, Some(h)) => h.stop(),
-            (true, None) => slot.host = Some((slot.power_on)(&self.hub)?),
+            (true, None) => slot.host = Some((slot.power_on)(hub)?),
             // Already as asked: nothing changes.
             (_, h) => slot.host = h,
         }

@@ -1,5 +1,6 @@
 //! `drivebus control --connect ADDR …`: one request to a running
-//! `drivebus serve --control ADDR` (docs/control.md).
+//! `drivebus serve --control ADDR` or `drivebus ethercat serve --control
+//! ADDR` (docs/control.md).
 
 use anyhow::bail;
 use clap::{Args, Subcommand};
@@ -10,7 +11,8 @@ use crate::control::{Addr, Request, request};
 /// `drivebus control`.
 #[derive(Args, Debug)]
 pub struct ControlArgs {
-    /// The server's control address: 127.0.0.1:PORT or a Unix socket path (serve --control).
+    /// The server's control address: 127.0.0.1:PORT or a Unix socket path (serve --control or
+    /// ethercat serve --control).
     #[arg(long, value_name = "ADDR")]
     pub connect: String,
     /// What to do.
@@ -52,9 +54,11 @@ pub enum ControlCmd {
         duration: Option<f64>,
     },
     /// Drop or corrupt frames on the server's bus, clear the rules, or put a drive bus-off
-    /// (`bus off NODE`) and back (`bus on NODE`).
+    /// (`bus off NODE`) and back (`bus on NODE`); on an EtherCAT line (`ethercat serve`): break
+    /// the link after a slave, lose or corrupt frames, skew a slave's working counter.
     Bus {
-        /// drop, corrupt, clear, rule (then --rule in `serve --fault` syntax), off or on.
+        /// drop, corrupt, clear, rule (then --rule in `serve --fault` syntax), off or on; EtherCAT:
+        /// break, lose, corrupt (without --id), wkc, drift, clear.
         action: String,
         /// off, on: the drive's node-ID.
         #[arg(value_name = "NODE")]
@@ -71,6 +75,9 @@ pub enum ControlCmd {
         /// rule: a whole `--fault` rule, e.g. drop:0x180-0x1FF,every=2.
         #[arg(long, value_name = "RULE")]
         rule: Option<String>,
+        /// EtherCAT line faults.
+        #[command(flatten)]
+        line: LineOpts,
     },
     /// Switch a drive's power off or on (it boots from its stored parameters).
     Power {
@@ -82,6 +89,73 @@ pub enum ControlCmd {
     },
 }
 
+/// The options of the EtherCAT line's faults (`bus break|lose|corrupt|wkc`).
+#[derive(Args, Debug, Default, Clone, PartialEq)]
+pub struct LineOpts {
+    /// break: the link behind this slave (position from 1) breaks.
+    #[arg(long, value_name = "N")]
+    pub after: Option<u8>,
+    /// lose, corrupt: only every N-th frame.
+    #[arg(long, value_name = "N")]
+    pub every: Option<u32>,
+    /// lose, corrupt: each frame with this probability (0..1).
+    #[arg(long, value_name = "P")]
+    pub probability: Option<f64>,
+    /// lose, corrupt: seed of the probability's generator (a run replays).
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+    /// corrupt: damaged in front of this slave (default 1); wkc: the slave that miscounts.
+    #[arg(long, value_name = "N")]
+    pub slave: Option<u8>,
+    /// wkc: added to each working counter the slave counts in (e.g. 1 or -1).
+    #[arg(long, value_name = "D", allow_negative_numbers = true)]
+    pub skew: Option<i16>,
+    /// drift: the slave's clock runs this many parts per million fast (negative: slow).
+    #[arg(long, value_name = "PPM", allow_negative_numbers = true)]
+    pub ppm: Option<f64>,
+}
+
+/// The rule of an EtherCAT line fault (docs/control.md), `None` when the
+/// action is not one.
+fn line_rule(
+    action: &str,
+    can_options: bool,
+    count: Option<u32>,
+    o: &LineOpts,
+) -> anyhow::Result<Option<String>> {
+    let mut opts = String::new();
+    for (k, v) in [
+        ("every", o.every.map(|v| v.to_string())),
+        ("times", count.map(|v| v.to_string())),
+        ("probability", o.probability.map(|v| v.to_string())),
+        ("seed", o.seed.map(|v| v.to_string())),
+    ] {
+        if let Some(v) = v {
+            opts.push_str(&format!(",{k}={v}"));
+        }
+    }
+    Ok(Some(match action {
+        "break" => match o.after {
+            Some(n) => format!("break:{n}"),
+            None => bail!("bus break needs --after N: the link behind slave N breaks"),
+        },
+        "lose" => format!("lose{opts}"),
+        "corrupt" if !can_options => match o.slave {
+            Some(n) => format!("corrupt:{n}{opts}"),
+            None => format!("corrupt{opts}"),
+        },
+        "wkc" => match (o.slave, o.skew) {
+            (Some(n), Some(d)) => format!("wkc:{n}:{d}"),
+            _ => bail!("bus wkc needs --slave N --skew D, e.g. --slave 2 --skew 1"),
+        },
+        "drift" => match (o.slave, o.ppm) {
+            (Some(n), Some(p)) => format!("drift:{n}:{p}"),
+            _ => bail!("bus drift needs --slave N --ppm X, e.g. --slave 2 --ppm 800"),
+        },
+        _ => return Ok(None),
+    }))
+}
+
 /// Examples of `drivebus control`.
 pub const CONTROL_EXAMPLES: &str = "\
 Examples:
@@ -91,7 +165,12 @@ Examples:
   drivebus control --connect 127.0.0.1:29537 fault 5 clear
   drivebus control --connect 127.0.0.1:29537 bus drop --id 0x185 --count 5
   drivebus control --connect 127.0.0.1:29537 bus off 5
-  drivebus control --connect 127.0.0.1:29537 power 5 off";
+  drivebus control --connect 127.0.0.1:29537 power 5 off
+  drivebus control --connect /tmp/ecat.sock bus break --after 1
+  drivebus control --connect /tmp/ecat.sock bus lose --probability 0.01 --seed 7
+  drivebus control --connect /tmp/ecat.sock bus wkc --slave 2 --skew 1
+  drivebus control --connect /tmp/ecat.sock bus drift --slave 2 --ppm 800
+  drivebus control --connect /tmp/ecat.sock power 2 off";
 
 fn level(s: &str) -> Option<f64> {
     match s {
@@ -121,12 +200,13 @@ pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<Request> {
         ControlCmd::Fault { drive: node, kind, switch, duration } => {
             Request::Fault { node: *node, kind: kind.clone(), switch: switch.clone(), duration: *duration }
         }
-        ControlCmd::Bus { action, drive: Some(node), id: None, count: None, mask: None, rule: None }
-            if action == "off" || action == "on" =>
-        {
-            Request::Link { node: *node, bus_off: action == "off" }
-        }
-        ControlCmd::Bus { action, drive: None, id, count, mask, rule } => {
+        ControlCmd::Bus {
+            action, drive: Some(node), id: None, count: None, mask: None, rule: None, ..
+        } if action == "off" || action == "on" => Request::Link { node: *node, bus_off: action == "off" },
+        ControlCmd::Bus { action, drive: None, id, count, mask, rule, line } => {
+            if let Some(rule) = line_rule(action, id.is_some() || mask.is_some(), *count, line)? {
+                return Ok(Request::Bus { rule });
+            }
             let times = count.map_or_else(String::new, |n| format!(",times={n}"));
             let rule = match (action.as_str(), id, mask, rule) {
                 ("clear", None, None, None) => "clear".to_owned(),
@@ -189,6 +269,7 @@ mod tests {
             count: None,
             mask: None,
             rule: None,
+            line: LineOpts::default(),
         };
         assert_eq!(to_request(&off).unwrap(), Request::Link { node: 5, bus_off: true });
         let bus = ControlCmd::Bus {
@@ -198,6 +279,7 @@ mod tests {
             count: Some(5),
             mask: None,
             rule: None,
+            line: LineOpts::default(),
         };
         assert_eq!(to_request(&bus).unwrap(), Request::Bus { rule: "drop:0x181,times=5".into() });
         let bad = ControlCmd::Bus {
@@ -207,8 +289,34 @@ mod tests {
             count: None,
             mask: None,
             rule: None,
+            line: LineOpts::default(),
         };
         assert!(to_request(&bad).unwrap_err().to_string().contains("needs --id"));
+        let ecat = |action: &str, line: LineOpts| ControlCmd::Bus {
+            action: action.into(),
+            drive: None,
+            id: None,
+            count: None,
+            mask: None,
+            rule: None,
+            line,
+        };
+        let rule = |c| match to_request(&c).unwrap() {
+            Request::Bus { rule } => rule,
+            r => panic!("{r:?}"),
+        };
+        assert_eq!(rule(ecat("break", LineOpts { after: Some(2), ..LineOpts::default() })), "break:2");
+        let lose = LineOpts { probability: Some(0.25), seed: Some(7), ..LineOpts::default() };
+        assert_eq!(rule(ecat("lose", lose)), "lose,probability=0.25,seed=7");
+        assert_eq!(
+            rule(ecat("corrupt", LineOpts { every: Some(4), ..LineOpts::default() })),
+            "corrupt,every=4"
+        );
+        let wkc = LineOpts { slave: Some(2), skew: Some(-1), ..LineOpts::default() };
+        assert_eq!(rule(ecat("wkc", wkc)), "wkc:2:-1");
+        let drift = LineOpts { slave: Some(1), ppm: Some(800.0), ..LineOpts::default() };
+        assert_eq!(rule(ecat("drift", drift)), "drift:1:800");
+        assert!(to_request(&ecat("break", LineOpts::default())).unwrap_err().to_string().contains("--after"));
         let p = ControlCmd::Power { drive: 5, state: "of".into() };
         assert!(to_request(&p).is_err());
     }

@@ -75,6 +75,87 @@ pub fn install(hub: &Hub, rules: &[String]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A fault of an EtherCAT line in text, as `drivebus control bus` sends it
+/// to `ethercat serve --control` (slaves are numbered from 1 as in
+/// `drivebus ethercat`):
+///
+/// `break:N` (the link behind slave N), `lose[,OPTS]`,
+/// `corrupt[:N][,OPTS]` (damaged in front of slave N, default 1),
+/// `wkc:N:SKEW` (slave N adds SKEW to each working counter it counts in),
+/// `drift:N:PPM` (slave N's clock runs PPM parts per million fast);
+/// OPTS are `every=N`, `skip=N`, `times=N`, `probability=P`, `seed=S`.
+/// Returns the fault and the seed to give the line's generator, if any.
+pub fn parse_line(text: &str, slaves: usize) -> anyhow::Result<(drivebus_ethercat::LineFault, Option<u64>)> {
+    use drivebus_can::Recurrence;
+    use drivebus_ethercat::LineFault;
+    let bad = || {
+        format!(
+            "bad EtherCAT fault `{text}`: expected break:N, lose[,every=N][,probability=P][,seed=S], \
+             corrupt[:N][,every=N], wkc:N:SKEW or drift:N:PPM (slaves 1..{slaves})"
+        )
+    };
+    let (head, opts) = match text.split_once(',') {
+        Some((h, o)) => (h, Some(o)),
+        None => (text, None),
+    };
+    let mut pick = Recurrence::always();
+    let mut seed = None;
+    for opt in opts.into_iter().flat_map(|o| o.split(',')) {
+        let (k, v) = opt.split_once('=').with_context(bad)?;
+        let (k, v) = (k.trim(), v.trim());
+        pick = match k {
+            "probability" => match v.parse::<f64>() {
+                Ok(p) if (0.0..=1.0).contains(&p) => pick.probability(p),
+                _ => bail!("{}: probability must be 0..1", bad()),
+            },
+            "seed" => {
+                seed = Some(v.parse().with_context(bad)?);
+                pick
+            }
+            _ => {
+                let n: u32 = v.parse().with_context(bad)?;
+                match k {
+                    "every" if n > 0 => pick.every(n),
+                    "skip" => pick.skip(n),
+                    "times" => pick.times(n),
+                    _ => bail!("{}", bad()),
+                }
+            }
+        };
+    }
+    let slave = |s: &str, last: usize| -> anyhow::Result<usize> {
+        match s.trim().parse::<usize>() {
+            Ok(n) if (1..=last).contains(&n) => Ok(n - 1),
+            _ => bail!("{}: slave `{s}` is not one of 1..{last}", bad()),
+        }
+    };
+    let parts: Vec<&str> = head.split(':').collect();
+    let fault = match parts.as_slice() {
+        ["break", n] if opts.is_none() => {
+            if slaves < 2 {
+                bail!("{}: a line of one slave has no link behind it to break", bad());
+            }
+            LineFault::Break { after: slave(n, slaves - 1)? }
+        }
+        ["lose"] => LineFault::Lose(pick),
+        ["corrupt"] => LineFault::Corrupt { at: 0, pick },
+        ["corrupt", n] => LineFault::Corrupt { at: slave(n, slaves)?, pick },
+        ["wkc", n, skew] if opts.is_none() => {
+            let skew: i16 = skew.trim().trim_start_matches('+').parse().with_context(bad)?;
+            LineFault::WkcSkew { slave: slave(n, slaves)?, skew }
+        }
+        ["drift", n, ppm] if opts.is_none() => {
+            let ppm: f64 = ppm.trim().trim_start_matches('+').parse().with_context(bad)?;
+            if !(-100_000.0..=100_000.0).contains(&ppm) {
+                bail!("{}: PPM must be within ±100000", bad());
+            }
+            LineFault::Drift { slave: slave(n, slaves)?, ppb: (ppm * 1000.0).round() as i32 }
+        }
+        _ => bail!("{}", bad()),
+    };
+    Ok((fault, seed))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,5 +179,33 @@ mod tests {
             let e = parse(bad).unwrap_err().to_string();
             assert!(e.contains("bad --fault"), "{bad}: {e}");
         }
+    }
+
+    #[test]
+    fn line_faults_parse_and_bad_ones_say_why() {
+        use drivebus_ethercat::LineFault;
+        assert_eq!(parse_line("break:2", 3).unwrap(), (LineFault::Break { after: 1 }, None));
+        assert_eq!(parse_line("wkc:3:+1", 3).unwrap().0, LineFault::WkcSkew { slave: 2, skew: 1 });
+        assert_eq!(parse_line("wkc:1:-2", 3).unwrap().0, LineFault::WkcSkew { slave: 0, skew: -2 });
+        assert_eq!(parse_line("drift:2:-1.5", 3).unwrap().0, LineFault::Drift { slave: 1, ppb: -1500 });
+        assert!(matches!(parse_line("corrupt:2,every=4", 3).unwrap().0, LineFault::Corrupt { at: 1, .. }));
+        let (f, seed) = parse_line("lose,probability=0.1,seed=7", 3).unwrap();
+        assert!(matches!(f, LineFault::Lose(_)));
+        assert_eq!(seed, Some(7));
+        for bad in [
+            "",
+            "break",
+            "break:3",
+            "break:0",
+            "lose,every=0",
+            "lose,probability=2",
+            "wkc:4:1",
+            "drift:1:1e9",
+            "flip",
+        ] {
+            let e = parse_line(bad, 3).unwrap_err().to_string();
+            assert!(e.contains("bad EtherCAT fault"), "{bad}: {e}");
+        }
+        assert!(parse_line("break:1", 1).unwrap_err().to_string().contains("one slave"));
     }
 }

@@ -114,6 +114,13 @@ impl LocalClock {
         self.anchor_local.wrapping_add(base.wrapping_add(self.slewed(dt)) as u64)
     }
 
+    /// Changes the oscillator's frequency error from `t` on (a drifting
+    /// clock as a fault); the local time stays continuous.
+    pub fn set_drift(&mut self, t: Instant, drift_ppb: i32) {
+        self.reanchor(t);
+        self.drift = i64::from(drift_ppb).clamp(-100_000_000, 100_000_000);
+    }
+
     /// Moves the anchor to `t`, consuming the slew done so far.
     fn reanchor(&mut self, t: Instant) {
         let dt = t.as_nanos().saturating_sub(self.anchor_t);

@@ -393,6 +393,13 @@ impl Esc {
         self.clock.instant_of(sys.wrapping_sub(self.system_time_offset()))
     }
 
+    /// Sets the local oscillator's frequency error (ppb, positive: fast)
+    /// from the latest `now` on, as a drifting clock would; the local time
+    /// stays continuous. [`EscConfig::clock`] keeps the one it was built with.
+    pub fn set_clock_drift(&mut self, drift_ppb: i32) {
+        self.clock.set_drift(self.now, drift_ppb);
+    }
+
     /// Frequency correction of the time control loop, in ppb.
     pub fn clock_correction_ppb(&self) -> i64 {
         self.clock.correction_ppb()
@@ -418,6 +425,15 @@ impl Esc {
             self.links = l;
             self.update_dl_status(true);
         }
+    }
+
+    /// Counts a frame with a bad FCS received on port `p` (0..=3): the
+    /// invalid frame counter (0x0300 + 2p), or the forwarded RX error
+    /// counter (0x0308 + p) when an earlier ESC had marked it already.
+    /// Both stop at 0xFF (ESC data sheet Section II, 0x0300–0x030B).
+    pub fn count_rx_error(&mut self, p: usize, forwarded: bool) {
+        let at = if forwarded { 0x0308 + p.min(3) } else { 0x0300 + 2 * p.min(3) };
+        self.mem[at] = self.mem[at].saturating_add(1);
     }
 
     /// True if frames leave through port `p` (link up and the loop not

@@ -19,14 +19,20 @@
 //! and SOEM do) gets `link + esc` per hop: exactly the time between two
 //! slaves processing the same datagram.
 //!
-//! Slaves can be inserted, removed and disconnected at run time; DL status
-//! and the lost-link counters follow.
+//! Slaves can be inserted, removed, disconnected and powered off and on
+//! at run time; DL status and the lost-link counters follow. Faults of the
+//! line ([`LineFault`]: a broken link, lost or corrupted frames, a skewed
+//! working counter) act on every frame until cleared.
 
 use crate::esc::{Esc, FrameReport, FrameTiming};
 use crate::frame;
 use alloc::boxed::Box;
 use alloc::vec::Vec;
+use drivebus_can::fault::XorShift64;
 use drivebus_can::{Duration, Instant, earliest};
+
+mod fault;
+pub use fault::LineFault;
 
 /// Something on the segment: an ESC, with or without firmware on its PDI.
 pub trait Device {
@@ -43,6 +49,11 @@ pub trait Device {
     /// does not expose itself.
     fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
         None
+    }
+    /// Power comes back: the ESC starts from its reset values with its
+    /// EEPROM as it was ([`Esc::reset`]); firmware restarts in INIT.
+    fn power_on(&mut self) {
+        self.esc_mut().reset();
     }
 }
 
@@ -67,6 +78,9 @@ impl<D: Device + ?Sized> Device for Box<D> {
     }
     fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
         (**self).as_any_mut()
+    }
+    fn power_on(&mut self) {
+        (**self).power_on()
     }
 }
 
@@ -94,6 +108,10 @@ pub struct SegmentReport {
     pub returns_at: Instant,
     /// The first slave's report (all slaves see the same frame layout).
     pub frame: FrameReport,
+    /// The master never gets the frame back: it was lost on the way
+    /// ([`LineFault::Lose`]) or arrives with a bad FCS that the master's
+    /// NIC discards ([`LineFault::Corrupt`]). Transports do not deliver it.
+    pub lost: bool,
 }
 
 /// A line of devices.
@@ -101,14 +119,29 @@ pub struct SegmentReport {
 pub struct Segment<D> {
     devices: Vec<D>,
     cables: Vec<bool>,
+    /// Devices with their power off.
+    unpowered: Vec<bool>,
+    faults: Vec<LineFault>,
+    rng: XorShift64,
     cfg: SegmentConfig,
     scratch: Vec<FrameTiming>,
+    /// Working counters before a skewed slave ran.
+    wkcs: Vec<(usize, u16)>,
 }
 
 impl<D: Device> Segment<D> {
     /// An empty segment.
     pub fn new(cfg: SegmentConfig) -> Self {
-        Segment { devices: Vec::new(), cables: Vec::new(), cfg, scratch: Vec::new() }
+        Segment {
+            devices: Vec::new(),
+            cables: Vec::new(),
+            unpowered: Vec::new(),
+            faults: Vec::new(),
+            rng: XorShift64::new(0),
+            cfg,
+            scratch: Vec::new(),
+            wkcs: Vec::new(),
+        }
     }
 
     /// A segment of `devices` in line order.
@@ -160,6 +193,7 @@ impl<D: Device> Segment<D> {
     pub fn insert(&mut self, i: usize, d: D) {
         let i = i.min(self.devices.len());
         self.devices.insert(i, d);
+        self.unpowered.insert(i, false);
         self.cables.insert(i.min(self.cables.len()), true);
         self.cables.truncate(self.devices.len().saturating_sub(1));
         while self.cables.len() < self.devices.len().saturating_sub(1) {
@@ -175,6 +209,7 @@ impl<D: Device> Segment<D> {
             return None;
         }
         let d = self.devices.remove(i);
+        self.unpowered.remove(i);
         if !self.cables.is_empty() {
             self.cables.remove(i.min(self.cables.len() - 1));
         }
@@ -191,13 +226,111 @@ impl<D: Device> Segment<D> {
         }
     }
 
+    /// Adds a fault of the line; it acts on every frame from now on.
+    pub fn add_fault(&mut self, f: LineFault) {
+        if let LineFault::Drift { slave, ppb } = f
+            && let Some(d) = self.devices.get_mut(slave)
+        {
+            d.esc_mut().set_clock_drift(ppb);
+        }
+        self.faults.push(f);
+        self.update_links();
+    }
+
+    /// Ends every fault of the line (power stays as it is); a drifting
+    /// clock gets its own drift back.
+    pub fn clear_faults(&mut self) {
+        for f in self.faults.drain(..) {
+            if let LineFault::Drift { slave, .. } = f
+                && let Some(d) = self.devices.get_mut(slave)
+            {
+                let own = d.esc().config().clock.drift_ppb;
+                d.esc_mut().set_clock_drift(own);
+            }
+        }
+        self.update_links();
+    }
+
+    /// The faults that are on, in the order added.
+    pub fn faults(&self) -> &[LineFault] {
+        &self.faults
+    }
+
+    /// Seeds the generator behind the faults' probabilities.
+    pub fn set_fault_seed(&mut self, seed: u64) {
+        self.rng = XorShift64::new(seed);
+    }
+
+    /// Cuts device `i`'s power: it neither processes nor forwards, its
+    /// neighbours lose their links to it (the line ends before it).
+    pub fn power_off(&mut self, i: usize) {
+        if let Some(p) = self.unpowered.get_mut(i) {
+            *p = true;
+            self.update_links();
+        }
+    }
+
+    /// Powers device `i` on again ([`Device::power_on`]: registers at
+    /// their reset values, the EEPROM kept); its links come up.
+    pub fn power_on(&mut self, i: usize) {
+        if self.unpowered.get(i) == Some(&true) {
+            self.unpowered[i] = false;
+            self.devices[i].power_on();
+            self.update_links();
+        }
+    }
+
+    /// False while device `i` has its power off.
+    pub fn is_powered(&self, i: usize) -> bool {
+        !self.unpowered.get(i).copied().unwrap_or(false)
+    }
+
+    /// True if frames pass between device `i` and `i + 1`: cabled, no
+    /// broken link, both powered.
+    fn joined(&self, i: usize) -> bool {
+        self.cables.get(i).copied().unwrap_or(false)
+            && !self.faults.iter().any(|f| f.breaks(i))
+            && !self.unpowered[i]
+            && !self.unpowered[i + 1]
+    }
+
     fn update_links(&mut self) {
         let n = self.devices.len();
         for i in 0..n {
-            let p0 = i == 0 || self.cables[i - 1];
-            let p1 = i + 1 < n && self.cables[i];
+            let (p0, p1) = if self.unpowered[i] {
+                (false, false)
+            } else {
+                (i == 0 || self.joined(i - 1), i + 1 < n && self.joined(i))
+            };
             self.devices[i].esc_mut().set_port_links([p0, p1, false, false]);
         }
+    }
+
+    /// Whether a [`LineFault::Lose`] takes this frame.
+    fn lose(&mut self) -> bool {
+        let rng = &mut self.rng;
+        self.faults.iter_mut().any(|f| match f {
+            LineFault::Lose(p) => p.fire(rng),
+            _ => false,
+        })
+    }
+
+    /// The slave a [`LineFault::Corrupt`] damages this frame in front of,
+    /// if one fires (only on cables the frame passes).
+    fn corrupt(&mut self, reached: usize) -> Option<usize> {
+        let rng = &mut self.rng;
+        self.faults.iter_mut().find_map(|f| match f {
+            LineFault::Corrupt { at, pick } if *at < reached => pick.fire(rng).then_some(*at),
+            _ => None,
+        })
+    }
+
+    /// The working-counter skew of slave `i`, if any.
+    fn skew(&self, i: usize) -> Option<i16> {
+        self.faults.iter().find_map(|f| match f {
+            LineFault::WkcSkew { slave, skew } if *slave == i => Some(*skew),
+            _ => None,
+        })
     }
 
     /// Passes an Ethernet frame through the line in place at `now` (when
@@ -209,11 +342,15 @@ impl<D: Device> Segment<D> {
             report.frame.ignored = true;
             return report;
         };
+        if !self.faults.is_empty() && self.lose() {
+            report.lost = true;
+            return report;
+        }
         let (link, esc) = (self.cfg.link_delay, self.cfg.esc_delay);
         self.scratch.clear();
         let mut t = now;
         for (i, d) in self.devices.iter().enumerate() {
-            if i > 0 && !self.cables[i - 1] {
+            if self.unpowered[i] || (i > 0 && !self.joined(i - 1)) {
                 break;
             }
             t += link;
@@ -237,13 +374,32 @@ impl<D: Device> Segment<D> {
         }
         report.returns_at = back + link;
         report.reached = reached;
+        let corrupt_at = if self.faults.is_empty() { None } else { self.corrupt(reached) };
         for i in 0..reached {
+            if let Some(at) = corrupt_at.filter(|at| i >= *at) {
+                // A bad FCS: nothing executed, the error counted.
+                self.devices[i].esc_mut().count_rx_error(0, i > at);
+                continue;
+            }
+            if corrupt_at.is_some() {
+                // Before the damage: processed on the way out, the bad
+                // frame forwarded from port 1 on the way back.
+                self.devices[i].esc_mut().count_rx_error(1, true);
+            }
+            let skew = if self.faults.is_empty() { None } else { self.skew(i) };
+            if skew.is_some() {
+                fault::working_counters(&frame[off..], &mut self.wkcs);
+            }
             let timing = self.scratch[i];
             let r = self.devices[i].esc_mut().process_ethercat(&mut frame[off..], &timing);
+            if let Some(skew) = skew {
+                fault::skew_counters(&mut frame[off..], &self.wkcs, skew);
+            }
             if i == 0 {
                 report.frame = r;
             }
         }
+        report.lost = corrupt_at.is_some();
         if !report.frame.ignored {
             frame::mark_reply_source(frame);
         }

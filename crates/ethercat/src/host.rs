@@ -25,6 +25,8 @@ pub struct HostStats {
     pub bad_frames: u64,
     /// Device polls at deadlines.
     pub deadline_polls: u64,
+    /// Frames a fault of the line lost or corrupted (never returned).
+    pub lost: u64,
 }
 
 struct Inner {
@@ -113,7 +115,8 @@ impl Host {
     }
 
     /// Processes one Ethernet frame in place, arriving now. Returns when
-    /// the reply is back at the master.
+    /// the reply is back at the master; a transport sends nothing back
+    /// when [`SegmentReport::lost`] says a fault of the line took it.
     pub fn process_frame(&self, frame: &mut [u8]) -> SegmentReport {
         let mut g = self.lock();
         let now = self.clock.now();
@@ -127,8 +130,9 @@ impl Host {
         if r.frame.ignored || r.frame.malformed {
             g.stats.bad_frames += 1;
         }
+        g.stats.lost += u64::from(r.lost);
         let unix = self.clock.unix_ns(r.returns_at);
-        if let Some(c) = g.capture.as_mut() {
+        if let Some(c) = g.capture.as_mut().filter(|_| !r.lost) {
             let _ = c.write(frame, unix, Direction::Outbound);
         }
         if self.clock.is_simulated() {

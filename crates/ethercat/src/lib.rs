@@ -36,4 +36,5 @@ pub mod probe;
 pub mod server;
 
 pub use clock::Clock;
+pub use drivebus_esc::segment::LineFault;
 pub use host::{BoxDevice, Host, HostStats};

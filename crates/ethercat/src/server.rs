@@ -145,6 +145,8 @@ pub struct ServerStats {
     pub frames: u64,
     /// Non-EtherCAT frames seen and dropped.
     pub ignored: u64,
+    /// EtherCAT frames a fault of the line lost (no reply sent).
+    pub lost: u64,
 }
 
 /// Serves `host` on `interface` until `stop` is set.
@@ -165,9 +167,12 @@ pub fn serve_socket(sock: &RawSocket, host: &Host, stop: &AtomicBool) -> io::Res
             stats.ignored += 1;
             continue;
         }
-        host.process_frame(&mut buf[..n]);
-        sock.send(&buf[..n])?;
         stats.frames += 1;
+        if host.process_frame(&mut buf[..n]).lost {
+            stats.lost += 1;
+            continue;
+        }
+        sock.send(&buf[..n])?;
     }
     Ok(stats)
 }

@@ -6,6 +6,7 @@
 //! (`drivebus_ethercat::master`, on ethercrab), and `demo.rs` is
 //! `drivebus demo --ethercat`.
 
+pub mod control;
 pub mod demo;
 mod drive;
 mod line;
@@ -45,11 +46,14 @@ Examples:
   drivebus ethercat serve --iface veth0 --drive ipos
   drivebus ethercat serve --iface eth1 --drive ipos --drive ipos --drive generic --state-dir ./ecat-state --pcap line.pcapng
   drivebus ethercat serve --iface veth0 --device ek1100.bin --device el2004.hex --device board.xml#1 --drive ipos
+  drivebus ethercat serve --iface veth0 --drive ipos --drive ipos --control /tmp/ecat.sock
 
 The slaves sit on the line in the order given (--drive and --device mixed). A --device is a real
 device's SII EEPROM image (served byte for byte) or ESI file; its inputs loop its outputs back. Prints one line containing `ready on IFACE` once
 the segment answers frames; stops on SIGINT/SIGTERM (exit 0). Any EtherCAT master on the wire
-(ethercrab, SOEM/pysoem, TwinCAT) sees them; --pcap records every frame for Wireshark.";
+(ethercrab, SOEM/pysoem, TwinCAT) sees them; --pcap records every frame for Wireshark. With
+--control ADDR, `drivebus control --connect ADDR ...` sets drive inputs and machine faults, breaks the
+line, loses or corrupts frames and power-cycles a slave while it runs (docs/control.md).";
 
 const SCAN_EXAMPLES: &str = "\
 Examples:
@@ -286,6 +290,11 @@ pub struct EcatServeArgs {
     /// Record every frame in and out as pcapng.
     #[arg(long, value_name = "FILE")]
     pub pcap: Option<PathBuf>,
+    /// Accept control requests (drive inputs and machine faults, faults of the line, a slave's
+    /// power) on this loopback address (127.0.0.1:PORT) or Unix socket path: `drivebus control`,
+    /// docs/control.md. Off unless given.
+    #[arg(long, value_name = "ADDR")]
+    pub control: Option<String>,
 }
 
 /// One slave of `ethercat serve`'s line.

@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// Serves until SIGINT or SIGTERM.
 pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
     let members = members(&a.line.slaves)?;
+    let control_addr = a.control.as_deref().map(crate::control::Addr::parse).transpose()?;
     if let Some(dir) = &a.state_dir {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create --state-dir {}", dir.display()))?;
@@ -30,6 +31,13 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
             a.iface
         )
     })?;
+    let control_task = match &control_addr {
+        Some(addr) => {
+            let control = Arc::new(crate::control::Control::ethercat(host.clone()));
+            Some(crate::control::listen(addr, control).await?)
+        }
+        None => None,
+    };
     let signals = Signals::install()?;
     let stop = Arc::new(AtomicBool::new(false));
     let served = {
@@ -38,10 +46,19 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
     };
     {
         let mut out = std::io::stdout().lock();
-        writeln!(out, "drivebus ethercat serve: ready on {} (line {})", a.iface, names(&members).join(" "))?;
+        let control =
+            control_task.as_ref().map_or_else(String::new, |(_, addr)| format!("; control on {addr}"));
+        let line = names(&members).join(" ");
+        writeln!(out, "drivebus ethercat serve: ready on {} (line {line}){control}", a.iface)?;
         out.flush()?;
     }
     signals.wait().await?;
+    if let Some((task, addr)) = control_task {
+        task.abort();
+        if let crate::control::Addr::Unix(p) = addr {
+            let _ = std::fs::remove_file(p);
+        }
+    }
     stop.store(true, Ordering::Release);
     let stats = served.join().map_err(|_| anyhow::anyhow!("the server thread panicked"))?;
     host.stop_capture().context("flushing --pcap")?;

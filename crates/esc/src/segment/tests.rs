@@ -3,6 +3,7 @@ use crate::frame::{Command, FrameBuilder, datagrams, position_address, station_a
 use crate::tests::image;
 use crate::{ClockConfig, EscConfig};
 use alloc::vec::Vec;
+use drivebus_can::fault::Recurrence;
 
 fn line(n: usize) -> Segment<Esc> {
     let escs = (0..n)
@@ -134,4 +135,123 @@ fn frmw_distributes_the_reference_time_down_the_line() {
     assert_eq!(wkc, 3, "reference reads, two followers write");
     let reference = u64::from_le_bytes(d.try_into().unwrap());
     assert_eq!(reference, 17 + 100_000 + 300);
+}
+
+fn brd_wkc(s: &mut Segment<Esc>) -> (u16, SegmentReport) {
+    let (_, wkc, r) = send(s, Command::Brd, station_address(0, 0), &[0], 0);
+    (wkc, r)
+}
+
+#[test]
+fn a_broken_link_fault_hides_the_slaves_behind_it_until_cleared() {
+    let mut s = line(4);
+    address_all(&mut s);
+    s.add_fault(LineFault::Break { after: 1 });
+    let (wkc, r) = brd_wkc(&mut s);
+    assert_eq!((wkc, r.reached, r.lost), (2, 2, false));
+    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1001, 0x0311), &[0], 0).0, [1]);
+    s.clear_faults();
+    assert_eq!(brd_wkc(&mut s).0, 4);
+    // The cable itself was never touched.
+    s.set_cable(2, false);
+    s.clear_faults();
+    assert_eq!(brd_wkc(&mut s).0, 3);
+}
+
+#[test]
+fn lost_frames_reach_no_slave_and_come_back_lost() {
+    let mut s = line(2);
+    address_all(&mut s);
+    s.add_fault(LineFault::Lose(Recurrence::always().every(3)));
+    let lost: Vec<bool> = (0..6).map(|_| brd_wkc(&mut s).1.lost).collect();
+    assert_eq!(lost, [true, false, false, true, false, false]);
+    // A lost write did not happen.
+    s.clear_faults();
+    s.add_fault(LineFault::Lose(Recurrence::always().times(1)));
+    let (_, _, r) = send(&mut s, Command::Fpwr, station_address(0x1001, 0x0600), &[0x34, 0x12], 0);
+    assert!(r.lost);
+    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1001, 0x0600), &[0, 0], 0).0, [0, 0]);
+}
+
+#[test]
+fn seeded_loss_replays_and_takes_about_its_share() {
+    let run = |seed| {
+        let mut s = line(1);
+        s.set_fault_seed(seed);
+        s.add_fault(LineFault::Lose(Recurrence::always().probability(0.25)));
+        (0..400).map(|_| brd_wkc(&mut s).1.lost).collect::<Vec<_>>()
+    };
+    let a = run(7);
+    assert_eq!(a, run(7));
+    let n = a.iter().filter(|l| **l).count();
+    assert!((60..140).contains(&n), "{n}");
+}
+
+#[test]
+fn a_corrupted_frame_is_lost_unexecuted_behind_the_damage_and_counted() {
+    let mut s = line(3);
+    address_all(&mut s);
+    s.add_fault(LineFault::Corrupt { at: 1, pick: Recurrence::always().times(1) });
+    let (_, wkc, r) = send(&mut s, Command::Bwr, station_address(0, 0x0600), &[0x21, 0x43], 0);
+    assert!(r.lost);
+    assert_eq!(wkc, 1, "only slave 0 executed it");
+    let fmmu = |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0600), &[0, 0], 0).0;
+    assert_eq!(fmmu(&mut s, 0x1000), [0x21, 0x43]);
+    assert_eq!(fmmu(&mut s, 0x1001), [0, 0]);
+    let counters =
+        |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0300), &[0; 12], 0).0;
+    assert_eq!(counters(&mut s, 0x1000)[8..10], [0, 1], "forwarded on the way back (port 1)");
+    assert_eq!(counters(&mut s, 0x1001)[0], 1, "invalid frame on port 0");
+    assert_eq!(counters(&mut s, 0x1002)[8], 1, "forwarded RX error on port 0");
+    // times=1: the next frame passes.
+    assert!(!brd_wkc(&mut s).1.lost);
+}
+
+#[test]
+fn a_skewed_slave_miscounts_only_where_it_counts() {
+    let mut s = line(3);
+    address_all(&mut s);
+    s.add_fault(LineFault::WkcSkew { slave: 1, skew: 1 });
+    assert_eq!(brd_wkc(&mut s).0, 4);
+    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1000, 0), &[0], 0).1, 1);
+    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1001, 0), &[0], 0).1, 2);
+    s.clear_faults();
+    assert_eq!(brd_wkc(&mut s).0, 3);
+}
+
+#[test]
+fn a_power_cycled_slave_comes_back_reset_with_its_eeprom() {
+    let mut s = line(3);
+    address_all(&mut s);
+    s.power_off(1);
+    assert!(!s.is_powered(1));
+    assert_eq!(brd_wkc(&mut s).0, 1, "the line ends before the unpowered slave");
+    s.power_on(1);
+    assert_eq!(brd_wkc(&mut s).0, 3);
+    // Its station address is back at the reset value; the others kept theirs.
+    assert_eq!(send(&mut s, Command::Aprd, position_address(1, 0x0010), &[0, 0], 0).0, [0, 0]);
+    assert_eq!(send(&mut s, Command::Aprd, position_address(2, 0x0010), &[0, 0], 0).0, [0x02, 0x10]);
+    // The EEPROM's configured station alias (word 4) loaded again.
+    let alias = send(&mut s, Command::Aprd, position_address(1, 0x0012), &[0, 0], 0).0;
+    assert_eq!(alias, send(&mut s, Command::Aprd, position_address(0, 0x0012), &[0, 0], 0).0);
+}
+
+#[test]
+fn a_drift_fault_changes_the_rate_of_one_clock_until_cleared() {
+    let mut s = line(2);
+    address_all(&mut s);
+    let time = |s: &mut Segment<Esc>, a, us| {
+        let d = send(s, Command::Fprd, station_address(a, 0x0910), &[0; 8], us).0;
+        u64::from_le_bytes(d.try_into().unwrap())
+    };
+    let rate = |s: &mut Segment<Esc>, a, from| {
+        let t0 = time(s, a, from);
+        time(s, a, from + 1000) - t0
+    };
+    assert_eq!(rate(&mut s, 0x1001, 0), 1_000_000);
+    s.add_fault(LineFault::Drift { slave: 1, ppb: 1_000_000 });
+    assert_eq!(rate(&mut s, 0x1001, 2000), 1_001_000, "1000 ppm fast");
+    assert_eq!(rate(&mut s, 0x1000, 4000), 1_000_000, "the other clock as before");
+    s.clear_faults();
+    assert_eq!(rate(&mut s, 0x1001, 6000), 1_000_000);
 }

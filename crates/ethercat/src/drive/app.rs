@@ -11,6 +11,7 @@ use drivebus_esc::slave::{
     Transition,
 };
 use drivebus_personality::ecat::{self, DriveFiles, EcatFacts, EsmEvent};
+use drivebus_personality::machine::{Change, MachineError};
 use drivebus_personality::{PersonalityDevice, Profile};
 
 /// The CoE emergency service in a CoE header (ETG.1000.6).
@@ -133,6 +134,24 @@ impl DriveApp {
     /// (default 1 ms; it then catches up in whole control periods).
     pub fn set_poll_period(&mut self, d: Duration) {
         self.poll_period = d.max(Duration::from_micros(1));
+    }
+
+    /// Changes the drive's machine at `now`: an input or a fault, put on
+    /// the machine schedule the machine file fills (as `drivebus serve
+    /// --control` does on CAN, docs/control.md); the application is
+    /// polled right after, through the node.
+    pub fn change_machine(
+        &mut self,
+        now: Instant,
+        change: Change,
+        duration: Option<f64>,
+    ) -> Result<(), MachineError> {
+        let dev = &mut self.dev;
+        let r = dev.node.with_app(now, &mut dev.app, &mut self.frames, |app, _| {
+            app.change_machine(now, change, duration)
+        });
+        self.take_frames();
+        r
     }
 
     /// Runs the node and drive up to `now` and takes their frames.

@@ -211,8 +211,11 @@ pub struct DriveLine<'m> {
     bad_in_row: u32,
     /// Cycles exchanged in OP.
     pub cycles: u64,
-    /// Cycles whose working counter was not the expected one.
+    /// Cycles whose working counter was not the expected one (lost
+    /// frames included).
     pub bad_wkc: u64,
+    /// Cycles whose frame never came back (ethercrab's PDU timeout).
+    pub lost: u64,
     /// What the last cycle read.
     pub fb: Feedback,
     controlword: u16,
@@ -308,6 +311,7 @@ impl<'m> DriveLine<'m> {
             bad_in_row: 0,
             cycles: 0,
             bad_wkc: 0,
+            lost: 0,
             fb: Feedback::default(),
             controlword: 0,
             target: 0,
@@ -431,13 +435,19 @@ impl<'m> DriveLine<'m> {
             }
         });
         let md = self.m.main_device();
-        let e = |e| DriveError::Master(MasterError::Ethercrab("process data".into(), e));
-        let (wkc, wait) = match &self.group {
-            Group::Dc(g) => {
-                let r = g.tx_rx_dc(md).await.map_err(e)?;
-                (r.working_counter, r.extra.next_cycle_wait)
+        let r = match &self.group {
+            Group::Dc(g) => g.tx_rx_dc(md).await.map(|r| (r.working_counter, r.extra.next_cycle_wait)),
+            Group::Free(g) => g.tx_rx(md).await.map(|r| (r.working_counter, self.cycle)),
+        };
+        let (wkc, wait) = match r {
+            Ok(r) => r,
+            // A frame lost on the line is one bad cycle, not the end of
+            // the line: the next cycle sends the outputs again.
+            Err(ethercrab::error::Error::Timeout(ethercrab::error::TimeoutError::Pdu)) => {
+                self.lost += 1;
+                (0, self.cycle)
             }
-            Group::Free(g) => (g.tx_rx(md).await.map_err(e)?.working_counter, self.cycle),
+            Err(e) => return Err(DriveError::Master(MasterError::Ethercrab("process data".into(), e))),
         };
         self.cycles += 1;
         if wkc == self.expected_wkc {
