@@ -233,3 +233,24 @@ fn bus_event(web: &Web, last: &mut HashMap<u8, RemoteState>, e: MasterEvent) -> 
         }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A client that reads slower than samples come loses the oldest,
+    /// counted; the queue never grows past its bound.
+    #[test]
+    fn the_queue_drops_the_oldest_and_counts() {
+        let q = Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() };
+        for i in 0..QUEUE + 10 {
+            q.push(&json!(i));
+        }
+        assert_eq!(q.dropped.load(Ordering::Relaxed), 10);
+        let all = q.take();
+        assert_eq!(all.len(), QUEUE);
+        assert_eq!(all[0], "10");
+        assert_eq!(all.last().map(String::as_str), Some(&*(QUEUE + 9).to_string()));
+        assert!(q.take().is_empty());
+    }
+}
