@@ -2,7 +2,7 @@
 //! stopping reactions are executed on the model and completed with
 //! `motion_stopped` (CiA 402-2 §6.2, 605Ah / 605Eh).
 
-use drivebus_cia402::model::{Command, DriveModel, DriveParams, Injection};
+use drivebus_cia402::model::{Command, DriveModel, DriveParams, ModelInjection};
 use drivebus_cia402::state_machine::{DriveFunction, Options, Reaction, State, StateMachine};
 
 const DT: f64 = 1.0 / 8000.0;
@@ -109,7 +109,7 @@ fn over_temperature_fault_reaction_stops_then_fault() {
     a.sm.controlword(0x0F);
     a.target_velocity = 300.0;
     a.run(0.2);
-    a.model.inject(Injection::OverTemperature);
+    a.model.inject(ModelInjection::OverTemperature);
     a.cycle();
     assert_eq!(a.sm.state(), State::FaultReactionActive);
     assert_eq!(a.sm.fault_code(), 0x4310);
@@ -124,7 +124,7 @@ fn over_temperature_fault_reaction_stops_then_fault() {
     assert!(a.model.clear_faults().any());
     a.cycle();
     assert_eq!(a.sm.state(), State::Fault);
-    a.model.inject(Injection::Clear);
+    a.model.inject(ModelInjection::Clear);
     a.sm.controlword(0x00);
     a.sm.controlword(0x80);
     assert!(!a.model.clear_faults().any());

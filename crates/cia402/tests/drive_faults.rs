@@ -6,7 +6,7 @@ mod drive_rig;
 use drive_rig::*;
 use drivebus_can::Frame;
 use drivebus_cia402::drive::Injection;
-use drivebus_cia402::model::Injection as M;
+use drivebus_cia402::model::ModelInjection as M;
 
 const FAULT: u16 = 0x0228;
 const SOD: u16 = 0x0260;

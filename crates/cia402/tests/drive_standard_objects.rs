@@ -9,7 +9,7 @@ mod drive_rig;
 use core::f64::consts::PI;
 use drive_rig::*;
 use drivebus_cia402::drive::Injection;
-use drivebus_cia402::model::Injection as Plant;
+use drivebus_cia402::model::ModelInjection as Plant;
 
 const REV: f64 = 360_000.0; // position units per motor revolution (generic)
 const SW_REACHED: u16 = 1 << 10;

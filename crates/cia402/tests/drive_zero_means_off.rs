@@ -7,7 +7,7 @@
 mod drive_rig;
 use drive_rig::*;
 use drivebus_cia402::drive::{DriveConfig, Injection, ZeroMeansOff};
-use drivebus_cia402::model::Injection as M;
+use drivebus_cia402::model::ModelInjection as M;
 
 /// Enabled in pp with a load above the peak torque dragging the axis away;
 /// returns whether the following error fault (8611h) was raised.

@@ -1,11 +1,11 @@
-//! Forced switch inputs (`model::Injection::ForceSwitch`): a limit switch
+//! Forced switch inputs (`model::ModelInjection::ForceSwitch`): a limit switch
 //! that trips without the axis being there (an obstacle, a broken wire of
 //! a normally-closed switch) or a dead one. The level shows in 60FDh and as
 //! an edge at the present position, so the drive reacts to it as to the
 //! axis reaching the switch (CiA 402-2 §6.2: 60FDh bits 0–2).
 
 use drivebus_cia402::model::{
-    AxisParams, Command, DriveModel, DriveParams, EventKind, Injection, SwitchInput,
+    AxisParams, Command, DriveModel, DriveParams, EventKind, ModelInjection, SwitchInput,
 };
 
 fn model() -> DriveModel {
@@ -26,7 +26,7 @@ fn a_forced_limit_switch_is_an_edge_where_the_axis_is_and_a_release_too() {
     let mut m = model();
     m.step(DT);
     assert!(!m.switches().positive_limit);
-    m.inject(Injection::ForceSwitch(SwitchInput::PositiveLimit, Some(true)));
+    m.inject(ModelInjection::ForceSwitch(SwitchInput::PositiveLimit, Some(true)));
     let e = *m.step(DT).first(EventKind::PositiveLimit).expect("edge");
     assert!(e.active);
     assert_eq!(e.position, m.position());
@@ -34,7 +34,7 @@ fn a_forced_limit_switch_is_an_edge_where_the_axis_is_and_a_release_too() {
     assert_eq!(m.switches().digital_inputs(), 0b010);
     // Held: no further edge.
     assert!(m.step(DT).first(EventKind::PositiveLimit).is_none());
-    m.inject(Injection::ForceSwitch(SwitchInput::PositiveLimit, None));
+    m.inject(ModelInjection::ForceSwitch(SwitchInput::PositiveLimit, None));
     let e = *m.step(DT).first(EventKind::PositiveLimit).expect("release edge");
     assert!(!e.active);
     assert!(!m.switches().positive_limit);
@@ -43,7 +43,7 @@ fn a_forced_limit_switch_is_an_edge_where_the_axis_is_and_a_release_too() {
 #[test]
 fn a_dead_switch_hides_the_axis_edges_until_released() {
     let mut m = model();
-    m.inject(Injection::ForceSwitch(SwitchInput::Home, Some(false)));
+    m.inject(ModelInjection::ForceSwitch(SwitchInput::Home, Some(false)));
     m.step(DT);
     assert!(m.set_command(Command::Velocity { velocity: 40.0, acceleration: 1e4 }));
     let mut home_edges = 0;
@@ -57,17 +57,17 @@ fn a_dead_switch_hides_the_axis_edges_until_released() {
     assert!(m.rad_to_units(m.position()) >= 300.0);
     assert_eq!(home_edges, 0);
     // Released outside the switch: its level was already inactive, no edge.
-    m.inject(Injection::ForceSwitch(SwitchInput::Home, None));
+    m.inject(ModelInjection::ForceSwitch(SwitchInput::Home, None));
     assert!(m.step(DT).first(EventKind::Home).is_none());
 }
 
 #[test]
 fn clear_releases_forced_switches() {
     let mut m = model();
-    m.inject(Injection::ForceSwitch(SwitchInput::NegativeLimit, Some(true)));
+    m.inject(ModelInjection::ForceSwitch(SwitchInput::NegativeLimit, Some(true)));
     m.step(DT);
     assert!(m.switches().negative_limit);
-    m.inject(Injection::Clear);
+    m.inject(ModelInjection::Clear);
     let e = *m.step(DT).first(EventKind::NegativeLimit).expect("release edge");
     assert!(!e.active);
     assert!(!m.switches().negative_limit);

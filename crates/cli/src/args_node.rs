@@ -2,7 +2,9 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Subcommand, ValueEnum};
+use clap::builder::TypedValueParser as _;
+use clap::{Args, Subcommand};
+use drivebus_master::PdoDir;
 
 pub(crate) const SDO_EXAMPLES: &str = "\
 Examples:
@@ -117,19 +119,18 @@ pub enum PdoCmd {
     Map(PdoMapArgs),
 }
 
-/// Direction of a PDO.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PdoDir {
-    /// Receive PDO (master → device).
-    Rpdo,
-    /// Transmit PDO (device → master).
-    Tpdo,
+/// `rpdo` (master → device) or `tpdo` (device → master), as the master's
+/// [`PdoDir`]: clap cannot derive `ValueEnum` for another crate's type.
+fn pdo_dir() -> impl clap::builder::TypedValueParser<Value = PdoDir> {
+    clap::builder::PossibleValuesParser::new(["rpdo", "tpdo"])
+        .map(|s| if s == "rpdo" { PdoDir::Rx } else { PdoDir::Tx })
 }
 
 /// `pdo map`.
 #[derive(Args, Debug)]
 pub struct PdoMapArgs {
     /// rpdo or tpdo.
+    #[arg(value_parser = pdo_dir())]
     pub dir: PdoDir,
     /// PDO number, 1-based.
     #[arg(value_parser = clap::value_parser!(u16).range(1..=512))]

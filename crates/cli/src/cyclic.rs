@@ -35,7 +35,7 @@ fn end_of(seconds: Option<f64>) -> anyhow::Result<Option<Instant>> {
 }
 
 /// What a cyclic `send` did.
-pub struct Cyclic {
+pub struct CyclicSendReport {
     /// Rounds sent.
     pub rounds: u64,
     /// Rounds that started a whole period or more late (skipped ticks).
@@ -48,14 +48,14 @@ pub async fn send_cyclic(
     frames: &[Frame],
     period_ms: f64,
     count: Option<u64>,
-) -> anyhow::Result<Cyclic> {
+) -> anyhow::Result<CyclicSendReport> {
     let every = period("--period", period_ms)?;
     let mut tick = tokio::time::interval(every);
     // A round that cannot keep the period is counted, not sent in a burst.
     tick.set_missed_tick_behavior(MissedTickBehavior::Skip);
     let stop = crate::serve::wait_for_signal();
     tokio::pin!(stop);
-    let mut c = Cyclic { rounds: 0, late: 0 };
+    let mut c = CyclicSendReport { rounds: 0, late: 0 };
     let mut expected = Instant::now();
     while count.is_none_or(|n| c.rounds < n) {
         tokio::select! {

@@ -3,7 +3,7 @@
 use anyhow::anyhow;
 use drivebus_master::{ConfigError, PdoDir as Dir, PdoMapEntry, PdoRecord, SdoAbort, SdoError};
 
-use crate::args::{Global, PdoCmd, PdoDir, PdoMapArgs};
+use crate::args::{Global, PdoCmd, PdoMapArgs};
 use crate::conn::{Conn, need_node};
 use crate::dict::Dict;
 use crate::error::{coded, sdo};
@@ -115,7 +115,7 @@ async fn map(g: &Global, node: u8, a: &PdoMapArgs) -> anyhow::Result<()> {
         .map(|e| parse_entry(&dict, e).map_err(|e| coded("usage", e)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let cob = a.cob_id.as_deref().map(crate::dict::number).transpose().map_err(|e| coded("usage", e))?;
-    let dir = if a.dir == PdoDir::Rpdo { Dir::Rx } else { Dir::Tx };
+    let dir = a.dir;
     let conn = Conn::open_with(g, dict).await?;
     let m = &conn.master;
     let current = m.read_pdo(node, dir, a.number).await;

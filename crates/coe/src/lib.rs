@@ -94,4 +94,4 @@ pub use coe::emergency::{Emergency, EmergencyQueueFull};
 pub use drivebus_esc::slave::AlState;
 pub use foe::{FileHandler, FoeEnd, FoeError, FoeProgress, NoFiles};
 pub use mailbox::{MailboxErrorCode, MailboxHeader, MailboxType};
-pub use server::{ConfigError, MailboxConfig, MailboxServer, MailboxStats};
+pub use server::{MailboxConfig, MailboxServer, MailboxSizeError, MailboxStats};

@@ -65,22 +65,26 @@ impl MailboxConfig {
 /// A mailbox length outside
 /// [`MIN_MAILBOX_SIZE`]..=[`MAX_MAILBOX_SIZE`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ConfigError {
+pub struct MailboxSizeError {
     /// The refused length.
     pub size: usize,
 }
 
-impl core::fmt::Display for ConfigError {
+impl core::fmt::Display for MailboxSizeError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(f, "mailbox size {} outside {MIN_MAILBOX_SIZE}..={MAX_MAILBOX_SIZE}", self.size)
     }
 }
 
 #[cfg(feature = "std")]
-impl std::error::Error for ConfigError {}
+impl std::error::Error for MailboxSizeError {}
 
-fn check_size(size: usize) -> Result<(), ConfigError> {
-    if (MIN_MAILBOX_SIZE..=MAX_MAILBOX_SIZE).contains(&size) { Ok(()) } else { Err(ConfigError { size }) }
+fn check_size(size: usize) -> Result<(), MailboxSizeError> {
+    if (MIN_MAILBOX_SIZE..=MAX_MAILBOX_SIZE).contains(&size) {
+        Ok(())
+    } else {
+        Err(MailboxSizeError { size })
+    }
 }
 
 /// Counters for diagnostics and tests.
@@ -129,7 +133,7 @@ pub struct MailboxServer {
 impl MailboxServer {
     /// A server with these mailbox sizes and options. Every buffer a
     /// response needs is allocated here.
-    pub fn new(config: MailboxConfig) -> Result<MailboxServer, ConfigError> {
+    pub fn new(config: MailboxConfig) -> Result<MailboxServer, MailboxSizeError> {
         check_size(config.rx_size)?;
         check_size(config.tx_size)?;
         let coe = CoeConfig {
@@ -170,7 +174,7 @@ impl MailboxServer {
         rx_size: usize,
         tx_size: usize,
         files: &mut F,
-    ) -> Result<(), ConfigError> {
+    ) -> Result<(), MailboxSizeError> {
         check_size(rx_size)?;
         check_size(tx_size)?;
         self.reset(files);

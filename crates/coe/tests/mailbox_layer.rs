@@ -5,7 +5,7 @@ mod support;
 
 use drivebus_can::Duration;
 use drivebus_coe::mailbox::{MAX_MAILBOX_SIZE, MIN_MAILBOX_SIZE};
-use drivebus_coe::{AlState, ConfigError, MailboxConfig, MailboxServer, NoFiles};
+use drivebus_coe::{AlState, MailboxConfig, MailboxServer, MailboxSizeError, NoFiles};
 use drivebus_od::NoHooks;
 use support::{Dev, Rig, body, ethercrab, header, mbx, test_od};
 
@@ -234,11 +234,11 @@ fn mailbox_sizes_are_checked() {
     for bad in [0, MIN_MAILBOX_SIZE - 1, MAX_MAILBOX_SIZE + 1] {
         assert_eq!(
             MailboxServer::new(MailboxConfig::with_sizes(bad, 128)).err(),
-            Some(ConfigError { size: bad })
+            Some(MailboxSizeError { size: bad })
         );
         assert_eq!(
             MailboxServer::new(MailboxConfig::with_sizes(128, bad)).err(),
-            Some(ConfigError { size: bad })
+            Some(MailboxSizeError { size: bad })
         );
     }
     let mut r = rig();

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 
 /// One `key=value` with the line it came from, borrowed from the text.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Entry<'a> {
+pub struct IniEntry<'a> {
     /// Key as written.
     pub key: &'a str,
     /// Value, trimmed.
@@ -30,14 +30,14 @@ pub struct Section<'a> {
     /// 1-based line of the header.
     pub line: usize,
     /// Entries in file order.
-    pub entries: Vec<Entry<'a>>,
+    pub entries: Vec<IniEntry<'a>>,
     /// Lower-case key → position; filled only past [`SCAN`] entries.
     index: BTreeMap<String, usize>,
 }
 
 impl<'a> Section<'a> {
     /// Value of `key` (case-insensitive).
-    pub fn get(&self, key: &str) -> Option<&Entry<'a>> {
+    pub fn get(&self, key: &str) -> Option<&IniEntry<'a>> {
         self.position(key).map(|i| &self.entries[i])
     }
 
@@ -49,7 +49,7 @@ impl<'a> Section<'a> {
         }
     }
 
-    fn push(&mut self, e: Entry<'a>) {
+    fn push(&mut self, e: IniEntry<'a>) {
         self.entries.push(e);
         let n = self.entries.len();
         if n == SCAN + 1 {
@@ -133,7 +133,7 @@ impl<'a> Ini<'a> {
                 ini.warnings.push((line, format!("duplicate key {key} in [{}]; first value kept", sec.name)));
                 continue;
             }
-            sec.push(Entry { key, value, line });
+            sec.push(IniEntry { key, value, line });
         }
         ini
     }

@@ -21,6 +21,6 @@ pub use check::{Finding, Severity, check};
 pub use convert::{from_od, to_od, to_od_static};
 pub use dcf::{dcf, dcf_from_od};
 pub use model::{Commissioning, DeviceInfo, Diagnostic, Eds, EdsError, EdsObject, EdsVar};
-pub use read::{Parsed, parse};
+pub use read::{ParsedEds, parse};
 pub use value::{eval, format as format_value, is_node_relative};
 pub use write::write;

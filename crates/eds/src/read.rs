@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 
 /// What reading produced: the file, plus warnings about tolerated quirks.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Parsed {
+pub struct ParsedEds {
     /// The file's content.
     pub eds: Eds,
     /// Quirks that were tolerated (line, message).
@@ -180,7 +180,7 @@ impl Reader {
 /// keys, sub-index 0 inconsistencies, unknown sections) become warnings; real
 /// errors (bad numbers, unknown types or access, malformed values) are all
 /// collected and returned with their line numbers.
-pub fn parse(text: &str) -> Result<Parsed, EdsError> {
+pub fn parse(text: &str) -> Result<ParsedEds, EdsError> {
     let ini = Ini::parse(text);
     let mut r = Reader { errors: Vec::new(), warnings: Vec::new() };
     for (line, m) in &ini.warnings {
@@ -334,7 +334,7 @@ pub fn parse(text: &str) -> Result<Parsed, EdsError> {
         }
     }
     if r.errors.is_empty() {
-        Ok(Parsed { eds, warnings: r.warnings })
+        Ok(ParsedEds { eds, warnings: r.warnings })
     } else {
         // In file order; the consequences found at the end (no line: an
         // object listed without its section) after the causes with lines.

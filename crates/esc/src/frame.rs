@@ -241,7 +241,7 @@ impl<'a> Iterator for Datagrams<'a> {
 
 /// Why a [`FrameBuilder`] refused a datagram.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BuildError {
+pub enum FrameBuildError {
     /// The buffer or the 11-bit EtherCAT length has no room for it.
     TooLong,
 }
@@ -274,7 +274,7 @@ impl<'a> FrameBuilder<'a> {
         index: u8,
         address: u32,
         data: &[u8],
-    ) -> Result<usize, BuildError> {
+    ) -> Result<usize, FrameBuildError> {
         self.push_raw(command as u8, index, address, data, 0)
     }
 
@@ -286,11 +286,11 @@ impl<'a> FrameBuilder<'a> {
         address: u32,
         data: &[u8],
         wkc: u16,
-    ) -> Result<usize, BuildError> {
+    ) -> Result<usize, FrameBuildError> {
         let total = DATAGRAM_HEADER_LEN + data.len() + WKC_LEN;
         let payload_len = self.pos + total - ETH_HEADER_LEN - ECAT_HEADER_LEN;
         if data.len() > MAX_DATA_LEN || self.pos + total > self.buf.len() || payload_len > 0x07FF {
-            return Err(BuildError::TooLong);
+            return Err(FrameBuildError::TooLong);
         }
         if let Some(prev) = self.last {
             self.buf[prev + 7] |= 0x80;

@@ -122,9 +122,11 @@ impl ConfigArea {
 /// CANopen node's and the LSS address.
 pub use drivebus_can::Identity;
 
-/// Mailbox offsets and sizes.
+/// Mailbox offsets and sizes: SII words 0x14–0x17 (bootstrap) and
+/// 0x18–0x1B (standard), the ESI's `BootStrap` (receive start, size, send
+/// start, size).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct MailboxConfig {
+pub struct MailboxArea {
     /// Receive mailbox (master → slave, SM0) start.
     pub rx_offset: u16,
     /// Receive mailbox size.
@@ -133,6 +135,17 @@ pub struct MailboxConfig {
     pub tx_offset: u16,
     /// Send mailbox size.
     pub tx_size: u16,
+}
+
+impl MailboxArea {
+    /// The 8 bytes as the SII and the ESI's `BootStrap` hold them.
+    pub fn bytes(&self) -> [u8; 8] {
+        let mut b = [0u8; 8];
+        for (i, w) in [self.rx_offset, self.rx_size, self.tx_offset, self.tx_size].into_iter().enumerate() {
+            b[2 * i..2 * i + 2].copy_from_slice(&w.to_le_bytes());
+        }
+        b
+    }
 }
 
 /// The General category (ETG.1000.6 Table 21), 32 bytes.
@@ -281,9 +294,9 @@ pub struct SiiContent {
     /// Identity.
     pub identity: Identity,
     /// Bootstrap mailbox (words 0x14–0x17).
-    pub bootstrap_mailbox: MailboxConfig,
+    pub bootstrap_mailbox: MailboxArea,
     /// Standard mailbox (words 0x18–0x1B).
-    pub mailbox: MailboxConfig,
+    pub mailbox: MailboxArea,
     /// Mailbox protocols (word 0x1C), see [`protocols`].
     pub mailbox_protocols: u16,
     /// EEPROM size in Kbit (word 0x3E + 1).
@@ -432,14 +445,14 @@ impl SiiBuilder {
     }
 
     /// Standard mailbox and its protocols.
-    pub fn mailbox(mut self, mailbox: MailboxConfig, protocols: u16) -> Self {
+    pub fn mailbox(mut self, mailbox: MailboxArea, protocols: u16) -> Self {
         self.content.mailbox = mailbox;
         self.content.mailbox_protocols = protocols;
         self
     }
 
     /// Bootstrap mailbox.
-    pub fn bootstrap_mailbox(mut self, mailbox: MailboxConfig) -> Self {
+    pub fn bootstrap_mailbox(mut self, mailbox: MailboxArea) -> Self {
         self.content.bootstrap_mailbox = mailbox;
         self
     }

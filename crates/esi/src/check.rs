@@ -36,7 +36,7 @@ impl fmt::Display for Source {
 
 /// One disagreement.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
-pub struct Finding {
+pub struct Disagreement {
     /// What the ESI was compared with.
     pub source: Source,
     /// Object index, if it is about one.
@@ -53,7 +53,7 @@ pub struct Finding {
     pub note: String,
 }
 
-impl fmt::Display for Finding {
+impl fmt::Display for Disagreement {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match (self.index, self.sub) {
             (Some(i), Some(s)) => write!(f, "{i:04X}h:{s:02X} ")?,
@@ -108,7 +108,7 @@ impl Default for CheckOptions {
 
 pub(crate) struct Report {
     pub(crate) source: Source,
-    pub(crate) out: Vec<Finding>,
+    pub(crate) out: Vec<Disagreement>,
 }
 
 impl Report {
@@ -124,7 +124,7 @@ impl Report {
         other: impl Into<String>,
         note: &str,
     ) {
-        self.out.push(Finding {
+        self.out.push(Disagreement {
             source: self.source,
             index,
             sub,
@@ -263,7 +263,11 @@ fn compare_identity(r: &mut Report, d: &SlaveDescription, id: [Option<u32>; 3], 
 /// limits), every PDO mapping object (the `RxPdo`/`TxPdo` entries against
 /// the default mapping, `@Sm` against 1C12h/1C13h) and the process data
 /// SM sizes of the default assignment.
-pub fn check_dictionary(d: &SlaveDescription, od: &ObjectDictionary, opts: &CheckOptions) -> Vec<Finding> {
+pub fn check_dictionary(
+    d: &SlaveDescription,
+    od: &ObjectDictionary,
+    opts: &CheckOptions,
+) -> Vec<Disagreement> {
     let mut r = Report::new(Source::Dictionary);
     let id = [1, 2, 3].map(|s| default_u64(od, 0x1018, s).map(|v| v as u32));
     compare_identity(&mut r, d, id, default_u64(od, 0x1000, 0).map(|v| v as u32));
@@ -361,7 +365,7 @@ fn eds_sub(index: u16, sub: u8, v: &EdsVar, node_id: u8) -> Result<SubObject, St
 /// ProductName) and every object and sub-object of the file, compared as
 /// [`check_dictionary`] compares them; values are evaluated with
 /// `opts.node_id`.
-pub fn check_eds(d: &SlaveDescription, eds: &Eds, opts: &CheckOptions) -> Vec<Finding> {
+pub fn check_eds(d: &SlaveDescription, eds: &Eds, opts: &CheckOptions) -> Vec<Disagreement> {
     let mut r = Report::new(Source::Eds);
     let di = &eds.device_info;
     compare_identity(&mut r, d, [di.vendor_number, di.product_number, di.revision_number], None);

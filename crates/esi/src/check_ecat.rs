@@ -2,7 +2,7 @@
 //! (ETG.1000.6 sync manager and PDO objects, the masters' mailbox needs,
 //! and the limits a device's manual sets).
 
-use crate::check::{CheckOptions, Finding, Report, Source, access_text};
+use crate::check::{CheckOptions, Disagreement, Report, Source, access_text};
 use crate::description::{SlaveDescription, SmKind};
 use crate::pdo::{RX_MAPPING, TX_MAPPING, default_assignment, mapping_values};
 use drivebus_coe::access_bits;
@@ -46,7 +46,7 @@ fn writable(d: &SlaveDescription, index: u16, sub: u8) -> Option<u16> {
 /// * 1018h has subs 1–4 (masters read the identity over CoE);
 /// * the mailboxes are within 32..=1486 bytes and SM1 is large enough for
 ///   ethercrab with this many objects.
-pub fn check_ethercat(d: &SlaveDescription, od: &ObjectDictionary, opts: &CheckOptions) -> Vec<Finding> {
+pub fn check_ethercat(d: &SlaveDescription, od: &ObjectDictionary, opts: &CheckOptions) -> Vec<Disagreement> {
     let mut r = Report::new(Source::EtherCat);
     sync_manager_types(&mut r, d);
     let coe = d.mailbox.and_then(|m| m.coe);
@@ -327,9 +327,9 @@ mod tests {
         let od = od(4, &[0x6041_0010]);
         let mut f = DeviceFacts::new(1, "v", 1, 1, "p");
         f.mailbox_area = Some(crate::description::MailboxArea {
-            rx_start: 0x1000,
+            rx_offset: 0x1000,
             rx_size: 16,
-            tx_start: 0x1100,
+            tx_offset: 0x1100,
             tx_size: 20,
         });
         let d = SlaveDescription::new(&od, &f);

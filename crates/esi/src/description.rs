@@ -44,7 +44,7 @@ pub struct SlaveDescription {
     /// the master's defaults.
     pub mailbox_timeouts: Option<MailboxTimeouts>,
     /// `Profile/ProfileNo` (402) and `Profile/AddInfo`.
-    pub profile: Profile,
+    pub profile: EsiProfile,
     /// `Profile/Dictionary/Objects`: the object dictionary as ETG.2000 can
     /// describe it, in index order.
     pub objects: Vec<EsiObject>,
@@ -54,9 +54,9 @@ pub struct SlaveDescription {
     pub sync_managers: Vec<SyncManager>,
     /// `RxPdo` elements: default-assigned first (in 1C12h order), then the
     /// others by index; SII RxPDO category.
-    pub rx_pdos: Vec<Pdo>,
+    pub rx_pdos: Vec<EsiPdo>,
     /// `TxPdo` elements, ordered like [`SlaveDescription::rx_pdos`].
-    pub tx_pdos: Vec<Pdo>,
+    pub tx_pdos: Vec<EsiPdo>,
     /// `Mailbox`, if the device has one; SII word 0x1C and General CoE details.
     pub mailbox: Option<Mailbox>,
     /// `Dc/OpMode` elements; SII DC category.
@@ -67,7 +67,7 @@ pub struct SlaveDescription {
 
 /// `Profile`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Profile {
+pub struct EsiProfile {
     /// `ProfileNo`: the device profile (402 for CiA 402 drives), 1000h bits 0–15.
     pub number: u16,
     /// `AddInfo`: 1000h bits 16–31 (the CiA 402 drive type).
@@ -167,7 +167,7 @@ pub struct SyncManager {
 
 /// One `RxPdo`/`TxPdo` element.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Pdo {
+pub struct EsiPdo {
     /// `Index`: the mapping object (16xxh/1Axxh).
     pub index: u16,
     /// `Name`: the mapping object's name.
@@ -183,7 +183,7 @@ pub struct Pdo {
     pub entries: Vec<PdoEntry>,
 }
 
-impl Pdo {
+impl EsiPdo {
     /// Bits of the default mapping.
     pub fn bits(&self) -> u32 {
         self.entries.iter().map(|e| u32::from(e.bit_len)).sum()
@@ -275,29 +275,8 @@ pub struct Eeprom {
 /// SII words 0x00–0x06, the ESI's `ConfigData`: the SII's own type.
 pub use drivebus_esc::sii::ConfigArea;
 
-/// Mailbox offsets and sizes (`BootStrap`: receive start, size, send start, size).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MailboxArea {
-    /// Receive mailbox (master → slave) start.
-    pub rx_start: u16,
-    /// Receive mailbox size.
-    pub rx_size: u16,
-    /// Send mailbox (slave → master) start.
-    pub tx_start: u16,
-    /// Send mailbox size.
-    pub tx_size: u16,
-}
-
-impl MailboxArea {
-    /// The 8 bytes of `BootStrap`.
-    pub fn bytes(&self) -> [u8; 8] {
-        let mut b = [0u8; 8];
-        for (i, w) in [self.rx_start, self.rx_size, self.tx_start, self.tx_size].into_iter().enumerate() {
-            b[2 * i..2 * i + 2].copy_from_slice(&w.to_le_bytes());
-        }
-        b
-    }
-}
+/// Mailbox offsets and sizes (`BootStrap`): the SII's own type.
+pub use drivebus_esc::sii::MailboxArea;
 
 /// Restricts the ESM states in which entries may be read or written
 /// (ETG.2000 `ReadRestrictions`/`WriteRestrictions`, SDO Information
@@ -374,7 +353,7 @@ impl DeviceFacts {
     /// detail the `drivebus-coe` server implements, no FoE, free run only,
     /// a 2 KiB EEPROM.
     pub fn new(vendor_id: u32, vendor_name: &str, product_code: u32, revision: u32, product: &str) -> Self {
-        let mbx = MailboxArea { rx_start: 0x1000, rx_size: 512, tx_start: 0x1200, tx_size: 512 };
+        let mbx = MailboxArea { rx_offset: 0x1000, rx_size: 512, tx_offset: 0x1200, tx_size: 512 };
         DeviceFacts {
             vendor_id,
             vendor_name: vendor_name.into(),
@@ -463,14 +442,14 @@ impl SlaveDescription {
         if let Some(m) = facts.mailbox_area {
             sync_managers.push(SyncManager {
                 kind: SmKind::MBoxOut,
-                start: m.rx_start,
+                start: m.rx_offset,
                 default_size: Some(m.rx_size),
                 control: 0x26,
                 enable: true,
             });
             sync_managers.push(SyncManager {
                 kind: SmKind::MBoxIn,
-                start: m.tx_start,
+                start: m.tx_offset,
                 default_size: Some(m.tx_size),
                 control: 0x22,
                 enable: true,
@@ -479,8 +458,8 @@ impl SlaveDescription {
         let out_sm = sync_managers.len() as u8;
         let in_sm = out_sm + 1;
         let (rx_pdos, tx_pdos) = pdo::describe(od, &objects, out_sm, in_sm);
-        let size = |pdos: &[Pdo]| {
-            let bits: u32 = pdos.iter().filter(|p| p.sm.is_some()).map(Pdo::bits).sum();
+        let size = |pdos: &[EsiPdo]| {
+            let bits: u32 = pdos.iter().filter(|p| p.sm.is_some()).map(EsiPdo::bits).sum();
             Some(u16::try_from(bits.div_ceil(8)).unwrap_or(u16::MAX))
         };
         for (kind, (start, control), pdos) in
@@ -501,7 +480,7 @@ impl SlaveDescription {
             url: facts.url.clone(),
             physics: facts.physics.clone(),
             mailbox_timeouts: facts.mailbox_timeouts,
-            profile: Profile {
+            profile: EsiProfile {
                 number: facts.profile_no.unwrap_or(device_type as u16),
                 add_info: (device_type >> 16) as u16,
             },

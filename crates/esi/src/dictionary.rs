@@ -4,7 +4,7 @@
 //! name, identity, sync manager types, PDO mapping and assignment, and
 //! the mapped objects themselves).
 
-use crate::description::{Pdo, SlaveDescription, SmKind};
+use crate::description::{EsiPdo, SlaveDescription, SmKind};
 use crate::model::{EsiObject, EsiSub, ObjectKind};
 use drivebus_coe::access_bits::{READ, RXPDO, TXPDO, WRITE};
 use drivebus_od::{Access, DataType, Object, ObjectCode, ObjectDictionary, SubObject};
@@ -168,7 +168,7 @@ pub fn objects_from_description(d: &SlaveDescription) -> Vec<EsiObject> {
     out.into_values().collect()
 }
 
-fn mapping(p: &Pdo) -> EsiObject {
+fn mapping(p: &EsiPdo) -> EsiObject {
     let values: Vec<Vec<u8>> = p
         .entries
         .iter()
@@ -183,7 +183,7 @@ fn mapping(p: &Pdo) -> EsiObject {
 }
 
 /// Adds the objects `p` maps (index 0 is a gap), keeping what is there.
-fn mapped(out: &mut BTreeMap<u16, EsiObject>, p: &Pdo, access: u16) {
+fn mapped(out: &mut BTreeMap<u16, EsiObject>, p: &EsiPdo, access: u16) {
     for e in p.entries.iter().filter(|e| e.index != 0) {
         // Objects below 2000h are communication objects, not process data.
         if e.index < 0x2000 {
@@ -231,7 +231,7 @@ mod tests {
             </Device></Devices></Descriptions></EtherCATInfo>";
         let mut d = crate::read(xml).unwrap();
         d.rx_pdos = (0..4u16)
-            .map(|i| Pdo {
+            .map(|i| EsiPdo {
                 index: 0x1600 + i,
                 name: format!("Channel {}", i + 1),
                 sm: Some(2),

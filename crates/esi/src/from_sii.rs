@@ -9,8 +9,8 @@
 //! [`crate::dictionary`]).
 
 use crate::description::{
-    CoeDetails, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, Pdo, PdoEntry, Profile, SlaveDescription,
-    SmKind, SyncManager, SyncSignal,
+    CoeDetails, DcOpMode, Eeprom, EsiPdo, EsiProfile, FmmuUsage, Mailbox, PdoEntry, SlaveDescription, SmKind,
+    SyncManager, SyncSignal,
 };
 use crate::read::ReadError;
 use drivebus_esc::sii::{SiiContent, SiiPdo, fmmu_usage, protocols, sm_type};
@@ -50,9 +50,9 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let pdos = |list: &[SiiPdo]| -> Vec<Pdo> {
+    let pdos = |list: &[SiiPdo]| -> Vec<EsiPdo> {
         list.iter()
-            .map(|p| Pdo {
+            .map(|p| EsiPdo {
                 index: p.index,
                 name: string(p.name_idx),
                 sm: (usize::from(p.sync_manager) < sync_managers.len()).then_some(p.sync_manager),
@@ -110,7 +110,7 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
             .trim_end()
             .to_string(),
         mailbox_timeouts: None,
-        profile: Profile { number: if g.ds402_channels > 0 { 402 } else { 0 }, add_info: 0 },
+        profile: EsiProfile { number: if g.ds402_channels > 0 { 402 } else { 0 }, add_info: 0 },
         objects: Vec::new(),
         fmmus: c
             .fmmus
@@ -148,12 +148,7 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
         eeprom: Eeprom {
             byte_size: u32::from(c.size_kbit) * 128,
             config: c.config,
-            bootstrap: (b.rx_size > 0).then_some(MailboxArea {
-                rx_start: b.rx_offset,
-                rx_size: b.rx_size,
-                tx_start: b.tx_offset,
-                tx_size: b.tx_size,
-            }),
+            bootstrap: (b.rx_size > 0).then_some(b),
         },
     })
 }
@@ -182,7 +177,7 @@ mod tests {
         assert_eq!(back.mailbox, d.mailbox);
         assert_eq!(back.physics, d.physics);
         assert_eq!(back.sii_coe_details(), d.sii_coe_details());
-        let idx = |p: &[Pdo]| p.iter().map(|p| (p.index, p.bits())).collect::<Vec<_>>();
+        let idx = |p: &[EsiPdo]| p.iter().map(|p| (p.index, p.bits())).collect::<Vec<_>>();
         assert_eq!(idx(&back.rx_pdos), idx(&d.rx_pdos));
         assert_eq!(idx(&back.tx_pdos), idx(&d.tx_pdos));
         assert_eq!(back.dc.iter().map(|m| m.assign_activate).collect::<Vec<_>>(), [0, 0x0300]);

@@ -45,7 +45,7 @@ pub const REVISION: u32 = u32::from_be_bytes(*b"A00G");
 ///   the drive takes to erase its flash during an FoE download.
 pub fn facts(vendor_id: u32, vendor_name: &str, product_code: u32, product: &str) -> DeviceFacts {
     let mut f = DeviceFacts::new(vendor_id, vendor_name, product_code, REVISION, product);
-    let mbx = MailboxArea { rx_start: 0x1000, rx_size: 512, tx_start: 0x1200, tx_size: 512 };
+    let mbx = MailboxArea { rx_offset: 0x1000, rx_size: 512, tx_offset: 0x1200, tx_size: 512 };
     f.name = format!("Technosoft {product} (drivebus twin, firmware {FIRMWARE})");
     f.group_type = "TechnosoftDrives".into();
     f.group_name = "Technosoft intelligent drives".into();

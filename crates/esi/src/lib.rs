@@ -101,11 +101,11 @@ mod write;
 mod write_dict;
 mod xml;
 
-pub use check::{CheckOptions, Finding, Source, check_dictionary, check_eds};
+pub use check::{CheckOptions, Disagreement, Source, check_dictionary, check_eds};
 pub use check_ecat::check_ethercat;
 pub use description::{
-    ALL_STATES, CoeDetails, ConfigArea, DcOpMode, DeviceFacts, Eeprom, FmmuUsage, Mailbox, MailboxArea,
-    MailboxTimeouts, PREOP, Pdo, PdoEntry, Profile, SlaveDescription, SmKind, StateRule, SyncManager,
+    ALL_STATES, CoeDetails, ConfigArea, DcOpMode, DeviceFacts, Eeprom, EsiPdo, EsiProfile, FmmuUsage,
+    Mailbox, MailboxArea, MailboxTimeouts, PREOP, PdoEntry, SlaveDescription, SmKind, StateRule, SyncManager,
     SyncSignal, apply_rules, default_config_area, free_run,
 };
 pub use dictionary::{device_objects, dictionary, objects_from_description};

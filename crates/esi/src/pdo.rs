@@ -2,7 +2,7 @@
 //! 1A00h–1BFFh (TxPDO), their default mapping, and the default assignment
 //! (1C12h/1C13h on EtherCAT, valid COB-IDs on a CAN dictionary).
 
-use crate::description::{Pdo, PdoEntry};
+use crate::description::{EsiPdo, PdoEntry};
 use crate::model::EsiObject;
 use crate::types::xml_safe;
 use drivebus_coe::access_bits;
@@ -64,17 +64,22 @@ pub fn entry(od: &ObjectDictionary, value: u32) -> PdoEntry {
 /// RxPDOs and TxPDOs of `od`: default-assigned ones first in assignment
 /// order with `sm` set, then the others by index. `objects` (the ESI view)
 /// says whether a mapping can be changed.
-pub fn describe(od: &ObjectDictionary, objects: &[EsiObject], out_sm: u8, in_sm: u8) -> (Vec<Pdo>, Vec<Pdo>) {
+pub fn describe(
+    od: &ObjectDictionary,
+    objects: &[EsiObject],
+    out_sm: u8,
+    in_sm: u8,
+) -> (Vec<EsiPdo>, Vec<EsiPdo>) {
     let build = |range: std::ops::RangeInclusive<u16>, rx: bool, sm: u8| {
         let assigned = default_assignment(od, rx).unwrap_or_default();
-        let mut pdos: Vec<Pdo> = od
+        let mut pdos: Vec<EsiPdo> = od
             .objects()
             .iter()
             .filter(|o| range.contains(&o.index))
             .map(|o| {
                 let esi = objects.iter().find(|e| e.index == o.index);
                 let writable = esi.and_then(|e| e.get(0)).is_some_and(|s| s.access & access_bits::WRITE != 0);
-                Pdo {
+                EsiPdo {
                     index: o.index,
                     name: xml_safe(&o.name).into_owned(),
                     sm: assigned.contains(&o.index).then_some(sm),
@@ -84,7 +89,7 @@ pub fn describe(od: &ObjectDictionary, objects: &[EsiObject], out_sm: u8, in_sm:
                 }
             })
             .collect();
-        let rank = |p: &Pdo| assigned.iter().position(|a| *a == p.index).unwrap_or(usize::MAX);
+        let rank = |p: &EsiPdo| assigned.iter().position(|a| *a == p.index).unwrap_or(usize::MAX);
         pdos.sort_by_key(|p| (rank(p), p.index));
         pdos
     };

@@ -3,8 +3,8 @@
 //! file can be compared with the dictionary and EDS it came from.
 
 use crate::description::{
-    CoeDetails, ConfigArea, DcOpMode, Eeprom, FmmuUsage, Mailbox, MailboxArea, MailboxTimeouts, Pdo,
-    PdoEntry, Profile, SlaveDescription, SmKind, SyncManager, SyncSignal,
+    CoeDetails, ConfigArea, DcOpMode, Eeprom, EsiPdo, EsiProfile, FmmuUsage, Mailbox, MailboxArea,
+    MailboxTimeouts, PdoEntry, SlaveDescription, SmKind, SyncManager, SyncSignal,
 };
 use crate::model::{EsiObject, EsiSub, ObjectKind, parse_states};
 use crate::types::{parse_hex_bytes, parse_hex_dec, parse_number, parse_type_name};
@@ -141,7 +141,7 @@ fn device(
         url: d.child_text("URL").map(str::to_string),
         physics: d.attr("Physics").unwrap_or_default().to_string(),
         mailbox_timeouts,
-        profile: Profile {
+        profile: EsiProfile {
             number: num(profile.and_then(|p| p.child_text("ProfileNo")).or(Some("0")), "Profile/ProfileNo")?,
             add_info: num(profile.and_then(|p| p.child_text("AddInfo")).or(Some("0")), "Profile/AddInfo")?,
         },
@@ -187,7 +187,7 @@ fn sync_manager(s: &Element) -> Result<SyncManager, ReadError> {
     })
 }
 
-fn pdo(p: &Element, tag: &str) -> Result<Pdo, ReadError> {
+fn pdo(p: &Element, tag: &str) -> Result<EsiPdo, ReadError> {
     let at = format!("Device/{tag} {}", p.child_text("Index").unwrap_or("?"));
     let entries = p
         .all("Entry")
@@ -202,7 +202,7 @@ fn pdo(p: &Element, tag: &str) -> Result<Pdo, ReadError> {
             })
         })
         .collect::<Result<_, ReadError>>()?;
-    Ok(Pdo {
+    Ok(EsiPdo {
         index: num(p.child_text("Index"), &format!("{at}/Index"))?,
         name: p.child_text("Name").unwrap_or_default().to_string(),
         sm: p.attr("Sm").map(|s| num(Some(s), &format!("{at}@Sm"))).transpose()?,
@@ -250,7 +250,7 @@ fn eeprom(e: Option<&Element>) -> Result<Eeprom, ReadError> {
     };
     let bootstrap = bytes("BootStrap")?.map(|b| {
         let w = |i: usize| b.get(2 * i..2 * i + 2).map_or(0, |x| u16::from_le_bytes([x[0], x[1]]));
-        MailboxArea { rx_start: w(0), rx_size: w(1), tx_start: w(2), tx_size: w(3) }
+        MailboxArea { rx_offset: w(0), rx_size: w(1), tx_offset: w(2), tx_size: w(3) }
     });
     Ok(Eeprom {
         byte_size: num(e.child_text("ByteSize").or(Some("0")), "Eeprom/ByteSize")?,

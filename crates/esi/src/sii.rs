@@ -3,9 +3,9 @@
 //! ships with say the same (the table in the crate docs says which field
 //! feeds which word or category).
 
-use crate::description::{Pdo, SlaveDescription, SmKind};
+use crate::description::{EsiPdo, SlaveDescription, SmKind};
 use drivebus_esc::sii::{
-    General, MailboxConfig, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry, SiiSyncManager,
+    General, MailboxArea, SiiBuilder, SiiContent, SiiDcSync, SiiImage, SiiPdo, SiiPdoEntry, SiiSyncManager,
 };
 
 /// ETG.2000 PDO attributes as SII PDO flags (ETG.1000.6 Table 26).
@@ -18,14 +18,14 @@ pub mod pdo_flags {
     pub const FIXED: u16 = 0x0010;
 }
 
-fn mailbox(d: &SlaveDescription) -> MailboxConfig {
+fn mailbox(d: &SlaveDescription) -> MailboxArea {
     let area = |k: SmKind| d.sm(k).map_or((0, 0), |(_, s)| (s.start, s.default_size.unwrap_or(0)));
     let (rx_offset, rx_size) = area(SmKind::MBoxOut);
     let (tx_offset, tx_size) = area(SmKind::MBoxIn);
-    MailboxConfig { rx_offset, rx_size, tx_offset, tx_size }
+    MailboxArea { rx_offset, rx_size, tx_offset, tx_size }
 }
 
-fn pdo(b: &mut SiiBuilder, p: &Pdo, direction_sm: u8) -> SiiPdo {
+fn pdo(b: &mut SiiBuilder, p: &EsiPdo, direction_sm: u8) -> SiiPdo {
     let name_idx = b.add_string(&p.name);
     let entries = p
         .entries
@@ -64,12 +64,7 @@ fn pdo(b: &mut SiiBuilder, p: &Pdo, direction_sm: u8) -> SiiPdo {
 /// The SII builder of `d`, ready to [`SiiBuilder::build`].
 impl From<&SlaveDescription> for SiiBuilder {
     fn from(d: &SlaveDescription) -> SiiBuilder {
-        let boot = d.eeprom.bootstrap.map_or(MailboxConfig::default(), |m| MailboxConfig {
-            rx_offset: m.rx_start,
-            rx_size: m.rx_size,
-            tx_offset: m.tx_start,
-            tx_size: m.tx_size,
-        });
+        let boot = d.eeprom.bootstrap.unwrap_or_default();
         let content = SiiContent {
             config: d.eeprom.config,
             bootstrap_mailbox: boot,

@@ -3,7 +3,7 @@
 //! tools (TwinCAT) accept the file; the output is a pure function of the
 //! description (no dates, no hash-map order).
 
-use crate::description::{DcOpMode, Pdo, SlaveDescription, SyncSignal};
+use crate::description::{DcOpMode, EsiPdo, SlaveDescription, SyncSignal};
 use crate::types::{hex, hex_bytes, hex_index, xml_safe};
 use crate::write_dict::dictionary;
 use crate::xml::XmlWriter;
@@ -137,7 +137,7 @@ fn bool_text(b: bool) -> &'static str {
     if b { "true" } else { "false" }
 }
 
-fn pdo(w: &mut XmlWriter, tag: &str, p: &Pdo) {
+fn pdo(w: &mut XmlWriter, tag: &str, p: &EsiPdo) {
     let sm = p.sm.map(|s| s.to_string());
     let mut attrs = vec![("Fixed", bool_text(p.fixed)), ("Mandatory", bool_text(p.mandatory))];
     if let Some(s) = &sm {

@@ -5,7 +5,7 @@
 mod common;
 
 use drivebus_esi::{
-    CheckOptions, Finding, SlaveDescription, check_dictionary, check_eds, check_ethercat, ipos,
+    CheckOptions, Disagreement, SlaveDescription, check_dictionary, check_eds, check_ethercat, ipos,
 };
 use drivebus_personality::Profile;
 
@@ -16,13 +16,13 @@ fn opts(p: Profile) -> CheckOptions {
     }
 }
 
-fn keys(f: &[Finding]) -> Vec<(Option<u16>, Option<u8>, String, String)> {
+fn keys(f: &[Disagreement]) -> Vec<(Option<u16>, Option<u8>, String, String)> {
     let mut k: Vec<_> = f.iter().map(|f| (f.index, f.sub, f.field.clone(), f.esi.clone())).collect();
     k.sort();
     k
 }
 
-fn show(f: &[Finding]) -> String {
+fn show(f: &[Disagreement]) -> String {
     f.iter().map(|f| format!("\n  {f}")).collect()
 }
 

@@ -33,7 +33,7 @@ pub use drivebus_od::{Access, DataType};
 
 /// Which standard defines an object.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Profile {
+pub enum Standard {
     /// CiA 301 communication profile (and CiA 302 objects 1F50h–1F80h).
     Cia301,
     /// CiA 402 drives and motion control.
@@ -80,7 +80,7 @@ pub struct Def {
     /// Object code.
     pub kind: Kind,
     /// Defining standard.
-    pub profile: Profile,
+    pub profile: Standard,
     /// Sub-objects, ascending.
     pub subs: &'static [SubDef],
 }

@@ -8,7 +8,7 @@ macro_rules! var {
             last: $i,
             name: $n,
             kind: Kind::Var,
-            profile: Profile::$p,
+            profile: Standard::$p,
             subs: &[SubDef { first: 0, last: 0, name: $n, data_type: T::$t, access: A::$a, pdo: $pdo }],
         }
     };
@@ -24,7 +24,7 @@ macro_rules! obj {
             last: $j,
             name: $n,
             kind: Kind::$k,
-            profile: Profile::$p,
+            profile: Standard::$p,
             subs: &[
                 SubDef { first: 0, last: 0, name: $zero, data_type: T::Unsigned8, access: A::$za, pdo: false },
                 $( SubDef { first: $f, last: $l, name: $sn, data_type: T::$t, access: A::$a, pdo: $pdo } ),*

@@ -2,7 +2,7 @@
 //! ARRAY/RECORD is its count / highest sub-index. CiA 301 here, CiA 402 in
 //! `table402.rs`.
 
-use crate::{Access as A, DataType as T, Def, Kind, Profile, SubDef};
+use crate::{Access as A, DataType as T, Def, Kind, Standard, SubDef};
 
 use crate::macros::HS;
 

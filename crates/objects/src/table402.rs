@@ -1,6 +1,6 @@
 //! The CiA 402-2 objects (drives and motion control).
 
-use crate::{Access as A, DataType as T, Def, Kind, Profile, SubDef};
+use crate::{Access as A, DataType as T, Def, Kind, Standard, SubDef};
 
 use crate::macros::{HS, NE};
 

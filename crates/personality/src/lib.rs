@@ -47,7 +47,7 @@ pub use build::{
     Plain, Verdict, build, build_custom, build_on, build_on_machine, build_with, parse_drive_spec,
 };
 
-pub use drivebus_eds::Parsed;
+pub use drivebus_eds::ParsedEds;
 pub use spec::{drive_spec, drive_specs};
 
 /// One personality.
@@ -111,15 +111,15 @@ impl Profile {
 
     /// The EDS file read. The files are part of this crate and its tests
     /// prove each one reads without errors, so failure here is a build defect.
-    pub fn parse_eds(&self) -> Parsed {
+    pub fn parse_eds(&self) -> ParsedEds {
         self.eds().clone()
     }
 
     /// The EDS file read, once per process: every build of a drive needs
     /// it, and reading the text costs more than the rest of a build (the
     /// SSD 630's 73 000-line file: ~100 ms). Same result as [`Profile::parse_eds`].
-    pub fn eds(&self) -> &'static Parsed {
-        static PARSED: [OnceLock<Parsed>; ALL.len()] = [const { OnceLock::new() }; ALL.len()];
+    pub fn eds(&self) -> &'static ParsedEds {
+        static PARSED: [OnceLock<ParsedEds>; ALL.len()] = [const { OnceLock::new() }; ALL.len()];
         PARSED[*self as usize].get_or_init(|| match drivebus_eds::parse(self.eds_text()) {
             Ok(p) => p,
             Err(e) => panic!("embedded {}.eds does not parse: {e}", self.name()),

@@ -285,7 +285,7 @@ fn brake_release_command() {
 /// `volts` and the master encoder at `master` counts/s.
 fn with_inputs(volts: f64, master: f64) -> replay_rig::Rig {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let m = drivebus_personality::machine::Machine::default_for(P);
     let (mut r, _) = replay_rig::Rig::with(P.build_on(k::ID, &m).unwrap());
     r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts }));
@@ -508,7 +508,7 @@ fn analog_input_cutoff() {
 #[test]
 fn mode_minus_1_follows_the_filtered_input() {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let current = |cutoff: u32| {
         let mut r = with_inputs(0.0, 0.0);
         k::put(&mut r, 0x5002, 0, &250u32.to_le_bytes());

@@ -726,9 +726,10 @@ fn manual_brake_control_and_brake_output_source() {
     write(&mut r, 0x2810, 0x0A, &0x0204u16.to_le_bytes());
     r.run_ms(100);
     assert!(brake_engaged(&r));
-    r.pn_mut()
-        .app
-        .inject(Injection::Model(drivebus_cia402::model::Injection::DigitalInput { line: 4, level: true }));
+    r.pn_mut().app.inject(Injection::Model(drivebus_cia402::model::ModelInjection::DigitalInput {
+        line: 4,
+        level: true,
+    }));
     r.run_ms(100);
     assert!(!brake_engaged(&r));
 }
@@ -736,7 +737,7 @@ fn manual_brake_control_and_brake_output_source() {
 #[test]
 fn machine_inputs_reach_3210h_and_3250h() {
     // §6.4.14 DI2..DI7 = the machine's lines 2..7; §6.4.16 AI0 in mV.
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let mut r = rig();
     r.pn_mut().app.inject(Injection::Model(Plant::DigitalInput { line: 3, level: true }));
     r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: 2.5 }));
@@ -750,7 +751,7 @@ fn machine_inputs_reach_3210h_and_3250h() {
 #[test]
 fn fault_reset_input_di2() {
     // §6.4.8 2810h:02 default 0502h: a falling edge of DI2 resets a fault.
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let mut r = rig();
     enable(&mut r);
     r.pn_mut().app.inject(Injection::FollowingError);

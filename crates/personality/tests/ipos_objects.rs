@@ -236,7 +236,7 @@ fn mode_display_follows_in_operation_enabled() {
     assert_eq!(r.upload(0x6061, 0, 1), 1);
 }
 
-fn inject(r: &mut Rig, what: drivebus_cia402::model::Injection) {
+fn inject(r: &mut Rig, what: drivebus_cia402::model::ModelInjection) {
     r.bus
         .node_mut::<PersonalityDevice>(r.dut)
         .unwrap()
@@ -249,19 +249,19 @@ fn inject(r: &mut Rig, what: drivebus_cia402::model::Injection) {
 /// triggered, reset by a Reset Fault command.
 #[test]
 fn motion_error_register_shows_the_faults() {
-    use drivebus_cia402::model::Injection;
+    use drivebus_cia402::model::ModelInjection;
     for (what, bit) in [
-        (Injection::OverCurrent, 8),
-        (Injection::BusOverVoltage, 12),
-        (Injection::BusUnderVoltage, 13),
-        (Injection::OverTemperature, 10),
-        (Injection::EncoderFailure, 5),
+        (ModelInjection::OverCurrent, 8),
+        (ModelInjection::BusOverVoltage, 12),
+        (ModelInjection::BusUnderVoltage, 13),
+        (ModelInjection::OverTemperature, 10),
+        (ModelInjection::EncoderFailure, 5),
     ] {
         let mut r = enabled_in(1);
         assert_eq!(r.upload(0x2000, 0, 2), 0);
         inject(&mut r, what);
         assert_eq!(r.upload(0x2000, 0, 2), 1 << bit, "{what:?}");
-        inject(&mut r, Injection::Clear);
+        inject(&mut r, ModelInjection::Clear);
         r.controlword(0x80);
         r.run_ms(5);
         assert_eq!(r.upload(0x2000, 0, 2), 0, "{what:?}: reset by Reset Fault");
@@ -289,12 +289,12 @@ fn digital_outputs_status_and_8bit_outputs() {
 /// §4.5.2: 208Fh:01 shows 60FDh bits 0-3 (here the LSN).
 #[test]
 fn digital_inputs_8bit() {
-    use drivebus_cia402::model::{Injection, SwitchInput};
+    use drivebus_cia402::model::{ModelInjection, SwitchInput};
     let mut r = Rig::new();
-    inject(&mut r, Injection::ForceSwitch(SwitchInput::NegativeLimit, Some(true)));
+    inject(&mut r, ModelInjection::ForceSwitch(SwitchInput::NegativeLimit, Some(true)));
     assert_eq!(r.upload(0x60FD, 0, 4) & 0x0F, 0x01);
     assert_eq!(r.upload(0x208F, 1, 1), 0x01);
-    inject(&mut r, Injection::ForceSwitch(SwitchInput::NegativeLimit, Some(false)));
+    inject(&mut r, ModelInjection::ForceSwitch(SwitchInput::NegativeLimit, Some(false)));
     assert_eq!(r.upload(0x208F, 1, 1), 0x00);
 }
 
@@ -566,12 +566,12 @@ fn brake_status_follows_the_brake() {
 /// (IN0)").
 #[test]
 fn digital_input_lines() {
-    use drivebus_cia402::model::{Injection, SwitchInput};
+    use drivebus_cia402::model::{ModelInjection, SwitchInput};
     let mut r = Rig::new();
-    inject(&mut r, Injection::DigitalInput { line: 3, level: true });
+    inject(&mut r, ModelInjection::DigitalInput { line: 3, level: true });
     assert_eq!(r.upload(0x60FD, 0, 4) as u32, 1 << 18, "IN2");
     assert_eq!(r.upload(0x208F, 2, 1), 0x04);
-    inject(&mut r, Injection::ForceSwitch(SwitchInput::Home, Some(true)));
+    inject(&mut r, ModelInjection::ForceSwitch(SwitchInput::Home, Some(true)));
     assert_eq!(r.upload(0x60FD, 0, 4) as u32, 1 << 18 | 1 << 16 | 1 << 2, "home = bit 2 and IN0");
     assert_eq!(r.upload(0x208F, 2, 1), 0x05);
 }
@@ -604,13 +604,13 @@ fn output_lines_and_unavailable_outputs() {
 /// (reference) and 2 (feedback), 0…65520 over 0…5 V.
 #[test]
 fn analogue_inputs() {
-    use drivebus_cia402::model::Injection;
+    use drivebus_cia402::model::ModelInjection;
     let mut r = Rig::new();
-    inject(&mut r, Injection::AnalogInput { channel: 1, volts: 2.5 });
-    inject(&mut r, Injection::AnalogInput { channel: 2, volts: 7.0 });
+    inject(&mut r, ModelInjection::AnalogInput { channel: 1, volts: 2.5 });
+    inject(&mut r, ModelInjection::AnalogInput { channel: 2, volts: 7.0 });
     assert_eq!(r.upload(0x2046, 0, 2), 32_760);
     assert_eq!(r.upload(0x2047, 0, 2) as u16, 65_520, "beyond full scale");
-    inject(&mut r, Injection::AnalogInput { channel: 1, volts: -1.0 });
+    inject(&mut r, ModelInjection::AnalogInput { channel: 1, volts: -1.0 });
     assert_eq!(r.upload(0x2046, 0, 2), 0);
 }
 

@@ -82,7 +82,7 @@ fn quick_stop_option_code() {
 #[test]
 fn fault_reaction_option_code() {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Model;
+    use drivebus_cia402::model::ModelInjection as Model;
     let after_fault = |code: i16| {
         let mut r = enabled_in(3);
         r.sdo(0x605E, 0, &code.to_le_bytes());
@@ -266,7 +266,7 @@ fn positioning_option_code_on_a_modulo_axis() {
 /// bits, and the EMCY codes sent.
 fn over_voltage_in_pv(setup: impl FnOnce(&mut Rig)) -> (f64, u16, Rig) {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Model;
+    use drivebus_cia402::model::ModelInjection as Model;
     let mut r = enabled_in(3);
     setup(&mut r);
     r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
@@ -309,7 +309,7 @@ fn fault_override_option_codes() {
 #[test]
 fn fatal_errors_disable_the_drive() {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Model;
+    use drivebus_cia402::model::ModelInjection as Model;
     let mut r = enabled_in(3);
     r.sdo(0x60FF, 0, &SPEED.to_le_bytes());
     r.run_ms(300);

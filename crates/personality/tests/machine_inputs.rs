@@ -305,7 +305,7 @@ fn generic_set_brake_bit_and_a_released_brake_let_the_load_fall() {
     // on the machine's schedule): nothing holds the load.
     controlword(&mut r, 0x00);
     r.pn_mut().app.inject(drivebus_cia402::drive::Injection::Model(
-        drivebus_cia402::model::Injection::Brake(Some(false)),
+        drivebus_cia402::model::ModelInjection::Brake(Some(false)),
     ));
     let at = position(&mut r);
     r.run_ms(100);

@@ -709,7 +709,7 @@ fn e31_gearing_second_encoder() {
     r.sdo(0x2013, 2, &1u16.to_le_bytes());
     let enc = |r: &mut Rig, m: i64| {
         use drivebus_cia402::drive::Injection;
-        use drivebus_cia402::model::Injection as Model;
+        use drivebus_cia402::model::ModelInjection as Model;
         let id = r.dut;
         let pn = r.bus.node_mut::<PersonalityDevice>(id).unwrap();
         pn.app.inject(Injection::Model(Model::MasterPosition(m.rem_euclid(2000) as f64)));

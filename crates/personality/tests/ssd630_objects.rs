@@ -392,7 +392,7 @@ fn drive_information_reads_the_machine() {
     // §13 4803h "Drive information": 05h motor temperature (°C), 06h Ucc
     // (V), 07h analog input X10 (mV); units are not given (our choice).
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let mut r = rig();
     r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: -2.5 }));
     r.run_ms(5);

@@ -67,7 +67,7 @@ use profile::{Ramp, Shape};
 pub enum Injection {
     /// A model-level condition (over-current, temperature, DC link, encoder,
     /// load torque step, clear).
-    Model(crate::model::Injection),
+    Model(crate::model::ModelInjection),
     /// A following error: the next control periods see the window exceeded
     /// (as if the load blocked), raising 8611h after 6066h.
     FollowingError,

@@ -27,7 +27,7 @@ pub const MAX_VALUE: f64 = 1e15;
 
 /// One sample of an interpolated set-point.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sample {
+pub struct SetPointSample {
     /// Value (position, velocity or torque).
     pub value: f64,
     /// Its rate of change per second.
@@ -175,9 +175,9 @@ impl Interpolator {
     /// at the start of the period and add the feed-forward over it, so the
     /// demand refers to the period's start: the value latched at a SYNC is
     /// output from the first period after the next SYNC on.
-    pub fn step(&mut self, dt: f64) -> Sample {
+    pub fn step(&mut self, dt: f64) -> SetPointSample {
         let t = self.dt_sum;
-        let sample = Sample {
+        let sample = SetPointSample {
             value: self.value(),
             slope: self.rate(),
             curvature: if t >= self.period * (1.0 - EDGE) { 0.0 } else { self.curvature },

@@ -15,5 +15,7 @@ pub mod cyclic;
 pub mod ip;
 
 pub use adapter::{CspMode, CstMode, CsvMode, IpMode, IpMonitor};
-pub use cyclic::{Cyclic, CyclicConfig, CyclicKind, CyclicOutput, FollowingWatch, Interpolator, Sample};
+pub use cyclic::{
+    Cyclic, CyclicConfig, CyclicKind, CyclicOutput, FollowingWatch, Interpolator, SetPointSample,
+};
 pub use ip::{Ip, IpBuffer, IpBufferError, IpConfig, IpOutput, IpRecord, Organisation, SubMode};

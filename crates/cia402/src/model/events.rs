@@ -193,7 +193,7 @@ impl Faults {
 
 /// Fault injection inputs (test and demo scenarios).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Injection {
+pub enum ModelInjection {
     /// Latch an over-current (2310h).
     OverCurrent,
     /// Force the winding over its temperature limit (4310h).

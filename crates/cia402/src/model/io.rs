@@ -3,7 +3,7 @@
 //! holding brake and the motor temperature reading.
 //!
 //! Their power-on values are [`IoParams`] (a machine file sets them); at
-//! run time they change through [`super::Injection`] (the machine's
+//! run time they change through [`super::ModelInjection`] (the machine's
 //! schedule, a test) and the drive sets the outputs and the brake command
 //! ([`DriveModel::set_outputs`], [`DriveModel::set_brake`]). Personalities
 //! read them from [`DriveModel`]: [`DriveModel::digital_inputs`],

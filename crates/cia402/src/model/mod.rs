@@ -32,7 +32,7 @@ pub mod params;
 mod physics;
 pub mod tuning;
 
-pub use events::{Event, EventKind, Faults, Injection, MAX_EVENTS, StepEvents, SwitchInput, Switches};
+pub use events::{Event, EventKind, Faults, MAX_EVENTS, ModelInjection, StepEvents, SwitchInput, Switches};
 pub use io::{ANALOG_INPUTS, BrakeParams, BrakeState, DIGITAL_LINES, IoParams};
 pub use params::{
     AxisKind, AxisParams, BusParams, ControlParams, DriveParams, EncoderParams, LoadTorque, MotorKind,
@@ -165,7 +165,7 @@ pub struct DriveModel {
     /// Switch levels from the axis position alone.
     natural: Switches,
     /// Forced levels (negative limit, positive limit, home): a tripped or
-    /// broken switch, set by [`Injection::ForceSwitch`].
+    /// broken switch, set by [`ModelInjection::ForceSwitch`].
     forced: [Option<bool>; 3],
     /// `forced` as of the last step (a release is an edge too).
     prev_forced: [Option<bool>; 3],
@@ -375,32 +375,32 @@ impl DriveModel {
     }
 
     /// Applies a fault injection.
-    pub fn inject(&mut self, what: Injection) {
+    pub fn inject(&mut self, what: ModelInjection) {
         match what {
-            Injection::OverCurrent => self.force_oc = true,
-            Injection::OverTemperature => self.force_ot = true,
-            Injection::BusOverVoltage => self.force_bus = Some(self.p.bus.over_voltage * 1.05),
-            Injection::BusUnderVoltage => self.force_bus = Some(self.p.bus.under_voltage * 0.9),
-            Injection::BusVoltage(v) => {
+            ModelInjection::OverCurrent => self.force_oc = true,
+            ModelInjection::OverTemperature => self.force_ot = true,
+            ModelInjection::BusOverVoltage => self.force_bus = Some(self.p.bus.over_voltage * 1.05),
+            ModelInjection::BusUnderVoltage => self.force_bus = Some(self.p.bus.under_voltage * 0.9),
+            ModelInjection::BusVoltage(v) => {
                 self.force_bus = v.filter(|v| v.is_finite() && (0.0..=1e6).contains(v));
                 if self.force_bus.is_none() {
                     self.bus_voltage = self.p.bus.nominal_voltage;
                 }
             }
-            Injection::EncoderFailure => self.encoder_failed = true,
-            Injection::ForceSwitch(which, level) => self.forced[which as usize] = level,
-            Injection::LoadTorqueStep(t) => {
+            ModelInjection::EncoderFailure => self.encoder_failed = true,
+            ModelInjection::ForceSwitch(which, level) => self.forced[which as usize] = level,
+            ModelInjection::LoadTorqueStep(t) => {
                 if t.is_finite() && t.abs() <= params::MAX_TORQUE {
                     self.load_step = t;
                 }
             }
-            Injection::DigitalInput { line, level } => {
+            ModelInjection::DigitalInput { line, level } => {
                 if (1..=DIGITAL_LINES as u8).contains(&line) {
                     let bit = 1u16 << (line - 1);
                     self.io.digital = if level { self.io.digital | bit } else { self.io.digital & !bit };
                 }
             }
-            Injection::AnalogInput { channel, volts } => {
+            ModelInjection::AnalogInput { channel, volts } => {
                 let slot = usize::from(channel).checked_sub(1).and_then(|i| self.io.analog.get_mut(i));
                 if let Some(v) = slot
                     && volts.is_finite()
@@ -409,22 +409,22 @@ impl DriveModel {
                     *v = volts;
                 }
             }
-            Injection::MasterVelocity(v) => {
+            ModelInjection::MasterVelocity(v) => {
                 if v.is_finite() && v.abs() <= io::MAX_MASTER {
                     self.io.master_vel = v;
                 }
             }
-            Injection::MasterPosition(p) => {
+            ModelInjection::MasterPosition(p) => {
                 if p.is_finite() && p.abs() <= io::MAX_MASTER {
                     self.io.master_pos = p;
                 }
             }
-            Injection::MotorTemperature(t) => {
+            ModelInjection::MotorTemperature(t) => {
                 let t = t.filter(|t| t.is_finite() && (-273.0..=1e4).contains(t));
                 self.io.temperature = t.or(self.p.io.motor_temperature);
             }
-            Injection::Brake(b) => self.io.brake_forced = b,
-            Injection::Clear => {
+            ModelInjection::Brake(b) => self.io.brake_forced = b,
+            ModelInjection::Clear => {
                 self.io.temperature = self.p.io.motor_temperature;
                 self.io.brake_forced = None;
                 self.force_oc = false;
@@ -503,7 +503,7 @@ impl DriveModel {
 
     /// Motor (winding) temperature \[°C\]: the thermal model's, or the
     /// reading forced by [`IoParams::motor_temperature`] /
-    /// [`Injection::MotorTemperature`].
+    /// [`ModelInjection::MotorTemperature`].
     pub fn temperature(&self) -> f64 {
         self.io.temperature.unwrap_or(self.temperature)
     }

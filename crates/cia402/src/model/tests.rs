@@ -135,7 +135,7 @@ fn bus_voltage_limits_speed() {
     assert!(rel(m.velocity(), expect) < 0.005, "{}", m.velocity());
     assert!(rel(m.current(), 1.0) < 0.005, "{}", m.current());
     // Lower bus (under-voltage injection) lowers the ceiling accordingly.
-    m.inject(Injection::BusVoltage(Some(160.0)));
+    m.inject(ModelInjection::BusVoltage(Some(160.0)));
     run(&mut m, 0.2);
     assert!(rel(m.velocity(), (160.0 - 5.0) / 0.4) < 0.005, "{}", m.velocity());
 }
@@ -262,32 +262,32 @@ fn short_circuit_braking_stops_the_motor() {
 fn fault_injection() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
     let cases = [
-        (Injection::OverCurrent, 0x2310),
-        (Injection::BusOverVoltage, 0x3210),
-        (Injection::BusUnderVoltage, 0x3220),
-        (Injection::EncoderFailure, 0x7305),
-        (Injection::OverTemperature, 0x4310),
+        (ModelInjection::OverCurrent, 0x2310),
+        (ModelInjection::BusOverVoltage, 0x3210),
+        (ModelInjection::BusUnderVoltage, 0x3220),
+        (ModelInjection::EncoderFailure, 0x7305),
+        (ModelInjection::OverTemperature, 0x4310),
     ];
     for (inj, code) in cases {
         m.inject(inj);
         m.step(1.0 / 8000.0);
         assert_eq!(m.faults().error_code(), Some(code), "{inj:?}");
         assert!(m.clear_faults().any(), "condition still forced");
-        m.inject(Injection::Clear);
+        m.inject(ModelInjection::Clear);
         m.step(1.0 / 8000.0);
         assert!(!m.clear_faults().any(), "{inj:?}");
     }
     // Encoder failure freezes the reading.
     m.set_motion(0.0, 10.0);
-    m.inject(Injection::EncoderFailure);
+    m.inject(ModelInjection::EncoderFailure);
     let c = m.position_counts();
     run(&mut m, 0.01);
     assert_eq!(m.position_counts(), c);
     assert!(m.position() > 0.05);
     // A load torque step moves a free rotor.
-    m.inject(Injection::Clear);
+    m.inject(ModelInjection::Clear);
     m.set_motion(0.0, 0.0);
-    m.inject(Injection::LoadTorqueStep(-0.5));
+    m.inject(ModelInjection::LoadTorqueStep(-0.5));
     run(&mut m, 0.01);
     assert!(m.velocity() < 0.0);
 }

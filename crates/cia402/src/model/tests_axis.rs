@@ -219,7 +219,7 @@ fn closed_loop_stepper_does_not_lose_steps() {
     assert_eq!(m.lost_steps(), 0);
     assert!((m.demand_position() - m.position()).abs() < FULL_STEP);
     // Overloaded: pushed back, reported as stall, still no step loss.
-    m.inject(Injection::LoadTorqueStep(-0.5));
+    m.inject(ModelInjection::LoadTorqueStep(-0.5));
     run(&mut m, 0.2);
     assert!(m.stalled());
     assert_eq!(m.lost_steps(), 0);

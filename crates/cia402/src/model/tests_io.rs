@@ -88,14 +88,14 @@ fn overloaded_brake_slips() {
 #[test]
 fn forced_brake_overrides_the_command_until_cleared() {
     let mut m = hanging(true);
-    m.inject(Injection::Brake(Some(false)));
+    m.inject(ModelInjection::Brake(Some(false)));
     assert!(!m.brake().engaged && m.brake().commanded);
     run(&mut m, 0.1);
     assert!(m.position() < -0.1, "held released, the load falls");
-    m.inject(Injection::Clear);
+    m.inject(ModelInjection::Clear);
     assert!(m.brake().engaged);
     m.set_brake(false);
-    m.inject(Injection::Brake(Some(true)));
+    m.inject(ModelInjection::Brake(Some(true)));
     run(&mut m, 0.2);
     assert!(m.brake().engaged && !m.brake().commanded, "stuck engaged");
 }
@@ -109,9 +109,9 @@ fn digital_inputs_levels_and_wired_outputs() {
     assert_eq!(m.digital_inputs(), 0b101);
     assert!(m.digital_input(1) && !m.digital_input(2) && m.digital_input(3));
     assert!(!m.digital_input(0) && !m.digital_input(17), "no such lines");
-    m.inject(Injection::DigitalInput { line: 2, level: true });
-    m.inject(Injection::DigitalInput { line: 1, level: false });
-    m.inject(Injection::DigitalInput { line: 17, level: true });
+    m.inject(ModelInjection::DigitalInput { line: 2, level: true });
+    m.inject(ModelInjection::DigitalInput { line: 1, level: false });
+    m.inject(ModelInjection::DigitalInput { line: 17, level: true });
     assert_eq!(m.digital_inputs(), 0b110);
     m.set_outputs(0b10);
     assert_eq!(m.outputs(), 0b10);
@@ -119,7 +119,7 @@ fn digital_inputs_levels_and_wired_outputs() {
     m.set_outputs(0b01);
     assert!(!m.digital_input(9));
     // Clear removes forced conditions, not the plant's levels.
-    m.inject(Injection::Clear);
+    m.inject(ModelInjection::Clear);
     assert_eq!(m.digital_inputs(), 0b110);
 }
 
@@ -129,9 +129,9 @@ fn analog_inputs_in_volts() {
     p.io.analog_inputs = [1.5, 0.0, -2.0, 0.0];
     let mut m = DriveModel::new(p).unwrap();
     assert_eq!((m.analog_input(1), m.analog_input(3)), (1.5, -2.0));
-    m.inject(Injection::AnalogInput { channel: 2, volts: 7.25 });
-    m.inject(Injection::AnalogInput { channel: 2, volts: f64::NAN });
-    m.inject(Injection::AnalogInput { channel: 5, volts: 1.0 });
+    m.inject(ModelInjection::AnalogInput { channel: 2, volts: 7.25 });
+    m.inject(ModelInjection::AnalogInput { channel: 2, volts: f64::NAN });
+    m.inject(ModelInjection::AnalogInput { channel: 5, volts: 1.0 });
     assert_eq!(m.analog_input(2), 7.25);
     assert_eq!((m.analog_input(0), m.analog_input(5)), (0.0, 0.0));
     let mut bad = DriveParams::servo_small();
@@ -149,11 +149,11 @@ fn master_encoder_runs_at_its_speed() {
     run(&mut m, 0.5);
     assert_eq!(m.master_position(), 2100);
     assert_eq!(m.master_velocity(), 4000.0);
-    m.inject(Injection::MasterPosition(-10.0));
-    m.inject(Injection::MasterVelocity(-2000.0));
+    m.inject(ModelInjection::MasterPosition(-10.0));
+    m.inject(ModelInjection::MasterVelocity(-2000.0));
     run(&mut m, 0.25);
     assert_eq!(m.master_position(), -510);
-    m.inject(Injection::MasterVelocity(f64::NAN));
+    m.inject(ModelInjection::MasterVelocity(f64::NAN));
     assert_eq!(m.master_velocity(), -2000.0);
 }
 
@@ -163,18 +163,18 @@ fn forced_temperature_reads_and_trips() {
     p.io.motor_temperature = Some(60.0);
     let mut m = DriveModel::new(p).unwrap();
     assert_eq!(m.temperature(), 60.0);
-    m.inject(Injection::MotorTemperature(Some(100.0)));
+    m.inject(ModelInjection::MotorTemperature(Some(100.0)));
     m.step(1e-4);
     assert_eq!(m.temperature(), 100.0);
     assert!(!m.faults().over_temperature, "below the 120 °C limit");
-    m.inject(Injection::MotorTemperature(Some(130.0)));
+    m.inject(ModelInjection::MotorTemperature(Some(130.0)));
     assert!(m.faults().over_temperature);
     assert_eq!(m.faults().error_code(), Some(0x4310));
     // Back to the machine's reading; the latched flag clears on reset.
-    m.inject(Injection::Clear);
+    m.inject(ModelInjection::Clear);
     assert_eq!(m.temperature(), 60.0);
     assert!(!m.clear_faults().over_temperature);
-    m.inject(Injection::MotorTemperature(None));
+    m.inject(ModelInjection::MotorTemperature(None));
     assert_eq!(m.temperature(), 60.0);
 }
 
@@ -182,8 +182,8 @@ fn forced_temperature_reads_and_trips() {
 fn thermal_model_without_a_forced_reading() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
     assert_eq!(m.temperature(), 25.0);
-    m.inject(Injection::MotorTemperature(Some(80.0)));
-    m.inject(Injection::MotorTemperature(None));
+    m.inject(ModelInjection::MotorTemperature(Some(80.0)));
+    m.inject(ModelInjection::MotorTemperature(None));
     assert_eq!(m.temperature(), 25.0, "back to the thermal model");
 }
 

@@ -57,7 +57,7 @@ fn higher_velocity_gain_rejects_a_load_step_better() {
         let mut m = tuned(|p| p.control.velocity_kp = kp);
         m.set_command(Command::Velocity { velocity: 50.0, acceleration: 0.0 });
         run(&mut m, 0.3);
-        m.inject(Injection::LoadTorqueStep(-0.5));
+        m.inject(ModelInjection::LoadTorqueStep(-0.5));
         let dt = m.params().control_period();
         let mut worst: f64 = 0.0;
         for _ in 0..400 {

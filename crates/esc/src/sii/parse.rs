@@ -11,8 +11,8 @@ fn dword(b: &[u8], w: usize) -> u32 {
     u32::from(word(b, w)) | (u32::from(word(b, w + 1)) << 16)
 }
 
-fn mailbox_at(b: &[u8], w: usize) -> MailboxConfig {
-    MailboxConfig {
+fn mailbox_at(b: &[u8], w: usize) -> MailboxArea {
+    MailboxArea {
         rx_offset: word(b, w),
         rx_size: word(b, w + 1),
         tx_offset: word(b, w + 2),

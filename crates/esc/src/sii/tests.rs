@@ -134,8 +134,8 @@ prop_compose! {
         SiiContent {
             config: ConfigArea { pdi_control: cfg[0], pdi_config: cfg[1], sync_impulse_len: cfg[2], pdi_config2: cfg[3], station_alias: cfg[4] },
             identity: Identity { vendor_id: id[0], product_code: id[1], revision: id[2], serial: id[3] },
-            bootstrap_mailbox: MailboxConfig { rx_offset: mbx[0], rx_size: mbx[1], tx_offset: mbx[2], tx_size: mbx[3] },
-            mailbox: MailboxConfig { rx_offset: mbx[4], rx_size: mbx[5], tx_offset: mbx[6], tx_size: mbx[7] },
+            bootstrap_mailbox: MailboxArea { rx_offset: mbx[0], rx_size: mbx[1], tx_offset: mbx[2], tx_size: mbx[3] },
+            mailbox: MailboxArea { rx_offset: mbx[4], rx_size: mbx[5], tx_offset: mbx[6], tx_size: mbx[7] },
             mailbox_protocols: protocols,
             size_kbit: 0,
             version: 1,

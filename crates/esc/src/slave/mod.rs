@@ -53,7 +53,7 @@ pub use mailbox::{HEADER_LEN as MAILBOX_HEADER_LEN, MailboxOut, mailbox_error, m
 use crate::esc::Esc;
 use crate::events::EscEvent;
 use crate::segment::Device;
-use crate::sii::{MailboxConfig, sm_type};
+use crate::sii::{MailboxArea, sm_type};
 use alloc::vec::Vec;
 use drivebus_can::{Instant, earliest};
 use mailbox::Mailbox;
@@ -65,8 +65,8 @@ struct Layout {
     mbx_in: usize,
     outputs: Option<(usize, u16)>,
     inputs: Option<(usize, u16)>,
-    mailbox: MailboxConfig,
-    bootstrap: MailboxConfig,
+    mailbox: MailboxArea,
+    bootstrap: MailboxArea,
 }
 
 impl Layout {
@@ -472,7 +472,7 @@ impl<A: SlaveApp> Slave<A> {
         self.app.check_transition(t, &self.sync)
     }
 
-    fn check_mailbox(&self, m: MailboxConfig, code: AlStatusCode) -> Result<(), AlStatusCode> {
+    fn check_mailbox(&self, m: MailboxArea, code: AlStatusCode) -> Result<(), AlStatusCode> {
         let ok = |n: usize, start: u16, len: u16, ctrl: u8| {
             self.esc
                 .sync_manager(n)

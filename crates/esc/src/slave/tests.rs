@@ -69,10 +69,10 @@ fn image() -> SiiImage {
     SiiImage::builder()
         .identity(0x1A3, 1, 1, 1)
         .mailbox(
-            crate::sii::MailboxConfig { rx_offset: 0x1000, rx_size: 64, tx_offset: 0x1080, tx_size: 64 },
+            crate::sii::MailboxArea { rx_offset: 0x1000, rx_size: 64, tx_offset: 0x1080, tx_size: 64 },
             4,
         )
-        .bootstrap_mailbox(crate::sii::MailboxConfig {
+        .bootstrap_mailbox(crate::sii::MailboxArea {
             rx_offset: 0x1400,
             rx_size: 128,
             tx_offset: 0x1600,

@@ -234,7 +234,7 @@ fn process_data(d: &SlaveDescription) -> Result<(ProcessDataSizes, Option<u8>, O
 
 /// Entries of the PDOs assigned to `sm`, at their bit offsets, that the
 /// dictionary holds with a value of 1 to 64 bits.
-fn mirrors(od: &drivebus_od::ObjectDictionary, pdos: &[drivebus_esi::Pdo], sm: Option<u8>) -> Vec<Mirror> {
+fn mirrors(od: &drivebus_od::ObjectDictionary, pdos: &[drivebus_esi::EsiPdo], sm: Option<u8>) -> Vec<Mirror> {
     let mut off = 0usize;
     let mut out = Vec::new();
     for p in pdos.iter().filter(|p| sm.is_some() && p.sm == sm) {

@@ -74,7 +74,7 @@ pub enum DriveError {
     /// The state directory could not be used.
     State(PathBuf, std::io::Error),
     /// The SII mailbox sizes do not suit the CoE server.
-    Mailbox(drivebus_coe::ConfigError),
+    Mailbox(drivebus_coe::MailboxSizeError),
 }
 
 impl std::fmt::Display for DriveError {

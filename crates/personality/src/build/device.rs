@@ -24,7 +24,7 @@ use alloc::vec::Vec;
 use drivebus_can::Instant;
 use drivebus_cia401::{IoModule, volts_to_raw};
 use drivebus_cia402::drive::Injection;
-use drivebus_cia402::model::Injection as Plant;
+use drivebus_cia402::model::ModelInjection as Plant;
 use drivebus_eds::{Diagnostic, Eds, EdsError};
 use drivebus_node::{AppContext, Application, EdsOptions, FrameFilter, Node, NodeDevice, NodeEvent, Storage};
 use drivebus_od::{ObjectDictionary, SdoAbort, Target, WriteOutcome};

@@ -19,7 +19,7 @@ pub mod option {
 /// Engage, Shared release / engage" with only "0 = None" numbered; the
 /// others are taken as 1–6 in the printed order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Action {
+pub enum ManualBrakeAction {
     /// 0: the signal does nothing.
     None,
     /// 1: active signal, always released.
@@ -36,24 +36,24 @@ pub enum Action {
     SharedReleaseEngage,
 }
 
-impl Action {
+impl ManualBrakeAction {
     /// Bits 8–11 of 2360h:01; an unknown code acts as None.
-    pub fn of(option: u16) -> Action {
+    pub fn of(option: u16) -> ManualBrakeAction {
         match (option >> 8) & 0x0F {
-            1 => Action::Release,
-            2 => Action::Engage,
-            3 => Action::ReleaseEngage,
-            4 => Action::SharedRelease,
-            5 => Action::SharedEngage,
-            6 => Action::SharedReleaseEngage,
-            _ => Action::None,
+            1 => ManualBrakeAction::Release,
+            2 => ManualBrakeAction::Engage,
+            3 => ManualBrakeAction::ReleaseEngage,
+            4 => ManualBrakeAction::SharedRelease,
+            5 => ManualBrakeAction::SharedEngage,
+            6 => ManualBrakeAction::SharedReleaseEngage,
+            _ => ManualBrakeAction::None,
         }
     }
 }
 
 /// The brake's settings and state.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Brake {
+pub struct HoldingBrakeControl {
     /// 2360h:01.
     pub option: u16,
     /// 2360h:02 Application_Time_HBRKS \[ms\].
@@ -74,9 +74,9 @@ pub struct Brake {
     since_s: f64,
 }
 
-impl Default for Brake {
+impl Default for HoldingBrakeControl {
     fn default() -> Self {
-        Brake {
+        HoldingBrakeControl {
             option: 0,
             application_ms: 200,
             release_ms: 200,
@@ -92,7 +92,7 @@ impl Default for Brake {
     }
 }
 
-impl Brake {
+impl HoldingBrakeControl {
     /// The drive handles the brake automatically (bit 0, not manual).
     pub fn automatic(&self) -> bool {
         self.option & (option::HANDLED | option::MANUAL) == option::HANDLED
@@ -120,17 +120,19 @@ impl Brake {
         let release = if self.option & option::MANUAL != 0 {
             signal
         } else {
-            match Action::of(self.option) {
-                Action::None => auto,
-                Action::Release => signal || auto,
-                Action::Engage => !signal && auto,
-                Action::ReleaseEngage => signal,
-                Action::SharedRelease | Action::SharedEngage | Action::SharedReleaseEngage => {
-                    let a = Action::of(self.option);
-                    if rising && a != Action::SharedEngage {
+            match ManualBrakeAction::of(self.option) {
+                ManualBrakeAction::None => auto,
+                ManualBrakeAction::Release => signal || auto,
+                ManualBrakeAction::Engage => !signal && auto,
+                ManualBrakeAction::ReleaseEngage => signal,
+                ManualBrakeAction::SharedRelease
+                | ManualBrakeAction::SharedEngage
+                | ManualBrakeAction::SharedReleaseEngage => {
+                    let a = ManualBrakeAction::of(self.option);
+                    if rising && a != ManualBrakeAction::SharedEngage {
                         self.shared = Some(true);
-                    } else if (rising && a == Action::SharedEngage)
-                        || (falling && a == Action::SharedReleaseEngage)
+                    } else if (rising && a == ManualBrakeAction::SharedEngage)
+                        || (falling && a == ManualBrakeAction::SharedReleaseEngage)
                     {
                         self.shared = Some(false);
                     }
@@ -171,7 +173,7 @@ mod tests {
 
     const DT: f64 = 0.001;
 
-    fn run(b: &mut Brake, release: bool, enabled: bool, di: u16, ms: u32) -> BrakeControl {
+    fn run(b: &mut HoldingBrakeControl, release: bool, enabled: bool, di: u16, ms: u32) -> BrakeControl {
         let mut c = BrakeControl::Auto;
         for _ in 0..ms {
             c = b.step(release, enabled, di, DT);
@@ -181,7 +183,7 @@ mod tests {
 
     #[test]
     fn handled_brake_releases_then_reports() {
-        let mut b = Brake { option: option::HANDLED, ..Brake::default() };
+        let mut b = HoldingBrakeControl { option: option::HANDLED, ..HoldingBrakeControl::default() };
         assert_eq!(b.status(), 0b100, "engaged at power-on");
         // Being enabled: released at once, "released" after 200 ms.
         assert_eq!(run(&mut b, true, false, 0, 100), BrakeControl::Released);
@@ -197,7 +199,7 @@ mod tests {
 
     #[test]
     fn not_handled_keeps_the_brake_engaged() {
-        let mut b = Brake::default();
+        let mut b = HoldingBrakeControl::default();
         assert_eq!(run(&mut b, true, true, 0, 10), BrakeControl::Engaged);
         assert!(!b.output());
     }
@@ -205,22 +207,31 @@ mod tests {
     #[test]
     fn manual_signal_and_actions() {
         // Manual: 3360h:01 bit 0 releases.
-        let mut b = Brake { option: option::HANDLED | option::MANUAL, control: 1, ..Brake::default() };
+        let mut b = HoldingBrakeControl {
+            option: option::HANDLED | option::MANUAL,
+            control: 1,
+            ..HoldingBrakeControl::default()
+        };
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Released);
-        // Action 2 "Engage": an active input (DI4 per 2810h:0Ah = 0204h)
+        // ManualBrakeAction 2 "Engage": an active input (DI4 per 2810h:0Ah = 0204h)
         // engages an enabled motor's brake.
-        let mut b = Brake { option: option::HANDLED | 2 << 8, input: 0x0204, ..Brake::default() };
+        let mut b = HoldingBrakeControl {
+            option: option::HANDLED | 2 << 8,
+            input: 0x0204,
+            ..HoldingBrakeControl::default()
+        };
         assert_eq!(run(&mut b, true, true, 0, 5), BrakeControl::Auto);
         assert_eq!(run(&mut b, true, true, 1 << 4, 5), BrakeControl::Engaged);
-        // Action 4 "Shared release": an edge releases a disabled motor's
+        // ManualBrakeAction 4 "Shared release": an edge releases a disabled motor's
         // brake until the drive commands again.
-        let mut b = Brake { option: option::HANDLED | 4 << 8, ..Brake::default() };
+        let mut b =
+            HoldingBrakeControl { option: option::HANDLED | 4 << 8, ..HoldingBrakeControl::default() };
         b.control = 1;
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Released);
         b.control = 0;
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Released, "latched");
         run(&mut b, true, true, 0, 5);
         assert_eq!(run(&mut b, false, false, 0, 5), BrakeControl::Auto, "the drive engaged it");
-        assert_eq!(Action::of(0x0F00), Action::None);
+        assert_eq!(ManualBrakeAction::of(0x0F00), ManualBrakeAction::None);
     }
 }

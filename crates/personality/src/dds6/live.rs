@@ -10,7 +10,7 @@
 //! wire them), DO0..DO2 its output lines 1..3, AI0 / AI1 its analog
 //! channels 1 / 2.
 
-use super::brake::Brake;
+use super::brake::HoldingBrakeControl;
 use super::io;
 use drivebus_cia402::drive::Drive;
 use drivebus_od::{EntryRef, ObjectDictionary};
@@ -67,7 +67,7 @@ pub(super) struct Live {
     /// The fault-reset input fired (taken by the behaviour).
     fault_reset: bool,
     /// The holding brake.
-    pub brake: Brake,
+    pub brake: HoldingBrakeControl,
 }
 
 impl Live {

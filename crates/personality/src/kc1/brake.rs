@@ -17,7 +17,7 @@ use drivebus_od::{EntryRef, ObjectDictionary, SdoAbort};
 
 /// The brake objects' state.
 #[derive(Debug, Clone, Default)]
-pub struct Brake {
+pub struct FieldbusBrake {
     status: Option<EntryRef>,
     objects: usize,
     /// 345Ah:1 as last written.
@@ -28,7 +28,7 @@ pub struct Brake {
     manual: Option<bool>,
 }
 
-impl Brake {
+impl FieldbusBrake {
     /// A write of 345Ah:1.
     pub fn command(&mut self, value: u16) {
         if value & 1 == 0 {

@@ -91,7 +91,7 @@ pub struct Kollmorgen {
     /// The latch objects over the touch probe.
     latch: latch::Latch,
     /// The brake objects 345Ah, MOTOR.BRAKERLS.
-    brake: brake::Brake,
+    brake: brake::FieldbusBrake,
     /// DIN1–7 and their change flags in 60FDh.
     inputs: io::Inputs,
     /// The foldback readings and supervision.
@@ -121,7 +121,7 @@ impl Kollmorgen {
             period: timing::PeriodPair::default(),
             monitor: monitor::Monitor::default(),
             latch: latch::Latch::default(),
-            brake: brake::Brake::default(),
+            brake: brake::FieldbusBrake::default(),
             inputs: io::Inputs::default(),
             foldback: tuning::Foldback::default(),
             pls: pls::Pls::default(),
@@ -205,7 +205,7 @@ impl Behaviour for Kollmorgen {
         if matches!(event, NodeEvent::ResetApplication) {
             self.status.reset();
             self.period.reset();
-            self.brake = brake::Brake::default();
+            self.brake = brake::FieldbusBrake::default();
             self.pls = pls::Pls::default();
         }
         // §7.2.2.15: "when fieldbus communication is lost, the drive will

@@ -11,7 +11,7 @@ use super::io::{Input, InputChange};
 use super::{MachineError, Polarity};
 use drivebus_can::Instant;
 use drivebus_cia402::drive::{Drive, Injection};
-use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES, Injection as ModelInjection, SwitchInput};
+use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES, ModelInjection, SwitchInput};
 
 /// One of the three switches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -18,7 +18,9 @@
 //! type, a value out of range or in the wrong order.
 
 use super::io::{Brake, Input, InputChange};
-use super::{Fault, FaultKind, HardStops, HomeSwitch, Limits, Machine, MachineError, Polarity, Switch};
+use super::{
+    Fault, FaultKind, HardStops, HomeSwitch, LimitSwitches, Machine, MachineError, Polarity, Switch,
+};
 use crate::Profile;
 use drivebus_cia402::model::{ANALOG_INPUTS, DIGITAL_LINES};
 use serde::Deserialize;
@@ -424,7 +426,7 @@ impl MachineFile {
                 let need = |v: Option<f64>, b: Option<f64>, key: &str| {
                     v.or(b).ok_or_else(|| place(&sp, missing(key)))
                 };
-                m.limits = Some(Limits {
+                m.limits = Some(LimitSwitches {
                     negative: need(neg, base.map(|b| b.negative), "limits.negative")?,
                     positive: need(posv, base.map(|b| b.positive), "limits.positive")?,
                     polarity: pol(l.polarity).or(base.map(|b| b.polarity)).unwrap_or_default(),

@@ -12,7 +12,7 @@
 
 use super::{MachineError, err, finite, not_negative};
 use drivebus_cia402::drive::DriveConfig;
-use drivebus_cia402::model::{ANALOG_INPUTS, BrakeParams, DIGITAL_LINES, Injection, IoParams};
+use drivebus_cia402::model::{ANALOG_INPUTS, BrakeParams, DIGITAL_LINES, IoParams, ModelInjection};
 
 /// Digital and analog inputs at power-on, and the drive's output lines
 /// wired back to input lines.
@@ -106,14 +106,14 @@ const MAX_VOLTS: f64 = 1000.0;
 
 impl Input {
     /// The model's injection that sets it.
-    pub(super) fn injection(self) -> Injection {
+    pub(super) fn injection(self) -> ModelInjection {
         match self {
-            Input::Digital { line, level } => Injection::DigitalInput { line, level },
-            Input::Analog { channel, volts } => Injection::AnalogInput { channel, volts },
-            Input::MasterVelocity(v) => Injection::MasterVelocity(v),
-            Input::MasterPosition(p) => Injection::MasterPosition(p),
-            Input::MotorTemperature(t) => Injection::MotorTemperature(Some(t)),
-            Input::Brake(b) => Injection::Brake(Some(b)),
+            Input::Digital { line, level } => ModelInjection::DigitalInput { line, level },
+            Input::Analog { channel, volts } => ModelInjection::AnalogInput { channel, volts },
+            Input::MasterVelocity(v) => ModelInjection::MasterVelocity(v),
+            Input::MasterPosition(p) => ModelInjection::MasterPosition(p),
+            Input::MotorTemperature(t) => ModelInjection::MotorTemperature(Some(t)),
+            Input::Brake(b) => ModelInjection::Brake(Some(b)),
         }
     }
 

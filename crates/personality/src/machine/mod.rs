@@ -50,7 +50,7 @@ pub enum Polarity {
 
 /// The two limit switches: active at or beyond their positions.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
+pub struct LimitSwitches {
     /// Negative limit switch, active at or below \[machine units\].
     pub negative: f64,
     /// Positive limit switch, active at or above \[machine units\].
@@ -109,7 +109,7 @@ pub struct Machine {
     /// Position at power-on \[machine units\].
     pub start: f64,
     /// Limit switches (`None`: none fitted).
-    pub limits: Option<Limits>,
+    pub limits: Option<LimitSwitches>,
     /// Home switch (`None`: none fitted).
     pub home_switch: Option<HomeSwitch>,
     /// Hard stops (`None`: endless travel).
@@ -194,7 +194,7 @@ fn layout(feed: f64, gear_ratio: f64, (neg, pos): (f64, f64), inertia: f64, coul
         feed,
         gear_ratio,
         start: 0.0,
-        limits: Some(Limits {
+        limits: Some(LimitSwitches {
             negative: -neg * r,
             positive: pos * r,
             polarity: Polarity::NormallyClosed,

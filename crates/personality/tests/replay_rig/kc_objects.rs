@@ -678,7 +678,7 @@ pub fn brake_release_command(profile: Profile) {
 /// analog input 1.
 pub fn analog_input_value(profile: Profile) {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let m = drivebus_personality::machine::Machine::default_for(profile);
     let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
     r.pn_mut().app.inject(Injection::Model(Plant::AnalogInput { channel: 1, volts: -1.25 }));
@@ -693,7 +693,7 @@ pub fn analog_input_value(profile: Profile) {
 /// 60FEh:2 enables them (KC1 §7.2.3.9, AKD §6.2.3.9).
 pub fn digital_io(profile: Profile) {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let m = drivebus_personality::machine::Machine::default_for(profile);
     let (mut r, _) = Rig::with(profile.build_on(ID, &m).unwrap());
     r.run_ms(2);
@@ -731,7 +731,7 @@ pub fn set_brake_bit(profile: Profile) {
 /// encoder (counts); DRV.TEMPERATURES 3610h the ambient.
 pub fn secondary_feedback(profile: Profile) -> Rig {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let text = "[[node]]\nid = 3\n[node.temperature]\nambient = 31.0\n";
     let m =
         drivebus_personality::machine::MachineFile::parse(text).unwrap().machine_for(profile, ID).unwrap();

@@ -144,7 +144,7 @@ pub fn analog_output(profile: Profile) {
 /// a first-order low-pass; 0 reads it as it is.
 pub fn analog_input_cutoff(profile: Profile) {
     use drivebus_cia402::drive::Injection;
-    use drivebus_cia402::model::Injection as Plant;
+    use drivebus_cia402::model::ModelInjection as Plant;
     let step = |cutoff: u32| {
         let mut r = operational(profile);
         put(&mut r, 0x5000, 0, &cutoff.to_le_bytes());

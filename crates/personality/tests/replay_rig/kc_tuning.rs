@@ -6,7 +6,7 @@
 use super::Rig;
 use super::kc_objects::{ID, emcy, emcys_after, enable, get, getu, operational, put, refused};
 use drivebus_cia402::drive::Injection;
-use drivebus_cia402::model::Injection as ModelInjection;
+use drivebus_cia402::model::ModelInjection;
 use drivebus_personality::Profile;
 
 /// `profile` on a machine with a holding brake of 20 N·m, applied by
