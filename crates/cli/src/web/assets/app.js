@@ -152,7 +152,8 @@ function draw() {
       k ? g.lineTo(x, y) : g.moveTo(x, y);
     });
     g.stroke();
-    legend.push(`<span style="color:${col}">${key}h = ${s[s.length - 1][1]} [${lo}..${hi}]</span>`);
+    const [node, index, sub] = key.split(":");
+    legend.push(`<span style="color:${col}">node ${node} ${index}h:${sub} = ${s[s.length - 1][1]} [${lo}..${hi}]</span>`);
   }
   $("legend").innerHTML = legend.join("");
   requestAnimationFrame(draw);
