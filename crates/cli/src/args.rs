@@ -143,6 +143,9 @@ pub enum Command {
     /// CiA 309-3 ASCII gateway on stdin/stdout or TCP (cocomm, coctl lines).
     #[command(after_help = GATEWAY_EXAMPLES)]
     Gateway(GatewayArgs),
+    /// The page in the browser: nodes, objects, drive panel and scope over the bus (HTTP API).
+    #[command(after_help = UI_EXAMPLES)]
+    Ui(UiArgs),
     /// EDS/DCF files: check, show, export.
     #[command(subcommand, after_help = EDS_EXAMPLES)]
     Eds(EdsCmd),
@@ -180,6 +183,24 @@ otherwise (ending `; control on ADDR` with --control); stops on SIGINT/SIGTERM (
 With --control ADDR, `drivebus control --connect ADDR ...` sets inputs, triggers and clears faults,
 drops frames and switches a drive's power while it runs (docs/control.md).
 python-can: can.Bus(interface='socketcand', host='127.0.0.1', port=29536, channel='can0')";
+
+const UI_EXAMPLES: &str = "\
+Examples:
+  drivebus ui --sim akd:1 --sim dds6:2                       two virtual drives, page on 127.0.0.1:8402
+  drivebus ui --bus socketcand://127.0.0.1:29536/can0 --http 127.0.0.1:0
+  drivebus ui --bus socketcan://can0 --http 0.0.0.0:8402        (beyond loopback: needs the printed token)
+
+Prints one line when ready: `drivebus ui: open http://ADDR/ in a browser (...)`; runs until
+SIGINT/SIGTERM. The API (REST + WebSocket) is in docs/http-api.md.";
+
+/// `drivebus ui`.
+#[derive(Args, Debug)]
+pub struct UiArgs {
+    /// Address of the web server (port 0 picks a free one). Beyond loopback every request needs
+    /// the token printed at start.
+    #[arg(long, value_name = "HOST:PORT", default_value = crate::web::DEFAULT_HTTP)]
+    pub http: String,
+}
 
 /// `drivebus serve`.
 #[derive(Args, Debug)]
@@ -220,6 +241,10 @@ pub struct ServeArgs {
     /// manuals do not list them).
     #[arg(long)]
     pub eds_object: bool,
+    /// Also serve the page and its HTTP API for these drives on HOST:PORT (`drivebus ui`; port 0
+    /// picks a free one; beyond loopback every request needs the token printed at start).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub http: Option<String>,
 }
 
 const DEMO_EXAMPLES: &str = "\

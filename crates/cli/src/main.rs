@@ -38,6 +38,7 @@ mod slcan_pty;
 mod stats_cmd;
 mod vdevice;
 mod vdrive;
+mod web;
 
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches};
@@ -81,6 +82,7 @@ fn uses(path: &[&str]) -> &'static [Opt] {
         ["dump", ..] | ["monitor", ..] => NODE_SDO,
         ["send" | "replay" | "produce" | "gen" | "stats", ..] => &[Bus, Json, Sim, Machine],
         ["gateway", ..] => &[Bus, Node, Timeout, Retries, Sim, Machine],
+        ["ui", ..] => &[Bus, Eds, Timeout, Retries, Sim, Machine],
         ["eds", "check", ..] => &[Json],
         ["eds", "show", ..] => &[Eds, Json],
         ["eds", ..] => NODE_SDO,
@@ -200,7 +202,8 @@ fn main() {
         std::process::exit(2);
     }
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,ethercrab=off"));
+        // Every write from the web page is logged (issue 19 §3).
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,ethercrab=off,drivebus::web=info"));
     tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).init();
     let rt = match tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build() {
         Ok(rt) => rt,
@@ -259,6 +262,7 @@ async fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Gen(a) => cyclic::gen_frames(g, a).await.map(|()| 0),
         Command::Stats(a) => stats_cmd::run(g, a).await.map(|()| 0),
         Command::Gateway(a) => gateway::run(g, a).await.map(|()| 0),
+        Command::Ui(a) => web::run_ui(g, a).await.map(|()| 0),
         Command::Eds(c) => eds_cmd::run(g, c).await,
         Command::Lss(c) => lss_cmd::run(g, c).await.map(|()| 0),
         Command::SlcanPty(a) => slcan_pty::run(g, a).await.map(|()| 0),

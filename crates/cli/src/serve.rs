@@ -10,7 +10,7 @@
 //! Contract (other tools rely on it): one stdout line once the drives are
 //! up — containing `listening on HOST:PORT (channel NAME)` when listening,
 //! `serving on URL` otherwise, ending `; control on ADDR` with `--control`
-//! (`crate::control`); runs until SIGINT or SIGTERM, then exits 0.
+//! (`crate::control`) and `; page on http://ADDR/` with `--http` (`crate::web`); runs until SIGINT or SIGTERM, then exits 0.
 
 use std::io::Write;
 
@@ -79,12 +79,20 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     let options = BuildOptions { eds_object: a.eds_object };
     // Checked before anything starts.
     let control_addr = a.control.as_deref().map(crate::control::Addr::parse).transpose()?;
+    // The page's master listens before the drives start: it hears their boot-ups.
+    let web_master = a.http.as_ref().map(|_| drivebus_master::Master::new(hub.attach()));
     let (nodes, described) =
         host_on_hub(&specs, &devices, &hub, a.state_dir.as_deref(), options, g.machine.as_deref())?;
     let control = std::sync::Arc::new(crate::control::Control::new(hub.clone(), nodes));
     let control_task = match &control_addr {
         Some(addr) => Some(crate::control::listen(addr, control.clone()).await?),
         None => None,
+    };
+    let web = match (&a.http, &web_master) {
+        (Some(addr), Some(m)) => {
+            Some(crate::web::start(m.clone(), crate::dict::Dict::default(), addr).await?)
+        }
+        _ => None,
     };
     let drive_list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
     let list = match (specs.is_empty(), described.is_empty()) {
@@ -101,6 +109,9 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         let mut on = if bridge.is_some() { format!(" on {}", g.bus) } else { String::new() };
         if let Some((_, addr)) = &control_task {
             on.push_str(&format!("; control on {addr}"));
+        }
+        if let Some(w) = &web {
+            on.push_str(&format!("; page on {}", w.url()));
         }
         match &server {
             Some((_, addr)) => writeln!(
@@ -124,6 +135,10 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         }
     }
     control.stop().await;
+    drop(web);
+    if let Some(m) = web_master {
+        let _ = m.close().await;
+    }
     if let Some(b) = bridge {
         b.abort();
     }

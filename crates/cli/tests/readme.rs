@@ -193,6 +193,7 @@ fn the_install_section_and_the_command_table_match_the_tool() {
         "gen",
         "stats",
         "control",
+        "ui",
     ] {
         assert!(text.contains(&format!("`{cmd}")), "README table lists {cmd}");
         assert!(help.contains(&format!("  {cmd} ")), "`drivebus --help` lists {cmd}");

@@ -1,0 +1,220 @@
+//! The browser page and its HTTP API (issue 19): `drivebus ui --http ADDR`
+//! and `drivebus serve --http ADDR`. Everything goes through one
+//! [`Master`] (SDO, NMT, PDO configuration, the CiA 402 `Drive`); the page
+//! is plain HTML, JS and CSS inside the binary. The API is in
+//! `docs/http-api.md`.
+//!
+//! A page that can move axes binds loopback by default; on any other
+//! address every request needs the token printed at start (`?token=` or
+//! the `X-Drivebus-Token` header), else 401.
+
+mod api;
+mod drive;
+mod error;
+mod stream;
+mod values;
+
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex};
+
+use anyhow::Context;
+use axum::Router;
+use axum::extract::{Request, State};
+use axum::http::{HeaderValue, StatusCode, header};
+use axum::middleware::Next;
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use drivebus_master::{Master, MasterEvent};
+use tokio::sync::broadcast;
+
+use crate::dict::Dict;
+
+/// `--http`'s default address: loopback, port 8402 ("402").
+pub const DEFAULT_HTTP: &str = "127.0.0.1:8402";
+
+/// EMCYs kept for `GET /api/emcy`.
+const EMCY_HISTORY: usize = 256;
+
+/// What every handler shares.
+pub struct Web {
+    /// The bus.
+    pub master: Master,
+    /// Object names and types (`--eds`, then CiA 301/402).
+    pub dict: Dict,
+    /// The last EMCYs, oldest first.
+    emcy: Mutex<VecDeque<serde_json::Value>>,
+    /// Events the server itself makes (a motion's end), for the stream.
+    events: broadcast::Sender<serde_json::Value>,
+    /// Time zero of `t` in the API.
+    start: std::time::Instant,
+    /// Required on a non-loopback address.
+    token: Option<String>,
+}
+
+impl Web {
+    /// Milliseconds since the server started (`t` of samples and events).
+    pub fn t(&self) -> f64 {
+        self.start.elapsed().as_secs_f64() * 1000.0
+    }
+
+    /// Sends a server event to the streams.
+    pub fn event(&self, v: serde_json::Value) {
+        let _ = self.events.send(v);
+    }
+}
+
+/// A running web server.
+pub struct Server {
+    /// Where it listens.
+    pub addr: SocketAddr,
+    /// The token, when one is required.
+    pub token: Option<String>,
+    /// The server task (aborted on drop).
+    task: tokio::task::JoinHandle<()>,
+}
+
+impl Server {
+    /// `http://ADDR/`, with `?token=` when one is required.
+    pub fn url(&self) -> String {
+        match &self.token {
+            Some(t) => format!("http://{}/?token={t}", self.addr),
+            None => format!("http://{}/", self.addr),
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.task.abort();
+    }
+}
+
+/// Binds `addr` and serves the page and the API for `master`.
+pub async fn start(master: Master, dict: Dict, addr: &str) -> anyhow::Result<Server> {
+    let listener = tokio::net::TcpListener::bind(addr)
+        .await
+        .with_context(|| format!("cannot listen on --http {addr}: is the port free? (port 0 picks one)"))?;
+    let local = listener.local_addr()?;
+    let token = (!local.ip().is_loopback()).then(new_token);
+    let (events, _) = broadcast::channel(256);
+    let web = Arc::new(Web {
+        master,
+        dict,
+        emcy: Mutex::new(VecDeque::new()),
+        events,
+        start: std::time::Instant::now(),
+        token: token.clone(),
+    });
+    tokio::spawn(keep_emcy(web.clone()));
+    let app = router(web);
+    let task = tokio::spawn(async move {
+        if let Err(e) = axum::serve(listener, app).await {
+            tracing::error!(error = %e, "web server stopped");
+        }
+    });
+    Ok(Server { addr: local, token, task })
+}
+
+fn router(web: Arc<Web>) -> Router {
+    Router::new()
+        .route("/", get(|| async { page("text/html; charset=utf-8", include_str!("assets/index.html")) }))
+        .route(
+            "/app.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/app.js")) }),
+        )
+        .route(
+            "/style.css",
+            get(|| async { page("text/css; charset=utf-8", include_str!("assets/style.css")) }),
+        )
+        .route("/api/nodes", get(api::nodes))
+        .route("/api/nodes/{n}/sdo/{index}", get(api::sdo_get_object).put(api::sdo_put_object))
+        .route("/api/nodes/{n}/sdo/{index}/{sub}", get(api::sdo_get).put(api::sdo_put))
+        .route("/api/nodes/{n}/nmt", post(api::nmt))
+        .route("/api/nodes/{n}/pdo", get(api::pdo))
+        .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))
+        .route("/api/emcy", get(api::emcy))
+        .route("/api/stream", get(stream::upgrade))
+        .fallback(|| async { error::ApiError::not_found("no such page or endpoint: see docs/http-api.md") })
+        .layer(axum::middleware::from_fn_with_state(web.clone(), auth))
+        .with_state(web)
+}
+
+fn page(content_type: &'static str, body: &'static str) -> Response {
+    ([(header::CONTENT_TYPE, HeaderValue::from_static(content_type))], body).into_response()
+}
+
+/// 401 without the token, when one is required.
+async fn auth(State(web): State<Arc<Web>>, req: Request, next: Next) -> Response {
+    let Some(want) = &web.token else { return next.run(req).await };
+    let header = req.headers().get("x-drivebus-token").and_then(|v| v.to_str().ok());
+    let query = req.uri().query().unwrap_or("").split('&').find_map(|kv| kv.strip_prefix("token="));
+    if header == Some(want.as_str()) || query == Some(want.as_str()) {
+        return next.run(req).await;
+    }
+    error::ApiError {
+        status: StatusCode::UNAUTHORIZED,
+        message: "missing or wrong token: this server listens beyond loopback; add ?token=TOKEN (printed at start) or the X-Drivebus-Token header".into(),
+    }
+    .into_response()
+}
+
+/// 128 random bits in hex (from the OS, else from the hasher's seed).
+fn new_token() -> String {
+    use std::io::Read;
+    let mut b = [0u8; 16];
+    let from_os = std::fs::File::open("/dev/urandom").and_then(|mut f| f.read_exact(&mut b)).is_ok();
+    if !from_os {
+        use std::hash::{BuildHasher, Hasher};
+        for c in b.chunks_mut(8) {
+            let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+            h.write_u128(
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .unwrap_or_default()
+                    .as_nanos(),
+            );
+            c.copy_from_slice(&h.finish().to_le_bytes());
+        }
+    }
+    b.iter().map(|x| format!("{x:02x}")).collect()
+}
+
+/// Keeps the last EMCYs with their decoded text.
+async fn keep_emcy(web: Arc<Web>) {
+    let mut rx = web.master.subscribe_events();
+    loop {
+        match rx.recv().await {
+            Ok(MasterEvent::Emcy { node, code, register, data, text }) => {
+                let v = serde_json::json!({"t": web.t(), "node": node, "code": format!("{code:04X}"),
+                    "register": register, "data": values::hex(&data), "text": text});
+                let mut h = web.emcy.lock().unwrap_or_else(|e| e.into_inner());
+                if h.len() == EMCY_HISTORY {
+                    h.pop_front();
+                }
+                h.push_back(v);
+            }
+            Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
+            Err(broadcast::error::RecvError::Closed) => return,
+        }
+    }
+}
+
+/// `drivebus ui`: the page for the bus of `--bus` (and its `--sim` drives)
+/// until SIGINT/SIGTERM or the bus is lost.
+pub async fn run_ui(g: &crate::args::Global, a: &crate::args::UiArgs) -> anyhow::Result<()> {
+    let stop = crate::serve::Signals::install()?;
+    let conn = crate::conn::Conn::open(g).await?;
+    let dict = Dict { eds: crate::eds_cmd::load_global_eds(g)? };
+    let server = start(conn.master.clone(), dict, &a.http).await?;
+    let nodes: Vec<String> = conn.master.seen_nodes().iter().map(u8::to_string).collect();
+    let seen =
+        if nodes.is_empty() { "none seen yet".to_owned() } else { format!("nodes {}", nodes.join(", ")) };
+    crate::output::outln!("drivebus ui: open {} in a browser ({seen} on {})", server.url(), g.bus);
+    tokio::select! {
+        r = stop.wait() => r?,
+        why = conn.master.lost() => return Err(conn.lost(&why)),
+    }
+    drop(server);
+    conn.close().await
+}

@@ -1,0 +1,256 @@
+//! `GET /api/stream` (WebSocket): samples of the objects a client
+//! subscribes to, polled by SDO at the period it asks, and NMT, EMCY and
+//! motion events. Everything goes through one bounded queue per client:
+//! when the client reads slower than the bus gives, the oldest messages
+//! are dropped and counted, and the count is in every `status` message,
+//! so the bus side never waits for a browser.
+
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
+
+use axum::extract::State;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::response::Response;
+use drivebus_master::{MasterEvent, RemoteState, Value};
+use serde_json::{Value as Json_, json};
+use tokio::sync::{Notify, broadcast};
+use tokio::task::JoinHandle;
+
+use super::Web;
+use super::api::{nmt_name, seen_node};
+use super::values;
+
+/// Messages queued per client before the oldest is dropped.
+const QUEUE: usize = 4096;
+/// Shortest polling period a client may ask for.
+const MIN_PERIOD_MS: u64 = 1;
+
+/// A client's bounded queue.
+struct Queue {
+    q: Mutex<VecDeque<String>>,
+    dropped: AtomicU64,
+    ready: Notify,
+}
+
+impl Queue {
+    fn push(&self, v: &Json_) {
+        let mut q = self.q.lock().unwrap_or_else(|e| e.into_inner());
+        if q.len() >= QUEUE {
+            q.pop_front();
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+        q.push_back(v.to_string());
+        drop(q);
+        self.ready.notify_one();
+    }
+
+    fn take(&self) -> Vec<String> {
+        self.q.lock().unwrap_or_else(|e| e.into_inner()).drain(..).collect()
+    }
+}
+
+/// Upgrades to the stream.
+pub async fn upgrade(State(web): State<Arc<Web>>, ws: WebSocketUpgrade) -> Response {
+    ws.on_upgrade(move |s| session(web, s))
+}
+
+/// Aborts its tasks when the client goes.
+struct Tasks(Vec<JoinHandle<()>>);
+
+impl Drop for Tasks {
+    fn drop(&mut self) {
+        self.0.iter().for_each(JoinHandle::abort);
+    }
+}
+
+async fn session(web: Arc<Web>, mut socket: WebSocket) {
+    let queue =
+        Arc::new(Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() });
+    let _events = Tasks(vec![tokio::spawn(events(web.clone(), queue.clone()))]);
+    let mut polls = Tasks(Vec::new());
+    let mut status = tokio::time::interval(Duration::from_secs(1));
+    loop {
+        tokio::select! {
+            m = socket.recv() => match m {
+                Some(Ok(Message::Text(t))) => match subscribe(&web, &queue, t.as_str()) {
+                    Ok(tasks) => {
+                        let n = tasks.len();
+                        polls = Tasks(tasks);
+                        queue.push(&json!({"type": "subscribed", "channels": n}));
+                    }
+                    Err(e) => queue.push(&json!({"type": "error", "error": e})),
+                },
+                Some(Ok(_)) => {}
+                Some(Err(_)) | None => return,
+            },
+            _ = queue.ready.notified() => {
+                for m in queue.take() {
+                    if socket.send(Message::Text(m.into())).await.is_err() {
+                        return;
+                    }
+                }
+            }
+            _ = status.tick() => {
+                let s = json!({"type": "status", "t": web.t(), "dropped": queue.dropped.load(Ordering::Relaxed),
+                    "channels": polls.0.len()});
+                if socket.send(Message::Text(s.to_string().into())).await.is_err() {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct Subscribe {
+    subscribe: Vec<Channel>,
+}
+
+#[derive(serde::Deserialize)]
+struct Channel {
+    node: Json_,
+    index: Json_,
+    #[serde(default)]
+    sub: u8,
+    period_ms: Option<u64>,
+    #[serde(rename = "type")]
+    ty: Option<String>,
+}
+
+/// Starts one polling task per channel of a `{"subscribe": [...]}`
+/// message (replacing the previous subscription); an error names the
+/// first bad channel and starts nothing.
+fn subscribe(web: &Arc<Web>, queue: &Arc<Queue>, text: &str) -> Result<Vec<JoinHandle<()>>, String> {
+    let shape = r#"{"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 10}]}"#;
+    let s: Subscribe =
+        serde_json::from_str(text).map_err(|e| format!("malformed subscription: {e}; send {shape}"))?;
+    let text_of = |v: &Json_| match v {
+        Json_::String(s) => s.clone(),
+        other => other.to_string(),
+    };
+    let mut plan = Vec::new();
+    for c in &s.subscribe {
+        let node = seen_node(web, &text_of(&c.node)).map_err(|e| e.message)?;
+        let (index, sub) = values::object(&web.dict, &text_of(&c.index), Some(&format!("{:X}", c.sub)))
+            .map_err(|e| e.message)?;
+        let dt = match &c.ty {
+            Some(t) => values::data_type(t).map_err(|e| e.message)?,
+            None => web.dict.data_type(index, sub).or_else(|| web.master.sdo(node).data_type(index, sub)).ok_or_else(
+                || format!("the data type of {index:04X}h:{sub:02X}h is unknown: add \"type\": \"i32\" to the channel"),
+            )?,
+        };
+        let period = Duration::from_millis(c.period_ms.unwrap_or(100).max(MIN_PERIOD_MS));
+        plan.push((node, index, sub, dt, period));
+    }
+    Ok(plan.into_iter().map(|p| tokio::spawn(poll(web.clone(), queue.clone(), p))).collect())
+}
+
+async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master::DataType, Duration)) {
+    let (node, index, sub, dt, period) = p;
+    let sdo = web.master.sdo(node);
+    let mut tick = tokio::time::interval(period);
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    let mut failing = false;
+    loop {
+        tick.tick().await;
+        match sdo.upload(index, sub).await.map(|raw| Value::decode(dt, &raw)) {
+            Ok(Ok(v)) => {
+                failing = false;
+                queue.push(
+                    &json!({"type": "sample", "t": web.t(), "node": node, "index": format!("{index:04X}"),
+                    "sub": sub, "value": values::to_json(&v)}),
+                );
+            }
+            // Said once per run of failures, not at every period.
+            r if !failing => {
+                failing = true;
+                let why = match r {
+                    Err(e) => e.to_string(),
+                    Ok(Err(a)) => format!("not a {}: {a}", dt.name()),
+                    Ok(Ok(_)) => String::new(),
+                };
+                queue.push(
+                    &json!({"type": "error", "t": web.t(), "node": node, "index": format!("{index:04X}"),
+                    "sub": sub, "error": why}),
+                );
+            }
+            _ => {}
+        }
+    }
+}
+
+/// NMT state changes, EMCYs and the server's motion events.
+async fn events(web: Arc<Web>, queue: Arc<Queue>) {
+    let mut bus = web.master.subscribe_events();
+    let mut own = web.events.subscribe();
+    let mut last: HashMap<u8, RemoteState> = HashMap::new();
+    loop {
+        let ev = tokio::select! {
+            e = bus.recv() => match e {
+                Ok(e) => bus_event(&web, &mut last, e),
+                Err(broadcast::error::RecvError::Lagged(n)) => {
+                    queue.dropped.fetch_add(n, Ordering::Relaxed);
+                    None
+                }
+                Err(broadcast::error::RecvError::Closed) => return,
+            },
+            e = own.recv() => e.ok(),
+        };
+        if let Some(ev) = ev {
+            queue.push(&ev);
+        }
+    }
+}
+
+fn bus_event(web: &Web, last: &mut HashMap<u8, RemoteState>, e: MasterEvent) -> Option<Json_> {
+    let t = web.t();
+    Some(match e {
+        MasterEvent::Bootup { node } => {
+            last.insert(node, RemoteState::BootUp);
+            json!({"type": "event", "event": "bootup", "t": t, "node": node})
+        }
+        MasterEvent::Heartbeat { node, state } => {
+            if last.insert(node, state) == Some(state) {
+                return None;
+            }
+            json!({"type": "event", "event": "nmt", "t": t, "node": node, "state": nmt_name(state)})
+        }
+        MasterEvent::HeartbeatLost { node } => {
+            json!({"type": "event", "event": "heartbeat-lost", "t": t, "node": node})
+        }
+        MasterEvent::HeartbeatRecovered { node } => {
+            json!({"type": "event", "event": "heartbeat-recovered", "t": t, "node": node})
+        }
+        MasterEvent::Emcy { node, code, register, data, text } => {
+            json!({"type": "event", "event": "emcy", "t": t,
+            "node": node, "code": format!("{code:04X}"), "register": register, "data": values::hex(&data), "text": text})
+        }
+        MasterEvent::BusError { reason } => {
+            json!({"type": "event", "event": "bus-error", "t": t, "reason": reason})
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A client that reads slower than samples come loses the oldest,
+    /// counted; the queue never grows past its bound.
+    #[test]
+    fn the_queue_drops_the_oldest_and_counts() {
+        let q = Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() };
+        for i in 0..QUEUE + 10 {
+            q.push(&json!(i));
+        }
+        assert_eq!(q.dropped.load(Ordering::Relaxed), 10);
+        let all = q.take();
+        assert_eq!(all.len(), QUEUE);
+        assert_eq!(all[0], "10");
+        assert_eq!(all.last().map(String::as_str), Some(&*(QUEUE + 9).to_string()));
+        assert!(q.take().is_empty());
+    }
+}

@@ -1,0 +1,393 @@
+//! The HTTP API of `drivebus ui` and `serve --http` (docs/http-api.md),
+//! with an HTTP and a WebSocket client against the real binary and two
+//! virtual drives: every endpoint, and every bad input answered with a
+//! 4xx `{"error": ...}` that changed nothing (checked by reading back).
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{Value, json};
+
+/// A running `drivebus ui`; killed when dropped.
+struct Ui {
+    child: Child,
+    /// `http://ADDR` without the trailing slash.
+    base: String,
+    line: String,
+    /// Its stderr (the log).
+    log: tempfile::NamedTempFile,
+}
+
+impl Ui {
+    fn start(args: &[&str]) -> Ui {
+        let log = tempfile::NamedTempFile::new().expect("log file");
+        let mut child = Command::new(common::bin())
+            .args(args)
+            .env_remove("RUST_LOG")
+            .stdout(Stdio::piped())
+            .stderr(log.reopen().expect("log file"))
+            .spawn()
+            .expect("spawn drivebus");
+        let stdout = child.stdout.take().expect("stdout");
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let line = rx.recv_timeout(Duration::from_secs(60)).expect("drivebus printed no ready line");
+        let at = line.find("http://").unwrap_or_else(|| panic!("no http:// in `{line}`"));
+        let url: String = line[at..].chars().take_while(|c| !c.is_whitespace() && *c != '?').collect();
+        Ui { child, base: url.trim_end_matches('/').to_owned(), line, log }
+    }
+
+    fn sims() -> Ui {
+        Ui::start(&["ui", "--sim", "akd:1", "--sim", "dds6:2", "--http", "127.0.0.1:0"])
+    }
+
+    fn log(&self) -> String {
+        std::fs::read_to_string(self.log.path()).unwrap_or_default()
+    }
+
+    fn url(&self, path: &str) -> String {
+        format!("{}{path}", self.base)
+    }
+}
+
+impl Drop for Ui {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn client() -> reqwest::Client {
+    reqwest::Client::builder().timeout(Duration::from_secs(30)).build().expect("client")
+}
+
+async fn get(ui: &Ui, path: &str) -> (u16, Value) {
+    let r = client().get(ui.url(path)).send().await.expect("GET");
+    let status = r.status().as_u16();
+    (status, r.json().await.expect("JSON answer"))
+}
+
+async fn send(ui: &Ui, method: reqwest::Method, path: &str, body: &str) -> (u16, Value) {
+    let r = client()
+        .request(method, ui.url(path))
+        .header("content-type", "application/json")
+        .body(body.to_owned())
+        .send()
+        .await
+        .expect("request");
+    let status = r.status().as_u16();
+    (status, r.json().await.expect("JSON answer"))
+}
+
+async fn put(ui: &Ui, path: &str, body: Value) -> (u16, Value) {
+    send(ui, reqwest::Method::PUT, path, &body.to_string()).await
+}
+
+async fn post(ui: &Ui, path: &str, body: Value) -> (u16, Value) {
+    send(ui, reqwest::Method::POST, path, &body.to_string()).await
+}
+
+/// A 4xx with an `error` text containing `word`.
+fn refused(r: &(u16, Value), status: u16, word: &str) {
+    assert_eq!(r.0, status, "{r:?}");
+    let e = r.1["error"].as_str().unwrap_or_else(|| panic!("no error text in {r:?}"));
+    assert!(e.contains(word), "`{e}` does not say `{word}`");
+}
+
+/// Polls `f` until it gives `Some`, for at most `limit`.
+async fn wait_for<T, F: std::future::Future<Output = Option<T>>>(
+    limit: Duration,
+    mut f: impl FnMut() -> F,
+) -> T {
+    let t0 = Instant::now();
+    loop {
+        if let Some(v) = f().await {
+            return v;
+        }
+        assert!(t0.elapsed() < limit, "condition not met within {limit:?}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ui_prints_one_line_and_lists_both_drives() {
+    let ui = Ui::sims();
+    assert!(ui.line.starts_with("drivebus ui: open http://127.0.0.1:"), "{}", ui.line);
+    let (s, v) = get(&ui, "/api/nodes").await;
+    assert_eq!(s, 200, "{v}");
+    let nodes = v["nodes"].as_array().expect("nodes");
+    assert_eq!(nodes.iter().map(|n| n["node"].as_u64().unwrap()).collect::<Vec<_>>(), vec![1, 2]);
+    for n in nodes {
+        assert_eq!(n["device_type"].as_u64().map(|t| t & 0xFFFF), Some(402), "{n}");
+        assert!(n["identity"]["vendor_id"].as_u64().is_some(), "{n}");
+        assert_eq!(n["drive"]["state"], "switch on disabled", "{n}");
+        assert!(n["nmt"].is_string(), "{n}");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sdo_reads_by_hex_or_name_and_writes_read_back() {
+    let ui = Ui::sims();
+    let (s, a) = get(&ui, "/api/nodes/1/sdo/6041/0").await;
+    assert_eq!(s, 200, "{a}");
+    assert_eq!(a["type"], "UNSIGNED16");
+    assert_eq!(a["name"], "Statusword");
+    let (_, b) = get(&ui, "/api/nodes/1/sdo/statusword").await;
+    let (_, c) = get(&ui, "/api/nodes/1/sdo/0x6041/00").await;
+    assert_eq!(a["value"], b["value"]);
+    assert_eq!(a["value"], c["value"]);
+    let (s, v) = get(&ui, "/api/nodes/2/sdo/identity/1").await;
+    assert_eq!((s, v["index"].as_str()), (200, Some("1018")), "{v}");
+    let (s, w) = put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": 12345})).await;
+    assert_eq!(s, 200, "{w}");
+    assert_eq!(w["type"], "UNSIGNED32");
+    assert_eq!(get(&ui, "/api/nodes/1/sdo/6081/0").await.1["value"], 12345);
+    let (s, w) = put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": "0x100", "type": "u32"})).await;
+    assert_eq!(s, 200, "{w}");
+    assert_eq!(get(&ui, "/api/nodes/1/sdo/6081/0?type=u32").await.1["value"], 256);
+    // Every write is logged, by default.
+    wait_for(Duration::from_secs(10), || async { ui.log().contains("web: SDO write").then_some(()) }).await;
+    assert!(ui.log().contains("6081"), "{}", ui.log());
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bad_inputs_are_4xx_json_and_change_nothing() {
+    let ui = Ui::sims();
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": 777})).await.0, 200);
+    refused(&get(&ui, "/api/nodes/9/sdo/6041/0").await, 404, "node 9 has not been seen");
+    refused(&put(&ui, "/api/nodes/9/sdo/6081/0", json!({"value": 1})).await, 404, "not been seen");
+    refused(&get(&ui, "/api/nodes/0/sdo/6041/0").await, 400, "not a node-ID");
+    refused(&get(&ui, "/api/nodes/abc/pdo").await, 400, "not a node-ID");
+    refused(&get(&ui, "/api/nodes/1/sdo/zz99/0").await, 400, "is not an object");
+    refused(&get(&ui, "/api/nodes/1/sdo/6041/100").await, 400, "above FFh");
+    refused(&get(&ui, "/api/nodes/1/sdo/5FFE/0").await, 404, "Object does not exist");
+    refused(
+        &put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": 5_000_000_000u64})).await,
+        400,
+        "UNSIGNED32",
+    );
+    refused(&put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": -1})).await, 400, "out of range");
+    refused(&put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": 1.5})).await, 400, "not an integer");
+    refused(&put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": "fast"})).await, 400, "not a valid");
+    refused(
+        &put(&ui, "/api/nodes/1/sdo/6081/0", json!({"value": 1, "type": "u17"})).await,
+        400,
+        "not a data type",
+    );
+    refused(&put(&ui, "/api/nodes/1/sdo/6081/0", json!({"val": 1})).await, 400, "malformed JSON");
+    refused(
+        &send(&ui, reqwest::Method::PUT, "/api/nodes/1/sdo/6081/0", "{\"value\": ").await,
+        400,
+        "malformed JSON",
+    );
+    refused(&put(&ui, "/api/nodes/1/sdo/5FFE/0", json!({"value": 1})).await, 400, "data type");
+    refused(&put(&ui, "/api/nodes/1/sdo/6041/0", json!({"value": 1})).await, 422, "read only");
+    refused(&post(&ui, "/api/nodes/1/nmt", json!({"command": "jump"})).await, 400, "not an NMT command");
+    refused(&send(&ui, reqwest::Method::POST, "/api/nodes/1/nmt", "nmt start").await, 400, "malformed JSON");
+    refused(&post(&ui, "/api/nodes/1/drive", json!({"action": "dance"})).await, 400, "not a drive action");
+    refused(&post(&ui, "/api/nodes/1/drive", json!({"action": "move"})).await, 400, "needs \"target\"");
+    refused(&post(&ui, "/api/nodes/1/drive", json!({"action": "move", "target": 5})).await, 409, "enable");
+    refused(&get(&ui, "/api/nowhere").await, 404, "http-api.md");
+    // Nothing changed: the value, the NMT state, the drive state.
+    assert_eq!(get(&ui, "/api/nodes/1/sdo/6081/0").await.1["value"], 777);
+    let (_, n) = get(&ui, "/api/nodes").await;
+    assert_eq!(n["nodes"][0]["drive"]["state"], "switch on disabled", "{n}");
+    assert_eq!(
+        get(&ui, "/api/nodes/1/sdo/6060/0").await.1["value"],
+        get(&ui, "/api/nodes/1/sdo/6061/0").await.1["value"]
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn nmt_pdo_emcy_and_the_page() {
+    let ui = Ui::sims();
+    // Heartbeats every 50 ms, so the master sees the NMT state change.
+    assert_eq!(put(&ui, "/api/nodes/2/sdo/1017/0", json!({"value": 50})).await.0, 200);
+    let state = |want: &'static str| {
+        let ui = &ui;
+        move || async move {
+            let (_, v) = get(ui, "/api/nodes").await;
+            (v["nodes"][1]["nmt"] == want).then_some(v)
+        }
+    };
+    assert_eq!(post(&ui, "/api/nodes/2/nmt", json!({"command": "start"})).await.0, 200);
+    let v = wait_for(Duration::from_secs(30), state("operational")).await;
+    assert!(v["nodes"][1]["heartbeat_age_ms"].as_u64().is_some(), "{v}");
+    assert_eq!(post(&ui, "/api/nodes/2/nmt", json!({"command": "stop"})).await.0, 200);
+    let v = wait_for(Duration::from_secs(30), state("stopped")).await;
+    // A stopped node answers no SDO: listed without identity.
+    assert_eq!(v["nodes"][1]["identity"], json!({}), "{v}");
+    assert_eq!(post(&ui, "/api/nodes/2/nmt", json!({"command": "preop"})).await.0, 200);
+    wait_for(Duration::from_secs(30), state("pre-operational")).await;
+    let (s, p) = get(&ui, "/api/nodes/1/pdo").await;
+    assert_eq!(s, 200, "{p}");
+    let tpdo1 = &p["tpdo"][0];
+    assert_eq!(tpdo1["cob_id"], "181", "{p}");
+    assert!(tpdo1["mapping"].as_array().unwrap().iter().any(|m| m["index"] == "6041"), "{p}");
+    let (s, e) = get(&ui, "/api/emcy").await;
+    assert_eq!(s, 200);
+    assert!(e["emcy"].is_array(), "{e}");
+    let page = client().get(ui.url("/")).send().await.unwrap().text().await.unwrap();
+    assert!(page.contains("<canvas id=\"scope\""), "{page}");
+    let js = client().get(ui.url("/app.js")).send().await.unwrap();
+    assert!(js.headers()["content-type"].to_str().unwrap().starts_with("text/javascript"));
+    assert!(js.text().await.unwrap().contains("/api/stream"));
+}
+
+/// Enable and move node 1 through the API; the WebSocket stream shows
+/// the position reach the target, and the motion's end as an event.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn enable_and_move_seen_in_the_stream() {
+    let ui = Ui::sims();
+    let ws_url = ui.url("/api/stream").replacen("http://", "ws://", 1);
+    let (mut ws, _) = tokio_tungstenite::connect_async(ws_url).await.expect("WebSocket");
+    let sub = json!({"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 20}]});
+    ws.send(tokio_tungstenite::tungstenite::Message::Text(sub.to_string().into())).await.unwrap();
+    let (s, v) = post(&ui, "/api/nodes/1/drive", json!({"action": "enable"})).await;
+    assert_eq!((s, v["state"].as_str()), (200, Some("operation enabled")), "{v}");
+    let (s, v) = post(
+        &ui,
+        "/api/nodes/1/drive",
+        json!({"action": "move", "target": 4000, "velocity": 4000, "acceleration": 20000}),
+    )
+    .await;
+    assert_eq!(s, 202, "{v}");
+    let (mut subscribed, mut reached, mut ended, mut status) = (false, false, false, false);
+    let t0 = Instant::now();
+    while !(reached && ended && status) {
+        assert!(
+            t0.elapsed() < Duration::from_secs(90),
+            "subscribed {subscribed} reached {reached} ended {ended}"
+        );
+        let m = tokio::time::timeout(Duration::from_secs(30), ws.next())
+            .await
+            .expect("stream silent")
+            .unwrap()
+            .unwrap();
+        let Ok(text) = m.to_text() else { continue };
+        let msg: Value = serde_json::from_str(text).unwrap();
+        match msg["type"].as_str() {
+            Some("subscribed") => subscribed = msg["channels"] == 1,
+            Some("sample") if msg["node"] == 1 && msg["index"] == "6064" => {
+                assert!(msg["t"].is_number() && msg["sub"] == 0, "{msg}");
+                // The model settles within a few increments of the target.
+                reached |= msg["value"].as_i64().is_some_and(|p| (p - 4000).abs() <= 20);
+            }
+            Some("event") if msg["event"] == "motion" => {
+                assert_eq!(msg["result"]["end"], "target_reached", "{msg}");
+                ended = true;
+            }
+            Some("status") => status = msg["dropped"].is_u64(),
+            _ => {}
+        }
+    }
+    assert!(subscribed);
+    let (_, d) = get(&ui, "/api/nodes/1/drive").await;
+    assert_eq!(d["state"], "operation enabled", "{d}");
+    assert!(d["position"].as_i64().is_some_and(|p| (p - 4000).abs() <= 20), "{d}");
+    let (s, d) = post(&ui, "/api/nodes/1/drive", json!({"action": "disable"})).await;
+    assert_eq!((s, d["state"].as_str()), (200, Some("ready to switch on")), "{d}");
+}
+
+/// Beyond loopback every request needs the token printed at start.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_non_loopback_address_needs_the_token() {
+    let ui = Ui::start(&["ui", "--sim", "akd:1", "--http", "0.0.0.0:0"]);
+    let token =
+        ui.line.split("?token=").nth(1).expect("token in the line").split_whitespace().next().unwrap();
+    let port = ui.base.rsplit(':').next().unwrap();
+    let base = format!("http://127.0.0.1:{port}");
+    let r = client().get(format!("{base}/api/nodes")).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 401);
+    assert!(r.json::<Value>().await.unwrap()["error"].as_str().unwrap().contains("token"));
+    let r = client().get(format!("{base}/api/nodes?token={token}")).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 200);
+    let r = client().get(format!("{base}/api/nodes")).header("X-Drivebus-Token", token).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 200);
+    let r = client().get(format!("{base}/?token=wrong")).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 401);
+}
+
+/// `serve --http`: the page for the drives it serves.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn serve_hosts_the_page_for_its_drives() {
+    let port = common::free_port().to_string();
+    let listen = format!("127.0.0.1:{port}");
+    let ui = Ui::start(&["serve", "--listen", &listen, "--drive", "akd:1", "--http", "127.0.0.1:0"]);
+    assert!(
+        ui.line.contains("listening on") && ui.line.contains("; page on http://127.0.0.1:"),
+        "{}",
+        ui.line
+    );
+    let (s, v) = get(&ui, "/api/nodes").await;
+    assert_eq!(s, 200);
+    assert_eq!(v["nodes"][0]["node"], 1, "{v}");
+    let (s, v) = get(&ui, "/api/nodes/1/sdo/6041/0").await;
+    assert_eq!((s, v["type"].as_str()), (200, Some("UNSIGNED16")), "{v}");
+}
+
+/// The README's "In the browser" command prints the line the README shows
+/// (run on a free port instead of 8402).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn readme_in_the_browser_prints_its_line() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let from = readme.find("## In the browser").expect("README section");
+    let block = &readme[from..];
+    let block = &block[block.find("```sh\n").unwrap() + 6..];
+    let mut lines = block.lines();
+    let cmd = lines.next().unwrap();
+    let printed = lines.next().unwrap().strip_prefix("# prints: ").unwrap();
+    let port = common::free_port().to_string();
+    let mut args: Vec<&str> = cmd.split_whitespace().skip(1).collect();
+    let http = format!("127.0.0.1:{port}");
+    args.extend(["--http", &http]);
+    let ui = Ui::start(&args);
+    assert_eq!(ui.line.replace(&port, "8402"), printed);
+}
+
+/// A following error trips node 1: the EMCY is in the history and on the
+/// stream with its text, and a fault reset through the API clears it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn following_error_emcy_is_decoded_and_fault_reset() {
+    let ui = Ui::sims();
+    let ws_url = ui.url("/api/stream").replacen("http://", "ws://", 1);
+    let (mut ws, _) = tokio_tungstenite::connect_async(ws_url).await.expect("WebSocket");
+    assert_eq!(get(&ui, "/api/emcy").await.1["emcy"], json!([]));
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/6065/0", json!({"value": 1})).await.0, 200);
+    assert_eq!(post(&ui, "/api/nodes/1/drive", json!({"action": "enable"})).await.0, 200);
+    let fast = json!({"action": "move", "target": 40000, "velocity": 40000, "acceleration": 200000});
+    assert_eq!(post(&ui, "/api/nodes/1/drive", fast).await.0, 202);
+    let e = wait_for(Duration::from_secs(60), || async {
+        let (_, v) = get(&ui, "/api/emcy").await;
+        v["emcy"].as_array().and_then(|l| l.iter().find(|e| e["code"] == "8611").cloned())
+    })
+    .await;
+    assert_eq!((e["node"].as_u64(), e["text"].as_str()), (Some(1), Some("Following error")), "{e}");
+    let t0 = Instant::now();
+    loop {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no emcy event on the stream");
+        let m = tokio::time::timeout(Duration::from_secs(30), ws.next())
+            .await
+            .expect("stream silent")
+            .unwrap()
+            .unwrap();
+        let msg: Value = serde_json::from_str(m.to_text().unwrap_or("{}")).unwrap_or_default();
+        if msg["event"] == "emcy" && msg["code"] == "8611" {
+            assert_eq!(msg["text"], "Following error", "{msg}");
+            break;
+        }
+    }
+    assert_eq!(get(&ui, "/api/nodes/1/drive").await.1["state"], "fault");
+    let (s, d) = post(&ui, "/api/nodes/1/drive", json!({"action": "fault-reset"})).await;
+    assert_eq!((s, d["state"].as_str()), (200, Some("switch on disabled")), "{d}");
+}
