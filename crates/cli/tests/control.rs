@@ -97,11 +97,13 @@ async fn control_sets_inputs_faults_bus_rules_and_power() {
 
 #[test]
 fn control_without_a_server_says_what_to_do() {
-    let out = control("127.0.0.1:1", &["power", "5", "on"]);
+    // A port just freed (a fixed one such as 1 may be taken on a shared host).
+    let addr = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().to_string();
+    let out = control(&addr, &["power", "5", "on"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("cannot reach the control interface at 127.0.0.1:1"), "{err}");
-    assert!(err.contains("drivebus serve --control 127.0.0.1:1"), "{err}");
+    assert!(err.contains(&format!("cannot reach the control interface at {addr}")), "{err}");
+    assert!(err.contains(&format!("drivebus serve --control {addr}")), "{err}");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

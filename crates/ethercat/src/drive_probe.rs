@@ -9,6 +9,7 @@
 //! scenario.
 
 use drivebus_can::Duration;
+use drivebus_cia402::codes::EnableStep;
 use ethercrab::error::Error;
 use ethercrab::subdevice_group::DcConfiguration;
 use ethercrab::{DcSync, MainDevice, RegisterAddress, SubDeviceRef};
@@ -263,14 +264,8 @@ impl Axis {
     fn step(&mut self, inputs: &[u8], outputs: &mut [u8], cycle: u32, s: &DriveScenario) {
         let sw = get(inputs, self.sw, 2) as u16;
         let pos = get(inputs, self.pos, 4) as f64;
-        let (cw, target): (u16, f64) = if sw & 0x08 != 0 {
-            // A fault from before (a previous master left OP: 6007h) is
-            // reset; one after the drive was enabled here is a failure.
-            if self.report.enabled_at.is_some() {
-                self.report.fault_cycles += 1;
-            }
-            (if cycle.is_multiple_of(2) { 0x00 } else { 0x80 }, pos)
-        } else if sw & 0x6F == 0x27 {
+        let step = EnableStep::from_statusword(sw);
+        let (cw, target): (u16, f64) = if step == EnableStep::Done {
             self.report.enabled_at.get_or_insert(cycle);
             self.report.enabled_cycles += 1;
             if let Some(p) = self.previous {
@@ -279,22 +274,22 @@ impl Axis {
             self.report.travel = self.report.travel.max((pos - self.start).abs());
             self.k += 1;
             let phase = 2.0 * std::f64::consts::PI * f64::from(self.k) / f64::from(s.period_cycles.max(1));
-            (0x0F, self.start + s.amplitude * phase.sin())
+            (step.cyclic_controlword(false), self.start + s.amplitude * phase.sin())
         } else {
+            // A fault from before (a previous master left OP: 6007h) is
+            // reset; one after the drive was enabled here is a failure.
+            if step == EnableStep::FaultReset && self.report.enabled_at.is_some() {
+                self.report.fault_cycles += 1;
+            }
             self.start = pos;
             self.previous = None;
-            let cw = match sw & 0x6F {
-                0x21 => 0x07,
-                0x23 => 0x0F,
-                _ => 0x06,
-            };
-            (cw, pos)
+            (step.cyclic_controlword(!cycle.is_multiple_of(2)), pos)
         };
         let t = target.round() as i32;
         put(outputs, &self.cw, &cw.to_le_bytes());
         put(outputs, &self.target, &t.to_le_bytes());
         put(outputs, &self.mode, &[8]);
-        self.previous = (cw == 0x0F && sw & 0x6F == 0x27).then_some(f64::from(t));
+        self.previous = (step == EnableStep::Done).then_some(f64::from(t));
     }
 }
 

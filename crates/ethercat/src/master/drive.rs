@@ -13,7 +13,7 @@ use super::{
 };
 use super::{MAX_PDI, MAX_SUBDEVICES};
 use drivebus_can::Duration;
-use drivebus_cia402::codes::{ModeNotShown, State, cw, mode, sw};
+use drivebus_cia402::codes::{EnableStep, ModeNotShown, State, cw, mode, sw};
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, NoDc, Op, PreOpPdi};
 use ethercrab::{DcSync, DefaultLock, RegisterAddress, SubDeviceGroup};
 use std::fmt;
@@ -562,18 +562,15 @@ impl<'m> DriveLine<'m> {
             }
             let state = self.fb.state();
             self.target = self.fb.position;
-            let c = match state {
-                Some(State::OperationEnabled) => return self.confirm_mode().await,
-                Some(State::Fault) => {
-                    reset_tried = true;
-                    // A rising edge of bit 7 resets the fault.
-                    if k % 2 == 0 { cw::FAULT_RESET } else { 0 }
-                }
-                Some(State::FaultReactionActive) => 0,
-                Some(State::SwitchOnDisabled) | Some(State::NotReadyToSwitchOn) | None => cw::SHUTDOWN,
-                Some(State::ReadyToSwitchOn) => cw::SWITCH_ON,
-                Some(State::SwitchedOn) | Some(State::QuickStopActive) => cw::ENABLE_OPERATION,
-            };
+            // The one enable sequence (`cia402::codes::EnableStep`), one
+            // controlword per cycle; a fault reset is a rising edge of bit 7.
+            let step = EnableStep::from(state);
+            match step {
+                EnableStep::Done => return self.confirm_mode().await,
+                EnableStep::FaultReset => reset_tried = true,
+                _ => {}
+            }
+            let c = step.cyclic_controlword(k % 2 == 0);
             self.controlword = c;
             self.cycle().await?;
         }
