@@ -8,7 +8,7 @@
 use drivebus_can::{Duration, Instant};
 use drivebus_esc::frame::{Command, FrameBuilder, datagrams, station_address};
 use drivebus_esc::segment::{Device, Segment, SegmentConfig};
-use drivebus_esc::sii::{MailboxConfig, SiiImage, SiiSyncManager, protocols};
+use drivebus_esc::sii::{MailboxArea, SiiImage, SiiSyncManager, protocols};
 use drivebus_esc::slave::{MailboxOut, ProcessDataSizes, Slave, SlaveApp, SlaveConfig};
 use drivebus_esc::{Esc, EscConfig};
 use drivebus_ethercat::dio::{self, DioConfig};
@@ -32,7 +32,7 @@ impl SlaveApp for Echo {
 fn echo() -> Slave<Echo> {
     let sii = SiiImage::builder()
         .identity(1, 2, 3, 4)
-        .mailbox(MailboxConfig { rx_offset: 0x1000, rx_size: 64, tx_offset: 0x1080, tx_size: 64 }, protocols::COE)
+        .mailbox(MailboxArea { rx_offset: 0x1000, rx_size: 64, tx_offset: 0x1080, tx_size: 64 }, protocols::COE)
         .sync_manager(SiiSyncManager { start: 0x1000, length: 64, control: 0x26, enable: 1, sm_type: 1 })
         .sync_manager(SiiSyncManager { start: 0x1080, length: 64, control: 0x22, enable: 1, sm_type: 2 })
         .sync_manager(SiiSyncManager { start: 0x1100, length: 0, control: 0x64, enable: 1, sm_type: 3 })

@@ -28,7 +28,7 @@ async fn state_json(d: &Drive, node: u8) -> ApiResult<Json_> {
     let mode = d.read_raw(0x6061, 0).await.ok().and_then(|v| v.first().map(|b| *b as i8));
     Ok(json!({"node": node, "statusword": sw, "state": DriveState::from_statusword(sw).name(),
         "mode": mode, "mode_name": mode.map(mode_name), "position": d.position().await,
-        "velocity": d.actual_velocity().await, "target_reached": sw & 0x400 != 0,
+        "velocity": d.actual_velocity().await, "target_reached": sw & drivebus_master::drive::sw::TARGET_REACHED != 0,
         "flags": drivebus_master::DriveFlags { statusword: sw, inputs: None, mode }.statusword_text()}))
 }
 

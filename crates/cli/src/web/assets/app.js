@@ -80,7 +80,13 @@ async function driveAction(body) {
 for (const b of document.querySelectorAll("[data-action]")) b.onclick = () => driveAction({ action: b.dataset.action });
 $("move").onsubmit = (ev) => {
   ev.preventDefault();
-  driveAction({ action: "move", target: parseInt($("move-target").value, 10), relative: $("move-relative").checked });
+  const body = { action: "move", target: parseInt($("move-target").value, 10), relative: $("move-relative").checked };
+  // Empty: the drive's own 6081h/6083h.
+  for (const [k, id] of [["velocity", "move-velocity"], ["acceleration", "move-acceleration"]]) {
+    const v = parseInt($(id).value, 10);
+    if (!Number.isNaN(v)) body[k] = v;
+  }
+  driveAction(body);
 };
 async function refreshDrive() {
   if (!$("drive-node").value) return;
