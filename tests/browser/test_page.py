@@ -89,7 +89,7 @@ def test_enable_and_move_by_clicking_and_the_scope_shows_the_target(browser, pag
     Select(browser.find_element(By.ID, "drive-node")).select_by_value("1")
     click_action(browser, "enable")
     wait_for(browser, "the drive panel shows operation enabled", lambda b: "operation enabled" in text(b, "drive-state"))
-    for id_, v in (("move-target", "4000"), ("move-velocity", "20000"), ("move-acceleration", "100000")):
+    for id_, v in (("scope-window", "3"), ("move-target", "4000"), ("move-velocity", "20000"), ("move-acceleration", "100000")):
         el = browser.find_element(By.ID, id_)
         el.clear()
         el.send_keys(v)

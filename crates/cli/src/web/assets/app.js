@@ -76,6 +76,7 @@ async function driveAction(body) {
   try { show($("drive-out"), await api("POST", `/api/nodes/${$("drive-node").value}/drive`, body)); }
   catch (e) { show($("drive-out"), e.message, true); }
   refreshDrive();
+  refreshNodes(); // the overview's 402 state follows the action at once
 }
 for (const b of document.querySelectorAll("[data-action]")) b.onclick = () => driveAction({ action: b.dataset.action });
 $("move").onsubmit = (ev) => {
