@@ -12,31 +12,8 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn ip(args: &[&str]) -> Result<(), String> {
-    match Command::new("ip").args(args).output() {
-        Ok(o) if o.status.success() => Ok(()),
-        Ok(o) => Err(format!("`ip {}`: {}", args.join(" "), String::from_utf8_lossy(&o.stderr).trim())),
-        Err(e) => Err(format!("cannot run `ip`: {e}")),
-    }
-}
-
-struct Veth(String);
-
-impl Drop for Veth {
-    fn drop(&mut self) {
-        let _ = ip(&["link", "del", &self.0]);
-    }
-}
-
-/// A BRD of register 0x0000 (2 bytes): every slave adds 1 to the WKC.
-fn count_frame() -> Vec<u8> {
-    let mut f = vec![0xFF; 6];
-    f.extend_from_slice(&[0x10; 6]);
-    f.extend_from_slice(&[0x88, 0xA4]);
-    f.extend_from_slice(&(14u16 | 1 << 12).to_le_bytes());
-    f.extend_from_slice(&[0x07, 0x42, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0, 0]);
-    f
-}
+mod netns;
+use netns::{Veth, count_frame};
 
 /// The working counter of one broadcast read, `None` if no reply came.
 fn count(sock: &RawSocket) -> Option<u16> {
@@ -77,15 +54,14 @@ fn refused(sock: &str, args: &[&str], why: &str) {
 
 #[test]
 fn control_breaks_loses_skews_and_power_cycles_the_line() {
-    let tag = std::process::id() % 100_000;
-    let (a, b) = (format!("dbctl{tag}a"), format!("dbctl{tag}b"));
-    if let Err(why) = ip(&["link", "add", &a, "type", "veth", "peer", "name", &b]) {
-        println!("SKIPPED control_breaks_loses_skews_and_power_cycles_the_line: {why}");
-        return;
-    }
-    let _veth = Veth(a.clone());
-    ip(&["link", "set", &a, "up"]).unwrap();
-    ip(&["link", "set", &b, "up"]).unwrap();
+    let veth = match Veth::create("dbctl") {
+        Ok(v) => v,
+        Err(why) => {
+            println!("SKIPPED control_breaks_loses_skews_and_power_cycles_the_line: {why}");
+            return;
+        }
+    };
+    let (tag, a, b) = (veth.tag, veth.a.clone(), veth.b.clone());
     let dir = std::env::temp_dir().join(format!("drivebus-ecat-control-{tag}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();

@@ -2,6 +2,8 @@
 //! CLI tests: the other end stays in the root namespace (where `ethercat
 //! serve` runs). Everything, the server included, is removed on drop.
 
+#![allow(dead_code)] // each test binary uses a part
+
 use std::process::{Child, Command, Stdio};
 
 /// Runs `ip ARGS`; the error names the command and what `ip` said.
@@ -51,4 +53,41 @@ impl Drop for VethPair {
         let _ = ip(&["link", "del", &self.outer]);
         let _ = ip(&["netns", "del", &self.ns]);
     }
+}
+
+/// A veth pair `{prefix}{pid}a`/`…b` in the root namespace, both up;
+/// deleted on drop.
+pub struct Veth {
+    pub a: String,
+    pub b: String,
+    pub tag: u32,
+}
+
+impl Veth {
+    /// Creates the pair; the error says why (no root, no `ip`).
+    pub fn create(prefix: &str) -> Result<Veth, String> {
+        let tag = std::process::id() % 100_000;
+        let (a, b) = (format!("{prefix}{tag}a"), format!("{prefix}{tag}b"));
+        ip(&["link", "add", &a, "type", "veth", "peer", "name", &b])?;
+        let v = Veth { a, b, tag };
+        ip(&["link", "set", &v.a, "up"])?;
+        ip(&["link", "set", &v.b, "up"])?;
+        Ok(v)
+    }
+}
+
+impl Drop for Veth {
+    fn drop(&mut self) {
+        let _ = ip(&["link", "del", &self.a]);
+    }
+}
+
+/// A BRD of register 0x0000 (2 bytes): every slave adds 1 to the WKC.
+pub fn count_frame() -> Vec<u8> {
+    let mut f = vec![0xFF; 6];
+    f.extend_from_slice(&[0x10; 6]);
+    f.extend_from_slice(&[0x88, 0xA4]);
+    f.extend_from_slice(&(14u16 | 1 << 12).to_le_bytes());
+    f.extend_from_slice(&[0x07, 0x42, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0, 0]);
+    f
 }
