@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
+use drivebus_transport::socketcand::{SocketcandConfig, SocketcandServer};
 use drivebus_transport::{Hub, HubConfig};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -47,7 +47,7 @@ impl Server {
         }
         let built = crate::bus::build_all(&drives, machine.as_deref())?;
         let rt = runtime()?;
-        let cfg = ServerConfig::new(channel);
+        let cfg = SocketcandConfig::new(channel);
         let (server, addr, drives) = py
             .detach(|| {
                 rt.block_on(async {

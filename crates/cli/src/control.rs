@@ -26,7 +26,7 @@ use tokio::sync::Mutex;
 /// One request line.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Request {
+pub enum ControlRequest {
     /// An input of a drive's machine, named as in `[[node.inputs]]`.
     Input {
         /// Node-ID (CAN) or the slave's position from 1 (EtherCAT).
@@ -201,36 +201,36 @@ impl Control {
     }
 
     /// Carries out `req`; the error names the cause first, then what to do.
-    pub async fn handle(&self, req: Request) -> anyhow::Result<()> {
+    pub async fn handle(&self, req: ControlRequest) -> anyhow::Result<()> {
         let (hub, nodes) = match self {
             Control::Can { hub, nodes } => (hub, nodes),
             Control::Ethercat(host) => return crate::ethercat::control::handle(host, req),
         };
         match req {
-            Request::Input { node, input, line, value, duration } => {
+            ControlRequest::Input { node, input, line, value, duration } => {
                 let c = Change::input(&input, line, value).map_err(|e| anyhow!("input: {e}"))?;
                 self.change(node, c, duration).await
             }
-            Request::Fault { node, kind, switch, duration } => {
+            ControlRequest::Fault { node, kind, switch, duration } => {
                 let c = Change::fault(&kind, switch.as_deref()).map_err(|e| anyhow!("fault: {e}"))?;
                 self.change(node, c, duration).await
             }
-            Request::Bus { rule } if rule == "clear" => {
+            ControlRequest::Bus { rule } if rule == "clear" => {
                 hub.clear_faults();
                 Ok(())
             }
-            Request::Bus { rule } => {
+            ControlRequest::Bus { rule } => {
                 let r = crate::fault::parse(&rule)?;
                 hub.add_fault(r)?;
                 Ok(())
             }
-            Request::Link { node, bus_off } => {
+            ControlRequest::Link { node, bus_off } => {
                 let state = if bus_off { LinkState::BusOff { recover_at: None } } else { LinkState::Active };
                 let nodes = nodes.lock().await;
                 let host = running(&nodes, node)?;
                 host.set_link(state).await.ok_or_else(|| stopped(node))
             }
-            Request::Power { node, on } => Self::power(hub, nodes, node, on).await,
+            ControlRequest::Power { node, on } => Self::power(hub, nodes, node, on).await,
         }
     }
 
@@ -264,7 +264,7 @@ impl Control {
 
     /// Answers one request line.
     pub async fn answer(&self, line: &str) -> Response {
-        let r = match serde_json::from_str::<Request>(line) {
+        let r = match serde_json::from_str::<ControlRequest>(line) {
             Ok(req) => self.handle(req).await,
             Err(e) => Err(anyhow!("bad request: {e}: send one JSON object per line (docs/control.md)")),
         };
@@ -394,7 +394,7 @@ async fn session(s: impl AsyncRead + AsyncWrite + Unpin, control: Arc<Control>) 
 }
 
 /// Sends `req` to the server at `addr` and returns its answer.
-pub async fn request(addr: &Addr, req: &Request) -> anyhow::Result<Response> {
+pub async fn request(addr: &Addr, req: &ControlRequest) -> anyhow::Result<Response> {
     let mut line = serde_json::to_string(req)?;
     line.push('\n');
     let what = || {
@@ -431,14 +431,20 @@ mod tests {
 
     #[test]
     fn requests_read_as_documented() {
-        let r: Request =
+        let r: ControlRequest =
             serde_json::from_str(r#"{"op":"input","node":5,"input":"digital","line":3,"value":1}"#).unwrap();
         assert_eq!(
             r,
-            Request::Input { node: 5, input: "digital".into(), line: Some(3), value: 1.0, duration: None }
+            ControlRequest::Input {
+                node: 5,
+                input: "digital".into(),
+                line: Some(3),
+                value: 1.0,
+                duration: None
+            }
         );
-        assert!(serde_json::from_str::<Request>(r#"{"op":"input","node":5,"valu":1}"#).is_err());
-        let p: Request = serde_json::from_str(r#"{"op":"power","node":5,"on":false}"#).unwrap();
-        assert_eq!(p, Request::Power { node: 5, on: false });
+        assert!(serde_json::from_str::<ControlRequest>(r#"{"op":"input","node":5,"valu":1}"#).is_err());
+        let p: ControlRequest = serde_json::from_str(r#"{"op":"power","node":5,"on":false}"#).unwrap();
+        assert_eq!(p, ControlRequest::Power { node: 5, on: false });
     }
 }

@@ -6,7 +6,7 @@ use anyhow::bail;
 use clap::{Args, Subcommand};
 
 use crate::args::Global;
-use crate::control::{Addr, Request, request};
+use crate::control::{Addr, ControlRequest, request};
 
 /// `drivebus control`.
 #[derive(Args, Debug)]
@@ -181,7 +181,7 @@ fn level(s: &str) -> Option<f64> {
 }
 
 /// The request `cmd` makes.
-pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<Request> {
+pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<ControlRequest> {
     Ok(match cmd {
         ControlCmd::Input { drive: node, input, args, duration } => {
             let (line, value) = match args.as_slice() {
@@ -195,17 +195,22 @@ pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<Request> {
             let Some(value) = level(value) else {
                 bail!("bad value `{value}`: expected on, off or a number");
             };
-            Request::Input { node: *node, input: input.clone(), line, value, duration: *duration }
+            ControlRequest::Input { node: *node, input: input.clone(), line, value, duration: *duration }
         }
-        ControlCmd::Fault { drive: node, kind, switch, duration } => {
-            Request::Fault { node: *node, kind: kind.clone(), switch: switch.clone(), duration: *duration }
-        }
+        ControlCmd::Fault { drive: node, kind, switch, duration } => ControlRequest::Fault {
+            node: *node,
+            kind: kind.clone(),
+            switch: switch.clone(),
+            duration: *duration,
+        },
         ControlCmd::Bus {
             action, drive: Some(node), id: None, count: None, mask: None, rule: None, ..
-        } if action == "off" || action == "on" => Request::Link { node: *node, bus_off: action == "off" },
+        } if action == "off" || action == "on" => {
+            ControlRequest::Link { node: *node, bus_off: action == "off" }
+        }
         ControlCmd::Bus { action, drive: None, id, count, mask, rule, line } => {
             if let Some(rule) = line_rule(action, id.is_some() || mask.is_some(), *count, line)? {
-                return Ok(Request::Bus { rule });
+                return Ok(ControlRequest::Bus { rule });
             }
             let times = count.map_or_else(String::new, |n| format!(",times={n}"));
             let rule = match (action.as_str(), id, mask, rule) {
@@ -221,14 +226,14 @@ pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<Request> {
                      [--count N], rule --rule RULE, clear, off NODE or on NODE"
                 ),
             };
-            Request::Bus { rule }
+            ControlRequest::Bus { rule }
         }
         ControlCmd::Bus { action, .. } => {
             bail!("bad bus request `{action}` with a node-ID: use `bus off NODE` or `bus on NODE`")
         }
         ControlCmd::Power { drive: node, state } => match state.as_str() {
-            "on" => Request::Power { node: *node, on: true },
-            "off" => Request::Power { node: *node, on: false },
+            "on" => ControlRequest::Power { node: *node, on: true },
+            "off" => ControlRequest::Power { node: *node, on: false },
             s => bail!("bad power state `{s}`: expected on or off"),
         },
     })
@@ -260,7 +265,13 @@ mod tests {
         };
         assert_eq!(
             to_request(&input).unwrap(),
-            Request::Input { node: 5, input: "digital".into(), line: Some(3), value: 1.0, duration: None }
+            ControlRequest::Input {
+                node: 5,
+                input: "digital".into(),
+                line: Some(3),
+                value: 1.0,
+                duration: None
+            }
         );
         let off = ControlCmd::Bus {
             action: "off".into(),
@@ -271,7 +282,7 @@ mod tests {
             rule: None,
             line: LineOpts::default(),
         };
-        assert_eq!(to_request(&off).unwrap(), Request::Link { node: 5, bus_off: true });
+        assert_eq!(to_request(&off).unwrap(), ControlRequest::Link { node: 5, bus_off: true });
         let bus = ControlCmd::Bus {
             action: "drop".into(),
             drive: None,
@@ -281,7 +292,7 @@ mod tests {
             rule: None,
             line: LineOpts::default(),
         };
-        assert_eq!(to_request(&bus).unwrap(), Request::Bus { rule: "drop:0x181,times=5".into() });
+        assert_eq!(to_request(&bus).unwrap(), ControlRequest::Bus { rule: "drop:0x181,times=5".into() });
         let bad = ControlCmd::Bus {
             action: "drop".into(),
             drive: None,
@@ -302,7 +313,7 @@ mod tests {
             line,
         };
         let rule = |c| match to_request(&c).unwrap() {
-            Request::Bus { rule } => rule,
+            ControlRequest::Bus { rule } => rule,
             r => panic!("{r:?}"),
         };
         assert_eq!(rule(ecat("break", LineOpts { after: Some(2), ..LineOpts::default() })), "break:2");

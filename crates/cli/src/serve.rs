@@ -16,7 +16,7 @@ use std::io::Write;
 
 use anyhow::{Context, anyhow};
 use drivebus_personality::build::BuildOptions;
-use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
+use drivebus_transport::socketcand::{SocketcandConfig, SocketcandServer};
 use drivebus_transport::{BusUrl, Hub, HubConfig};
 
 use crate::args::{DEFAULT_LISTEN, Global, ServeArgs};
@@ -63,7 +63,7 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     };
     let server = match &listen {
         Some(l) => Some(
-            SocketcandServer::bind_with(l.as_str(), ServerConfig::new(&a.channel), hub.clone())
+            SocketcandServer::bind_with(l.as_str(), SocketcandConfig::new(&a.channel), hub.clone())
                 .await
                 .with_context(|| format!("cannot listen on {l}"))?,
         ),

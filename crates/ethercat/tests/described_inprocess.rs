@@ -9,7 +9,7 @@
 
 use drivebus_can::Instant;
 use drivebus_ethercat::described::{self, Member};
-use drivebus_ethercat::master::{Master, Storage};
+use drivebus_ethercat::master::{Master, PduFrames};
 use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
 use std::time::Duration;
@@ -33,7 +33,7 @@ fn line() -> Host {
 
 #[test]
 fn real_devices_discovered_to_op_with_outputs_and_inputs() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let host = line();
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
@@ -84,7 +84,7 @@ fn real_devices_discovered_to_op_with_outputs_and_inputs() {
 /// goes to OP, and the controlword it writes lands in 6040h.
 #[test]
 fn coe_image_without_esi_serves_its_pdos() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let akd = Member::Device(Box::new(described::load(&vector("akd.bin")).unwrap()));
     let host =
         Host::line(described::devices(&[akd], None).unwrap(), Clock::simulated(Instant::from_millis(1)));

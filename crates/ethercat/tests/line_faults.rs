@@ -8,7 +8,7 @@ use drivebus_can::{Duration, Instant};
 use drivebus_ethercat::dio::{self, DioConfig};
 use drivebus_ethercat::drive::{DriveLine as Line, with_drive};
 use drivebus_ethercat::master::drive::DriveLine;
-use drivebus_ethercat::master::{AlState, Master, Storage};
+use drivebus_ethercat::master::{AlState, Master, PduFrames};
 use drivebus_ethercat::{BoxDevice, Clock, Host, LineFault, link};
 use drivebus_personality::Profile;
 use drivebus_personality::machine::Change;
@@ -150,7 +150,7 @@ fn drives() -> Host {
 
 #[test]
 fn the_tool_master_counts_broken_and_lost_cycles_and_keeps_driving() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let host = drives();
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
@@ -194,7 +194,7 @@ fn the_tool_master_counts_broken_and_lost_cycles_and_keeps_driving() {
 
 #[test]
 fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let host = drives();
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
@@ -226,7 +226,7 @@ fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
 
 #[test]
 fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_to_op() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let host = drives();
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
@@ -252,7 +252,7 @@ fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_t
 
 #[test]
 fn a_drifting_clock_shows_in_its_system_time_difference_and_settles_when_cleared() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let host = drives();
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {

@@ -12,7 +12,7 @@ use drivebus_esi::CoeDetails;
 use drivebus_ethercat::drive::DriveLine as Line;
 use drivebus_ethercat::drive::DriveSpec;
 use drivebus_ethercat::master::drive::DriveLine;
-use drivebus_ethercat::master::{self, AlState, Described, Master, MasterError, Storage, coe_details};
+use drivebus_ethercat::master::{self, AlState, Described, Master, MasterError, PduFrames, coe_details};
 use drivebus_ethercat::{BoxDevice, Clock, Host};
 use drivebus_personality::Profile;
 
@@ -26,7 +26,7 @@ fn line() -> Host {
 
 #[test]
 fn scan_coe_state_and_pdos() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         assert_eq!(m.count().await.unwrap(), 2);
@@ -75,7 +75,7 @@ fn scan_coe_state_and_pdos() {
 
 #[test]
 fn drive_enable_home_move_and_csp_with_dc() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
@@ -110,7 +110,7 @@ fn drive_enable_home_move_and_csp_with_dc() {
 
 #[test]
 fn drive_in_free_run_on_the_generic_servo() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
@@ -139,7 +139,7 @@ fn coe(sdo_info: bool, complete_access: bool) -> Option<CoeDetails> {
 
 #[test]
 fn whole_objects_by_sdo_information_and_complete_access() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
@@ -188,7 +188,7 @@ fn whole_objects_by_sdo_information_and_complete_access() {
 
 #[test]
 fn whole_objects_without_sdo_information_or_complete_access() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let m = Master::on_host(&S, ipos_offering(coe(false, false))).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
@@ -207,7 +207,7 @@ fn whole_objects_without_sdo_information_or_complete_access() {
         // The slave really refuses both services (the SII tells the truth).
         assert_eq!(m.object_description(&sd, 1, 0x1C13).await.unwrap(), None);
     });
-    static T: Storage = Storage::new();
+    static T: PduFrames = PduFrames::new();
     let m = Master::on_host(&T, ipos_offering(coe(false, true))).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
@@ -231,7 +231,7 @@ fn whole_objects_without_sdo_information_or_complete_access() {
 /// enable, and start once 6061h shows the mode.
 #[test]
 fn ipos_modes_set_before_enabling() {
-    static S: Storage = Storage::new();
+    static S: PduFrames = PduFrames::new();
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();

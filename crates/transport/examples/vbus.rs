@@ -13,7 +13,7 @@
 use std::time::Duration;
 
 use drivebus_transport::slcan::{SlcanPty, SlcanTcpServer};
-use drivebus_transport::socketcand::{ServerConfig, SocketcandServer};
+use drivebus_transport::socketcand::{SocketcandConfig, SocketcandServer};
 use drivebus_transport::{Frame, Hub, HubConfig};
 
 #[tokio::main]
@@ -35,7 +35,8 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let hub = Hub::new(HubConfig { bitrate, ..HubConfig::default() });
     let (_srv, addr) =
-        SocketcandServer::bind_with(("127.0.0.1", port), ServerConfig::new(&channel), hub.clone()).await?;
+        SocketcandServer::bind_with(("127.0.0.1", port), SocketcandConfig::new(&channel), hub.clone())
+            .await?;
     println!("socketcand {addr}");
     let _pty = if pty {
         let p = SlcanPty::spawn(hub.attach())?;

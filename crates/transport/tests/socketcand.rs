@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use drivebus_transport::socketcand::proto::{self, Message, Splitter};
-use drivebus_transport::socketcand::{ServerConfig, SocketcandServer, connect};
+use drivebus_transport::socketcand::{SocketcandConfig, SocketcandServer, connect};
 use drivebus_transport::{CanBus, CanId, FaultRule, Frame, Hub, HubConfig};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
@@ -243,7 +243,7 @@ async fn frames_in_the_grace_window_are_held_back_not_lost() {
 async fn slow_client_is_disconnected_not_stalling_the_hub() {
     let hub = Hub::new(HubConfig { capacity: 256, ..HubConfig::default() });
     let (srv, addr) =
-        SocketcandServer::bind_with("127.0.0.1:0", ServerConfig::new("can0"), hub).await.unwrap();
+        SocketcandServer::bind_with("127.0.0.1:0", SocketcandConfig::new("can0"), hub).await.unwrap();
     // A client with a tiny receive window that stops reading after the handshake.
     let sock = tokio::net::TcpSocket::new_v4().unwrap();
     sock.set_recv_buffer_size(4096).unwrap();
@@ -287,7 +287,7 @@ async fn paced_hub_and_fault_rules() {
     let hub = Hub::new(HubConfig { bitrate: Some(125_000), ..HubConfig::default() });
     hub.add_fault(FaultRule::drop_frames().ids(0x700..=0x7FF)).unwrap();
     let (srv, addr) =
-        SocketcandServer::bind_with("127.0.0.1:0", ServerConfig::new("can0"), hub).await.unwrap();
+        SocketcandServer::bind_with("127.0.0.1:0", SocketcandConfig::new("can0"), hub).await.unwrap();
     let mut client = connect(addr, "can0").await.unwrap();
     sleep(Duration::from_millis(40)).await;
     let drive = srv.attach();
@@ -322,7 +322,7 @@ async fn bursts_larger_than_a_write_batch_arrive_complete_and_in_order() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn client_that_stops_reading_is_dropped_after_write_timeout() {
-    let cfg = ServerConfig { write_timeout: Duration::from_millis(200), ..ServerConfig::new("can0") };
+    let cfg = SocketcandConfig { write_timeout: Duration::from_millis(200), ..SocketcandConfig::new("can0") };
     let (srv, addr) = SocketcandServer::bind_with("127.0.0.1:0", cfg, Hub::default()).await.unwrap();
     let sock = tokio::net::TcpSocket::new_v4().unwrap();
     sock.set_recv_buffer_size(4096).unwrap();

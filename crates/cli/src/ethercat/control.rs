@@ -5,7 +5,7 @@
 //! and power are faults of the line, kept in the segment
 //! (`drivebus_esc::segment::LineFault`) so every transport sees them.
 
-use crate::control::Request;
+use crate::control::ControlRequest;
 use anyhow::{anyhow, bail};
 use drivebus_ethercat::Host;
 use drivebus_ethercat::drive::with_drive;
@@ -13,22 +13,22 @@ use drivebus_personality::machine::Change;
 
 /// Carries out `req` on the line; the error names the cause first, then
 /// what to do.
-pub fn handle(host: &Host, req: Request) -> anyhow::Result<()> {
+pub fn handle(host: &Host, req: ControlRequest) -> anyhow::Result<()> {
     let slaves = host.with_segment(|s| s.len());
     match req {
-        Request::Input { node, input, line, value, duration } => {
+        ControlRequest::Input { node, input, line, value, duration } => {
             let c = Change::input(&input, line, value).map_err(|e| anyhow!("input: {e}"))?;
             change(host, slaves, node, c, duration)
         }
-        Request::Fault { node, kind, switch, duration } => {
+        ControlRequest::Fault { node, kind, switch, duration } => {
             let c = Change::fault(&kind, switch.as_deref()).map_err(|e| anyhow!("fault: {e}"))?;
             change(host, slaves, node, c, duration)
         }
-        Request::Bus { rule } if rule == "clear" => {
+        ControlRequest::Bus { rule } if rule == "clear" => {
             host.with_segment(|s| s.clear_faults());
             Ok(())
         }
-        Request::Bus { rule } => {
+        ControlRequest::Bus { rule } => {
             let (fault, seed) = crate::fault::parse_line(&rule, slaves)?;
             host.with_segment(|s| {
                 if let Some(seed) = seed {
@@ -38,11 +38,11 @@ pub fn handle(host: &Host, req: Request) -> anyhow::Result<()> {
             });
             Ok(())
         }
-        Request::Link { .. } => bail!(
+        ControlRequest::Link { .. } => bail!(
             "an EtherCAT slave has no bus-off: break the line behind a slave (drivebus control bus break \
              --after N) or cut its power (drivebus control power N off)"
         ),
-        Request::Power { node, on } => {
+        ControlRequest::Power { node, on } => {
             let i = position(slaves, node)?;
             host.with_segment(|s| if on { s.power_on(i) } else { s.power_off(i) });
             Ok(())

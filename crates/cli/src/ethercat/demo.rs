@@ -11,7 +11,7 @@ use anyhow::{Context, anyhow, bail};
 use drivebus_can::{Duration, Instant};
 use drivebus_ethercat::drive::DriveLine as Line;
 use drivebus_ethercat::master::drive::{DriveLine, Feedback};
-use drivebus_ethercat::master::{Master, SlaveInfo, Storage, block_on};
+use drivebus_ethercat::master::{Master, PduFrames, SlaveInfo, block_on};
 use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -146,7 +146,7 @@ impl Trace {
 }
 
 fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Report> {
-    static STORAGE: Storage = Storage::new();
+    static STORAGE: PduFrames = PduFrames::new();
     let clock = if realtime { Clock::real() } else { Clock::simulated(Instant::from_millis(1)) };
     let host: Host = Line::new().drive(Profile::Ipos).host(clock.clone()).context("building the iPOS")?;
     let m = Master::on_host(&STORAGE, host).context("starting the master")?;

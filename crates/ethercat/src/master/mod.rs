@@ -41,14 +41,14 @@ pub const MAX_PDI: usize = 1024;
 pub const MAX_SDO: usize = 1024;
 
 /// ethercrab's frame storage for one master.
-pub type Storage = PduStorage<16, { PduStorage::element_size(1100) }>;
+pub type PduFrames = PduStorage<16, { PduStorage::element_size(1100) }>;
 
 /// A group of every slave on the line, in PRE-OP.
 pub type PreOpGroup = SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>;
 
 /// The storage of [`Master::on_iface`]: ethercrab splits a storage once,
 /// so a process opens one interface master.
-static IFACE_STORAGE: Storage = PduStorage::new();
+static IFACE_STORAGE: PduFrames = PduStorage::new();
 
 /// What went wrong, in words a user can act on.
 #[derive(Debug)]
@@ -291,7 +291,7 @@ impl Master {
     /// A master on an in-process `host` (the demo, tests), through
     /// [`link`](crate::link); `storage` must not have been split before.
     /// With a simulated clock the master's waits move the host's time.
-    pub fn on_host(storage: &'static Storage, host: Host) -> Result<Master, MasterError> {
+    pub fn on_host(storage: &'static PduFrames, host: Host) -> Result<Master, MasterError> {
         let (tx, rx, pdu_loop) = storage.try_split().map_err(|()| MasterError::InUse)?;
         let h = host.clone();
         std::thread::Builder::new()

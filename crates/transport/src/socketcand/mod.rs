@@ -11,4 +11,4 @@ pub mod proto;
 mod server;
 
 pub use client::{HANDSHAKE_TIMEOUT, connect};
-pub use server::{ServerConfig, SocketcandServer};
+pub use server::{SocketcandConfig, SocketcandServer};

@@ -18,7 +18,7 @@ use crate::hub::{Hub, HubFrame, ParticipantId};
 
 /// Settings of a [`SocketcandServer`].
 #[derive(Clone, Debug)]
-pub struct ServerConfig {
+pub struct SocketcandConfig {
     /// The only bus name `< open NAME >` accepts.
     pub channel: String,
     /// Quiet time after `< ok >` for rawmode before frames flow; frames of
@@ -32,10 +32,10 @@ pub struct ServerConfig {
     pub write_timeout: Duration,
 }
 
-impl ServerConfig {
+impl SocketcandConfig {
     /// Defaults for bus `channel`: 20 ms grace, 256 clients, 10 s write timeout.
     pub fn new(channel: &str) -> Self {
-        ServerConfig {
+        SocketcandConfig {
             channel: channel.to_owned(),
             grace: Duration::from_millis(20),
             max_clients: 256,
@@ -61,7 +61,7 @@ impl SocketcandServer {
     /// Listens on `addr` serving bus `channel` on a new default [`Hub`].
     /// Returns the server and the address it listens on (useful with port 0).
     pub async fn bind(addr: impl ToSocketAddrs, channel: &str) -> io::Result<(SocketcandServer, SocketAddr)> {
-        SocketcandServer::bind_with(addr, ServerConfig::new(channel), Hub::default()).await
+        SocketcandServer::bind_with(addr, SocketcandConfig::new(channel), Hub::default()).await
     }
 
     /// Listens on `addr` with `cfg`, relaying through `hub` (which may be
@@ -69,7 +69,7 @@ impl SocketcandServer {
     /// faulty [`HubConfig`](crate::HubConfig), …).
     pub async fn bind_with(
         addr: impl ToSocketAddrs,
-        cfg: ServerConfig,
+        cfg: SocketcandConfig,
         hub: Hub,
     ) -> io::Result<(SocketcandServer, SocketAddr)> {
         let listener = TcpListener::bind(addr).await?;
@@ -114,7 +114,7 @@ impl Drop for SocketcandServer {
     }
 }
 
-async fn accept_loop(listener: TcpListener, cfg: Arc<ServerConfig>, hub: Hub, clients: Arc<AtomicUsize>) {
+async fn accept_loop(listener: TcpListener, cfg: Arc<SocketcandConfig>, hub: Hub, clients: Arc<AtomicUsize>) {
     let mut tasks = JoinSet::new();
     loop {
         tokio::select! {
@@ -159,7 +159,7 @@ enum Mode {
 }
 
 /// Serves one client until it leaves or fails; returns why.
-async fn serve(stream: TcpStream, cfg: &ServerConfig, hub: &Hub) -> String {
+async fn serve(stream: TcpStream, cfg: &SocketcandConfig, hub: &Hub) -> String {
     if let Err(e) = stream.set_nodelay(true) {
         return format!("set TCP_NODELAY: {e}");
     }
@@ -187,7 +187,7 @@ fn quickack(rd: &OwnedReadHalf) {
 
 async fn reader(
     mut rd: OwnedReadHalf,
-    cfg: &ServerConfig,
+    cfg: &SocketcandConfig,
     hub: &Hub,
     id: ParticipantId,
     ctl: mpsc::Sender<Ctl>,
@@ -238,7 +238,7 @@ async fn reader(
 
 async fn writer(
     mut wr: OwnedWriteHalf,
-    cfg: &ServerConfig,
+    cfg: &SocketcandConfig,
     hub: &Hub,
     id: ParticipantId,
     mut ctl: mpsc::Receiver<Ctl>,
@@ -302,7 +302,7 @@ async fn writer(
 }
 
 /// Writes all of `data` within the configured timeout.
-async fn write(wr: &mut OwnedWriteHalf, data: &[u8], cfg: &ServerConfig) -> Result<(), String> {
+async fn write(wr: &mut OwnedWriteHalf, data: &[u8], cfg: &SocketcandConfig) -> Result<(), String> {
     match tokio::time::timeout(cfg.write_timeout, wr.write_all(data)).await {
         Ok(Ok(())) => Ok(()),
         Ok(Err(e)) => Err(format!("write: {e}")),
