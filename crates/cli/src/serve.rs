@@ -90,7 +90,8 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     };
     let web = match (&a.http, &web_master) {
         (Some(addr), Some(m)) => {
-            Some(crate::web::start(m.clone(), crate::dict::Dict::default(), addr).await?)
+            let profiles = specs.iter().map(|s| (s.node, s.profile)).collect();
+            Some(crate::web::start(m.clone(), crate::dict::Dict::default(), profiles, addr).await?)
         }
         _ => None,
     };

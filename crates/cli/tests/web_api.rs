@@ -372,7 +372,12 @@ async fn following_error_emcy_is_decoded_and_fault_reset() {
         v["emcy"].as_array().and_then(|l| l.iter().find(|e| e["code"] == "8611").cloned())
     })
     .await;
-    assert_eq!((e["node"].as_u64(), e["text"].as_str()), (Some(1), Some("Following error")), "{e}");
+    // The AKD manual's text and fault number (its EMCY table), not CiA 402's.
+    assert_eq!(
+        (e["node"].as_u64(), e["text"].as_str(), e["detail"].as_str()),
+        (Some(1), Some("Following error (user)"), Some("F439 (fault)")),
+        "{e}"
+    );
     let t0 = Instant::now();
     loop {
         assert!(t0.elapsed() < Duration::from_secs(60), "no emcy event on the stream");
@@ -383,7 +388,7 @@ async fn following_error_emcy_is_decoded_and_fault_reset() {
             .unwrap();
         let msg: Value = serde_json::from_str(m.to_text().unwrap_or("{}")).unwrap_or_default();
         if msg["event"] == "emcy" && msg["code"] == "8611" {
-            assert_eq!(msg["text"], "Following error", "{msg}");
+            assert_eq!((msg["text"].as_str(), msg["detail"].as_str()), (Some("Following error (user)"), Some("F439 (fault)")), "{msg}");
             break;
         }
     }

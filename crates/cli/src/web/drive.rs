@@ -138,3 +138,44 @@ async fn start_motion(web: Arc<Web>, d: Drive, node: u8, a: Action) -> ApiResult
 fn report(r: &MotionReport) -> Json_ {
     json!({"end": r.end.code(), "position": r.position, "reason": r.reason()})
 }
+
+/// The standard homing methods of CiA 402-2 (6098h 1..35 and 37).
+const CIA402_HOMING: [i8; 36] = {
+    let mut m = [0i8; 36];
+    let mut i = 0;
+    while i < 35 {
+        m[i] = i as i8 + 1;
+        i += 1;
+    }
+    m[35] = 37;
+    m
+};
+
+/// `GET /api/nodes/{n}/drive/homing`: the homing methods the drive offers
+/// (60E3h), else those the hosted personality accepts (its manual), else
+/// the CiA 402 list; with 6098h, the method set now.
+pub async fn homing(State(web): State<Arc<Web>>, Path(n): Path<String>) -> ApiResult<Json<Json_>> {
+    let node = seen_node(&web, &n)?;
+    let d = handle(&web, node).await?;
+    let offered = d.homing_methods().await;
+    let (methods, source) = if !offered.is_empty() {
+        (offered, "60E3h".to_owned())
+    } else if let Some(p) = web.profiles.get(&node) {
+        (p.info().homing_methods.to_vec(), format!("the {} manual", p.name()))
+    } else {
+        (CIA402_HOMING.to_vec(), "CiA 402".to_owned())
+    };
+    let current = d.read_raw(0x6098, 0).await.ok().and_then(|v| v.first().map(|b| *b as i8));
+    Ok(Json(json!({"node": node, "methods": methods, "source": source, "current": current})))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_cia402_homing_list_is_1_to_35_and_37() {
+        assert_eq!(super::CIA402_HOMING[0], 1);
+        assert_eq!(super::CIA402_HOMING[34], 35);
+        assert_eq!(super::CIA402_HOMING[35], 37);
+        assert!(!super::CIA402_HOMING.contains(&36));
+    }
+}

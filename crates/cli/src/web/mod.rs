@@ -14,7 +14,7 @@ mod error;
 mod stream;
 mod values;
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 
@@ -26,6 +26,7 @@ use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use drivebus_master::{Master, MasterEvent};
+use drivebus_personality::Profile;
 use tokio::sync::broadcast;
 
 use crate::dict::Dict;
@@ -42,6 +43,9 @@ pub struct Web {
     pub master: Master,
     /// Object names and types (`--eds`, then CiA 301/402).
     pub dict: Dict,
+    /// The personality of each drive this process hosts (`serve --drive`,
+    /// `ui --sim`): its homing methods and its manual's EMCY table.
+    pub profiles: HashMap<u8, Profile>,
     /// The last EMCYs, oldest first.
     emcy: Mutex<VecDeque<serde_json::Value>>,
     /// Events the server itself makes (a motion's end), for the stream.
@@ -61,6 +65,20 @@ impl Web {
     /// Sends a server event to the streams.
     pub fn event(&self, v: serde_json::Value) {
         let _ = self.events.send(v);
+    }
+
+    /// An EMCY as the API gives it: the code, the text the master decoded
+    /// (the hosted personality's table, else CiA 301/402) and the
+    /// manual's classification of the code (`F439 (fault)`), if any.
+    pub fn emcy_json(&self, node: u8, code: u16, register: u8, data: &[u8], text: Option<String>) -> serde_json::Value {
+        let detail = self
+            .profiles
+            .get(&node)
+            .and_then(|p| p.info().emcy.iter().find(|e| e.code == code))
+            .map(|e| e.detail)
+            .filter(|d| !d.is_empty());
+        serde_json::json!({"t": self.t(), "node": node, "code": format!("{code:04X}"), "register": register,
+            "data": values::hex(data), "text": text, "detail": detail})
     }
 }
 
@@ -90,17 +108,28 @@ impl Drop for Server {
     }
 }
 
-/// Binds `addr` and serves the page and the API for `master`.
-pub async fn start(master: Master, dict: Dict, addr: &str) -> anyhow::Result<Server> {
+/// Binds `addr` and serves the page and the API for `master`; `profiles`
+/// are the drives this process hosts (their EMCY texts go to the master).
+pub async fn start(
+    master: Master,
+    dict: Dict,
+    profiles: HashMap<u8, Profile>,
+    addr: &str,
+) -> anyhow::Result<Server> {
     let listener = tokio::net::TcpListener::bind(addr)
         .await
         .with_context(|| format!("cannot listen on --http {addr}: is the port free? (port 0 picks one)"))?;
     let local = listener.local_addr()?;
     let token = (!local.ip().is_loopback()).then(new_token);
     let (events, _) = broadcast::channel(256);
+    // The manual's texts, as `Master::emcy_text` gives them to every EMCY event.
+    for (&node, p) in &profiles {
+        master.add_emcy_texts(node, p.info().emcy.iter().map(|e| (e.code, e.text)));
+    }
     let web = Arc::new(Web {
         master,
         dict,
+        profiles,
         emcy: Mutex::new(VecDeque::new()),
         events,
         start: std::time::Instant::now(),
@@ -133,6 +162,7 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes/{n}/nmt", post(api::nmt))
         .route("/api/nodes/{n}/pdo", get(api::pdo))
         .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))
+        .route("/api/nodes/{n}/drive/homing", get(drive::homing))
         .route("/api/emcy", get(api::emcy))
         .route("/api/stream", get(stream::upgrade))
         .fallback(|| async { error::ApiError::not_found("no such page or endpoint: see docs/http-api.md") })
@@ -186,8 +216,7 @@ async fn keep_emcy(web: Arc<Web>) {
     loop {
         match rx.recv().await {
             Ok(MasterEvent::Emcy { node, code, register, data, text }) => {
-                let v = serde_json::json!({"t": web.t(), "node": node, "code": format!("{code:04X}"),
-                    "register": register, "data": values::hex(&data), "text": text});
+                let v = web.emcy_json(node, code, register, &data, text);
                 let mut h = web.emcy.lock().unwrap_or_else(|e| e.into_inner());
                 if h.len() == EMCY_HISTORY {
                     h.pop_front();
@@ -200,13 +229,20 @@ async fn keep_emcy(web: Arc<Web>) {
     }
 }
 
+/// The personalities of `--sim PROFILE:NODE` (device files left out).
+fn hosted_profiles(sim: &[String]) -> anyhow::Result<HashMap<u8, Profile>> {
+    let drives: Vec<String> =
+        sim.iter().filter(|s| !crate::vdevice::DeviceSpec::is_file_spec(s)).cloned().collect();
+    Ok(crate::vdrive::DriveSpec::parse_all(&drives)?.into_iter().map(|s| (s.node, s.profile)).collect())
+}
+
 /// `drivebus ui`: the page for the bus of `--bus` (and its `--sim` drives)
 /// until SIGINT/SIGTERM or the bus is lost.
 pub async fn run_ui(g: &crate::args::Global, a: &crate::args::UiArgs) -> anyhow::Result<()> {
     let stop = crate::serve::Signals::install()?;
     let conn = crate::conn::Conn::open(g).await?;
     let dict = Dict { eds: crate::eds_cmd::load_global_eds(g)? };
-    let server = start(conn.master.clone(), dict, &a.http).await?;
+    let server = start(conn.master.clone(), dict, hosted_profiles(&g.sim)?, &a.http).await?;
     let nodes: Vec<String> = conn.master.seen_nodes().iter().map(u8::to_string).collect();
     let seen =
         if nodes.is_empty() { "none seen yet".to_owned() } else { format!("nodes {}", nodes.join(", ")) };

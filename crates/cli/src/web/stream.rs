@@ -225,8 +225,10 @@ fn bus_event(web: &Web, last: &mut HashMap<u8, RemoteState>, e: MasterEvent) -> 
             json!({"type": "event", "event": "heartbeat-recovered", "t": t, "node": node})
         }
         MasterEvent::Emcy { node, code, register, data, text } => {
-            json!({"type": "event", "event": "emcy", "t": t,
-            "node": node, "code": format!("{code:04X}"), "register": register, "data": values::hex(&data), "text": text})
+            let mut v = web.emcy_json(node, code, register, &data, text);
+            v["type"] = json!("event");
+            v["event"] = json!("emcy");
+            v
         }
         MasterEvent::BusError { reason } => {
             json!({"type": "event", "event": "bus-error", "t": t, "reason": reason})

@@ -47,7 +47,9 @@ async function refreshEmcy() {
     ul.innerHTML = "";
     for (const e of emcy.slice().reverse()) {
       const li = document.createElement("li");
-      li.textContent = `${(e.t / 1000).toFixed(1)} s  node ${e.node}  ${e.code}h  ${e.text || "manufacturer specific"}  [${e.data}]`;
+      const detail = e.detail ? ` (${e.detail})` : "";
+      li.textContent = `${(e.t / 1000).toFixed(1)} s  node ${e.node}  ${e.code}h  ${e.text || "manufacturer specific"}${detail}  register ${e.register.toString(16).toUpperCase().padStart(2, "0")}h  [${e.data}]`;
+      Object.assign(li.dataset, { node: e.node, code: e.code, text: e.text || "" });
       ul.appendChild(li);
     }
   } catch (e) { /* shown by the overview */ }
@@ -79,6 +81,25 @@ async function driveAction(body) {
   refreshNodes(); // the overview's 402 state follows the action at once
 }
 for (const b of document.querySelectorAll("[data-action]")) b.onclick = () => driveAction({ action: b.dataset.action });
+$("home").onsubmit = (ev) => {
+  ev.preventDefault();
+  const body = { action: "home" };
+  if ($("home-method").value !== "") body.method = parseInt($("home-method").value, 10);
+  driveAction(body);
+};
+// The homing methods of the selected drive, the one in 6098h selected.
+async function refreshHoming() {
+  const sel = $("home-method");
+  if (!$("drive-node").value) return;
+  try {
+    const h = await api("GET", `/api/nodes/${$("drive-node").value}/drive/homing`);
+    sel.innerHTML = "";
+    for (const m of h.methods) { const o = document.createElement("option"); o.value = o.textContent = m; sel.appendChild(o); }
+    if (h.current !== null && h.methods.includes(h.current)) sel.value = h.current;
+    sel.dataset.node = h.node;
+    $("home-source").textContent = `(from ${h.source})`;
+  } catch (e) { $("home-source").textContent = e.message; }
+}
 $("move").onsubmit = (ev) => {
   ev.preventDefault();
   const body = { action: "move", target: parseInt($("move-target").value, 10), relative: $("move-relative").checked };
@@ -89,13 +110,107 @@ $("move").onsubmit = (ev) => {
   }
   driveAction(body);
 };
+let driveBusy = false; // one GET at a time: a slow bus must not pile them up
 async function refreshDrive() {
-  if (!$("drive-node").value) return;
+  if (!$("drive-node").value || driveBusy) return;
+  driveBusy = true;
   try {
     const d = await api("GET", `/api/nodes/${$("drive-node").value}/drive`);
     $("drive-state").textContent = `state: ${d.state} (statusword ${d.statusword.toString(16).toUpperCase().padStart(4, "0")}h), mode ${d.mode_name || "–"}, position ${d.position ?? "–"}, velocity ${d.velocity ?? "–"}`;
-  } catch (e) { $("drive-state").textContent = e.message; }
+    markState(d.state);
+  } catch (e) { $("drive-state").textContent = e.message; markState("unknown"); }
+  finally { driveBusy = false; }
 }
+$("drive-node").onchange = () => { refreshDrive(); refreshHoming(); };
+
+// The CiA 402 state machine (CiA 402-2 figure "state machine"): states as
+// the API names them (DriveState::name), transitions with their numbers.
+const SVG = "http://www.w3.org/2000/svg";
+const states = [
+  // name, label, x, y (box 150 × 30)
+  ["not ready to switch on", "Not ready to switch on", 20, 24],
+  ["switch on disabled", "Switch on disabled", 20, 84],
+  ["ready to switch on", "Ready to switch on", 20, 144],
+  ["switched on", "Switched on", 20, 204],
+  ["operation enabled", "Operation enabled", 20, 264],
+  ["fault reaction active", "Fault reaction active", 260, 24],
+  ["fault", "Fault", 260, 84],
+  ["quick stop active", "Quick stop active", 260, 264],
+];
+// from, to, number, bend (0 straight; else the control point's x offset)
+const transitions = [
+  [null, "not ready to switch on", 0], ["not ready to switch on", "switch on disabled", 1],
+  ["switch on disabled", "ready to switch on", 2], ["ready to switch on", "switched on", 3],
+  ["switched on", "operation enabled", 4], ["operation enabled", "switched on", 5],
+  ["switched on", "ready to switch on", 6], ["ready to switch on", "switch on disabled", 7],
+  ["operation enabled", "ready to switch on", 8, -38], ["operation enabled", "switch on disabled", 9, -62],
+  ["switched on", "switch on disabled", 10, -50], ["operation enabled", "quick stop active", 11],
+  ["quick stop active", "switch on disabled", 12], [null, "fault reaction active", 13],
+  ["fault reaction active", "fault", 14], ["fault", "switch on disabled", 15],
+  ["quick stop active", "operation enabled", 16],
+];
+function svgEl(tag, attrs, parent) {
+  const e = document.createElementNS(SVG, tag);
+  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+  if (parent) parent.appendChild(e);
+  return e;
+}
+function drawStateMachine() {
+  const svg = svgEl("svg", { id: "state-diagram", viewBox: "0 0 430 310", width: "430", height: "310",
+    role: "img", "aria-label": "CiA 402 state machine", "data-state": "unknown" });
+  const defs = svgEl("defs", {}, svg);
+  const m = svgEl("marker", { id: "arrow", viewBox: "0 0 8 8", refX: "8", refY: "4", markerWidth: "7", markerHeight: "7", orient: "auto" }, defs);
+  svgEl("path", { d: "M0,0 L8,4 L0,8 z", fill: "#667" }, m);
+  const at = Object.fromEntries(states.map(([n, , x, y]) => [n, { x, y }]));
+  const W = 150, H = 30;
+  const links = svgEl("g", { class: "transitions" }, svg);
+  for (const [from, to, num, bend] of transitions) {
+    const b = at[to];
+    let d, lx, ly;
+    if (from === null) { // 0: from power on; 13: from any state on a fault
+      const [x, y] = num === 0 ? [b.x + W / 2, 4] : [b.x + W + 12, b.y - 10];
+      const [ex, ey] = num === 0 ? [b.x + W / 2, b.y] : [b.x + W - 10, b.y];
+      d = `M${x},${y} L${ex},${ey}`; [lx, ly] = num === 0 ? [x + 4, y + 12] : [x + 2, y + 4];
+    } else {
+      const a = at[from];
+      if (a.x === b.x && !bend) { // vertical: down on the left third, up on the right third
+        const x = a.y < b.y ? a.x + W / 3 : a.x + (2 * W) / 3;
+        const [y1, y2] = a.y < b.y ? [a.y + H, b.y] : [a.y, b.y + H];
+        d = `M${x},${y1} L${x},${y2}`; [lx, ly] = [x + 4, (y1 + y2) / 2 + 4];
+      } else if (bend) { // left of the column, bent outwards
+        const [y1, y2] = [a.y + H / 2 + (num === 9 ? 6 : 0), b.y + H / 2 + (num === 9 ? 6 : 0)];
+        const cx = a.x + bend;
+        d = `M${a.x},${y1} Q${cx},${(y1 + y2) / 2} ${b.x},${y2}`; [lx, ly] = [a.x + bend / 2 - 6, (y1 + y2) / 2 + 4];
+      } else if (a.y === b.y) { // horizontal pair (11 and 16)
+        const y = num === 11 ? a.y + 9 : a.y + H - 9;
+        const [x1, x2] = a.x < b.x ? [a.x + W, b.x] : [a.x, b.x + W];
+        d = `M${x1},${y} L${x2},${y}`; [lx, ly] = [(x1 + x2) / 2 - 4, y - 3];
+      } else { // diagonal (12, 15)
+        const [x1, y1] = [a.x, a.y + (num === 12 ? 0 : H / 2)];
+        const [x2, y2] = [b.x + W, b.y + H / 2];
+        d = `M${x1},${y1} L${x2},${y2}`; [lx, ly] = [(x1 + x2) / 2, (y1 + y2) / 2 - 4];
+      }
+    }
+    svgEl("path", { d, class: "transition", "data-transition": num, "marker-end": "url(#arrow)" }, links);
+    const t = svgEl("text", { x: lx, y: ly, class: "tnum" }, links);
+    t.textContent = num;
+  }
+  for (const [name, label, x, y] of states) {
+    const g = svgEl("g", { class: "state", "data-state-name": name }, svg);
+    svgEl("rect", { x, y, width: W, height: H, rx: 5 }, g);
+    const t = svgEl("text", { x: x + W / 2, y: y + 19, "text-anchor": "middle" }, g);
+    t.textContent = label;
+  }
+  $("state-diagram-box").appendChild(svg);
+}
+// Highlights `name` (the API's state word); the SVG's data-state says which.
+function markState(name) {
+  const svg = $("state-diagram");
+  if (!svg || svg.dataset.state === name) return;
+  svg.dataset.state = name;
+  for (const g of svg.querySelectorAll("g.state")) g.classList.toggle("current", g.dataset.stateName === name);
+}
+drawStateMachine();
 
 // Scope: channels over the WebSocket stream, drawn on a canvas.
 const colours = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
@@ -123,6 +238,10 @@ function connect() {
     }
   };
 }
+// For tests and the console: the scope's buffered samples, per channel.
+window.drivebus = {
+  samples: () => Object.fromEntries([...channels].map(([k, s]) => [k, s.slice()])),
+};
 function subscribe() {
   if (!ws || ws.readyState !== 1) return;
   const period = parseInt($("scope-period").value, 10) || 10;
@@ -167,9 +286,9 @@ function draw() {
 }
 
 $("refresh").onclick = refreshNodes;
-refreshNodes().then(refreshDrive);
+refreshNodes().then(() => { refreshDrive(); refreshHoming(); });
 refreshEmcy();
 setInterval(refreshNodes, 3000);
-setInterval(refreshDrive, 500);
+setInterval(refreshDrive, 250);
 connect();
 requestAnimationFrame(draw);
