@@ -388,7 +388,11 @@ async fn following_error_emcy_is_decoded_and_fault_reset() {
             .unwrap();
         let msg: Value = serde_json::from_str(m.to_text().unwrap_or("{}")).unwrap_or_default();
         if msg["event"] == "emcy" && msg["code"] == "8611" {
-            assert_eq!((msg["text"].as_str(), msg["detail"].as_str()), (Some("Following error (user)"), Some("F439 (fault)")), "{msg}");
+            assert_eq!(
+                (msg["text"].as_str(), msg["detail"].as_str()),
+                (Some("Following error (user)"), Some("F439 (fault)")),
+                "{msg}"
+            );
             break;
         }
     }

@@ -70,7 +70,14 @@ impl Web {
     /// An EMCY as the API gives it: the code, the text the master decoded
     /// (the hosted personality's table, else CiA 301/402) and the
     /// manual's classification of the code (`F439 (fault)`), if any.
-    pub fn emcy_json(&self, node: u8, code: u16, register: u8, data: &[u8], text: Option<String>) -> serde_json::Value {
+    pub fn emcy_json(
+        &self,
+        node: u8,
+        code: u16,
+        register: u8,
+        data: &[u8],
+        text: Option<String>,
+    ) -> serde_json::Value {
         let detail = self
             .profiles
             .get(&node)
