@@ -53,7 +53,7 @@ def wait_for(browser, what, cond):
     try:
         return WebDriverWait(browser, WAIT_S, poll_frequency=0.1).until(lambda b: cond(b))
     except Exception as e:  # selenium's TimeoutException says nothing of what
-        seen = {i: text(browser, i) for i in ("conn", "drive-state", "drive-out", "sdo-out", "legend")}
+        seen = {i: text(browser, i) for i in ("conn", "drive-state", "drive-out", "motion-out", "sdo-out", "legend", "trig-state")}
         raise AssertionError(f"{what}: not within {WAIT_S} s; the page shows {seen}") from e
 
 
@@ -107,7 +107,7 @@ def test_enable_and_move_by_clicking_and_the_scope_shows_the_target(browser, pag
         return m and abs(int(m.group(1)) - 4000) <= 20
 
     wait_for(browser, "the scope's 6064h trace reaches 4000", legend_at_target)
-    wait_for(browser, "the motion's end reported", lambda b: "target_reached" in text(b, "drive-out"))
+    wait_for(browser, "the motion's end reported", lambda b: "target_reached" in text(b, "motion-out"))
     shot(browser, "web-scope.png")
     click_action(browser, "disable")
     wait_for(browser, "the drive panel leaves operation enabled", lambda b: "operation enabled" not in text(b, "drive-state"))
@@ -180,12 +180,12 @@ def test_enable_home_and_move_by_clicking(browser, page_url):
     # Homing on the current position (35): the position becomes the home offset, 0.
     Select(browser.find_element(By.ID, "home-method")).select_by_value("35")
     browser.find_element(By.CSS_SELECTOR, '#home button[type="submit"]').click()
-    wait_for(browser, "homing attained", lambda b: "homing_attained" in text(b, "drive-out"))
+    wait_for(browser, "homing attained", lambda b: "homing_attained" in text(b, "motion-out"))
     wait_for(browser, "the scope's 6064h at 0 after homing", lambda b: (v := scope_last(b, "1:6064:0")) is not None and abs(v) <= 20)
     set_fields(browser, (("move-target", "3000"),))
     browser.find_element(By.CSS_SELECTOR, '#move button[type="submit"]').click()
     wait_for(browser, "the scope's 6064h reaches 3000", lambda b: (v := scope_last(b, "1:6064:0")) is not None and abs(v - 3000) <= 20)
-    wait_for(browser, "the move's end reported", lambda b: "target_reached" in text(b, "drive-out"))
+    wait_for(browser, "the move's end reported", lambda b: "target_reached" in text(b, "motion-out"))
     click_action(browser, "disable")
     wait_for(browser, "the diagram leaves operation enabled", lambda b: diagram_state(b)[0] == "ready to switch on")
 
@@ -251,3 +251,82 @@ def test_a_bad_index_shows_the_reason_and_changes_nothing(browser, page_url):
     el.send_keys("nonsense_object")
     browser.find_element(By.ID, "sdo-read").click()
     wait_for(browser, "an error naming the cause", lambda b: "nonsense_object" in text(b, "sdo-out"))
+
+
+def scope_js(browser, expr, *args):
+    return browser.execute_script("return " + expr, *args)
+
+
+def subscribe_scope(browser, chans, period="10", window="2"):
+    set_fields(browser, (("scope-channels", chans), ("scope-period", period), ("scope-window", window)))
+    browser.find_element(By.CSS_SELECTOR, '#scope-form button[type="submit"]').click()
+
+
+def move_to(browser, target):
+    set_fields(browser, (("move-target", str(target)), ("move-velocity", "20000"), ("move-acceleration", "100000")))
+    browser.find_element(By.CSS_SELECTOR, '#move button[type="submit"]').click()
+
+
+def test_the_scope_triggers_on_a_level_edge_and_a_statusword_bit(browser, page_url):
+    browser.get(page_url)
+    wait_for(browser, "drive 1 selectable", lambda b: Select(b.find_element(By.ID, "drive-node")).options)
+    Select(browser.find_element(By.ID, "drive-node")).select_by_value("1")
+    subscribe_scope(browser, "1:6064, 1:6041")
+    sources = lambda b: [o.get_attribute("value") for o in Select(b.find_element(By.ID, "trig-source")).options]
+    wait_for(browser, "both channels as trigger sources", lambda b: {"1:6064:0", "1:6041:0"} <= set(sources(b)))
+    click_action(browser, "enable")
+    wait_for(browser, "operation enabled", lambda b: diagram_state(b)[0] == "operation enabled")
+    move_to(browser, 0)
+    wait_for(browser, "the position at 0", lambda b: (v := scope_last(b, "1:6064:0")) is not None and abs(v) <= 20)
+    # Level 1000, rising edge on the position.
+    Select(browser.find_element(By.ID, "trig-source")).select_by_value("1:6064:0")
+    Select(browser.find_element(By.ID, "trig-kind")).select_by_value("rising")
+    set_fields(browser, (("trig-level", "1000"),))
+    browser.find_element(By.ID, "trig-arm").click()
+    assert browser.find_element(By.ID, "trig-state").get_attribute("data-state") == "armed"
+    assert scope_js(browser, "window.drivebus.capture()") is None
+    move_to(browser, 3000)
+    wait_for(browser, "triggered", lambda b: b.find_element(By.ID, "trig-state").get_attribute("data-state") in ("triggered", "done"))
+    wait_for(browser, "the capture done", lambda b: b.find_element(By.ID, "trig-state").get_attribute("data-state") == "done")
+    t_trig = scope_js(browser, "window.drivebus.trigger().t")
+    cap = scope_js(browser, "window.drivebus.capture()")["1:6064:0"]
+    # The capture starts at the triggering sample: the first at or above the level.
+    assert cap[0][0] == t_trig and cap[0][1] >= 1000, cap[:3]
+    assert all(t >= t_trig for t, _ in cap)
+    live = scope_js(browser, "window.drivebus.samples()")["1:6064:0"]
+    before = [v for t, v in live if t < t_trig]
+    assert before and before[-1] < 1000, before[-3:]
+    # The capture holds one window (2 s) and is frozen on the canvas: Δt of the cursors is half of it.
+    assert cap[-1][0] - t_trig >= 2000 - 50
+    assert browser.find_element(By.ID, "cursors").get_attribute("data-dt") == "1000.000"
+    # Statusword bit 2 (operation enabled) cleared: a disable triggers.
+    Select(browser.find_element(By.ID, "trig-source")).select_by_value("1:6041:0")
+    Select(browser.find_element(By.ID, "trig-kind")).select_by_value("bit-clear")
+    set_fields(browser, (("trig-level", "2"),))
+    browser.find_element(By.ID, "trig-arm").click()
+    assert browser.find_element(By.ID, "trig-state").get_attribute("data-state") == "armed"
+    click_action(browser, "disable")
+    wait_for(browser, "the bit trigger fired", lambda b: b.find_element(By.ID, "trig-state").get_attribute("data-state") in ("triggered", "done"))
+    sw = scope_js(browser, "window.drivebus.capture()")["1:6041:0"]
+    assert sw[0][1] & 4 == 0 and sw[0][0] == scope_js(browser, "window.drivebus.trigger().t"), sw[:3]
+    browser.find_element(By.ID, "trig-off").click()
+    assert browser.find_element(By.ID, "trig-state").get_attribute("data-state") == "off"
+
+
+def test_the_scope_exports_csv_and_png(browser, page_url):
+    browser.get(page_url)
+    wait_for(browser, "drive 1 selectable", lambda b: Select(b.find_element(By.ID, "drive-node")).options)
+    subscribe_scope(browser, "1:6064, 1:6041", period="20", window="1")
+    wait_for(browser, "samples of both channels", lambda b: all(
+        len(scope_js(b, "window.drivebus.samples()").get(k, [])) >= 10 for k in ("1:6064:0", "1:6041:0")))
+    csv = scope_js(browser, "window.drivebus.csv()")
+    lines = csv.splitlines()
+    assert lines[0] == "t_ms,node,index,sub,value", lines[:2]
+    rows = [line.split(",") for line in lines[1:]]
+    assert len(rows) >= 20
+    assert {(r[1], r[2], r[3]) for r in rows} == {("1", "6064", "0"), ("1", "6041", "0")}
+    times = [float(r[0]) for r in rows]
+    assert times == sorted(times) and times[-1] - times[0] <= 1000
+    # Statusword rows are integers the drive reported (switch on disabled or ready to switch on: bit 6 or bit 0).
+    assert all(int(r[4]) & 0x41 for r in rows if r[2] == "6041")
+    assert scope_js(browser, "window.drivebus.png()").startswith("data:image/png;base64,")

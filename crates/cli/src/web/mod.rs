@@ -160,6 +160,10 @@ fn router(web: Arc<Web>) -> Router {
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/app.js")) }),
         )
         .route(
+            "/scope.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/scope.js")) }),
+        )
+        .route(
             "/style.css",
             get(|| async { page("text/css; charset=utf-8", include_str!("assets/style.css")) }),
         )

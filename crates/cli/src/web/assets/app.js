@@ -212,9 +212,7 @@ function markState(name) {
 }
 drawStateMachine();
 
-// Scope: channels over the WebSocket stream, drawn on a canvas.
-const colours = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
-let channels = new Map(); // "node:INDEX:sub" -> [[t, v], ...]
+// The stream: samples to the scope (scope.js), events to the panels.
 let ws;
 function connect() {
   const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/api/stream" + (token ? "?token=" + token : "");
@@ -224,66 +222,27 @@ function connect() {
   ws.onmessage = (m) => {
     const msg = JSON.parse(m.data);
     if (msg.type === "sample") {
-      const key = `${msg.node}:${msg.index}:${msg.sub}`;
-      if (!channels.has(key)) channels.set(key, []);
-      channels.get(key).push([msg.t, Number(msg.value)]);
+      scopeSample(msg);
+    } else if (msg.type === "subscribed") {
+      scopeSubscribed();
     } else if (msg.type === "status") {
       $("dropped").textContent = msg.dropped ? `${msg.dropped} samples dropped` : "";
     } else if (msg.type === "event") {
       if (msg.event === "emcy") refreshEmcy();
-      if (msg.event === "motion") show($("drive-out"), msg);
+      // Its own line: a short motion (homing on the spot) may end before
+      // the POST's answer is shown in drive-out.
+      if (msg.event === "motion") show($("motion-out"), `node ${msg.node}: ${msg.result.end}${msg.result.position === undefined ? "" : " at " + msg.result.position}${msg.result.reason ? " (" + msg.result.reason + ")" : ""}`, msg.result.end === "error");
       if (msg.event !== "motion") refreshNodes();
     } else if (msg.type === "error") {
       show($("drive-out"), msg.error, true);
     }
   };
 }
-// For tests and the console: the scope's buffered samples, per channel.
-window.drivebus = {
-  samples: () => Object.fromEntries([...channels].map(([k, s]) => [k, s.slice()])),
-};
 function subscribe() {
   if (!ws || ws.readyState !== 1) return;
-  const period = parseInt($("scope-period").value, 10) || 10;
-  const list = $("scope-channels").value.split(",").map((s) => s.trim()).filter(Boolean).slice(0, 8).map((s) => {
-    const [node, index, sub] = s.split(":");
-    return { node: parseInt(node, 10), index, sub: sub ? parseInt(sub, 16) : 0, period_ms: period };
-  });
-  channels = new Map();
-  ws.send(JSON.stringify({ subscribe: list }));
+  ws.send(JSON.stringify({ subscribe: scopeChannels() }));
 }
 $("scope-form").onsubmit = (ev) => { ev.preventDefault(); subscribe(); };
-
-function draw() {
-  const c = $("scope");
-  const g = c.getContext("2d");
-  g.fillStyle = "#101820"; g.fillRect(0, 0, c.width, c.height);
-  const windowMs = (parseFloat($("scope-window").value) || 10) * 1000;
-  let tMax = 0;
-  for (const s of channels.values()) if (s.length) tMax = Math.max(tMax, s[s.length - 1][0]);
-  const tMin = tMax - windowMs;
-  const legend = [];
-  let i = 0;
-  for (const [key, s] of channels) {
-    while (s.length && s[0][0] < tMin) s.shift();
-    const col = colours[i++ % colours.length];
-    if (!s.length) continue;
-    let lo = Infinity, hi = -Infinity;
-    for (const [, v] of s) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-    if (hi === lo) { hi += 1; lo -= 1; }
-    g.strokeStyle = col; g.beginPath();
-    s.forEach(([t, v], k) => {
-      const x = ((t - tMin) / windowMs) * c.width;
-      const y = c.height - 10 - ((v - lo) / (hi - lo)) * (c.height - 20);
-      k ? g.lineTo(x, y) : g.moveTo(x, y);
-    });
-    g.stroke();
-    const [node, index, sub] = key.split(":");
-    legend.push(`<span style="color:${col}">node ${node} ${index}h:${sub} = ${s[s.length - 1][1]} [${lo}..${hi}]</span>`);
-  }
-  $("legend").innerHTML = legend.join("");
-  requestAnimationFrame(draw);
-}
 
 $("refresh").onclick = refreshNodes;
 refreshNodes().then(() => { refreshDrive(); refreshHoming(); });
@@ -291,4 +250,3 @@ refreshEmcy();
 setInterval(refreshNodes, 3000);
 setInterval(refreshDrive, 250);
 connect();
-requestAnimationFrame(draw);
