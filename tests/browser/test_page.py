@@ -330,3 +330,23 @@ def test_the_scope_exports_csv_and_png(browser, page_url):
     # Statusword rows are integers the drive reported (switch on disabled or ready to switch on: bit 6 or bit 0).
     assert all(int(r[4]) & 0x41 for r in rows if r[2] == "6041")
     assert scope_js(browser, "window.drivebus.png()").startswith("data:image/png;base64,")
+
+
+def test_the_dictionary_browser_searches_and_edits(browser, page_url):
+    browser.get(page_url)
+    wait_for(browser, "node 1 in the object form", lambda b: Select(b.find_element(By.ID, "sdo-node")).options)
+    Select(browser.find_element(By.ID, "sdo-node")).select_by_value("1")
+    set_fields(browser, (("od-q", "latch control"),))
+    browser.find_element(By.CSS_SELECTOR, '#od-search button[type="submit"]').click()
+    row = wait_for(browser, "20A4h listed", lambda b: next(iter(b.find_elements(By.CSS_SELECTOR, '#od tbody tr[data-index="20A4"]')), None))
+    assert "UNSIGNED16" in row.text and "rw" in row.text and "0..15" in row.text, row.text
+    row.click()
+    wait_for(browser, "the row read into the form", lambda b: '"index": "20A4"' in text(b, "sdo-out"))
+    set_fields(browser, (("sdo-value", "3"),))
+    browser.find_element(By.ID, "sdo-write").click()
+    wait_for(browser, "the write confirmed", lambda b: '"written": true' in text(b, "sdo-out"))
+    set_fields(browser, (("sdo-value", "16"),))
+    browser.find_element(By.ID, "sdo-write").click()
+    wait_for(browser, "the limit named", lambda b: "the EDS allows 0 to 15" in text(b, "sdo-out"))
+    browser.find_element(By.ID, "sdo-read").click()
+    wait_for(browser, "still 3", lambda b: b.find_element(By.ID, "sdo-value").get_attribute("value") == "3")

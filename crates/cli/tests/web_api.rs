@@ -400,3 +400,45 @@ async fn following_error_emcy_is_decoded_and_fault_reset() {
     let (s, d) = post(&ui, "/api/nodes/1/drive", json!({"action": "fault-reset"})).await;
     assert_eq!((s, d["state"].as_str()), (200, Some("switch on disabled")), "{d}");
 }
+
+/// The object dictionary of a hosted drive from its EDS, searchable; a
+/// write outside the EDS limits is a 400 and nothing is sent.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn objects_from_the_eds_and_their_limits() {
+    let ui = Ui::sims();
+    let (s, v) = get(&ui, "/api/nodes/1/objects?q=latch%20control").await;
+    assert_eq!(s, 200, "{v}");
+    let list = v["objects"].as_array().expect("objects");
+    let e = list.iter().find(|o| o["index"] == "20A4").unwrap_or_else(|| panic!("no 20A4h in {v}"));
+    assert_eq!(
+        (e["type"].as_str(), e["access"].as_str(), e["low"].as_u64(), e["high"].as_u64()),
+        (Some("UNSIGNED16"), Some("rw"), Some(0), Some(15)),
+        "{e}"
+    );
+    let named = |o: &Value, k: &str| o[k].as_str().unwrap().to_lowercase().contains("latch control");
+    assert!(list.iter().all(|o| named(o, "name") || named(o, "object")), "{v}");
+    // By index prefix: every sub of 1018h.
+    let (_, v) = get(&ui, "/api/nodes/1/objects?q=1018").await;
+    assert_eq!(v["objects"].as_array().unwrap().len(), 5, "{v}");
+    assert!(get(&ui, "/api/nodes/1/objects").await.1["objects"].as_array().unwrap().len() > 100);
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/20A4/0", json!({"value": 5})).await.0, 200);
+    refused(&put(&ui, "/api/nodes/1/sdo/20A4/0", json!({"value": 16})).await, 400, "the EDS allows 0 to 15");
+    assert_eq!(get(&ui, "/api/nodes/1/sdo/20A4/0").await.1["value"], 5);
+    refused(&get(&ui, "/api/nodes/9/objects").await, 404, "not been seen");
+}
+
+/// A device that is not a hosted drive: its dictionary comes from
+/// `--eds`; without one the answer says how to give it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn objects_of_a_device_come_from_eds() {
+    let eds = concat!(env!("CARGO_MANIFEST_DIR"), "/../personality/eds/generic.eds");
+    let sim = format!("{eds}:3");
+    let ui = Ui::start(&["ui", "--sim", &sim, "--http", "127.0.0.1:0"]);
+    refused(&get(&ui, "/api/nodes/3/objects").await, 404, "--eds FILE");
+    drop(ui);
+    let ui = Ui::start(&["ui", "--sim", &sim, "--eds", eds, "--http", "127.0.0.1:0"]);
+    let (s, v) = get(&ui, "/api/nodes/3/objects?q=60E3").await;
+    assert_eq!(s, 200, "{v}");
+    assert!(v["objects"].as_array().unwrap().iter().all(|o| o["index"] == "60E3"), "{v}");
+    assert!(v["objects"].as_array().unwrap().len() > 1, "{v}");
+}

@@ -150,6 +150,12 @@ async fn write(web: &Web, node: u8, index: u16, sub: u8, b: &Bytes) -> ApiResult
     };
     let value = values::from_json(dt, &w.value)?;
     let data = value.encode(dt).map_err(|a| ApiError::bad(format!("{value} as {}: {a}", dt.name())))?;
+    if let Some(od) = super::objects::dictionary(web, node)
+        && let Some(e) = od.get(index, sub)
+        && e.data_type == dt
+    {
+        super::objects::check_limits(e, index, sub, &value, &data)?;
+    }
     tracing::info!(node, index = format_args!("{index:04X}"), sub, value = %value, "web: SDO write");
     sdo.download(index, sub, &data).await.map_err(|e| ApiError::sdo(node, index, sub, &e))?;
     Ok(Json(json!({"node": node, "index": format!("{index:04X}"), "sub": sub, "type": dt.name(),

@@ -11,6 +11,7 @@
 mod api;
 mod drive;
 mod error;
+mod objects;
 mod stream;
 mod values;
 
@@ -132,6 +133,12 @@ pub async fn start(
     // The manual's texts, as `Master::emcy_text` gives them to every EMCY event.
     for (&node, p) in &profiles {
         master.add_emcy_texts(node, p.info().emcy.iter().map(|e| (e.code, e.text)));
+        // Its EDS (names, types, limits) unless `--eds` gave one.
+        if master.eds(node).is_none()
+            && let Ok(od) = drivebus_eds::to_od(&p.eds().eds, node)
+        {
+            master.set_eds(node, od);
+        }
     }
     let web = Arc::new(Web {
         master,
@@ -170,6 +177,7 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes", get(api::nodes))
         .route("/api/nodes/{n}/sdo/{index}", get(api::sdo_get_object).put(api::sdo_put_object))
         .route("/api/nodes/{n}/sdo/{index}/{sub}", get(api::sdo_get).put(api::sdo_put))
+        .route("/api/nodes/{n}/objects", get(objects::list))
         .route("/api/nodes/{n}/nmt", post(api::nmt))
         .route("/api/nodes/{n}/pdo", get(api::pdo))
         .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))

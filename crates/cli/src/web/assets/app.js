@@ -73,6 +73,33 @@ $("sdo-write").onclick = async () => {
   catch (e) { show($("sdo-out"), e.message, true); }
 };
 
+// Object dictionary browser: the node's EDS, searched; a row fills the
+// form above and reads the value (edit it there).
+$("od-search").onsubmit = async (ev) => {
+  ev.preventDefault();
+  const body = $("od").querySelector("tbody");
+  try {
+    const { objects } = await api("GET", `/api/nodes/${$("sdo-node").value}/objects?q=${encodeURIComponent($("od-q").value)}`);
+    body.innerHTML = "";
+    for (const o of objects) {
+      const tr = document.createElement("tr");
+      Object.assign(tr.dataset, { index: o.index, sub: o.sub });
+      const lim = o.low === null && o.high === null ? "–" : `${o.low ?? ""}..${o.high ?? ""}`;
+      for (const c of [o.index, o.sub, o.name === o.object ? o.name : `${o.object} / ${o.name}`, o.type, o.access, lim, o.default ?? "–"]) {
+        const td = document.createElement("td"); td.textContent = c; tr.appendChild(td);
+      }
+      tr.onclick = () => {
+        for (const r of body.querySelectorAll("tr.selected")) r.classList.remove("selected");
+        tr.classList.add("selected");
+        $("sdo-index").value = o.index; $("sdo-sub").value = o.sub.toString(16); $("sdo-type").value = "";
+        $("sdo-read").onclick();
+      };
+      body.appendChild(tr);
+    }
+    $("od-count").textContent = `${objects.length} entries`;
+  } catch (e) { body.innerHTML = ""; $("od-count").textContent = e.message; }
+};
+
 // Drive panel.
 async function driveAction(body) {
   try { show($("drive-out"), await api("POST", `/api/nodes/${$("drive-node").value}/drive`, body)); }
