@@ -155,14 +155,14 @@ $("drive-node").onchange = () => { refreshDrive(); refreshHoming(); };
 const SVG = "http://www.w3.org/2000/svg";
 const states = [
   // name, label, x, y (box 150 × 30)
-  ["not ready to switch on", "Not ready to switch on", 20, 24],
-  ["switch on disabled", "Switch on disabled", 20, 84],
-  ["ready to switch on", "Ready to switch on", 20, 144],
-  ["switched on", "Switched on", 20, 204],
-  ["operation enabled", "Operation enabled", 20, 264],
-  ["fault reaction active", "Fault reaction active", 260, 24],
-  ["fault", "Fault", 260, 84],
-  ["quick stop active", "Quick stop active", 260, 264],
+  ["not ready to switch on", "Not ready to switch on", 80, 24],
+  ["switch on disabled", "Switch on disabled", 80, 84],
+  ["ready to switch on", "Ready to switch on", 80, 144],
+  ["switched on", "Switched on", 80, 204],
+  ["operation enabled", "Operation enabled", 80, 264],
+  ["fault reaction active", "Fault reaction active", 320, 24],
+  ["fault", "Fault", 320, 84],
+  ["quick stop active", "Quick stop active", 320, 264],
 ];
 // from, to, number, bend (0 straight; else the control point's x offset)
 const transitions = [
@@ -183,7 +183,7 @@ function svgEl(tag, attrs, parent) {
   return e;
 }
 function drawStateMachine() {
-  const svg = svgEl("svg", { id: "state-diagram", viewBox: "0 0 430 310", width: "430", height: "310",
+  const svg = svgEl("svg", { id: "state-diagram", viewBox: "0 0 500 310", width: "500", height: "310",
     role: "img", "aria-label": "CiA 402 state machine", "data-state": "unknown" });
   const defs = svgEl("defs", {}, svg);
   const m = svgEl("marker", { id: "arrow", viewBox: "0 0 8 8", refX: "8", refY: "4", markerWidth: "7", markerHeight: "7", orient: "auto" }, defs);
