@@ -350,3 +350,22 @@ def test_the_dictionary_browser_searches_and_edits(browser, page_url):
     wait_for(browser, "the limit named", lambda b: "the EDS allows 0 to 15" in text(b, "sdo-out"))
     browser.find_element(By.ID, "sdo-read").click()
     wait_for(browser, "still 3", lambda b: b.find_element(By.ID, "sdo-value").get_attribute("value") == "3")
+
+
+def test_the_page_buffers_are_bounded(browser, page_url):
+    browser.get(page_url)
+    wait_for(browser, "the scope subscribed", lambda b: scope_last(b, "1:6064:0") is not None)
+    set_fields(browser, (("scope-window", "10"),))
+    # Samples from a long run age out: at most two windows (20 s at 1 kHz) are kept.
+    kept = browser.execute_script(
+        "for (let i = 0; i < 60000; i++) scopeSample({node: 9, index: 'AGED', sub: 0, t: 1e7 + i, value: i});"
+        "return window.drivebus.samples()['9:AGED:0'].length;"
+    )
+    assert kept <= 20000 + 1024, kept
+    # More within the window than the page keeps: the oldest dropped and counted.
+    kept = browser.execute_script(
+        "for (let i = 0; i < 130000; i++) scopeSample({node: 9, index: 'DENSE', sub: 0, t: 2e7 + i / 100, value: i});"
+        "return window.drivebus.samples()['9:DENSE:0'].length;"
+    )
+    assert kept <= 120000, kept
+    wait_for(browser, "the page's drops shown", lambda b: "dropped by the page" in text(b, "page-dropped"))

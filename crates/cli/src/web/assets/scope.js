@@ -6,8 +6,8 @@
 // two cursors read Δt and the values; CSV and PNG export what is shown.
 "use strict";
 const colours = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
-// Samples kept per channel: 10 min at 1 kHz would be 600 000; 120 000 is
-// 2 min at 1 kHz, enough for any window the page offers, and bounds memory.
+// Samples kept per channel within two windows (older ones age out): 120 000
+// is 1 min at 1 kHz; past that the oldest are dropped and counted.
 const MAX_SAMPLES = 120000;
 let channels = new Map(); // "node:INDEX:sub" -> [[t, v], ...], oldest first
 let pageDropped = 0;
@@ -26,6 +26,14 @@ function push(map, key, t, v) {
     if (map === channels) addSource(key);
   }
   s.push([t, v]);
+  // Samples older than two windows age out (checked every 1024 samples,
+  // so the trimming copies once per block, not per sample).
+  if (map === channels && (s.length & 1023) === 0) {
+    let k = 0;
+    while (k < s.length && s[k][0] < t - 2 * windowMs()) k++;
+    if (k) s.splice(0, k);
+  }
+  // More within them than the page keeps: dropped and counted.
   if (s.length > MAX_SAMPLES) {
     // Dropped in blocks: one copy per 10 % instead of a shift per sample.
     const n = Math.ceil(MAX_SAMPLES / 10);
