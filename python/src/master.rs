@@ -498,7 +498,7 @@ impl Drive {
                 d.write_raw(0x6083, 0, &a.to_le_bytes()).await?;
                 d.write_raw(0x6084, 0, &a.to_le_bytes()).await?;
             }
-            d.move_to(position, relative, None::<drivebus_master::Profile>, wait).await
+            d.move_to(position, relative, None::<drivebus_master::MoveProfile>, wait).await
         })?;
         report(py, &r)
     }
