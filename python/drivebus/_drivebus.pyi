@@ -68,6 +68,47 @@ class VirtualBus:
         """The next frame as ``(arbitration_id, is_extended_id, is_remote_frame, dlc, data)``, or ``None`` on timeout."""
     def close(self) -> None:
         """Stops the hosted drives and leaves the bus; closing twice is harmless."""
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets machine input ``input`` of drive ``node`` (``drivebus control input``).
+
+        ``"digital"`` (``line`` 1..16, value 0/1), ``"analog"`` (``line``
+        1..4, volts), ``"master_velocity"``, ``"master_position"``,
+        ``"motor_temperature"``, ``"brake"``; for ``duration`` seconds, then
+        back to the machine's value. Shows in 60FDh / a TPDO at the drive's
+        next control period. ``ValueError`` with the control interface's
+        message; ``OSError`` when the drive is powered off.
+        """
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts machine fault ``kind`` of drive ``node`` (``drivebus control fault``).
+
+        ``"encoder"``, ``"over_current"``, ``"over_temperature"``,
+        ``"over_voltage"``, ``"under_voltage"``, ``"trip"`` / ``"wire_break"``
+        with ``switch`` (``"negative_limit"``, ``"positive_limit"``,
+        ``"home_switch"``); ``"clear"`` ends every machine fault that is on
+        (a latched drive fault stays until the master's fault reset).
+        """
+    def bus_off(self, node: int) -> None:
+        """Drive ``node``'s CAN controller goes bus-off: it hears nothing, what it sends is lost."""
+    def bus_on(self, node: int) -> None:
+        """Drive ``node`` is back on the bus (a manual recovery)."""
+    def power(self, node: int, on: bool) -> None:
+        """Cuts (``on=False``) or restores drive ``node``'s power; on, it boots again (a boot-up message).
+
+        A drive without power is left out of ``drives``.
+        """
 
 class Simulation:
     """Drive twins on a virtual CAN bus in simulated time, deterministic.
@@ -110,6 +151,47 @@ class Simulation:
         """The log as candump lines (``(0.000047) can0 701#00``)."""
     def master(self) -> "Master":
         """The ``drivebus`` tool's CANopen master on this bus; its calls run in simulated time."""
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets machine input ``input`` of drive ``node`` (``drivebus control input``).
+
+        ``"digital"`` (``line`` 1..16, value 0/1), ``"analog"`` (``line``
+        1..4, volts), ``"master_velocity"``, ``"master_position"``,
+        ``"motor_temperature"``, ``"brake"``; for ``duration`` seconds, then
+        back to the machine's value. Shows in 60FDh / a TPDO at the drive's
+        next control period. ``ValueError`` with the control interface's
+        message; ``OSError`` when the drive is powered off.
+        """
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts machine fault ``kind`` of drive ``node`` (``drivebus control fault``).
+
+        ``"encoder"``, ``"over_current"``, ``"over_temperature"``,
+        ``"over_voltage"``, ``"under_voltage"``, ``"trip"`` / ``"wire_break"``
+        with ``switch`` (``"negative_limit"``, ``"positive_limit"``,
+        ``"home_switch"``); ``"clear"`` ends every machine fault that is on
+        (a latched drive fault stays until the master's fault reset).
+        """
+    def bus_off(self, node: int) -> None:
+        """Drive ``node``'s CAN controller goes bus-off: it hears nothing, what it sends is lost."""
+    def bus_on(self, node: int) -> None:
+        """Drive ``node`` is back on the bus (a manual recovery)."""
+    def power(self, node: int, on: bool) -> None:
+        """Cuts (``on=False``) or restores drive ``node``'s power; on, it boots again (a boot-up message).
+
+        A drive without power is left out of ``drives``.
+        """
     def run_until(self, predicate: Callable[[], object], timeout: float, step: float = 0.001) -> float:
         """Advances simulated time by ``step`` until ``predicate()`` is true; returns the simulated time then.
 

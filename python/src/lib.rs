@@ -27,6 +27,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 mod bus;
+mod control;
 mod master;
 mod serve;
 mod sim;

@@ -9,7 +9,7 @@ use drivebus_transport::{Hub, HubConfig};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
-use crate::bus::Hosted;
+use crate::bus::HostedDrives;
 use crate::runtime;
 use crate::state::DriveState;
 
@@ -20,7 +20,7 @@ pub struct Server {
     url: String,
     port: u16,
     server: Mutex<Option<SocketcandServer>>,
-    drives: Vec<Hosted>,
+    drives: HostedDrives,
 }
 
 #[pymethods]
@@ -54,7 +54,7 @@ impl Server {
                     // As `drivebus serve`: the hub, its listener, then the drives.
                     let hub = Hub::new(HubConfig::default());
                     let (server, addr) = SocketcandServer::bind_with((host, port), cfg, hub.clone()).await?;
-                    Ok::<_, std::io::Error>((server, addr, Hosted::spawn_all(built, &hub)))
+                    Ok::<_, std::io::Error>((server, addr, HostedDrives::spawn_all(built, &hub)))
                 })
             })
             .map_err(|e| PyOSError::new_err(format!("cannot listen on {host}:{port}: {e}")))?;
@@ -92,15 +92,13 @@ impl Server {
         if self.closed() {
             return Err(PyOSError::new_err("the socketcand server is closed"));
         }
-        Hosted::states(py, &self.drives)
+        self.drives.states(py)
     }
 
     /// Stops the drives and the server; the port is closed when it returns
     /// (clients lose their connection). Closing twice is harmless.
     fn close(&self, py: Python<'_>) -> PyResult<()> {
-        for h in &self.drives {
-            h.stop();
-        }
+        self.drives.stop();
         let server = self.server.lock().ok().and_then(|mut s| s.take());
         if let Some(server) = server {
             let rt = runtime()?;
@@ -120,16 +118,14 @@ impl Server {
     }
 
     fn __repr__(&self) -> String {
-        let drives: Vec<String> = self.drives.iter().map(Hosted::spec).collect();
+        let drives = self.drives.specs();
         format!("Server(url={:?}, drives={:?})", self.url, drives)
     }
 }
 
 impl Drop for Server {
     fn drop(&mut self) {
-        for h in &self.drives {
-            h.stop();
-        }
+        self.drives.stop();
         // Dropping the server closes its listener on the runtime.
     }
 }

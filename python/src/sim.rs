@@ -16,11 +16,13 @@ use std::time::Duration;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Frame, Instant};
 use drivebus_master::{MasterConfig, SimBus};
+use drivebus_personality::machine::Machine;
 use drivebus_personality::{PersonalityDevice, Profile};
 use pyo3::exceptions::{PyRuntimeError, PyTimeoutError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::bus::{Received, frame, received};
+use crate::control::{self, Action};
 use crate::master::Master;
 use crate::state::DriveState;
 
@@ -62,10 +64,47 @@ pub(crate) struct Sim {
     /// The bus and the master.
     pub(crate) sim: SimBus,
     probe: ProbeId,
-    drives: Vec<NodeId>,
+    /// Each drive's station and what it was built from (to build it again
+    /// at power-on).
+    drives: Vec<(NodeId, Profile, u8, Machine)>,
 }
 
 impl Sim {
+    /// Carries out `action` on drive `node` now, through the library calls
+    /// the control interface's in-code form names (docs/control.md).
+    fn apply(&mut self, node: u8, action: Action) -> PyResult<()> {
+        let Some((id, profile, _, machine)) = self.drives.iter().find(|d| d.2 == node) else {
+            let nodes = self.drives.iter().map(|d| (d.2, ())).collect();
+            return Err(control::no_node(&nodes, node));
+        };
+        let id = *id;
+        let bus = self.sim.bus_mut();
+        let powered = bus.node::<PersonalityDevice>(id).is_some();
+        match action {
+            Action::Power(false) => {
+                bus.power_off(id);
+            }
+            Action::Power(true) if !powered => {
+                let dev = profile
+                    .build_on(node, machine)
+                    .map_err(|e| PyValueError::new_err(format!("cannot build {profile}:{node}: {e}")))?;
+                bus.power_on(id, dev);
+            }
+            Action::Power(true) => {}
+            _ if !powered => return Err(control::powered_off(node)),
+            Action::Machine(change, duration) => {
+                let now = bus.now();
+                let dev = bus.node_mut::<PersonalityDevice>(id).ok_or_else(|| control::powered_off(node))?;
+                dev.app.change_machine(now, change, duration).map_err(|e| control::refused(node, e))?;
+                // Applied at this poll, as a scheduled entry.
+                bus.wake(id);
+            }
+            Action::BusOff(true) => bus.set_bus_off(id),
+            Action::BusOff(false) => bus.recover(id),
+        }
+        Ok(())
+    }
+
     /// Answers requests until the `Simulation` is dropped.
     fn serve(mut self, requests: mpsc::Receiver<Request>) {
         // A send fails only when the caller gave up waiting: nothing to do.
@@ -94,7 +133,7 @@ impl Sim {
                 }
                 Request::Drives(out) => {
                     let bus = self.sim.bus();
-                    let drives = self.drives.iter().filter_map(|&id| bus.node::<PersonalityDevice>(id));
+                    let drives = self.drives.iter().filter_map(|d| bus.node::<PersonalityDevice>(d.0));
                     let _ = out.send(drives.map(DriveState::of).collect());
                 }
                 Request::Now(out) => {
@@ -150,7 +189,7 @@ impl Simulation {
             return Err(PyValueError::new_err("bitrate must be positive (None: frames take no time)"));
         }
         let built = crate::bus::build_all(&drives, machine.as_deref())?;
-        let specs = built.iter().map(|(profile, node, _)| (*node, *profile)).collect();
+        let specs = built.iter().map(|b| (b.node, b.profile)).collect();
         let (to_bus, requests) = mpsc::channel();
         std::thread::Builder::new()
             .name("drivebus-sim".into())
@@ -158,7 +197,8 @@ impl Simulation {
                 let mut bus = Bus::new(BusConfig { bitrate, ..BusConfig::default() });
                 // The host's station, before the drives: it hears their boot-ups.
                 let probe = bus.attach_probe();
-                let drives = built.into_iter().map(|(_, _, d)| bus.attach(d)).collect();
+                let drives =
+                    built.into_iter().map(|b| (bus.attach(b.dev), b.profile, b.node, b.machine)).collect();
                 // The master's station joins last, as in `drivebus demo`.
                 let sim = SimBus::with_config(bus, MasterConfig::default());
                 Sim { sim, probe, drives }.serve(requests);
@@ -221,6 +261,58 @@ impl Simulation {
     #[getter]
     fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
         self.ask(py, Request::Drives)
+    }
+
+    /// Sets machine input `input` of drive `node` to `value` now, as
+    /// `drivebus control input` does to a running `serve` (see
+    /// `VirtualBus.input`); it shows in the drive's objects at its next
+    /// control period. Raises `ValueError` with the control interface's
+    /// message, `OSError` when the drive is powered off.
+    #[pyo3(signature = (node, input, value, line = None, duration = None))]
+    fn input(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        input: &str,
+        value: f64,
+        line: Option<u8>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        let action = control::input(input, line, value, duration)?;
+        self.link.run(py, move |s| s.apply(node, action))?
+    }
+
+    /// Starts machine fault `kind` of drive `node` now (`"clear"`: every
+    /// machine fault that is on ends), as `drivebus control fault` (see
+    /// `VirtualBus.fault`).
+    #[pyo3(signature = (node, kind, switch = None, duration = None))]
+    fn fault(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        kind: &str,
+        switch: Option<&str>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        let action = control::fault(kind, switch, duration)?;
+        self.link.run(py, move |s| s.apply(node, action))?
+    }
+
+    /// Drive `node`'s CAN controller goes bus-off now (`drivebus control bus off`).
+    fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, Action::BusOff(true)))?
+    }
+
+    /// Drive `node` is back on the bus now (`drivebus control bus on`).
+    fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, Action::BusOff(false)))?
+    }
+
+    /// Cuts (`on=False`) or restores drive `node`'s power now (`drivebus
+    /// control power`): off it is silent and its state is gone (it leaves
+    /// `drives`); on it boots again from its machine.
+    fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, Action::Power(on)))?
     }
 
     /// The CANopen master on this bus (the `drivebus` tool's), whose calls

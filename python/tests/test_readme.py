@@ -38,3 +38,14 @@ def test_readme_example_runs(capsys, readme, heading):
     assert out[0].startswith("vendor-ID 0x")
     assert out[1].split()[:4] == ["akd", "1", "operational", "switch"]
     assert out[2].split()[:3] == ["dds6", "2", "pre-operational"]
+
+
+def test_readme_control_example_runs(capsys):
+    code = example("python/README.md", "## Inputs and faults at run time")
+    cwd = os.getcwd()
+    os.chdir(ROOT)
+    try:
+        exec(compile(code, "python/README.md", "exec"), {})
+    finally:
+        os.chdir(cwd)
+    assert capsys.readouterr().out.splitlines() == ["EMCY ['0x7305']"]
