@@ -149,6 +149,16 @@ class Simulation:
         """Every frame delivered so far: ``(seconds, arbitration_id, is_extended_id, is_remote_frame, dlc, data)``."""
     def log_lines(self) -> List[str]:
         """The log as candump lines (``(0.000047) can0 701#00``)."""
+    def frame_log(self, columns: bool = True, numpy: bool = False) -> Any:
+        """The frame log for analysis.
+
+        ``columns=True``: a dict of equal-length lists ``time`` (simulated
+        seconds), ``id``, ``extended``, ``remote``, ``dlc``, ``data`` (bytes),
+        ready for ``pandas.DataFrame(...)``; ``columns=False``: a list of
+        dicts with those keys; ``numpy=True``: a numpy structured array with
+        those fields (``data`` as 8 ``uint8``, zero padded). ``ImportError``
+        naming numpy when it is asked for and not installed.
+        """
     def master(self) -> "Master":
         """The ``drivebus`` tool's CANopen master on this bus; its calls run in simulated time."""
     def input(
@@ -234,6 +244,74 @@ class Master:
         """``start``, ``stop``, ``preop``, ``reset`` or ``reset-comm`` to ``node`` (0: all); a reset waits for the boot-up."""
     def drive(self, node: int) -> "Drive":
         """The CiA 402 drive at ``node``."""
+    @property
+    def pdo(self) -> "Pdos":
+        """PDO configuration (``drivebus pdo show|map``)."""
+    @property
+    def lss(self) -> "Lss":
+        """The CiA 305 LSS services (``drivebus lss``), 100 ms of simulated time per answer."""
+    def start_sync(self, period: float = 0.001, counter: int = 0) -> None:
+        """Produces SYNC every ``period`` seconds of simulated time (``counter``: overflow value, 0: no counter)."""
+    def stop_sync(self) -> None:
+        """Stops producing SYNC."""
+    def sample(
+        self,
+        node: int,
+        index: Obj,
+        sub: Optional[Obj] = None,
+        *,
+        seconds: float = 1.0,
+        period: float = 0.01,
+    ) -> Tuple[List[float], List[Any]]:
+        """Reads an object by SDO every ``period`` for ``seconds`` of simulated time: ``(times, values)``."""
+
+class Pdos:
+    """The PDO configuration of the nodes on a simulation's bus (``master.pdo``)."""
+
+    def read(self, node: int, direction: str, number: int) -> Dict[str, Any]:
+        """PDO ``number`` (``direction`` ``"rpdo"``/``"tpdo"``): ``dir``, ``number``, ``cob_id``, ``valid``,
+        ``transmission_type``, ``inhibit_time``, ``event_timer_ms``, ``sync_start``, ``mapping``
+        (dicts ``index``, ``sub``, ``bits``, ``name``); ``SdoError``."""
+    def show(self, node: int) -> List[Dict[str, Any]]:
+        """Every PDO of ``node`` (``drivebus pdo show``): the RPDOs, then the TPDOs."""
+    def map(
+        self,
+        node: int,
+        direction: str,
+        number: int,
+        entries: Sequence[Union[Tuple[int, int, int], str]],
+        *,
+        cob_id: Optional[int] = None,
+        transmission: Optional[int] = None,
+        inhibit: Optional[int] = None,
+        event_timer: Optional[int] = None,
+    ) -> None:
+        """Maps PDO ``number`` (``drivebus pdo map``): entries ``(index, sub, bits)``, ``"6041:0:16"`` or an
+        object name; the previous mapping is restored when the device refuses (``SdoError`` says so)."""
+
+class Lss:
+    """The LSS master on a simulation's bus (``master.lss``); ``DrivebusError`` (``LSS: no answer``, ...)."""
+
+    def switch_global(self, mode: str) -> None:
+        """``"configuration"`` or ``"waiting"`` for every LSS slave."""
+    def switch_selective(self, vendor_id: int, product_code: int, revision: int, serial: int) -> None:
+        """The slave with this LSS address goes to configuration."""
+    def inquire_identity(self) -> Dict[str, int]:
+        """The LSS address of the slave in configuration: ``vendor_id``, ``product_code``, ``revision``, ``serial``."""
+    def inquire_node_id(self) -> int:
+        """The node-ID of the slave in configuration (0xFF: none)."""
+    def configure_node_id(self, node_id: int) -> None:
+        """Node-ID of the slave in configuration; in force after its next NMT reset communication."""
+    def store(self) -> None:
+        """Stores the configuration of the slave in configuration."""
+    def configure_selected(
+        self, node_id: int, vendor_id: int, product_code: int, revision: int, serial: int, store: bool = False
+    ) -> None:
+        """``drivebus lss set-node-id``: selective switch, configure, store when asked, back to waiting."""
+    def scan(self) -> Optional[Dict[str, Any]]:
+        """``drivebus lss scan``: the non-configured slave with the lowest address and ``more``, or ``None``."""
+    def configure_only_slave(self, node_id: int, store: bool = False) -> Optional[Dict[str, int]]:
+        """Gives ``node_id`` to the only non-configured slave; ``DrivebusError`` when several answer."""
 
 class Drive:
     """A CiA 402 drive of a simulation (``master.drive(node)``); each call runs the ``drivebus drive`` procedure."""
@@ -262,6 +340,8 @@ class Drive:
         timeout: float = 60.0,
     ) -> Dict[str, Any]:
         """A profile-position move; the report, or ``DriveError`` when it stopped anywhere but the target."""
+    def csp(self, positions: Sequence[int]) -> int:
+        """Cyclic synchronous position: mode 8, one target 607Ah per SYNC; how many were sent. Needs SYNC and the drive enabled."""
 
 class Server:
     """Drive twins on a socketcand server in this process (what ``drivebus serve`` runs).

@@ -28,7 +28,9 @@ use pyo3::prelude::*;
 
 mod bus;
 mod control;
+mod lss;
 mod master;
+mod pdo;
 mod serve;
 mod sim;
 mod state;
@@ -57,6 +59,8 @@ fn _drivebus(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<serve::Server>()?;
     m.add_class::<master::Master>()?;
     m.add_class::<master::Drive>()?;
+    m.add_class::<pdo::Pdos>()?;
+    m.add_class::<lss::Lss>()?;
     master::add_exceptions(m)?;
     m.add("PROFILES", drivebus_personality::Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>())?;
     Ok(())

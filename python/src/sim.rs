@@ -18,8 +18,10 @@ use drivebus_can::{Frame, Instant};
 use drivebus_master::{MasterConfig, SimBus};
 use drivebus_personality::machine::Machine;
 use drivebus_personality::{PersonalityDevice, Profile};
-use pyo3::exceptions::{PyRuntimeError, PyTimeoutError, PyValueError};
+use pyo3::IntoPyObjectExt;
+use pyo3::exceptions::{PyImportError, PyRuntimeError, PyTimeoutError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
 
 use crate::bus::{Received, frame, received};
 use crate::control::{self, Action};
@@ -252,6 +254,46 @@ impl Simulation {
         self.ask(py, Request::Log)
     }
 
+    /// The frame log for analysis: with `columns=True` (the default) a
+    /// dict of equal-length lists `time` (simulated seconds), `id`,
+    /// `extended`, `remote`, `dlc`, `data` (bytes), which
+    /// `pandas.DataFrame(...)` takes as it is; with `columns=False` a list
+    /// of dicts with those keys, one per frame; with `numpy=True` a numpy
+    /// structured array with those fields (`data` as 8 `uint8`, zero
+    /// padded). Raises `ImportError` naming the package when numpy is
+    /// asked for and not installed.
+    #[pyo3(signature = (columns = true, numpy = false))]
+    fn frame_log(&self, py: Python<'_>, columns: bool, numpy: bool) -> PyResult<Py<PyAny>> {
+        let log = self.ask(py, Request::Log)?;
+        if numpy {
+            return numpy_log(py, &log);
+        }
+        if !columns {
+            let rows = log
+                .iter()
+                .map(|(t, id, ext, rtr, dlc, data)| {
+                    let d = PyDict::new(py);
+                    d.set_item("time", t)?;
+                    d.set_item("id", id)?;
+                    d.set_item("extended", ext)?;
+                    d.set_item("remote", rtr)?;
+                    d.set_item("dlc", dlc)?;
+                    d.set_item("data", PyBytes::new(py, data))?;
+                    Ok(d)
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            return rows.into_py_any(py);
+        }
+        let d = PyDict::new(py);
+        d.set_item("time", log.iter().map(|e| e.0).collect::<Vec<_>>())?;
+        d.set_item("id", log.iter().map(|e| e.1).collect::<Vec<_>>())?;
+        d.set_item("extended", log.iter().map(|e| e.2).collect::<Vec<_>>())?;
+        d.set_item("remote", log.iter().map(|e| e.3).collect::<Vec<_>>())?;
+        d.set_item("dlc", log.iter().map(|e| e.4).collect::<Vec<_>>())?;
+        d.set_item("data", log.iter().map(|e| PyBytes::new(py, &e.5)).collect::<Vec<_>>())?;
+        d.into_py_any(py)
+    }
+
     /// The log as candump lines (`(0.001234) can0 701#00`).
     fn log_lines(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         self.ask(py, Request::LogLines)
@@ -375,6 +417,33 @@ impl Simulation {
 /// The bus thread ended (only a bug in a device makes it end early).
 fn stopped() -> PyErr {
     PyRuntimeError::new_err("the simulation has stopped")
+}
+
+/// The log as a numpy structured array, or why not.
+fn numpy_log(py: Python<'_>, log: &[Logged]) -> PyResult<Py<PyAny>> {
+    let np = py.import("numpy").map_err(|e| {
+        PyImportError::new_err(format!("frame_log(numpy=True) needs numpy ({e}): pip install numpy"))
+    })?;
+    let dtype = vec![
+        ("time", "f8").into_py_any(py)?,
+        ("id", "u4").into_py_any(py)?,
+        ("extended", "?").into_py_any(py)?,
+        ("remote", "?").into_py_any(py)?,
+        ("dlc", "u1").into_py_any(py)?,
+        ("data", "u1", (8,)).into_py_any(py)?,
+    ];
+    let rows = log
+        .iter()
+        .map(|(t, id, ext, rtr, dlc, data)| {
+            // As numbers: a `Vec<u8>` would reach Python as bytes.
+            let mut padded = [0u8; 8];
+            padded[..data.len().min(8)].copy_from_slice(&data[..data.len().min(8)]);
+            (*t, *id, *ext, *rtr, *dlc, padded.map(u16::from).to_vec()).into_py_any(py)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", dtype)?;
+    np.getattr("array")?.call((rows,), Some(&kwargs))?.into_py_any(py)
 }
 
 fn seconds(t: Instant) -> f64 {

@@ -49,3 +49,11 @@ def test_readme_control_example_runs(capsys):
     finally:
         os.chdir(cwd)
     assert capsys.readouterr().out.splitlines() == ["EMCY ['0x7305']"]
+
+
+def test_readme_sim_master_example_runs(capsys):
+    code = example("python/README.md", "### PDOs, LSS, SYNC and CSP")
+    exec(compile(code, "python/README.md", "exec"), {"drivebus": __import__("drivebus")})
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "500 targets on SYNC"
+    assert out[1].endswith("TPDO1 frames") and int(out[1].split()[0]) >= 500
