@@ -375,3 +375,26 @@ class Server:
         """Stops the drives and the server; the port is closed when it returns."""
     def __enter__(self) -> "Server": ...
     def __exit__(self, *args: object) -> bool: ...
+
+class EthercatServer:
+    """A line of drive twins served on a network interface (``drivebus.ethercat.serve``), as ``drivebus ethercat serve``.
+
+    ``ValueError`` with the CLI's message for a profile without an EtherCAT
+    face; ``OSError`` when the AF_PACKET socket cannot be opened (needs
+    root or CAP_NET_RAW, and the interface up).
+    """
+
+    def __init__(self, iface: str, drives: Sequence[str] = ...) -> None: ...
+    @property
+    def iface(self) -> str:
+        """The interface it serves on."""
+    @property
+    def drives(self) -> List[str]:
+        """The line's slaves in order (``["ipos", "generic"]``)."""
+    @property
+    def closed(self) -> bool:
+        """True once ``close()`` was called."""
+    def close(self) -> None:
+        """Stops serving; returns when the socket is closed. ``OSError`` when serving had failed."""
+    def __enter__(self) -> "EthercatServer": ...
+    def __exit__(self, *args: object) -> bool: ...
