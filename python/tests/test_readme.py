@@ -57,3 +57,13 @@ def test_readme_sim_master_example_runs(capsys):
     out = capsys.readouterr().out.splitlines()
     assert out[0] == "500 targets on SYNC"
     assert out[1].endswith("TPDO1 frames") and int(out[1].split()[0]) >= 500
+
+
+def test_root_readme_simulation_example_runs(capsys):
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    at = text.index("## Drive twins inside Python")
+    blocks = re.findall(r"```python\n(.*?)```", text[at : text.index("## Using virtual drives from Python")], re.S)
+    assert len(blocks) == 2, "the in-process bus, then the simulation"
+    exec(compile(blocks[1], "README.md", "exec"), {})
+    end, position, *_ = capsys.readouterr().out.split()
+    assert end == "target_reached" and abs(int(position) - 2000) <= 10
