@@ -371,6 +371,29 @@ class Server:
     @property
     def drives(self) -> List[DriveState]:
         """The hosted drives' state, read now; ``OSError`` once closed."""
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets a machine input of drive ``node`` (``drivebus control input``; see ``VirtualBus.input``)."""
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts (``"clear"``: ends) a machine fault of drive ``node`` (``drivebus control fault``)."""
+    def bus_off(self, node: int) -> None:
+        """Drive ``node``'s CAN controller goes bus-off."""
+    def bus_on(self, node: int) -> None:
+        """Drive ``node`` is back on the bus."""
+    def power(self, node: int, on: bool) -> None:
+        """Cuts or restores drive ``node``'s power; on, it boots again."""
     def close(self) -> None:
         """Stops the drives and the server; the port is closed when it returns."""
     def __enter__(self) -> "Server": ...

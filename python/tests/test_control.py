@@ -201,3 +201,26 @@ def test_simulation_power_and_bus_off():
         m.sdo_read(NODE, 0x1000)
     sim.bus_on(NODE)
     assert m.sdo_read(NODE, 0x1000) == 0x0002_0192
+
+
+def test_socketcand_server_drives_take_the_same_changes():
+    with drivebus.serve(drives=[f"generic:{NODE}"]) as server:
+        network = canopen.Network()
+        network.connect(interface="socketcand", host="127.0.0.1", port=server.port, channel="can0")
+        try:
+            node = network.add_node(NODE, str(EDS_DIR / "generic.eds"))
+            node.sdo.RESPONSE_TIMEOUT = 2.0
+            assert node.sdo[0x60FD].raw & LINE3 == 0
+            server.input(NODE, "digital", 1, line=3)
+            assert _until(lambda: node.sdo[0x60FD].raw & LINE3)
+            server.power(NODE, False)
+            assert server.drives == []
+            with pytest.raises(OSError, match="powered off"):
+                server.fault(NODE, "encoder")
+            server.power(NODE, True)
+            # Powered on again: the input is the machine's own again.
+            assert _until(lambda: node.sdo[0x60FD].raw & LINE3 == 0)
+        finally:
+            network.disconnect()
+    with pytest.raises(OSError, match="closed"):
+        server.bus_off(NODE)
