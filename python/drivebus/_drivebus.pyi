@@ -417,6 +417,25 @@ class EthercatServer:
     @property
     def closed(self) -> bool:
         """True once ``close()`` was called."""
+    def input(
+        self,
+        slave: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets a machine input of the drive at ``slave`` (position from 1), as ``drivebus control input``."""
+    def fault(
+        self,
+        slave: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts (``"clear"``: ends) a machine fault of the drive at ``slave``, as ``drivebus control fault``."""
+    def power(self, slave: int, on: bool) -> None:
+        """Cuts or restores the power of the slave at ``slave``; on, its ESC starts in INIT."""
     def close(self) -> None:
         """Stops serving; returns when the socket is closed. ``OSError`` when serving had failed."""
     def __enter__(self) -> "EthercatServer": ...

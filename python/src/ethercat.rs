@@ -12,12 +12,16 @@ use drivebus_ethercat::described::{self, Member};
 use drivebus_ethercat::server::{self, ServerStats};
 use drivebus_ethercat::{Clock, Host, drive};
 use pyo3::exceptions::{PyOSError, PyValueError};
+
+use crate::control::{self, Action};
 use pyo3::prelude::*;
 
 /// A line of drive twins served on a network interface while it is open.
 #[pyclass(frozen, module = "drivebus._drivebus")]
 pub struct EthercatServer {
     iface: String,
+    /// The line, shared with the server thread.
+    host: Host,
     drives: Vec<String>,
     stop: Arc<AtomicBool>,
     thread: Mutex<Option<JoinHandle<std::io::Result<ServerStats>>>>,
@@ -50,7 +54,7 @@ impl EthercatServer {
         })?;
         let stop = Arc::new(AtomicBool::new(false));
         let thread = {
-            let stop = stop.clone();
+            let (stop, host) = (stop.clone(), host.clone());
             std::thread::Builder::new()
                 .name("drivebus-ecat".into())
                 .spawn(move || server::serve_socket(&sock, &host, &stop))
@@ -58,6 +62,7 @@ impl EthercatServer {
         };
         Ok(EthercatServer {
             iface: iface.to_owned(),
+            host,
             drives: members.iter().map(name).collect(),
             stop,
             thread: Mutex::new(Some(thread)),
@@ -97,6 +102,36 @@ impl EthercatServer {
         }
     }
 
+    /// Sets a machine input of the drive at `slave` (its position from 1),
+    /// as `drivebus control input` does to `drivebus ethercat serve`
+    /// (see `VirtualBus.input`). Raises `ValueError` with the control
+    /// interface's message, `OSError` when the slave is powered off.
+    #[pyo3(signature = (slave, input, value, line = None, duration = None))]
+    fn input(
+        &self,
+        slave: u8,
+        input: &str,
+        value: f64,
+        line: Option<u8>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        self.apply(slave, control::input(input, line, value, duration)?)
+    }
+
+    /// Starts (`"clear"`: ends) a machine fault of the drive at `slave`,
+    /// as `drivebus control fault` (see `VirtualBus.fault`).
+    #[pyo3(signature = (slave, kind, switch = None, duration = None))]
+    fn fault(&self, slave: u8, kind: &str, switch: Option<&str>, duration: Option<f64>) -> PyResult<()> {
+        self.apply(slave, control::fault(kind, switch, duration)?)
+    }
+
+    /// Cuts (`on=False`) or restores the power of the slave at `slave`, as
+    /// `drivebus control power`: off it neither executes nor forwards
+    /// frames; on, its ESC starts from its reset values in INIT.
+    fn power(&self, slave: u8, on: bool) -> PyResult<()> {
+        self.apply(slave, Action::Power(on))
+    }
+
     fn __enter__(slf: Py<Self>) -> Py<Self> {
         slf
     }
@@ -109,6 +144,40 @@ impl EthercatServer {
 
     fn __repr__(&self) -> String {
         format!("EthercatServer(iface={:?}, drives={:?})", self.iface, self.drives)
+    }
+}
+
+impl EthercatServer {
+    /// Carries out `action` on the slave at `slave` (from 1) between two
+    /// frames, as the CLI's control interface does on a line.
+    fn apply(&self, slave: u8, action: Action) -> PyResult<()> {
+        let slaves = self.host.with_segment(|s| s.len());
+        if slave == 0 || usize::from(slave) > slaves {
+            return Err(PyValueError::new_err(format!(
+                "no slave {slave} on the line: use 1..{slaves} (positions from 1, as drivebus ethercat scan lists them)"
+            )));
+        }
+        let i = usize::from(slave) - 1;
+        match action {
+            Action::Power(on) => {
+                self.host.with_segment(|s| if on { s.power_on(i) } else { s.power_off(i) });
+                Ok(())
+            }
+            Action::BusOff(_) => Err(PyValueError::new_err(
+                "an EtherCAT slave has no bus-off: cut its power (power(slave, False))",
+            )),
+            Action::Machine(change, duration) => {
+                if !self.host.with_segment(|s| s.is_powered(i)) {
+                    return Err(PyOSError::new_err(format!(
+                        "slave {slave} is powered off: power it on first (power({slave}, True))"
+                    )));
+                }
+                let now = self.host.clock().now();
+                drive::with_drive(&self.host, i, |d| d.app_mut().change_machine(now, change, duration))
+                    .ok_or_else(|| PyValueError::new_err(format!("slave {slave}: not a drive twin")))?
+                    .map_err(|e| PyValueError::new_err(format!("slave {slave}: {e}")))
+            }
+        }
     }
 }
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import time
 
 import pytest
 
@@ -83,3 +84,32 @@ def test_the_fixture_serves_the_line_in_a_namespace(drivebus_ethercat):
         assert [s.man for s in m.slaves][0] == 0x1A3
     finally:
         m.close()
+
+
+def test_inputs_faults_and_power_of_the_line(veth):
+    master_end, line_end = veth
+    with drivebus.ethercat.serve(line_end, drives=["generic"]) as server:
+        m = pysoem.Master()
+        m.open(master_end)
+        try:
+            assert m.config_init() == 1
+            (generic,) = m.slaves
+            di = lambda: int.from_bytes(generic.sdo_read(0x60FD, 0), "little")  # noqa: E731
+            assert di() & (1 << 18) == 0
+            server.input(1, "digital", 1, line=3)  # generic: line n is 60FDh bit 15 + n
+            deadline = time.monotonic() + 2
+            while di() & (1 << 18) == 0 and time.monotonic() < deadline:
+                time.sleep(0.01)
+            assert di() & (1 << 18)
+            with pytest.raises(ValueError, match=r"^no slave 2 on the line: use 1..1"):
+                server.fault(2, "encoder")
+            with pytest.raises(ValueError, match="^fault: "):
+                server.fault(1, "encodr")
+            server.power(1, False)
+            with pytest.raises(OSError, match="slave 1 is powered off"):
+                server.input(1, "digital", 0, line=3)
+            assert m.config_init() <= 0
+            server.power(1, True)
+            assert m.config_init() == 1
+        finally:
+            m.close()
