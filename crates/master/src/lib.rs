@@ -33,6 +33,7 @@ pub mod dcf;
 pub mod dict;
 pub mod drive;
 pub mod driver;
+pub mod gateway;
 pub mod lss;
 mod master;
 pub mod pdo;

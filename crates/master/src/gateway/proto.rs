@@ -3,7 +3,7 @@
 //! Lely's `coctl` accept them. Parsing never panics: a bad line is a
 //! syntax error (code 101) naming the token.
 
-use drivebus_master::DataType;
+use crate::DataType;
 
 /// Gateway error codes (CiA 309-3 §"Error codes").
 pub mod code {
@@ -184,11 +184,36 @@ pub enum ServiceRequest {
     /// Empty line or comment.
     Empty,
     /// SDO upload.
-    Read { node: Option<u8>, index: u16, sub: u8, ty: Option<GwType> },
-    /// SDO download; `value` is the rest of the command as tokens.
-    Write { node: Option<u8>, index: u16, sub: u8, ty: GwType, value: Vec<String> },
-    /// NMT command (cs).
-    Nmt { node: Option<u8>, cs: u8 },
+    Read {
+        /// The node given in the line (else the session's default).
+        node: Option<u8>,
+        /// Object index.
+        index: u16,
+        /// Sub-index.
+        sub: u8,
+        /// How to show the value (raw bytes when absent).
+        ty: Option<GwType>,
+    },
+    /// SDO download.
+    Write {
+        /// The node given in the line (else the session's default).
+        node: Option<u8>,
+        /// Object index.
+        index: u16,
+        /// Sub-index.
+        sub: u8,
+        /// The value's type.
+        ty: GwType,
+        /// The rest of the command as tokens.
+        value: Vec<String>,
+    },
+    /// NMT command.
+    Nmt {
+        /// The node given in the line (else the session's default).
+        node: Option<u8>,
+        /// NMT command specifier (01h start, 02h stop, 80h, 81h, 82h).
+        cs: u8,
+    },
     /// `set network N`.
     SetNetwork(u16),
     /// `set node N`.
@@ -201,14 +226,31 @@ pub enum ServiceRequest {
     InfoVersion,
     /// `help [datatype|lss]`.
     Help(Option<String>),
-    /// LSS commands, with their argument tokens.
-    Lss { cmd: String, args: Vec<String> },
+    /// LSS commands.
+    Lss {
+        /// The command word.
+        cmd: String,
+        /// Its argument tokens.
+        args: Vec<String>,
+    },
     /// `r[ead] p[do] N`.
     PdoRead(u16),
     /// `w[rite] p[do] N n v1..vn`.
-    PdoWrite { num: u16, values: Vec<u64> },
+    PdoWrite {
+        /// PDO number.
+        num: u16,
+        /// The mapped values, in order.
+        values: Vec<u64>,
+    },
     /// `set rpdo|tpdo[x] N COBID TRANS [...] n entries`.
-    SetPdo { tx: bool, ext: bool, args: Vec<String> },
+    SetPdo {
+        /// `tpdo` (else `rpdo`).
+        tx: bool,
+        /// The `x` form (Lely's extended syntax).
+        ext: bool,
+        /// The argument tokens.
+        args: Vec<String>,
+    },
 }
 
 /// A line: sequence number (when bracketed) and the request or an error code.

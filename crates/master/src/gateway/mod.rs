@@ -1,18 +1,22 @@
-//! Executes CiA 309-3 requests on the master and words the answers the
-//! way CANopenNode's gateway does (so `cocomm` reads them): `[seq] OK`,
+//! The CiA 309-3 ASCII gateway as a master service: [`Session`] parses a
+//! request line ([`proto`]), executes it on the master and words the answer
+//! the way CANopenNode's gateway does (so `cocomm` reads them): `[seq] OK`,
 //! `[seq] VALUE`, `[seq] ERROR:CODE #text`, `[seq] ERROR:0xABORT #text`,
-//! each ending in CR LF.
+//! each ending in CR LF. Where the lines come from (stdin, TCP, a shell) is
+//! the caller's: `drivebus gateway` (`cli/src/gateway.rs`).
+
+pub mod proto;
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use drivebus_master::{
+use crate::{
     DataType, FastScan, Frame, Identity, LssError, LssField, LssMode, Master, PdoCallback, Protocol,
     SdoError, Value,
 };
 
-use super::proto::{GwType, ServiceRequest, c_number, c_signed, code, parse};
+use proto::{GwType, ServiceRequest, c_number, c_signed, code, parse};
 
 /// A PDO of the gateway itself (Lely's `set rpdo`/`set tpdo`).
 struct LocalPdo {
@@ -58,7 +62,7 @@ fn sdo_error(seq: u32, e: &SdoError) -> String {
         // The last attempt's failure, as a lone client would have seen it.
         SdoError::OtherClient { cause, .. } => return sdo_error(seq, cause),
     };
-    let text = drivebus_master::SdoAbort(abort).description().unwrap_or("-");
+    let text = crate::SdoAbort(abort).description().unwrap_or("-");
     format!("[{seq}] ERROR:0x{abort:08X} #{text}\r\n")
 }
 
@@ -242,7 +246,7 @@ impl Session {
                         // The data do not fit the type asked for (CiA 301 0607 0010h).
                         None => sdo_error(
                             seq,
-                            &SdoError::Abort { code: drivebus_master::SdoAbort::TYPE_MISMATCH, text: None },
+                            &SdoError::Abort { code: crate::SdoAbort::TYPE_MISMATCH, text: None },
                         ),
                     },
                     Err(e) => sdo_error(seq, &e),
