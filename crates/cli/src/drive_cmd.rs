@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{anyhow, bail};
 use drivebus_master::{
     Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
-    Profile, SdoError, StopAction, drive::human_secs, drive::mode, drive::sw as bit, mode_name,
+    MoveProfile, SdoError, StopAction, drive::human_secs, drive::mode, drive::sw as bit, mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -402,7 +402,7 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 "the move",
                 target,
                 false,
-                d.move_to(a.target, a.relative, None::<Profile>, wait),
+                d.move_to(a.target, a.relative, None::<MoveProfile>, wait),
             )
             .await;
             pb.finish_and_clear();

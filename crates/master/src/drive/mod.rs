@@ -127,7 +127,7 @@ impl fmt::Display for DriveState {
 
 /// Profile parameters for [`Drive::move_to`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Profile {
+pub struct MoveProfile {
     /// 6081h profile velocity.
     pub velocity: u32,
     /// 6083h profile acceleration.

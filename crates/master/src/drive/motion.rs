@@ -9,7 +9,7 @@ use tokio::sync::broadcast;
 
 use super::outcome::pp_at_rest;
 use super::{
-    Drive, DriveError, DriveState, MotionProgress, MotionReport, Profile, SW_BIT12, SW_BIT13,
+    Drive, DriveError, DriveState, MotionProgress, MotionReport, MoveProfile, SW_BIT12, SW_BIT13,
     SW_TARGET_REACHED, mode,
 };
 
@@ -234,7 +234,7 @@ impl Drive {
         &self,
         target: i32,
         relative: bool,
-        profile: Option<Profile>,
+        profile: Option<MoveProfile>,
         timeout: Duration,
     ) -> Result<MotionReport, DriveError> {
         let started = self.master.now();
