@@ -351,6 +351,13 @@ impl Node {
         &mut *self.s.storage
     }
 
+    /// Puts `storage` in place of the parameter storage and returns the
+    /// old one: the non-volatile memory handed to a device built again at
+    /// power-on (before its boot loads it).
+    pub fn replace_storage(&mut self, storage: Box<dyn Storage + Send>) -> Box<dyn Storage + Send> {
+        core::mem::replace(&mut self.s.storage, storage)
+    }
+
     /// Power on: load stored parameters, start the services, send the
     /// boot-up message, enter pre-operational and tell the application
     /// ([`Application::on_start`]). An unconfigured node (node-ID FFh)
