@@ -15,7 +15,13 @@ s.url``), for code that must use socketcand.
 simulated time: ``advance(seconds)``, ``send``, ``run_until``, the frame
 log with simulated timestamps, the same for the same calls, and
 ``master()``, the ``drivebus`` tool's master (scan, SDO by index or name,
-NMT, CiA 402 enable / home / move) running in simulated time.
+NMT, CiA 402 enable / home / move, PDO configuration ``master.pdo``, LSS
+``master.lss``, SYNC and a CSP stream ``drive(n).csp``) running in
+simulated time; ``sim.frame_log()`` the log as columns for pandas or numpy,
+``drivebus.plot(sim, node, object)`` an object over simulated time
+(matplotlib). ``input``, ``fault``, ``bus_off``, ``bus_on``, ``power`` of a
+bus or a simulation change the hosted drives at run time as ``drivebus
+control`` does.
 """
 
 import os
@@ -25,6 +31,8 @@ from ._drivebus import (
     PROFILES,
     Drive,
     DriveError,
+    Lss,
+    Pdos,
     DrivebusError,
     DriveState,
     Master,
@@ -38,6 +46,8 @@ __all__ = [
     "PROFILES",
     "Drive",
     "DriveError",
+    "Lss",
+    "Pdos",
     "DrivebusError",
     "DriveState",
     "Master",
@@ -45,8 +55,11 @@ __all__ = [
     "Server",
     "Simulation",
     "VirtualBus",
+    "plot",
     "serve",
 ]
+
+from .plot import plot  # noqa: E402  (needs the classes above)
 
 
 def serve(

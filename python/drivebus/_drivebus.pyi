@@ -68,6 +68,47 @@ class VirtualBus:
         """The next frame as ``(arbitration_id, is_extended_id, is_remote_frame, dlc, data)``, or ``None`` on timeout."""
     def close(self) -> None:
         """Stops the hosted drives and leaves the bus; closing twice is harmless."""
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets machine input ``input`` of drive ``node`` (``drivebus control input``).
+
+        ``"digital"`` (``line`` 1..16, value 0/1), ``"analog"`` (``line``
+        1..4, volts), ``"master_velocity"``, ``"master_position"``,
+        ``"motor_temperature"``, ``"brake"``; for ``duration`` seconds, then
+        back to the machine's value. Shows in 60FDh / a TPDO at the drive's
+        next control period. ``ValueError`` with the control interface's
+        message; ``OSError`` when the drive is powered off.
+        """
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts machine fault ``kind`` of drive ``node`` (``drivebus control fault``).
+
+        ``"encoder"``, ``"over_current"``, ``"over_temperature"``,
+        ``"over_voltage"``, ``"under_voltage"``, ``"trip"`` / ``"wire_break"``
+        with ``switch`` (``"negative_limit"``, ``"positive_limit"``,
+        ``"home_switch"``); ``"clear"`` ends every machine fault that is on
+        (a latched drive fault stays until the master's fault reset).
+        """
+    def bus_off(self, node: int) -> None:
+        """Drive ``node``'s CAN controller goes bus-off: it hears nothing, what it sends is lost."""
+    def bus_on(self, node: int) -> None:
+        """Drive ``node`` is back on the bus (a manual recovery)."""
+    def power(self, node: int, on: bool) -> None:
+        """Cuts (``on=False``) or restores drive ``node``'s power; on, it boots again (a boot-up message).
+
+        A drive without power is left out of ``drives``.
+        """
 
 class Simulation:
     """Drive twins on a virtual CAN bus in simulated time, deterministic.
@@ -108,8 +149,59 @@ class Simulation:
         """Every frame delivered so far: ``(seconds, arbitration_id, is_extended_id, is_remote_frame, dlc, data)``."""
     def log_lines(self) -> List[str]:
         """The log as candump lines (``(0.000047) can0 701#00``)."""
+    def frame_log(self, columns: bool = True, numpy: bool = False) -> Any:
+        """The frame log for analysis.
+
+        ``columns=True``: a dict of equal-length lists ``time`` (simulated
+        seconds), ``id``, ``extended``, ``remote``, ``dlc``, ``data`` (bytes),
+        ready for ``pandas.DataFrame(...)``; ``columns=False``: a list of
+        dicts with those keys; ``numpy=True``: a numpy structured array with
+        those fields (``data`` as 8 ``uint8``, zero padded). ``ImportError``
+        naming numpy when it is asked for and not installed.
+        """
     def master(self) -> "Master":
         """The ``drivebus`` tool's CANopen master on this bus; its calls run in simulated time."""
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets machine input ``input`` of drive ``node`` (``drivebus control input``).
+
+        ``"digital"`` (``line`` 1..16, value 0/1), ``"analog"`` (``line``
+        1..4, volts), ``"master_velocity"``, ``"master_position"``,
+        ``"motor_temperature"``, ``"brake"``; for ``duration`` seconds, then
+        back to the machine's value. Shows in 60FDh / a TPDO at the drive's
+        next control period. ``ValueError`` with the control interface's
+        message; ``OSError`` when the drive is powered off.
+        """
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts machine fault ``kind`` of drive ``node`` (``drivebus control fault``).
+
+        ``"encoder"``, ``"over_current"``, ``"over_temperature"``,
+        ``"over_voltage"``, ``"under_voltage"``, ``"trip"`` / ``"wire_break"``
+        with ``switch`` (``"negative_limit"``, ``"positive_limit"``,
+        ``"home_switch"``); ``"clear"`` ends every machine fault that is on
+        (a latched drive fault stays until the master's fault reset).
+        """
+    def bus_off(self, node: int) -> None:
+        """Drive ``node``'s CAN controller goes bus-off: it hears nothing, what it sends is lost."""
+    def bus_on(self, node: int) -> None:
+        """Drive ``node`` is back on the bus (a manual recovery)."""
+    def power(self, node: int, on: bool) -> None:
+        """Cuts (``on=False``) or restores drive ``node``'s power; on, it boots again (a boot-up message).
+
+        A drive without power is left out of ``drives``.
+        """
     def run_until(self, predicate: Callable[[], object], timeout: float, step: float = 0.001) -> float:
         """Advances simulated time by ``step`` until ``predicate()`` is true; returns the simulated time then.
 
@@ -152,6 +244,74 @@ class Master:
         """``start``, ``stop``, ``preop``, ``reset`` or ``reset-comm`` to ``node`` (0: all); a reset waits for the boot-up."""
     def drive(self, node: int) -> "Drive":
         """The CiA 402 drive at ``node``."""
+    @property
+    def pdo(self) -> "Pdos":
+        """PDO configuration (``drivebus pdo show|map``)."""
+    @property
+    def lss(self) -> "Lss":
+        """The CiA 305 LSS services (``drivebus lss``), 100 ms of simulated time per answer."""
+    def start_sync(self, period: float = 0.001, counter: int = 0) -> None:
+        """Produces SYNC every ``period`` seconds of simulated time (``counter``: overflow value, 0: no counter)."""
+    def stop_sync(self) -> None:
+        """Stops producing SYNC."""
+    def sample(
+        self,
+        node: int,
+        index: Obj,
+        sub: Optional[Obj] = None,
+        *,
+        seconds: float = 1.0,
+        period: float = 0.01,
+    ) -> Tuple[List[float], List[Any]]:
+        """Reads an object by SDO every ``period`` for ``seconds`` of simulated time: ``(times, values)``."""
+
+class Pdos:
+    """The PDO configuration of the nodes on a simulation's bus (``master.pdo``)."""
+
+    def read(self, node: int, direction: str, number: int) -> Dict[str, Any]:
+        """PDO ``number`` (``direction`` ``"rpdo"``/``"tpdo"``): ``dir``, ``number``, ``cob_id``, ``valid``,
+        ``transmission_type``, ``inhibit_time``, ``event_timer_ms``, ``sync_start``, ``mapping``
+        (dicts ``index``, ``sub``, ``bits``, ``name``); ``SdoError``."""
+    def show(self, node: int) -> List[Dict[str, Any]]:
+        """Every PDO of ``node`` (``drivebus pdo show``): the RPDOs, then the TPDOs."""
+    def map(
+        self,
+        node: int,
+        direction: str,
+        number: int,
+        entries: Sequence[Union[Tuple[int, int, int], str]],
+        *,
+        cob_id: Optional[int] = None,
+        transmission: Optional[int] = None,
+        inhibit: Optional[int] = None,
+        event_timer: Optional[int] = None,
+    ) -> None:
+        """Maps PDO ``number`` (``drivebus pdo map``): entries ``(index, sub, bits)``, ``"6041:0:16"`` or an
+        object name; the previous mapping is restored when the device refuses (``SdoError`` says so)."""
+
+class Lss:
+    """The LSS master on a simulation's bus (``master.lss``); ``DrivebusError`` (``LSS: no answer``, ...)."""
+
+    def switch_global(self, mode: str) -> None:
+        """``"configuration"`` or ``"waiting"`` for every LSS slave."""
+    def switch_selective(self, vendor_id: int, product_code: int, revision: int, serial: int) -> None:
+        """The slave with this LSS address goes to configuration."""
+    def inquire_identity(self) -> Dict[str, int]:
+        """The LSS address of the slave in configuration: ``vendor_id``, ``product_code``, ``revision``, ``serial``."""
+    def inquire_node_id(self) -> int:
+        """The node-ID of the slave in configuration (0xFF: none)."""
+    def configure_node_id(self, node_id: int) -> None:
+        """Node-ID of the slave in configuration; in force after its next NMT reset communication."""
+    def store(self) -> None:
+        """Stores the configuration of the slave in configuration."""
+    def configure_selected(
+        self, node_id: int, vendor_id: int, product_code: int, revision: int, serial: int, store: bool = False
+    ) -> None:
+        """``drivebus lss set-node-id``: selective switch, configure, store when asked, back to waiting."""
+    def scan(self) -> Optional[Dict[str, Any]]:
+        """``drivebus lss scan``: the non-configured slave with the lowest address and ``more``, or ``None``."""
+    def configure_only_slave(self, node_id: int, store: bool = False) -> Optional[Dict[str, int]]:
+        """Gives ``node_id`` to the only non-configured slave; ``DrivebusError`` when several answer."""
 
 class Drive:
     """A CiA 402 drive of a simulation (``master.drive(node)``); each call runs the ``drivebus drive`` procedure."""
@@ -180,6 +340,8 @@ class Drive:
         timeout: float = 60.0,
     ) -> Dict[str, Any]:
         """A profile-position move; the report, or ``DriveError`` when it stopped anywhere but the target."""
+    def csp(self, positions: Sequence[int]) -> int:
+        """Cyclic synchronous position: mode 8, one target 607Ah per SYNC; how many were sent. Needs SYNC and the drive enabled."""
 
 class Server:
     """Drive twins on a socketcand server in this process (what ``drivebus serve`` runs).
@@ -209,7 +371,72 @@ class Server:
     @property
     def drives(self) -> List[DriveState]:
         """The hosted drives' state, read now; ``OSError`` once closed."""
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets a machine input of drive ``node`` (``drivebus control input``; see ``VirtualBus.input``)."""
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts (``"clear"``: ends) a machine fault of drive ``node`` (``drivebus control fault``)."""
+    def bus_off(self, node: int) -> None:
+        """Drive ``node``'s CAN controller goes bus-off."""
+    def bus_on(self, node: int) -> None:
+        """Drive ``node`` is back on the bus."""
+    def power(self, node: int, on: bool) -> None:
+        """Cuts or restores drive ``node``'s power; on, it boots again."""
     def close(self) -> None:
         """Stops the drives and the server; the port is closed when it returns."""
     def __enter__(self) -> "Server": ...
+    def __exit__(self, *args: object) -> bool: ...
+
+class EthercatServer:
+    """A line of drive twins served on a network interface (``drivebus.ethercat.serve``), as ``drivebus ethercat serve``.
+
+    ``ValueError`` with the CLI's message for a profile without an EtherCAT
+    face; ``OSError`` when the AF_PACKET socket cannot be opened (needs
+    root or CAP_NET_RAW, and the interface up).
+    """
+
+    def __init__(self, iface: str, drives: Sequence[str] = ...) -> None: ...
+    @property
+    def iface(self) -> str:
+        """The interface it serves on."""
+    @property
+    def drives(self) -> List[str]:
+        """The line's slaves in order (``["ipos", "generic"]``)."""
+    @property
+    def closed(self) -> bool:
+        """True once ``close()`` was called."""
+    def input(
+        self,
+        slave: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets a machine input of the drive at ``slave`` (position from 1), as ``drivebus control input``."""
+    def fault(
+        self,
+        slave: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts (``"clear"``: ends) a machine fault of the drive at ``slave``, as ``drivebus control fault``."""
+    def power(self, slave: int, on: bool) -> None:
+        """Cuts or restores the power of the slave at ``slave``; on, its ESC starts in INIT."""
+    def close(self) -> None:
+        """Stops serving; returns when the socket is closed. ``OSError`` when serving had failed."""
+    def __enter__(self) -> "EthercatServer": ...
     def __exit__(self, *args: object) -> bool: ...

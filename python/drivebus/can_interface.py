@@ -49,6 +49,39 @@ class DrivebusBus(can.BusABC):
         """The hosted drives' state (NMT, CiA 402 state, statusword, mode, position), read now."""
         return self._bus.drives
 
+    def input(
+        self,
+        node: int,
+        input: str,
+        value: float,
+        line: Optional[int] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Sets a machine input of hosted drive ``node`` now, as ``drivebus control input`` (see ``VirtualBus.input``)."""
+        self._bus.input(node, input, value, line, duration)
+
+    def fault(
+        self,
+        node: int,
+        kind: str,
+        switch: Optional[str] = None,
+        duration: Optional[float] = None,
+    ) -> None:
+        """Starts (or with ``"clear"`` ends) a machine fault of hosted drive ``node``, as ``drivebus control fault``."""
+        self._bus.fault(node, kind, switch, duration)
+
+    def bus_off(self, node: int) -> None:
+        """Hosted drive ``node``'s CAN controller goes bus-off (``drivebus control bus off``)."""
+        self._bus.bus_off(node)
+
+    def bus_on(self, node: int) -> None:
+        """Hosted drive ``node`` is back on the bus (``drivebus control bus on``)."""
+        self._bus.bus_on(node)
+
+    def power(self, node: int, on: bool) -> None:
+        """Cuts or restores hosted drive ``node``'s power (``drivebus control power``)."""
+        self._bus.power(node, on)
+
     def send(self, msg: can.Message, timeout: Optional[float] = None) -> None:
         """Sends ``msg`` to every other participant of the virtual bus."""
         if msg.is_fd:

@@ -2,63 +2,162 @@
 //! optionally hosting drive twins on it.
 
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use drivebus_can::{CanId, Frame};
+use drivebus_can::{CanId, Frame, LinkState};
 use drivebus_personality::machine::{Machine, MachineFile, MachineFileError};
 use drivebus_personality::{PersonalityDevice, Profile};
-use drivebus_transport::host::{self, DeviceHost};
+use drivebus_transport::host::{self, Controller, DeviceHost};
 use drivebus_transport::{CanRx, CanTx, Hub, TrySendError};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use tokio::sync::watch;
 
+use crate::control::{self, Action};
 use crate::runtime;
 use crate::state::DriveState;
 
 /// A received frame: identifier, extended, remote, DLC, data.
 pub(crate) type Received = (u32, bool, bool, u8, Vec<u8>);
 
+/// A drive built for hosting: what `drivebus serve --drive` builds, and
+/// what it is built from (to build it again at power-on).
+pub(crate) struct Built {
+    pub(crate) profile: Profile,
+    pub(crate) node: u8,
+    pub(crate) machine: Machine,
+    pub(crate) dev: PersonalityDevice,
+}
+
+/// The real-time host of one drive: behind a CAN controller whose link
+/// the owner sets, as `drivebus serve` hosts it.
+type DriveHost = DeviceHost<Controller<PersonalityDevice>>;
+
 /// One drive hosted in real time (by a `VirtualBus` or a `Server`).
-pub(crate) struct Hosted {
+struct Hosted {
     profile: Profile,
     node: u8,
-    host: DeviceHost<PersonalityDevice>,
+    machine: Machine,
+    /// `None` while its power is off.
+    host: Mutex<Option<Arc<DriveHost>>>,
 }
 
 impl Hosted {
-    /// Starts the drives `built` as participants of `hub` (inside the runtime).
-    pub(crate) fn spawn_all(built: Vec<(Profile, u8, PersonalityDevice)>, hub: &Hub) -> Vec<Hosted> {
-        built
-            .into_iter()
-            .map(|(profile, node, dev)| Hosted { profile, node, host: host::spawn(dev, hub.attach()) })
-            .collect()
-    }
-
     /// `akd:1`.
-    pub(crate) fn spec(&self) -> String {
+    fn spec(&self) -> String {
         format!("{}:{}", self.profile, self.node)
     }
 
-    /// The drives' state, read now, with the GIL released.
-    pub(crate) fn states(py: Python<'_>, drives: &[Hosted]) -> PyResult<Vec<DriveState>> {
+    /// The running host, `None` while the power is off.
+    fn running(&self) -> Option<Arc<DriveHost>> {
+        self.host.lock().ok().and_then(|h| h.clone())
+    }
+}
+
+/// The drives of a `VirtualBus` or a `Server` on their hub.
+pub(crate) struct HostedDrives {
+    hub: Hub,
+    drives: Vec<Hosted>,
+}
+
+impl HostedDrives {
+    /// Starts the drives `built` as participants of `hub` (inside the runtime).
+    pub(crate) fn spawn_all(built: Vec<Built>, hub: &Hub) -> HostedDrives {
+        let drives = built
+            .into_iter()
+            .map(|b| Hosted {
+                profile: b.profile,
+                node: b.node,
+                machine: b.machine,
+                host: Mutex::new(Some(Arc::new(host::spawn(Controller::new(b.dev), hub.attach())))),
+            })
+            .collect();
+        HostedDrives { hub: hub.clone(), drives }
+    }
+
+    /// `["akd:1", ...]`.
+    pub(crate) fn specs(&self) -> Vec<String> {
+        self.drives.iter().map(Hosted::spec).collect()
+    }
+
+    /// The state of the drives that have power, read now, with the GIL released.
+    pub(crate) fn states(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
         let rt = runtime()?;
         py.detach(|| {
-            drives
-                .iter()
-                .map(|h| {
-                    rt.block_on(h.host.with(|d, _| DriveState::of(d)))
-                        .ok_or_else(|| PyOSError::new_err(format!("drive {} is not running", h.spec())))
-                })
-                .collect()
+            let mut states = Vec::with_capacity(self.drives.len());
+            for h in &self.drives {
+                let Some(host) = h.running() else { continue };
+                let s = rt.block_on(host.with(|d, _| DriveState::of(&d.device)));
+                states
+                    .push(s.ok_or_else(|| PyOSError::new_err(format!("drive {} is not running", h.spec())))?);
+            }
+            Ok(states)
         })
     }
 
-    /// Stops the drive (it falls silent, like a power cut).
+    /// Stops every drive (they fall silent, like a power cut).
     pub(crate) fn stop(&self) {
-        self.host.stop();
+        for h in &self.drives {
+            if let Some(host) = h.running() {
+                host.stop();
+            }
+        }
     }
+
+    /// Carries out `action` on drive `node` between two of its frames, as
+    /// `drivebus serve --control` does (crate::control).
+    pub(crate) fn apply(&self, py: Python<'_>, node: u8, action: Action) -> PyResult<()> {
+        let Some(h) = self.drives.iter().find(|h| h.node == node) else {
+            let nodes = self.drives.iter().map(|h| (h.node, ())).collect();
+            return Err(control::no_node(&nodes, node));
+        };
+        let rt = runtime()?;
+        match action {
+            Action::Power(on) => {
+                let mut slot =
+                    h.host.lock().map_err(|_| PyOSError::new_err("the drive's host is poisoned"))?;
+                match (on, slot.take()) {
+                    (false, Some(host)) => host.stop(),
+                    (true, None) => {
+                        let dev = h
+                            .profile
+                            .build_on(h.node, &h.machine)
+                            .map_err(|e| PyValueError::new_err(format!("cannot build {}: {e}", h.spec())))?;
+                        let _in_runtime = rt.enter();
+                        *slot = Some(Arc::new(host::spawn(Controller::new(dev), self.hub.attach())));
+                    }
+                    // Already as asked: nothing changes.
+                    (_, host) => *slot = host,
+                }
+                Ok(())
+            }
+            Action::Machine(change, duration) => {
+                let host = h.running().ok_or_else(|| control::powered_off(node))?;
+                let done = py.detach(|| {
+                    rt.block_on(host.with_out(move |d, now, out| {
+                        let dev = &mut d.device;
+                        dev.node.with_app(now, &mut dev.app, out, |app, _| {
+                            app.change_machine(now, change, duration)
+                        })
+                    }))
+                });
+                done.ok_or_else(|| stopped(node))?.map_err(|e| control::refused(node, e))
+            }
+            Action::BusOff(off) => {
+                let host = h.running().ok_or_else(|| control::powered_off(node))?;
+                let state = if off { LinkState::BusOff { recover_at: None } } else { LinkState::Active };
+                let done =
+                    py.detach(|| rt.block_on(host.with_out(move |d, now, out| d.set_link(state, now, out))));
+                done.ok_or_else(|| stopped(node))
+            }
+        }
+    }
+}
+
+/// The drive's task ended although it has power.
+fn stopped(node: u8) -> PyErr {
+    PyOSError::new_err(format!("node {node} has stopped running"))
 }
 
 /// A connection to the in-process virtual CAN bus `channel` (every
@@ -71,7 +170,7 @@ pub struct VirtualBus {
     tx: CanTx,
     rx: Mutex<CanRx>,
     closed: watch::Sender<bool>,
-    drives: Vec<Hosted>,
+    drives: HostedDrives,
 }
 
 #[pymethods]
@@ -89,7 +188,7 @@ impl VirtualBus {
         let hub = drivebus_transport::hub::virtual_hub(channel);
         // Joined before the drives start: their boot-ups reach this bus.
         let (tx, rx) = hub.attach().split();
-        let drives = Hosted::spawn_all(built, &hub);
+        let drives = HostedDrives::spawn_all(built, &hub);
         Ok(VirtualBus {
             channel: channel.to_owned(),
             tx,
@@ -182,7 +281,69 @@ impl VirtualBus {
         // Stopping a drive's task takes effect at its next await: a read
         // right after `close` could still be answered.
         self.check_open()?;
-        Hosted::states(py, &self.drives)
+        self.drives.states(py)
+    }
+
+    /// Sets machine input `input` of drive `node` to `value`, as `drivebus
+    /// control input NODE INPUT [LINE] VALUE [--for SECONDS]`: `"digital"`
+    /// (`line` 1..16, value 0/1), `"analog"` (`line` 1..4, volts),
+    /// `"master_velocity"`, `"master_position"`, `"motor_temperature"`,
+    /// `"brake"`; for `duration` seconds, then back to the machine's value.
+    /// It shows in the drive's objects (60FDh, a TPDO) at its next control
+    /// period. Raises `ValueError` with the control interface's message.
+    #[pyo3(signature = (node, input, value, line = None, duration = None))]
+    fn input(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        input: &str,
+        value: f64,
+        line: Option<u8>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, control::input(input, line, value, duration)?)
+    }
+
+    /// Starts machine fault `kind` of drive `node` (`"encoder"`,
+    /// `"over_current"`, `"over_temperature"`, `"over_voltage"`,
+    /// `"under_voltage"`, `"trip"` / `"wire_break"` with `switch`
+    /// `"negative_limit"`, `"positive_limit"` or `"home_switch"`), as
+    /// `drivebus control fault`; `"clear"` ends every machine fault that is
+    /// on (a latched drive fault stays until the master's fault reset).
+    #[pyo3(signature = (node, kind, switch = None, duration = None))]
+    fn fault(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        kind: &str,
+        switch: Option<&str>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, control::fault(kind, switch, duration)?)
+    }
+
+    /// Drive `node`'s CAN controller goes bus-off: it hears nothing and what
+    /// it sends is lost (`drivebus control bus off NODE`).
+    fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, Action::BusOff(true))
+    }
+
+    /// Drive `node` is back on the bus (`drivebus control bus on NODE`).
+    fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, Action::BusOff(false))
+    }
+
+    /// Cuts (`on=False`) or restores drive `node`'s power, as `drivebus
+    /// control power NODE off|on`: off it is silent and forgets its state;
+    /// on it boots again (a boot-up message) with its parameters at their
+    /// power-on values.
+    fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, Action::Power(on))
     }
 
     /// Stops the hosted drives (they fall silent, like a power cut) and
@@ -190,13 +351,11 @@ impl VirtualBus {
     /// twice is harmless.
     fn close(&self) {
         self.closed.send_replace(true);
-        for h in &self.drives {
-            h.stop();
-        }
+        self.drives.stop();
     }
 
     fn __repr__(&self) -> String {
-        let drives: Vec<String> = self.drives.iter().map(Hosted::spec).collect();
+        let drives = self.drives.specs();
         format!("VirtualBus(channel={:?}, drives={:?})", self.channel, drives)
     }
 }
@@ -220,10 +379,7 @@ fn closed_message() -> &'static str {
 /// The drives `drivebus serve --drive PROFILE:NODE [--machine FILE]`
 /// hosts: each personality on its machine (from `machine_file`, else the
 /// profile's default), parameters in memory. The errors are the CLI's.
-pub(crate) fn build_all(
-    drives: &[String],
-    machine_file: Option<&Path>,
-) -> PyResult<Vec<(Profile, u8, PersonalityDevice)>> {
+pub(crate) fn build_all(drives: &[String], machine_file: Option<&Path>) -> PyResult<Vec<Built>> {
     let specs = drivebus_personality::drive_specs(drives).map_err(PyValueError::new_err)?;
     let file = match machine_file {
         None => None,
@@ -243,7 +399,7 @@ pub(crate) fn build_all(
         let dev = profile
             .build_on(node, &machine)
             .map_err(|e| PyValueError::new_err(format!("cannot build {profile}:{node}: {e}")))?;
-        built.push((profile, node, dev));
+        built.push(Built { profile, node, machine, dev });
     }
     Ok(built)
 }

@@ -12,6 +12,9 @@
 //! `Server` ([`serve`]) puts the same drives on a socketcand server in
 //! the process (`drivebus.serve()`), for code that must use TCP.
 //!
+//! `EthercatServer` ([`ethercat`]) serves an EtherCAT slave line on a
+//! network interface (`drivebus.ethercat.serve()`).
+//!
 //! `Simulation` ([`sim`]) hosts the same drives on the virtual bus in
 //! simulated time instead (`drivebus_bus::Bus`): deterministic. Its
 //! `master()` ([`master`]) is the master of `drivebus_master` (the tool's)
@@ -27,7 +30,11 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 mod bus;
+mod control;
+mod ethercat;
+mod lss;
 mod master;
+mod pdo;
 mod serve;
 mod sim;
 mod state;
@@ -56,6 +63,9 @@ fn _drivebus(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<serve::Server>()?;
     m.add_class::<master::Master>()?;
     m.add_class::<master::Drive>()?;
+    m.add_class::<pdo::Pdos>()?;
+    m.add_class::<lss::Lss>()?;
+    m.add_class::<ethercat::EthercatServer>()?;
     master::add_exceptions(m)?;
     m.add("PROFILES", drivebus_personality::Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>())?;
     Ok(())

@@ -20,6 +20,8 @@ use pyo3::exceptions::{PyTimeoutError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+use crate::lss::Lss;
+use crate::pdo::Pdos;
 use crate::sim::{Link, Sim};
 
 pyo3::create_exception!(
@@ -55,6 +57,7 @@ const MAX_SECONDS: f64 = 365.0 * 86_400.0;
 
 /// The CANopen master on a `Simulation`'s bus (`sim.master()`).
 #[pyclass(frozen, module = "drivebus._drivebus")]
+#[derive(Clone)]
 pub struct Master {
     link: Arc<Link>,
     /// How each hosted drive names its objects (its EDS, then CiA 301/402).
@@ -70,12 +73,17 @@ impl Master {
         Master { link, dicts: Arc::new(dicts), standard: Arc::new(Dict::default()) }
     }
 
-    fn dict(&self, node: u8) -> &Dict {
+    /// How node `node` names its objects.
+    pub(crate) fn dict(&self, node: u8) -> &Dict {
         self.dicts.iter().find(|(n, _)| *n == node).map_or(&*self.standard, |(_, d)| d)
     }
 
     /// Runs the master future `f` in simulated time on the bus thread.
-    fn block_on<T, F>(&self, py: Python<'_>, f: impl FnOnce(RustMaster) -> F + Send + 'static) -> PyResult<T>
+    pub(crate) fn block_on<T, F>(
+        &self,
+        py: Python<'_>,
+        f: impl FnOnce(RustMaster) -> F + Send + 'static,
+    ) -> PyResult<T>
     where
         T: Send + 'static,
         F: Future<Output = T>,
@@ -89,7 +97,7 @@ impl Master {
 }
 
 /// A node-ID of a command to one node.
-fn node_id(node: i64) -> PyResult<u8> {
+pub(crate) fn node_id(node: i64) -> PyResult<u8> {
     u8::try_from(node)
         .ok()
         .filter(|n| (1..=127).contains(n))
@@ -126,7 +134,8 @@ fn stalled(e: Stalled) -> PyErr {
     PyTimeoutError::new_err(e.to_string())
 }
 
-fn sdo_error(
+/// An SDO failure with the tool's message.
+pub(crate) fn sdo_error(
     node: u8,
     index: u16,
     sub: u8,
@@ -338,14 +347,86 @@ impl Master {
 
     /// The CiA 402 drive at `node` (`drivebus drive`).
     fn drive(&self, node: i64) -> PyResult<Drive> {
-        Ok(Drive {
-            master: Master {
-                link: self.link.clone(),
-                dicts: self.dicts.clone(),
-                standard: self.standard.clone(),
-            },
-            node: node_id(node)?,
-        })
+        Ok(Drive { master: self.clone(), node: node_id(node)? })
+    }
+
+    /// PDO configuration (`drivebus pdo show|map`): `pdo.read`,
+    /// `pdo.show`, `pdo.map`.
+    #[getter]
+    fn pdo(&self) -> Pdos {
+        Pdos { master: self.clone() }
+    }
+
+    /// The LSS services (`drivebus lss`), each answer awaited 100 ms of
+    /// simulated time (the tool's default).
+    #[getter]
+    fn lss(&self) -> Lss {
+        Lss { master: self.clone(), timeout: Duration::from_millis(100) }
+    }
+
+    /// Starts producing SYNC every `period` seconds of simulated time
+    /// (`counter`: the counter overflow value, 0 for SYNC without a
+    /// counter), as `drivebus sync` does.
+    #[pyo3(signature = (period = 0.001, counter = 0))]
+    fn start_sync(&self, py: Python<'_>, period: f64, counter: u8) -> PyResult<()> {
+        let p = seconds("period", period)?;
+        if p < Duration::from_micros(100) {
+            return Err(PyValueError::new_err(format!("period: at least 0.0001 s, not {period}")));
+        }
+        self.block_on(py, move |m| async move { m.start_sync(p, counter) })
+    }
+
+    /// Stops producing SYNC.
+    fn stop_sync(&self, py: Python<'_>) -> PyResult<()> {
+        self.block_on(py, |m| async move { m.stop_sync() })
+    }
+
+    /// Reads `index`/`sub` of `node` by SDO every `period` seconds for
+    /// `seconds` of simulated time: `(times, values)`, the simulated time
+    /// of each reading and its value (decoded as `sdo_read` does). The
+    /// readings' SDO frames are on the bus like any other.
+    #[pyo3(signature = (node, index, sub = None, *, seconds = 1.0, period = 0.01))]
+    fn sample(
+        &self,
+        py: Python<'_>,
+        node: i64,
+        index: &Bound<'_, PyAny>,
+        sub: Option<&Bound<'_, PyAny>>,
+        seconds: f64,
+        period: f64,
+    ) -> PyResult<(Vec<f64>, Vec<Py<PyAny>>)> {
+        let node = node_id(node)?;
+        let total = self::seconds("seconds", seconds)?;
+        let step = self::seconds("period", period)?;
+        if step.is_zero() {
+            return Err(PyValueError::new_err("period must be above 0 seconds"));
+        }
+        let dict = self.dict(node);
+        let (index, sub) = resolve(dict, index, sub)?;
+        let sub = sub.unwrap_or(0);
+        let dt = dict.data_type(index, sub);
+        let got = self.block_on(py, move |m| async move {
+            let end = m.now() + total;
+            let mut out = Vec::new();
+            loop {
+                let at = m.now();
+                let r = m.sdo(node).upload(index, sub).await;
+                out.push((at.as_nanos() as f64 / 1e9, r));
+                if m.now() + step > end {
+                    return out;
+                }
+                m.sleep(step.saturating_sub(m.now().saturating_duration_since(at))).await;
+            }
+        })?;
+        let timeout = sdo_timeout();
+        let mut times = Vec::with_capacity(got.len());
+        let mut values = Vec::with_capacity(got.len());
+        for (t, r) in got {
+            let data = r.map_err(sdo_error(node, index, sub, false, timeout))?;
+            times.push(t);
+            values.push(decode(py, node, index, sub, dt, data)?);
+        }
+        Ok((times, values))
     }
 }
 
@@ -357,7 +438,7 @@ impl Master {
 }
 
 /// The SDO timeout of the simulation's master (`MasterConfig::default`).
-fn sdo_timeout() -> Duration {
+pub(crate) fn sdo_timeout() -> Duration {
     drivebus_master::MasterConfig::default().sdo_timeout
 }
 
@@ -498,9 +579,21 @@ impl Drive {
                 d.write_raw(0x6083, 0, &a.to_le_bytes()).await?;
                 d.write_raw(0x6084, 0, &a.to_le_bytes()).await?;
             }
-            d.move_to(position, relative, None::<drivebus_master::Profile>, wait).await
+            d.move_to(position, relative, None::<drivebus_master::MoveProfile>, wait).await
         })?;
         report(py, &r)
+    }
+
+    /// Cyclic synchronous position (`drivebus drive csp`): mode 8, then the
+    /// target positions 607Ah, one right after each SYNC (by an RPDO
+    /// mapping 607Ah when there is one, else SDO); returns how many were
+    /// sent. Needs SYNC (`master.start_sync`) and the drive enabled;
+    /// raises `DriveError` otherwise.
+    fn csp(&self, py: Python<'_>, positions: Vec<i32>) -> PyResult<usize> {
+        self.run(py, move |d| async move {
+            d.set_mode(mode::CSP).await?;
+            d.stream_csp(positions).await
+        })
     }
 
     fn __repr__(&self) -> String {

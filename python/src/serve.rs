@@ -9,7 +9,8 @@ use drivebus_transport::{Hub, HubConfig};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
-use crate::bus::Hosted;
+use crate::bus::HostedDrives;
+use crate::control::{self, Action};
 use crate::runtime;
 use crate::state::DriveState;
 
@@ -20,7 +21,7 @@ pub struct Server {
     url: String,
     port: u16,
     server: Mutex<Option<SocketcandServer>>,
-    drives: Vec<Hosted>,
+    drives: HostedDrives,
 }
 
 #[pymethods]
@@ -54,7 +55,7 @@ impl Server {
                     // As `drivebus serve`: the hub, its listener, then the drives.
                     let hub = Hub::new(HubConfig::default());
                     let (server, addr) = SocketcandServer::bind_with((host, port), cfg, hub.clone()).await?;
-                    Ok::<_, std::io::Error>((server, addr, Hosted::spawn_all(built, &hub)))
+                    Ok::<_, std::io::Error>((server, addr, HostedDrives::spawn_all(built, &hub)))
                 })
             })
             .map_err(|e| PyOSError::new_err(format!("cannot listen on {host}:{port}: {e}")))?;
@@ -89,18 +90,63 @@ impl Server {
     /// Raises `OSError` once closed.
     #[getter]
     fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
-        if self.closed() {
-            return Err(PyOSError::new_err("the socketcand server is closed"));
-        }
-        Hosted::states(py, &self.drives)
+        self.check_open()?;
+        self.drives.states(py)
+    }
+
+    /// Sets a machine input of drive `node` now, as `drivebus control
+    /// input` does to a running `serve` (see `VirtualBus.input`).
+    #[pyo3(signature = (node, input, value, line = None, duration = None))]
+    fn input(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        input: &str,
+        value: f64,
+        line: Option<u8>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, control::input(input, line, value, duration)?)
+    }
+
+    /// Starts (or with `"clear"` ends) a machine fault of drive `node`, as
+    /// `drivebus control fault` (see `VirtualBus.fault`).
+    #[pyo3(signature = (node, kind, switch = None, duration = None))]
+    fn fault(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        kind: &str,
+        switch: Option<&str>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, control::fault(kind, switch, duration)?)
+    }
+
+    /// Drive `node`'s CAN controller goes bus-off (`drivebus control bus off`).
+    fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, Action::BusOff(true))
+    }
+
+    /// Drive `node` is back on the bus (`drivebus control bus on`).
+    fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, Action::BusOff(false))
+    }
+
+    /// Cuts or restores drive `node`'s power (`drivebus control power`).
+    fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, Action::Power(on))
     }
 
     /// Stops the drives and the server; the port is closed when it returns
     /// (clients lose their connection). Closing twice is harmless.
     fn close(&self, py: Python<'_>) -> PyResult<()> {
-        for h in &self.drives {
-            h.stop();
-        }
+        self.drives.stop();
         let server = self.server.lock().ok().and_then(|mut s| s.take());
         if let Some(server) = server {
             let rt = runtime()?;
@@ -120,16 +166,20 @@ impl Server {
     }
 
     fn __repr__(&self) -> String {
-        let drives: Vec<String> = self.drives.iter().map(Hosted::spec).collect();
+        let drives = self.drives.specs();
         format!("Server(url={:?}, drives={:?})", self.url, drives)
+    }
+}
+
+impl Server {
+    fn check_open(&self) -> PyResult<()> {
+        if self.closed() { Err(PyOSError::new_err("the socketcand server is closed")) } else { Ok(()) }
     }
 }
 
 impl Drop for Server {
     fn drop(&mut self) {
-        for h in &self.drives {
-            h.stop();
-        }
+        self.drives.stop();
         // Dropping the server closes its listener on the runtime.
     }
 }

@@ -16,11 +16,15 @@ use std::time::Duration;
 use drivebus_bus::{Bus, BusConfig, NodeId, ProbeId};
 use drivebus_can::{Frame, Instant};
 use drivebus_master::{MasterConfig, SimBus};
+use drivebus_personality::machine::Machine;
 use drivebus_personality::{PersonalityDevice, Profile};
-use pyo3::exceptions::{PyRuntimeError, PyTimeoutError, PyValueError};
+use pyo3::IntoPyObjectExt;
+use pyo3::exceptions::{PyImportError, PyRuntimeError, PyTimeoutError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
 
 use crate::bus::{Received, frame, received};
+use crate::control::{self, Action};
 use crate::master::Master;
 use crate::state::DriveState;
 
@@ -62,10 +66,47 @@ pub(crate) struct Sim {
     /// The bus and the master.
     pub(crate) sim: SimBus,
     probe: ProbeId,
-    drives: Vec<NodeId>,
+    /// Each drive's station and what it was built from (to build it again
+    /// at power-on).
+    drives: Vec<(NodeId, Profile, u8, Machine)>,
 }
 
 impl Sim {
+    /// Carries out `action` on drive `node` now, through the library calls
+    /// the control interface's in-code form names (docs/control.md).
+    fn apply(&mut self, node: u8, action: Action) -> PyResult<()> {
+        let Some((id, profile, _, machine)) = self.drives.iter().find(|d| d.2 == node) else {
+            let nodes = self.drives.iter().map(|d| (d.2, ())).collect();
+            return Err(control::no_node(&nodes, node));
+        };
+        let id = *id;
+        let bus = self.sim.bus_mut();
+        let powered = bus.node::<PersonalityDevice>(id).is_some();
+        match action {
+            Action::Power(false) => {
+                bus.power_off(id);
+            }
+            Action::Power(true) if !powered => {
+                let dev = profile
+                    .build_on(node, machine)
+                    .map_err(|e| PyValueError::new_err(format!("cannot build {profile}:{node}: {e}")))?;
+                bus.power_on(id, dev);
+            }
+            Action::Power(true) => {}
+            _ if !powered => return Err(control::powered_off(node)),
+            Action::Machine(change, duration) => {
+                let now = bus.now();
+                let dev = bus.node_mut::<PersonalityDevice>(id).ok_or_else(|| control::powered_off(node))?;
+                dev.app.change_machine(now, change, duration).map_err(|e| control::refused(node, e))?;
+                // Applied at this poll, as a scheduled entry.
+                bus.wake(id);
+            }
+            Action::BusOff(true) => bus.set_bus_off(id),
+            Action::BusOff(false) => bus.recover(id),
+        }
+        Ok(())
+    }
+
     /// Answers requests until the `Simulation` is dropped.
     fn serve(mut self, requests: mpsc::Receiver<Request>) {
         // A send fails only when the caller gave up waiting: nothing to do.
@@ -94,7 +135,7 @@ impl Sim {
                 }
                 Request::Drives(out) => {
                     let bus = self.sim.bus();
-                    let drives = self.drives.iter().filter_map(|&id| bus.node::<PersonalityDevice>(id));
+                    let drives = self.drives.iter().filter_map(|d| bus.node::<PersonalityDevice>(d.0));
                     let _ = out.send(drives.map(DriveState::of).collect());
                 }
                 Request::Now(out) => {
@@ -150,7 +191,7 @@ impl Simulation {
             return Err(PyValueError::new_err("bitrate must be positive (None: frames take no time)"));
         }
         let built = crate::bus::build_all(&drives, machine.as_deref())?;
-        let specs = built.iter().map(|(profile, node, _)| (*node, *profile)).collect();
+        let specs = built.iter().map(|b| (b.node, b.profile)).collect();
         let (to_bus, requests) = mpsc::channel();
         std::thread::Builder::new()
             .name("drivebus-sim".into())
@@ -158,7 +199,8 @@ impl Simulation {
                 let mut bus = Bus::new(BusConfig { bitrate, ..BusConfig::default() });
                 // The host's station, before the drives: it hears their boot-ups.
                 let probe = bus.attach_probe();
-                let drives = built.into_iter().map(|(_, _, d)| bus.attach(d)).collect();
+                let drives =
+                    built.into_iter().map(|b| (bus.attach(b.dev), b.profile, b.node, b.machine)).collect();
                 // The master's station joins last, as in `drivebus demo`.
                 let sim = SimBus::with_config(bus, MasterConfig::default());
                 Sim { sim, probe, drives }.serve(requests);
@@ -212,6 +254,46 @@ impl Simulation {
         self.ask(py, Request::Log)
     }
 
+    /// The frame log for analysis: with `columns=True` (the default) a
+    /// dict of equal-length lists `time` (simulated seconds), `id`,
+    /// `extended`, `remote`, `dlc`, `data` (bytes), which
+    /// `pandas.DataFrame(...)` takes as it is; with `columns=False` a list
+    /// of dicts with those keys, one per frame; with `numpy=True` a numpy
+    /// structured array with those fields (`data` as 8 `uint8`, zero
+    /// padded). Raises `ImportError` naming the package when numpy is
+    /// asked for and not installed.
+    #[pyo3(signature = (columns = true, numpy = false))]
+    fn frame_log(&self, py: Python<'_>, columns: bool, numpy: bool) -> PyResult<Py<PyAny>> {
+        let log = self.ask(py, Request::Log)?;
+        if numpy {
+            return numpy_log(py, &log);
+        }
+        if !columns {
+            let rows = log
+                .iter()
+                .map(|(t, id, ext, rtr, dlc, data)| {
+                    let d = PyDict::new(py);
+                    d.set_item("time", t)?;
+                    d.set_item("id", id)?;
+                    d.set_item("extended", ext)?;
+                    d.set_item("remote", rtr)?;
+                    d.set_item("dlc", dlc)?;
+                    d.set_item("data", PyBytes::new(py, data))?;
+                    Ok(d)
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            return rows.into_py_any(py);
+        }
+        let d = PyDict::new(py);
+        d.set_item("time", log.iter().map(|e| e.0).collect::<Vec<_>>())?;
+        d.set_item("id", log.iter().map(|e| e.1).collect::<Vec<_>>())?;
+        d.set_item("extended", log.iter().map(|e| e.2).collect::<Vec<_>>())?;
+        d.set_item("remote", log.iter().map(|e| e.3).collect::<Vec<_>>())?;
+        d.set_item("dlc", log.iter().map(|e| e.4).collect::<Vec<_>>())?;
+        d.set_item("data", log.iter().map(|e| PyBytes::new(py, &e.5)).collect::<Vec<_>>())?;
+        d.into_py_any(py)
+    }
+
     /// The log as candump lines (`(0.001234) can0 701#00`).
     fn log_lines(&self, py: Python<'_>) -> PyResult<Vec<String>> {
         self.ask(py, Request::LogLines)
@@ -221,6 +303,58 @@ impl Simulation {
     #[getter]
     fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
         self.ask(py, Request::Drives)
+    }
+
+    /// Sets machine input `input` of drive `node` to `value` now, as
+    /// `drivebus control input` does to a running `serve` (see
+    /// `VirtualBus.input`); it shows in the drive's objects at its next
+    /// control period. Raises `ValueError` with the control interface's
+    /// message, `OSError` when the drive is powered off.
+    #[pyo3(signature = (node, input, value, line = None, duration = None))]
+    fn input(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        input: &str,
+        value: f64,
+        line: Option<u8>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        let action = control::input(input, line, value, duration)?;
+        self.link.run(py, move |s| s.apply(node, action))?
+    }
+
+    /// Starts machine fault `kind` of drive `node` now (`"clear"`: every
+    /// machine fault that is on ends), as `drivebus control fault` (see
+    /// `VirtualBus.fault`).
+    #[pyo3(signature = (node, kind, switch = None, duration = None))]
+    fn fault(
+        &self,
+        py: Python<'_>,
+        node: u8,
+        kind: &str,
+        switch: Option<&str>,
+        duration: Option<f64>,
+    ) -> PyResult<()> {
+        let action = control::fault(kind, switch, duration)?;
+        self.link.run(py, move |s| s.apply(node, action))?
+    }
+
+    /// Drive `node`'s CAN controller goes bus-off now (`drivebus control bus off`).
+    fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, Action::BusOff(true)))?
+    }
+
+    /// Drive `node` is back on the bus now (`drivebus control bus on`).
+    fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, Action::BusOff(false)))?
+    }
+
+    /// Cuts (`on=False`) or restores drive `node`'s power now (`drivebus
+    /// control power`): off it is silent and its state is gone (it leaves
+    /// `drives`); on it boots again from its machine.
+    fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, Action::Power(on)))?
     }
 
     /// The CANopen master on this bus (the `drivebus` tool's), whose calls
@@ -283,6 +417,33 @@ impl Simulation {
 /// The bus thread ended (only a bug in a device makes it end early).
 fn stopped() -> PyErr {
     PyRuntimeError::new_err("the simulation has stopped")
+}
+
+/// The log as a numpy structured array, or why not.
+fn numpy_log(py: Python<'_>, log: &[Logged]) -> PyResult<Py<PyAny>> {
+    let np = py.import("numpy").map_err(|e| {
+        PyImportError::new_err(format!("frame_log(numpy=True) needs numpy ({e}): pip install numpy"))
+    })?;
+    let dtype = vec![
+        ("time", "f8").into_py_any(py)?,
+        ("id", "u4").into_py_any(py)?,
+        ("extended", "?").into_py_any(py)?,
+        ("remote", "?").into_py_any(py)?,
+        ("dlc", "u1").into_py_any(py)?,
+        ("data", "u1", (8,)).into_py_any(py)?,
+    ];
+    let rows = log
+        .iter()
+        .map(|(t, id, ext, rtr, dlc, data)| {
+            // As numbers: a `Vec<u8>` would reach Python as bytes.
+            let mut padded = [0u8; 8];
+            padded[..data.len().min(8)].copy_from_slice(&data[..data.len().min(8)]);
+            (*t, *id, *ext, *rtr, *dlc, padded.map(u16::from).to_vec()).into_py_any(py)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", dtype)?;
+    np.getattr("array")?.call((rows,), Some(&kwargs))?.into_py_any(py)
 }
 
 fn seconds(t: Instant) -> f64 {

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -27,6 +30,19 @@ def test_emcy_fault_handling_example_passes():
         capture_output=True,
         text=True,
         timeout=120,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "1 passed" in r.stdout, r.stdout
+
+
+def test_pysoem_csp_example_reaches_op_and_follows_the_ramp():
+    if os.geteuid() != 0:
+        pytest.skip(f"the pysoem example needs root for its namespace and AF_PACKET (euid {os.geteuid()})")
+    r = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider", str(EXAMPLES / "test_pysoem_csp.py")],
+        capture_output=True,
+        text=True,
+        timeout=180,
     )
     assert r.returncode == 0, r.stdout + r.stderr
     assert "1 passed" in r.stdout, r.stdout

@@ -154,3 +154,45 @@ def test_serve_calls(drives, channel, port):
     with server:
         assert server.url.startswith("socketcand://127.0.0.1:")
         server.drives
+
+
+_SIM = drivebus.Simulation(drives=["generic:5"])
+
+
+@settings(max_examples=200, deadline=None)
+@given(node=anything, what=anything, value=anything, line=anything, duration=anything, on=anything)
+def test_run_time_changes(node, what, value, line, duration, on):
+    # A drive powered off refuses with OSError; anything else as above.
+    for call in (
+        lambda: _SIM.input(node, what, value, line, duration),
+        lambda: _SIM.fault(node, what, line, duration),
+        lambda: _SIM.bus_off(node),
+        lambda: _SIM.bus_on(node),
+        lambda: _SIM.power(node, on),
+    ):
+        try:
+            call()
+        except OK_ERRORS + (OSError,):
+            pass
+    _SIM.power(5, True)
+    _SIM.fault(5, "clear")
+    _SIM.advance(0.001)
+
+
+@settings(max_examples=150, deadline=None)
+@given(node=anything, direction=anything, number=anything, entries=anything, mode=anything)
+def test_pdo_and_lss_calls(node, direction, number, entries, mode):
+    m = _SIM.master()
+    for call in (
+        lambda: m.pdo.read(node, direction, number),
+        lambda: m.pdo.map(node, direction, number, entries),
+        lambda: m.lss.switch_global(mode),
+        lambda: m.lss.configure_node_id(node),
+        lambda: m.sample(node, direction, seconds=0.001, period=number),
+        lambda: _SIM.frame_log(columns=mode),
+    ):
+        try:
+            call()
+        except OK_ERRORS + (drivebus.DrivebusError,):
+            pass
+    m.lss.switch_global("waiting")

@@ -66,7 +66,8 @@ pub mod candump;
 mod node;
 mod sim;
 mod stats;
-pub mod timing;
+/// Bit timing of frames (`drivebus_can::timing`): the bus paces with it.
+pub use drivebus_can::timing;
 
 pub use bus::RuleId;
 pub use bus::{Bus, BusConfig, LogSink};

@@ -16,6 +16,7 @@ mod identity;
 #[cfg(feature = "pcap")]
 pub mod pcap;
 mod time;
+pub mod timing;
 
 pub use device::{Device, LinkState};
 pub use fault::{FaultAction, FaultRule, Recurrence, XorShift64};

@@ -8,7 +8,7 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use drivebus_cia402::model::{Command, DriveModel, DriveParams};
+use drivebus_cia402::model::{Demand, DriveModel, DriveParams};
 use std::hint::black_box;
 
 fn bench_step(c: &mut Criterion, name: &str, params: DriveParams) {
@@ -21,7 +21,7 @@ fn bench_step(c: &mut Criterion, name: &str, params: DriveParams) {
             // A slow sinusoid keeps every loop and the index detection busy
             // without ever running away.
             let pos = 20.0 * (t * 0.5).sin();
-            m.set_command(Command::Position {
+            m.set_demand(Demand::Position {
                 position: pos,
                 velocity: 10.0 * (t * 0.5).cos(),
                 acceleration: 0.0,

@@ -151,7 +151,7 @@ pub mod cw {
 /// Device control commands decoded from controlword 6040h bits 0–3 and 7
 /// (CiA 402-2 §6.2.1, table "Command coding").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Command {
+pub enum ControlCommand {
     /// `0xxx x110` (mask 0x87 = 0x06): transitions 2, 6, 8.
     Shutdown,
     /// `0xxx 0111` (mask 0x8F = 0x07): transition 3; the same coding is
@@ -168,20 +168,20 @@ pub enum Command {
     FaultReset,
 }
 
-impl Command {
+impl ControlCommand {
     /// Decodes bits 0–3 and 7 of a controlword (without edge detection on
     /// bit 7: a set bit 7 yields `None`).
-    pub const fn decode(cw: u16) -> Option<Command> {
+    pub const fn decode(cw: u16) -> Option<ControlCommand> {
         if cw & 0x82 == 0x00 {
-            Some(Command::DisableVoltage)
+            Some(ControlCommand::DisableVoltage)
         } else if cw & 0x86 == 0x02 {
-            Some(Command::QuickStop)
+            Some(ControlCommand::QuickStop)
         } else if cw & 0x87 == 0x06 {
-            Some(Command::Shutdown)
+            Some(ControlCommand::Shutdown)
         } else if cw & 0x8F == 0x07 {
-            Some(Command::SwitchOn)
+            Some(ControlCommand::SwitchOn)
         } else if cw & 0x8F == 0x0F {
-            Some(Command::EnableOperation)
+            Some(ControlCommand::EnableOperation)
         } else {
             None
         }
@@ -190,12 +190,12 @@ impl Command {
     /// The controlword a master writes for the command (bits 0–3 and 7).
     pub const fn controlword(self) -> u16 {
         match self {
-            Command::Shutdown => cw::SHUTDOWN,
-            Command::SwitchOn => cw::SWITCH_ON,
-            Command::EnableOperation => cw::ENABLE_OPERATION,
-            Command::DisableVoltage => cw::DISABLE_VOLTAGE,
-            Command::QuickStop => cw::QUICK_STOP,
-            Command::FaultReset => cw::FAULT_RESET,
+            ControlCommand::Shutdown => cw::SHUTDOWN,
+            ControlCommand::SwitchOn => cw::SWITCH_ON,
+            ControlCommand::EnableOperation => cw::ENABLE_OPERATION,
+            ControlCommand::DisableVoltage => cw::DISABLE_VOLTAGE,
+            ControlCommand::QuickStop => cw::QUICK_STOP,
+            ControlCommand::FaultReset => cw::FAULT_RESET,
         }
     }
 }
@@ -382,13 +382,13 @@ mod tests {
                 match EnableStep::from(Some(state)) {
                     EnableStep::Done => break,
                     EnableStep::Write { controlword, expect } => {
-                        let cmd = Command::decode(controlword).unwrap();
+                        let cmd = ControlCommand::decode(controlword).unwrap();
                         let allowed = matches!(
                             (state, cmd),
-                            (State::SwitchOnDisabled, Command::Shutdown)
-                                | (State::ReadyToSwitchOn, Command::SwitchOn)
-                                | (State::SwitchedOn, Command::EnableOperation)
-                                | (State::QuickStopActive, Command::DisableVoltage)
+                            (State::SwitchOnDisabled, ControlCommand::Shutdown)
+                                | (State::ReadyToSwitchOn, ControlCommand::SwitchOn)
+                                | (State::SwitchedOn, ControlCommand::EnableOperation)
+                                | (State::QuickStopActive, ControlCommand::DisableVoltage)
                         );
                         assert!(allowed, "{state:?}: {cmd:?} is no transition of the table");
                         state = expect;
@@ -444,15 +444,15 @@ mod tests {
     #[test]
     fn commands_round_trip() {
         for c in [
-            Command::Shutdown,
-            Command::SwitchOn,
-            Command::EnableOperation,
-            Command::DisableVoltage,
-            Command::QuickStop,
+            ControlCommand::Shutdown,
+            ControlCommand::SwitchOn,
+            ControlCommand::EnableOperation,
+            ControlCommand::DisableVoltage,
+            ControlCommand::QuickStop,
         ] {
-            assert_eq!(Command::decode(c.controlword()), Some(c));
+            assert_eq!(ControlCommand::decode(c.controlword()), Some(c));
         }
-        assert_eq!(Command::decode(cw::FAULT_RESET), None, "edge-detected by the state machine");
+        assert_eq!(ControlCommand::decode(cw::FAULT_RESET), None, "edge-detected by the state machine");
     }
 
     #[test]

@@ -80,12 +80,12 @@
 //! 1. Feed new controlwords (6040h) to [`state_machine::StateMachine::controlword`];
 //!    on `Outcome::fault_reset` call [`model::DriveModel::clear_faults`].
 //! 2. Read [`state_machine::StateMachine::drive_function`]:
-//!    `Disabled` → [`model::Command::Off`]; `Enabled` → the operating mode's
-//!    set-point (CSP: `Command::Position` with velocity/acceleration
-//!    feed-forward; CSV/PV: `Command::Velocity`; CST/TQ: `Command::Torque`);
+//!    `Disabled` → [`model::Demand::Off`]; `Enabled` → the operating mode's
+//!    set-point (CSP: `Demand::Position` with velocity/acceleration
+//!    feed-forward; CSV/PV: `Demand::Velocity`; CST/TQ: `Demand::Torque`);
 //!    `Stopping(reaction)` → execute the ramp (slow-down 6084h, quick stop
 //!    6085h: a velocity or position ramp; current limit: velocity 0 and let
-//!    the loop saturate; voltage limit: [`model::Command::ShortCircuit`]);
+//!    the loop saturate; voltage limit: [`model::Demand::ShortCircuit`]);
 //!    `Holding` → hold position / velocity 0.
 //! 3. [`model::DriveModel::step`] and use its events (index pulse, switch
 //!    edges with interpolated positions for homing and touch probe, end
@@ -97,7 +97,7 @@
 //! 5. Statusword 6041h = `sm.statusword()` (bits 0–6) | the mode's bits.
 //!
 //! ```
-//! use drivebus_cia402::model::{Command, DriveModel, DriveParams};
+//! use drivebus_cia402::model::{Demand, DriveModel, DriveParams};
 //! use drivebus_cia402::state_machine::{DriveFunction, Options, StateMachine};
 //!
 //! let mut sm = StateMachine::new(Options::default());
@@ -108,14 +108,14 @@
 //! sm.controlword(0x0F);
 //! for k in 0..800 {
 //!     let cmd = match sm.drive_function() {
-//!         DriveFunction::Enabled => Command::Position {
+//!         DriveFunction::Enabled => Demand::Position {
 //!             position: 0.001 * k as f64,
 //!             velocity: 0.001 / dt,
 //!             acceleration: 0.0,
 //!         },
-//!         _ => Command::Off,
+//!         _ => Demand::Off,
 //!     };
-//!     motor.set_command(cmd);
+//!     motor.set_demand(cmd);
 //!     motor.step(dt);
 //!     if let Some(code) = motor.faults().error_code() {
 //!         sm.fault(code);

@@ -10,7 +10,7 @@
 //! axis has come to rest the mode layer calls [`StateMachine::motion_stopped`]
 //! to complete the transition that waited for it.
 
-pub use crate::codes::{Command, State};
+pub use crate::codes::{ControlCommand, State};
 
 /// Statusword 6041h bits owned by device control (bits 0–6); the whole
 /// table is [`crate::codes::sw`].
@@ -341,8 +341,8 @@ impl StateMachine {
         self.bit7 = bit7;
         if rising {
             self.fault_reset = true;
-            self.apply(Command::FaultReset);
-        } else if let Some(cmd) = Command::decode(cw) {
+            self.apply(ControlCommand::FaultReset);
+        } else if let Some(cmd) = ControlCommand::decode(cw) {
             self.apply(cmd);
         }
         self.finish(prev)
@@ -350,8 +350,8 @@ impl StateMachine {
 
     /// Applies a decoded command (used by [`Self::controlword`] and for the
     /// 6007h actions). Commands not legal in the current state are ignored.
-    fn apply(&mut self, cmd: Command) {
-        use Command as C;
+    fn apply(&mut self, cmd: ControlCommand) {
+        use ControlCommand as C;
         use State as S;
         match (self.state, cmd) {
             (S::SwitchOnDisabled, C::Shutdown) => self.go(2, S::ReadyToSwitchOn),
@@ -503,7 +503,7 @@ impl StateMachine {
     /// 605Ah).
     pub fn quick_stop(&mut self) -> Outcome {
         let prev = self.begin();
-        self.apply(Command::QuickStop);
+        self.apply(ControlCommand::QuickStop);
         self.finish(prev)
     }
 
@@ -517,9 +517,9 @@ impl StateMachine {
             2 | 3 => {
                 let prev = self.begin();
                 let cmd = if self.options.abort_connection == 2 {
-                    Command::DisableVoltage
+                    ControlCommand::DisableVoltage
                 } else {
-                    Command::QuickStop
+                    ControlCommand::QuickStop
                 };
                 self.apply(cmd);
                 self.finish(prev)

@@ -2,7 +2,7 @@
 //! stopping reactions are executed on the model and completed with
 //! `motion_stopped` (CiA 402-2 §6.2, 605Ah / 605Eh).
 
-use drivebus_cia402::model::{Command, DriveModel, DriveParams, ModelInjection};
+use drivebus_cia402::model::{Demand, DriveModel, DriveParams, ModelInjection};
 use drivebus_cia402::state_machine::{DriveFunction, Options, Reaction, State, StateMachine};
 
 const DT: f64 = 1.0 / 8000.0;
@@ -33,13 +33,13 @@ impl Axis {
         let cmd = match self.sm.drive_function() {
             DriveFunction::Disabled => {
                 self.ramp_velocity = self.model.velocity();
-                Command::Off
+                Demand::Off
             }
             DriveFunction::Enabled => {
                 self.ramp_velocity = self.target_velocity;
-                Command::Velocity { velocity: self.target_velocity, acceleration: 0.0 }
+                Demand::Velocity { velocity: self.target_velocity, acceleration: 0.0 }
             }
-            DriveFunction::Holding => Command::Velocity { velocity: 0.0, acceleration: 0.0 },
+            DriveFunction::Holding => Demand::Velocity { velocity: 0.0, acceleration: 0.0 },
             DriveFunction::Stopping(r) => {
                 let decel = match r {
                     Reaction::SlowDownRamp => slow,
@@ -50,18 +50,18 @@ impl Axis {
                 };
                 if r == Reaction::VoltageLimit {
                     self.ramp_velocity = 0.0;
-                    Command::ShortCircuit
+                    Demand::ShortCircuit
                 } else if r == Reaction::DisableDrive {
                     self.ramp_velocity = 0.0;
-                    Command::Off
+                    Demand::Off
                 } else {
                     let dv = (decel * DT).min(self.ramp_velocity.abs());
                     self.ramp_velocity -= dv * self.ramp_velocity.signum();
-                    Command::Velocity { velocity: self.ramp_velocity, acceleration: 0.0 }
+                    Demand::Velocity { velocity: self.ramp_velocity, acceleration: 0.0 }
                 }
             }
         };
-        self.model.set_command(cmd);
+        self.model.set_demand(cmd);
         self.model.step(DT);
         if let Some(code) = self.model.faults().error_code() {
             self.sm.fault(code);

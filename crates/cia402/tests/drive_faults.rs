@@ -193,11 +193,11 @@ fn sync_loss_in_a_cyclic_mode_faults() {
 /// replaces 605Eh's.
 #[test]
 fn fault_actions_per_code() {
-    use drivebus_cia402::drive::FaultAction;
+    use drivebus_cia402::drive::ErrorReaction;
     use drivebus_cia402::state_machine::Reaction;
     let mut r = Rig::generic();
     r.start();
-    r.drive_mut().set_fault_action(0x3210, Some(FaultAction::NoAction));
+    r.drive_mut().set_fault_action(0x3210, Some(ErrorReaction::NoAction));
     r.enable();
     r.run_ms(2.0);
     r.take();
@@ -211,7 +211,7 @@ fn fault_actions_per_code() {
     assert_eq!(r.emcys(), vec![emcy(0x0000, 0x00)], "condition gone");
     assert_eq!(r.drive().ignored_fault(), None);
     // A reaction instead of 605Eh's (generic default 2, quick stop ramp).
-    r.drive_mut().set_fault_action(0x3210, Some(FaultAction::React(Reaction::DisableDrive)));
+    r.drive_mut().set_fault_action(0x3210, Some(ErrorReaction::React(Reaction::DisableDrive)));
     r.drive_mut().inject(Injection::Model(M::BusOverVoltage));
     r.run_ms(1.0);
     assert_eq!(r.statusword(), FAULT, "straight to Fault");

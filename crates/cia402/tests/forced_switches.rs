@@ -5,7 +5,7 @@
 //! axis reaching the switch (CiA 402-2 §6.2: 60FDh bits 0–2).
 
 use drivebus_cia402::model::{
-    AxisParams, Command, DriveModel, DriveParams, EventKind, ModelInjection, SwitchInput,
+    AxisParams, Demand, DriveModel, DriveParams, EventKind, ModelInjection, SwitchInput,
 };
 
 fn model() -> DriveModel {
@@ -45,7 +45,7 @@ fn a_dead_switch_hides_the_axis_edges_until_released() {
     let mut m = model();
     m.inject(ModelInjection::ForceSwitch(SwitchInput::Home, Some(false)));
     m.step(DT);
-    assert!(m.set_command(Command::Velocity { velocity: 40.0, acceleration: 1e4 }));
+    assert!(m.set_demand(Demand::Velocity { velocity: 40.0, acceleration: 1e4 }));
     let mut home_edges = 0;
     let mut t = 0.0;
     // 0° → past the home switch [100°, 200°] (40 rad/s ≈ 2292°/s).

@@ -5,7 +5,7 @@
 
 use drivebus_cia402::drive::{ModeCommand, ModeHandler, ModeIo, ModeParams, Units, op};
 use drivebus_cia402::homing::HomingMode;
-use drivebus_cia402::model::{AxisParams, Command, DriveModel, DriveParams};
+use drivebus_cia402::model::{AxisParams, Demand, DriveModel, DriveParams};
 
 use core::f64::consts::PI;
 
@@ -87,7 +87,7 @@ impl DriveStandIn {
             let u = &self.units;
             // Demand in the shifted frame → raw motor angle.
             let raw = u.pos_to_inc_f(position) - self.inc_offset as f64;
-            assert!(self.model.set_command(Command::Position {
+            assert!(self.model.set_demand(Demand::Position {
                 position: u.inc_to_rad(raw),
                 velocity: u.pos_to_rad(velocity),
                 acceleration: u.pos_to_rad(acceleration),

@@ -4,7 +4,7 @@
 
 use drivebus_cia402::interp::cyclic::{FOLLOWING_ERROR, FOLLOWING_ERROR_CODE, FOLLOWS};
 use drivebus_cia402::interp::{Cyclic, CyclicConfig, CyclicKind, Interpolator};
-use drivebus_cia402::model::{Command, DriveModel, DriveParams};
+use drivebus_cia402::model::{Demand, DriveModel, DriveParams};
 
 use core::f64::consts::PI;
 
@@ -50,18 +50,18 @@ impl Rig {
         self.faults.extend(out.fault);
         self.status = out.status;
         let cmd = match self.mode.kind() {
-            CyclicKind::Position => Command::Position {
+            CyclicKind::Position => Demand::Position {
                 position: m.units_to_rad(out.demand),
                 velocity: m.units_to_rad(out.feed_forward),
                 acceleration: m.units_to_rad(out.feed_forward2),
             },
-            CyclicKind::Velocity => Command::Velocity {
+            CyclicKind::Velocity => Demand::Velocity {
                 velocity: m.units_to_rad(out.demand),
                 acceleration: m.units_to_rad(out.feed_forward),
             },
-            CyclicKind::Torque => Command::Torque(out.demand / 1000.0 * RATED_TORQUE),
+            CyclicKind::Torque => Demand::Torque(out.demand / 1000.0 * RATED_TORQUE),
         };
-        assert!(m.set_command(cmd));
+        assert!(m.set_demand(cmd));
         m.step(DT);
         out.demand
     }

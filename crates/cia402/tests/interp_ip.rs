@@ -4,7 +4,7 @@
 
 use drivebus_cia402::interp::ip::{IP_ACTIVE, IP_OVERFLOW_CODE, IP_UNDERFLOW_CODE, TARGET_REACHED, WARNING};
 use drivebus_cia402::interp::{Ip, IpBufferError, IpConfig, IpRecord, Organisation, SubMode};
-use drivebus_cia402::model::{Command, DriveModel, DriveParams};
+use drivebus_cia402::model::{Demand, DriveModel, DriveParams};
 
 const DT: f64 = 1.0 / 8000.0;
 /// 1 kHz SYNC at 8 kHz control: 8 periods per SYNC.
@@ -37,12 +37,12 @@ impl Rig {
         self.emcy.extend(out.emcy);
         self.last_status = out.status;
         let m = &mut self.model;
-        let cmd = Command::Position {
+        let cmd = Demand::Position {
             position: m.units_to_rad(out.position),
             velocity: m.units_to_rad(out.velocity),
             acceleration: m.units_to_rad(out.acceleration),
         };
-        assert!(m.set_command(cmd));
+        assert!(m.set_demand(cmd));
         m.step(DT);
         out.position
     }

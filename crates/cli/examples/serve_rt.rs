@@ -123,6 +123,45 @@ fn match_drive(syncs: &[Instant], tpdos: &[Instant]) -> (Vec<(usize, f64)>, usiz
     (lat, missed + syncs.len() - k)
 }
 
+/// A stall of the idle thread worth reporting \[ms\].
+const HICCUP_MS: f64 = 1.0;
+
+/// A thread that only sleeps 200 µs at a time and records how much later
+/// than asked it woke: what the machine (guest, host, neighbours) does to
+/// any thread, beside what `serve` does to its own.
+struct Hiccups {
+    stop: Arc<std::sync::atomic::AtomicBool>,
+    thread: std::thread::JoinHandle<Vec<(f64, f64)>>,
+}
+
+impl Hiccups {
+    fn start(t0: Instant) -> Hiccups {
+        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::spawn(move || {
+            let nap = Duration::from_micros(200);
+            let mut found = Vec::new();
+            while !flag.load(std::sync::atomic::Ordering::Relaxed) {
+                let before = Instant::now();
+                std::thread::sleep(nap);
+                let after = Instant::now();
+                let late = (after - before).saturating_sub(nap).as_secs_f64() * 1e3;
+                if late > HICCUP_MS && after > t0 {
+                    // (when it woke, ms after the first SYNC; how late, ms)
+                    found.push(((after - t0).as_secs_f64() * 1e3, late));
+                }
+            }
+            found
+        });
+        Hiccups { stop, thread }
+    }
+
+    fn stop(self) -> Vec<(f64, f64)> {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        self.thread.join().unwrap_or_default()
+    }
+}
+
 fn main() -> anyhow::Result<()> {
     let a = parse_args()?;
     let _served = serve(&a)?;
@@ -179,6 +218,7 @@ fn main() -> anyhow::Result<()> {
     let t0 = Instant::now() + Duration::from_millis(200);
     // TPDOs before the first SYNC answered nothing we sent.
     let first_sync = t0;
+    let hiccups = Hiccups::start(t0);
     for k in 0..cycles {
         let due = t0 + period * k as u32;
         let now = Instant::now();
@@ -196,6 +236,7 @@ fn main() -> anyhow::Result<()> {
     std::thread::sleep(MISSED_AFTER + Duration::from_millis(20));
     recv.abort();
     let elapsed = start.elapsed();
+    let stalls = hiccups.stop();
 
     let log = log.lock().unwrap();
     let (mut lat, mut missed) = (Vec::new(), 0);
@@ -209,7 +250,21 @@ fn main() -> anyhow::Result<()> {
     // Where the worst cycles fall (start-up, periodic, random) tells what
     // dominates the tail.
     lat.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let worst: Vec<String> = lat.iter().take(5).map(|(k, us)| format!("{us:.0} us at cycle {k}")).collect();
+    // A worst cycle during which an idle thread of this (other) process
+    // was not scheduled either is a stall of the machine, not of `serve`.
+    let machine_stall = |k: usize, us: f64| {
+        let from = period.as_secs_f64() * 1e3 * k as f64 - 1.0;
+        let to = from + 1.0 + us / 1e3;
+        stalls.iter().any(|&(at, gap)| at + 1.0 >= from && at - gap <= to)
+    };
+    let worst: Vec<String> = lat
+        .iter()
+        .take(5)
+        .map(|&(k, us)| {
+            let tag = if machine_stall(k, us) { " (machine stall)" } else { "" };
+            format!("{us:.0} us at cycle {k}{tag}")
+        })
+        .collect();
     let mut lat: Vec<f64> = lat.into_iter().map(|x| x.1).collect();
     lat.sort_by(f64::total_cmp);
     let drive_cycles = cycles * usize::from(a.drives);
@@ -238,6 +293,11 @@ fn main() -> anyhow::Result<()> {
         lat.len()
     );
     println!("worst: {}", worst.join(", "));
+    let worst_stall = stalls.iter().map(|s| s.1).fold(0.0, f64::max);
+    println!(
+        "machine stalls (an idle thread of this process late by over {HICCUP_MS} ms): {} , longest {worst_stall:.1} ms",
+        stalls.len()
+    );
     println!(
         "missed cycles: {} of {} drive-cycles ({:.3} %); SYNCs sent more than a period late: {}",
         missed,

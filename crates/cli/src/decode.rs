@@ -4,6 +4,7 @@
 
 use std::collections::HashMap;
 
+use drivebus_master::sdo_wire::{CS_ABORT, EXPEDITED, expedited_len, scs};
 use drivebus_master::{CanId, Frame};
 use drivebus_master::{DataType, PdoMapEntry, SdoAbort, Value};
 
@@ -195,7 +196,7 @@ pub fn decode(f: &Frame, dict: &Dict, pdos: &PdoMaps) -> String {
 fn sdo(d: &[u8; 8], from_server: bool, dict: &Dict) -> String {
     let idx = u16::from_le_bytes([d[1], d[2]]);
     let sub = d[3];
-    if d[0] == 0x80 {
+    if d[0] == CS_ABORT {
         let a = SdoAbort(u32_at(d, 4));
         return format!(
             "abort {} code 0x{:08X} {}",
@@ -204,12 +205,12 @@ fn sdo(d: &[u8; 8], from_server: bool, dict: &Dict) -> String {
             a.description().unwrap_or("unknown abort code")
         );
     }
-    let cs = d[0] >> 5;
-    let expedited_len = |d0: u8| if d0 & 0x03 == 0x03 { 4 - usize::from((d0 >> 2) & 3) } else { 0 };
-    match (from_server, cs) {
+    // Without the size indicated an expedited frame shows all 4 bytes.
+    let expedited_n = |d0: u8| expedited_len(d0).unwrap_or(4);
+    match (from_server, scs(d[0])) {
         (false, 1) => {
-            if d[0] & 0x02 != 0 {
-                let n = expedited_len(d[0]).max(1);
+            if d[0] & EXPEDITED != 0 {
+                let n = expedited_n(d[0]);
                 let hex: Vec<String> = d[4..4 + n].iter().map(|b| format!("{b:02X}")).collect();
                 format!("write {} = {}", name(dict, idx, sub), hex.join(" "))
             } else {
@@ -222,8 +223,8 @@ fn sdo(d: &[u8; 8], from_server: bool, dict: &Dict) -> String {
         (false, 5) => "block upload".to_owned(),
         (false, 6) => format!("block download {}", name(dict, idx, sub)),
         (true, 2) => {
-            if d[0] & 0x02 != 0 {
-                let n = expedited_len(d[0]).max(1);
+            if d[0] & EXPEDITED != 0 {
+                let n = expedited_n(d[0]);
                 let mut b = [0u8; 4];
                 b[..n].copy_from_slice(&d[4..4 + n]);
                 let v = u32::from_le_bytes(b);
@@ -269,6 +270,12 @@ mod tests {
         assert_eq!(
             d(0x605, &[0x2B, 0x17, 0x10, 0, 0x64, 0x00, 0, 0]),
             "SDO master → node 5: write 1017h:00 (Producer heartbeat time) = 64 00"
+        );
+        // e = 1, s = 0: the size is not indicated, so all 4 bytes are shown
+        // (they used to be cut to one).
+        assert_eq!(
+            d(0x605, &[0x22, 0x17, 0x10, 0, 0x64, 0x00, 0, 0]),
+            "SDO master → node 5: write 1017h:00 (Producer heartbeat time) = 64 00 00 00"
         );
         assert!(
             d(0x585, &[0x80, 0x00, 0x20, 0, 0x00, 0x00, 0x02, 0x06])

@@ -390,7 +390,7 @@ async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(f64, f
     d1.set_mode(mode::PP).await?;
     d2.set_mode(mode::PP).await?;
     let profile =
-        drivebus_master::Profile { velocity: 720_000, acceleration: 3_600_000, deceleration: 3_600_000 };
+        drivebus_master::MoveProfile { velocity: 720_000, acceleration: 3_600_000, deceleration: 3_600_000 };
     let t0 = m.now();
     let one = async {
         d1.move_to(360_000, false, Some(profile), Duration::from_secs(20)).await.map(|_| secs(m, t0))

@@ -10,11 +10,12 @@ use std::time::Duration;
 use anyhow::{anyhow, bail};
 use drivebus_master::{
     Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
-    Profile, SdoError, StopAction, drive::human_secs, drive::mode, drive::sw as bit, mode_name,
+    MoveProfile, SdoError, StopAction, drive::cw, drive::human_secs, drive::mode, drive::sw as bit,
+    mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{DriveCmd, Global};
+use crate::args::{DriveCmd, Global, MoveArgs};
 use crate::conn::{Conn, need_node};
 use crate::error::{coded, coded_with};
 
@@ -241,76 +242,8 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             p2.set_message(describe_progress(p));
             p2.tick();
         });
-    let require_enabled = || async {
-        let sw = d.statusword().await.map_err(ex)?;
-        if DriveState::from_statusword(sw) != DriveState::OperationEnabled {
-            return Err(coded(
-                "drive_state",
-                anyhow!(
-                    "node {node}: drive is not in operation enabled (it is in {}); run `drivebus --node {node} drive enable` first",
-                    state_name(sw)
-                ),
-            ));
-        }
-        Ok(())
-    };
-    let read_i = |index: u16| {
-        let d = &d;
-        async move {
-            let v = d.read_raw(index, 0).await.ok()?;
-            Some(match v.len() {
-                1 => i64::from(v[0] as i8),
-                2 => i64::from(i16::from_le_bytes([v[0], v[1]])),
-                4 => i64::from(i32::from_le_bytes([v[0], v[1], v[2], v[3]])),
-                _ => return None,
-            })
-        }
-    };
     let report = match c {
-        DriveCmd::Status => {
-            let sw = d.statusword().await.map_err(ex)?;
-            let mode = read_i(0x6061).await.map(|m| m as i8);
-            let pos = read_i(0x6064).await;
-            let vel = read_i(0x606C).await;
-            let err = read_i(0x603F).await.map(|e| e as u16);
-            let reg = d.read_raw(0x1001, 0).await.ok().and_then(|v| v.first().copied());
-            let inputs = d.digital_inputs().await;
-            let flags = DriveFlags { statusword: sw, inputs, mode };
-            let bits = flags.statusword_text();
-            let active = inputs.map(DriveFlags::inputs_text).unwrap_or_default();
-            let json = serde_json::json!({"node": node, "statusword": sw, "state": state_name(sw), "mode": mode,
-                "mode_name": mode.map(mode_name), "position": pos, "velocity": vel, "error_code": err, "error_register": reg,
-                "target_reached": sw & bit::TARGET_REACHED != 0, "warning": sw & bit::WARNING != 0,
-                "internal_limit": sw & bit::INTERNAL_LIMIT != 0, "bit13": sw & bit::MODE_13 != 0, "statusword_flags": bits, "inputs": inputs,
-                "negative_limit_switch": inputs.map(|i| i & 1 != 0), "positive_limit_switch": inputs.map(|i| i & 2 != 0),
-                "home_switch": inputs.map(|i| i & 4 != 0)});
-            let mut t = format!("node {node}: {} (statusword {sw:04X}h)", state_name(sw));
-            if let Some(m) = mode {
-                t += &format!("\n  mode      {m} ({})", mode_name(m));
-            }
-            if let Some(p) = pos {
-                t += &format!("\n  position  {p}");
-            }
-            if let Some(v) = vel {
-                t += &format!("\n  velocity  {v}");
-            }
-            if !bits.is_empty() {
-                t += &format!("\n  flags     {}", bits.join(", "));
-            }
-            if !active.is_empty() {
-                t += &format!("\n  inputs    {active}");
-            }
-            t += &match err {
-                Some(0) | None if bits.is_empty() => "\n  errors    none".to_owned(),
-                Some(0) | None => "\n  errors    none in 603Fh".to_owned(),
-                Some(e) => format!(
-                    "\n  error     {e:04X}h {} (register {:02X}h)",
-                    drivebus_master::emcy_description(e).unwrap_or("manufacturer specific"),
-                    reg.unwrap_or(0)
-                ),
-            };
-            Some((t, json))
-        }
+        DriveCmd::Status => status(&d, node, ex).await?,
         DriveCmd::Enable => {
             d.enable().await.map_err(ex)?;
             done(
@@ -367,53 +300,13 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             };
             done(node, code, msg.into(), sw, serde_json::json!({}))
         }
-        DriveCmd::Move(a) => {
-            require_enabled().await?;
-            let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
-            let from = d.position().await;
-            let target = match (a.relative, from) {
-                (true, Some(p)) => Some(p.saturating_add(a.target)),
-                (true, None) => None,
-                (false, _) => Some(a.target),
-            };
-            // Checked with the profile the move would run at, before anything
-            // is written: a refused move leaves the drive as it was.
-            let mut limits = d.motion_limits().await;
-            if let Some(v) = a.velocity {
-                limits.profile_velocity = Some(v);
-            }
-            if let Some(acc) = a.acceleration {
-                limits.profile_acceleration = Some(acc);
-                limits.profile_deceleration = Some(acc);
-            }
-            preflight(&limits, node, from, target, wait)?;
-            d.set_mode(mode::PP).await.map_err(ex)?;
-            if let Some(v) = a.velocity {
-                d.write_raw(0x6081, 0, &v.to_le_bytes()).await.map_err(ex)?;
-            }
-            if let Some(acc) = a.acceleration {
-                d.write_raw(0x6083, 0, &acc.to_le_bytes()).await.map_err(ex)?;
-                d.write_raw(0x6084, 0, &acc.to_le_bytes()).await.map_err(ex)?;
-            }
-            let r = guarded(
-                &d,
-                node,
-                timeout,
-                "the move",
-                target,
-                false,
-                d.move_to(a.target, a.relative, None::<Profile>, wait),
-            )
-            .await;
-            pb.finish_and_clear();
-            reached(node, &r?)
-        }
+        DriveCmd::Move(a) => move_axis(&d, node, timeout, a, &pb, ex).await?,
         DriveCmd::Velocity(a) => {
-            require_enabled().await?;
+            require_enabled(&d, node, &ex).await?;
             let r = guarded(&d, node, timeout, "setting the velocity", None, false, async {
                 d.set_mode(mode::PV).await?;
                 d.velocity(a.value).await?;
-                d.controlword(0x0F).await
+                d.controlword(cw::ENABLE_OPERATION).await
             })
             .await;
             r?;
@@ -429,18 +322,18 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
         DriveCmd::Torque(a) => {
             let t = i16::try_from(a.value)
                 .map_err(|_| coded("usage", anyhow!("torque {} is outside -32768..32767", a.value)))?;
-            require_enabled().await?;
+            require_enabled(&d, node, &ex).await?;
             guarded(&d, node, timeout, "setting the torque", None, false, async {
                 d.set_mode(mode::TQ).await?;
                 d.torque(t).await?;
-                d.controlword(0x0F).await
+                d.controlword(cw::ENABLE_OPERATION).await
             })
             .await?;
             let sw = d.statusword().await.map_err(ex)?;
             done(node, "target_torque", format!("target torque {t} ‰"), sw, serde_json::json!({"torque": t}))
         }
         DriveCmd::Home(a) => {
-            require_enabled().await?;
+            require_enabled(&d, node, &ex).await?;
             let method = match a.method {
                 Some(m) => m,
                 None => d.read_raw(0x6098, 0).await.map_err(ex)?.first().map_or(0, |b| *b as i8),
@@ -453,6 +346,133 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
     };
     pb.finish_and_clear();
     Ok(report)
+}
+
+/// Refuses a motion command unless the drive is in operation enabled.
+async fn require_enabled(
+    d: &Drive,
+    node: u8,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<()> {
+    let sw = d.statusword().await.map_err(ex)?;
+    if DriveState::from_statusword(sw) != DriveState::OperationEnabled {
+        return Err(coded(
+            "drive_state",
+            anyhow!(
+                "node {node}: drive is not in operation enabled (it is in {}); run `drivebus --node {node} drive enable` first",
+                state_name(sw)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A signed integer object of 1, 2 or 4 bytes; `None` when it cannot be read.
+async fn read_int(d: &Drive, index: u16) -> Option<i64> {
+    let v = d.read_raw(index, 0).await.ok()?;
+    Some(match v.len() {
+        1 => i64::from(v[0] as i8),
+        2 => i64::from(i16::from_le_bytes([v[0], v[1]])),
+        4 => i64::from(i32::from_le_bytes([v[0], v[1], v[2], v[3]])),
+        _ => return None,
+    })
+}
+
+/// `drive status`: state, mode, position, velocity, flags, inputs, error.
+async fn status(d: &Drive, node: u8, ex: impl Fn(DriveError) -> anyhow::Error) -> anyhow::Result<Printed> {
+    let sw = d.statusword().await.map_err(&ex)?;
+    let mode = read_int(d, 0x6061).await.map(|m| m as i8);
+    let pos = read_int(d, 0x6064).await;
+    let vel = read_int(d, 0x606C).await;
+    let err = read_int(d, 0x603F).await.map(|e| e as u16);
+    let reg = d.read_raw(0x1001, 0).await.ok().and_then(|v| v.first().copied());
+    let inputs = d.digital_inputs().await;
+    let flags = DriveFlags { statusword: sw, inputs, mode };
+    let bits = flags.statusword_text();
+    let active = inputs.map(DriveFlags::inputs_text).unwrap_or_default();
+    let json = serde_json::json!({"node": node, "statusword": sw, "state": state_name(sw), "mode": mode,
+        "mode_name": mode.map(mode_name), "position": pos, "velocity": vel, "error_code": err, "error_register": reg,
+        "target_reached": sw & bit::TARGET_REACHED != 0, "warning": sw & bit::WARNING != 0,
+        "internal_limit": sw & bit::INTERNAL_LIMIT != 0, "bit13": sw & bit::MODE_13 != 0, "statusword_flags": bits, "inputs": inputs,
+        "negative_limit_switch": inputs.map(|i| i & 1 != 0), "positive_limit_switch": inputs.map(|i| i & 2 != 0),
+        "home_switch": inputs.map(|i| i & 4 != 0)});
+    let mut t = format!("node {node}: {} (statusword {sw:04X}h)", state_name(sw));
+    if let Some(m) = mode {
+        t += &format!("\n  mode      {m} ({})", mode_name(m));
+    }
+    if let Some(p) = pos {
+        t += &format!("\n  position  {p}");
+    }
+    if let Some(v) = vel {
+        t += &format!("\n  velocity  {v}");
+    }
+    if !bits.is_empty() {
+        t += &format!("\n  flags     {}", bits.join(", "));
+    }
+    if !active.is_empty() {
+        t += &format!("\n  inputs    {active}");
+    }
+    t += &match err {
+        Some(0) | None if bits.is_empty() => "\n  errors    none".to_owned(),
+        Some(0) | None => "\n  errors    none in 603Fh".to_owned(),
+        Some(e) => format!(
+            "\n  error     {e:04X}h {} (register {:02X}h)",
+            drivebus_master::emcy_description(e).unwrap_or("manufacturer specific"),
+            reg.unwrap_or(0)
+        ),
+    };
+    Ok(Some((t, json)))
+}
+
+/// `drive move`: a profile position move, checked against the limits
+/// before anything is written.
+async fn move_axis(
+    d: &Drive,
+    node: u8,
+    timeout: Duration,
+    a: &MoveArgs,
+    pb: &ProgressBar,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<Printed> {
+    require_enabled(d, node, &ex).await?;
+    let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
+    let from = d.position().await;
+    let target = match (a.relative, from) {
+        (true, Some(p)) => Some(p.saturating_add(a.target)),
+        (true, None) => None,
+        (false, _) => Some(a.target),
+    };
+    // Checked with the profile the move would run at, before anything
+    // is written: a refused move leaves the drive as it was.
+    let mut limits = d.motion_limits().await;
+    if let Some(v) = a.velocity {
+        limits.profile_velocity = Some(v);
+    }
+    if let Some(acc) = a.acceleration {
+        limits.profile_acceleration = Some(acc);
+        limits.profile_deceleration = Some(acc);
+    }
+    preflight(&limits, node, from, target, wait)?;
+    d.set_mode(mode::PP).await.map_err(&ex)?;
+    if let Some(v) = a.velocity {
+        d.write_raw(0x6081, 0, &v.to_le_bytes()).await.map_err(&ex)?;
+    }
+    if let Some(acc) = a.acceleration {
+        d.write_raw(0x6083, 0, &acc.to_le_bytes()).await.map_err(&ex)?;
+        d.write_raw(0x6084, 0, &acc.to_le_bytes()).await.map_err(&ex)?;
+    }
+    let r = guarded(
+        d,
+        node,
+        timeout,
+        "the move",
+        target,
+        false,
+        d.move_to(a.target, a.relative, None::<MoveProfile>, wait),
+    )
+    .await;
+    pb.finish_and_clear();
+    Ok(reached(node, &r?))
 }
 
 /// The report of a motion that did what it was asked.

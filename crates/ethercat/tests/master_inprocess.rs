@@ -12,7 +12,7 @@ use drivebus_esi::CoeDetails;
 use drivebus_ethercat::drive::DriveLine as Line;
 use drivebus_ethercat::drive::DriveSpec;
 use drivebus_ethercat::master::drive::DriveLine;
-use drivebus_ethercat::master::{self, AlState, Described, Master, MasterError, PduFrames, coe_details};
+use drivebus_ethercat::master::{self, AlState, DescribedBy, Master, MasterError, PduFrames, coe_details};
 use drivebus_ethercat::{BoxDevice, Clock, Host};
 use drivebus_personality::Profile;
 
@@ -149,9 +149,9 @@ fn whole_objects_by_sdo_information_and_complete_access() {
         // The TxPDO assignment: an ARRAY, every entry named and typed by the
         // slave, entries 1.. in one complete-access upload (§2.3 default).
         let r = m.read_object(&sd, 1, 0x1C13).await.unwrap();
-        let Described::SdoInfo(o) = &r.described else { panic!("{r:?}") };
+        let DescribedBy::SdoInfo(o) = &r.described else { panic!("{r:?}") };
         assert_eq!(
-            (o.name.as_str(), o.object_code, o.data_type),
+            (o.name_text().as_str(), o.object_code, o.data_type),
             ("Sync Manager Channel 3 (Process Data Input)", 8, 6)
         );
         assert!(r.complete_access && r.read_complete, "{r:?}");
@@ -159,14 +159,14 @@ fn whole_objects_by_sdo_information_and_complete_access() {
         assert_eq!(subs, [(0, vec![2]), (1, vec![0x00, 0x1A]), (2, vec![0x01, 0x1A])]);
         let i = r.entries[1].info.as_ref().unwrap();
         assert_eq!((i.data_type, i.bit_length, i.access_text()), (6, 16, "rw"));
-        assert_eq!(i.name, "Sync Manager Channel 3: PDO Mapping object index of assigned TxPDO (1st)");
-        assert_eq!(r.entries[0].info.as_ref().unwrap().name, "Number of entries");
+        assert_eq!(i.name_text(), "Sync Manager Channel 3: PDO Mapping object index of assigned TxPDO (1st)");
+        assert_eq!(r.entries[0].info.as_ref().unwrap().name_text(), "Number of entries");
         // A RECORD: the identity, read only.
         let r = m.read_object(&sd, 1, 0x1018).await.unwrap();
-        let Described::SdoInfo(o) = &r.described else { panic!("{r:?}") };
-        assert_eq!((o.name.as_str(), o.object_code), ("Identity Object", 9));
+        let DescribedBy::SdoInfo(o) = &r.described else { panic!("{r:?}") };
+        assert_eq!((o.name_text().as_str(), o.object_code), ("Identity Object", 9));
         assert!(r.read_complete);
-        let names: Vec<_> = r.entries.iter().map(|e| e.info.as_ref().unwrap().name.as_str()).collect();
+        let names: Vec<_> = r.entries.iter().map(|e| e.info.as_ref().unwrap().name_text()).collect();
         assert_eq!(
             names,
             ["Number of entries", "Vendor ID", "Product Code", "Revision number", "Serial number"]
@@ -196,7 +196,7 @@ fn whole_objects_without_sdo_information_or_complete_access() {
         let r = m.read_object(&sd, 1, 0x1C13).await.unwrap();
         assert_eq!(
             r.described,
-            Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into())
+            DescribedBy::NoSdoInfo("its SII announces no SDO Information (CoE details)".into())
         );
         assert!(!r.complete_access && r.entries.is_empty(), "{r:?}");
         // The caller's layout, one upload per entry.
@@ -213,7 +213,7 @@ fn whole_objects_without_sdo_information_or_complete_access() {
         let g = m.init().await.unwrap();
         let sd = m.slave(&g, 1).unwrap();
         let r = m.read_object(&sd, 1, 0x1018).await.unwrap();
-        assert!(matches!(r.described, Described::NoSdoInfo(_)) && r.complete_access, "{r:?}");
+        assert!(matches!(r.described, DescribedBy::NoSdoInfo(_)) && r.complete_access, "{r:?}");
         // Complete access with the caller's layout; a layout that does not
         // fit the image falls back to one upload per entry.
         let layout = [(1, Some(32)), (2, Some(32)), (3, Some(32)), (4, Some(32))];

@@ -33,6 +33,7 @@ pub mod dcf;
 pub mod dict;
 pub mod drive;
 pub mod driver;
+pub mod gateway;
 pub mod lss;
 mod master;
 pub mod pdo;
@@ -43,7 +44,7 @@ pub use crate::core::Stats;
 pub use dcf::DumpReport;
 pub use drive::{
     Drive, DriveError, DriveFlags, DriveState, ModeNotShown, MotionEnd, MotionLimits, MotionProgress,
-    MotionReport, Profile, StopAction, StopReport, mode_name,
+    MotionReport, MoveProfile, StopAction, StopReport, mode_name,
 };
 pub use driver::sim::{SimBus, Stalled};
 pub use lss::{LssError, LssMaster, OnlySlave};
@@ -61,3 +62,5 @@ pub use drivebus_lss::{FastScan, Identity, LssAddressRange, LssMode};
 pub use drivebus_nmt::{NmtCommand, RemoteState};
 pub use drivebus_od::{DataType, SdoAbort, Value};
 pub use drivebus_sdo::client::Protocol;
+/// The SDO command byte (CiA 301 §7.2.4.3), for tools that decode frames.
+pub use drivebus_sdo::wire as sdo_wire;

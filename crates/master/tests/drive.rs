@@ -10,7 +10,8 @@ use std::time::Duration;
 use common::bounded;
 use drivebus_master::drive::mode;
 use drivebus_master::{
-    Drive, DriveError, DriveState, Master, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, Profile, RemoteState,
+    Drive, DriveError, DriveState, Master, MoveProfile, NmtCommand, PdoDir, PdoMapEntry, PdoRecord,
+    RemoteState,
 };
 use drivebus_node::{AppContext, Application, Node, NodeConfig, NodeDevice};
 use drivebus_od::{
@@ -251,7 +252,7 @@ async fn enable_move_and_home_over_pdo() {
         assert!(d.statusword_by_pdo() && d.controlword_by_pdo(), "{d:?}");
         d.enable().await.unwrap();
         d.set_mode(mode::PP).await.unwrap();
-        let profile = Profile { velocity: 1000, acceleration: 5000, deceleration: 5000 };
+        let profile = MoveProfile { velocity: 1000, acceleration: 5000, deceleration: 5000 };
         d.move_to(1000, false, Some(profile), Duration::from_secs(1)).await.unwrap();
         assert_eq!(position(&r.m, 4).await, 1000);
         assert_eq!(r.m.sdo(4).read::<u32>(0x6081, 0).await.unwrap(), 1000);

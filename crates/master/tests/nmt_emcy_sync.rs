@@ -202,8 +202,11 @@ async fn own_heartbeat_producer() {
         assert!((5..=25).contains(&frames.len()), "{} heartbeats in 200 ms at 10 ms", frames.len());
         assert!(frames.iter().all(|f| f.data() == [0x05]), "{frames:?}");
         m.stop_heartbeat();
-        tokio::time::sleep(Duration::from_millis(20)).await;
-        assert!(collect(&mut spy, 0x77E, Duration::from_millis(50)).await.is_empty());
+        // One heartbeat may already be on its way when the producer stops
+        // (a loaded machine delivers it late); a running producer would send
+        // about ten in 100 ms.
+        let after = collect(&mut spy, 0x77E, Duration::from_millis(100)).await;
+        assert!(after.len() <= 1, "{} heartbeats after the producer stopped", after.len());
     })
     .await;
 }

@@ -275,9 +275,9 @@ fn generic_brake_sequence_holds_a_hanging_load() {
     let b = r.pn().app.drive.model().brake();
     assert!(!b.engaged && b.commanded && b.pending, "applying: {b:?}");
     r.run_ms(29);
-    assert!(r.pn().app.drive.model().command() != drivebus_cia402::model::Command::Off);
+    assert!(r.pn().app.drive.model().demand() != drivebus_cia402::model::Demand::Off);
     r.run_ms(20);
-    assert_eq!(r.pn().app.drive.model().command(), drivebus_cia402::model::Command::Off);
+    assert_eq!(r.pn().app.drive.model().demand(), drivebus_cia402::model::Demand::Off);
     assert!(r.pn().app.drive.model().brake().engaged);
     r.run_ms(500);
     assert!((position(&mut r) - at).abs() <= 20, "held: {} from {at}", position(&mut r));

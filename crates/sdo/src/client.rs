@@ -60,13 +60,12 @@
 //!   [`ClientError::Busy`]; starting drops a result nobody took.
 
 mod block;
-mod wire;
 
+use crate::wire::*;
 use alloc::vec::Vec;
 use core::fmt;
 use drivebus_can::{CanId, Duration, Frame, Instant, TxSink};
 use drivebus_od::SdoAbort;
-use wire::*;
 
 /// Default response timeout of a client (CiA 301 leaves it to the application).
 pub const DEFAULT_TIMEOUT: Duration = Duration::from_millis(1000);
@@ -533,22 +532,22 @@ impl SdoClient {
                 self.size = Some(len);
                 let mut d = [0u8; 4];
                 d[..len].copy_from_slice(&self.data[..len]);
-                // e = 1, s = 1, n = 4 - len unused bytes.
-                let cmd = CCS_INITIATE_DOWNLOAD | (((4 - len) as u8) << 2) | 0x03;
+                let cmd = expedited(CCS_INITIATE_DOWNLOAD, len);
                 self.send(out, mux_frame(cmd, index, sub, d));
                 self.state = State::InitDownload;
             }
             (Kind::Download, Protocol::Block) => {
                 self.size = Some(self.data.len());
                 // cs = 0 initiate, s = 1 size indicated, cc = CRC offered.
-                let cmd = CCS_BLOCK_DOWNLOAD | (u8::from(self.cfg.crc) << 2) | 0x02;
+                let crc = if self.cfg.crc { BLOCK_CRC } else { 0 };
+                let cmd = CCS_BLOCK_DOWNLOAD | crc | BLOCK_SIZE_INDICATED;
                 self.send(out, mux_frame(cmd, index, sub, (self.data.len() as u32).to_le_bytes()));
                 self.state = State::BlockDownInit;
             }
             (Kind::Download, _) => {
                 self.size = Some(self.data.len());
                 // e = 0, s = 1: segmented with the size in bytes 4..8.
-                let cmd = CCS_INITIATE_DOWNLOAD | 0x01;
+                let cmd = CCS_INITIATE_DOWNLOAD | SIZE_INDICATED;
                 self.send(out, mux_frame(cmd, index, sub, (self.data.len() as u32).to_le_bytes()));
                 self.state = State::InitDownload;
             }
@@ -702,11 +701,10 @@ impl SdoClient {
         if !self.mux_ok(d, out) {
             return;
         }
-        let expedited = d[0] & 0x02 != 0;
-        let sized = d[0] & 0x01 != 0;
-        if expedited {
+        let sized = d[0] & SIZE_INDICATED != 0;
+        if d[0] & EXPEDITED != 0 {
             // With s = 0 the size is unspecified: take all 4 bytes.
-            let len = if sized { 4 - usize::from((d[0] >> 2) & 0x03) } else { 4 };
+            let len = expedited_len(d[0]).unwrap_or(4);
             self.data.clear();
             self.data.extend_from_slice(&d[4..4 + len]);
             self.pos = len;
@@ -734,11 +732,11 @@ impl SdoClient {
         if (d[0] & TOGGLE != 0) != self.toggle {
             return self.violation(SdoAbort::TOGGLE_NOT_ALTERNATED, out);
         }
-        let len = SEG - usize::from((d[0] >> 1) & 0x07);
+        let len = segment_len(d[0]);
         if !self.push_upload(&d[1..=len], out) {
             return;
         }
-        if d[0] & 0x01 != 0 {
+        if d[0] & LAST_SEGMENT != 0 {
             if self.size.is_some_and(|n| n != self.data.len()) {
                 return self.violation(SdoAbort::TYPE_MISMATCH, out);
             }

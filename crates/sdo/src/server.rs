@@ -32,9 +32,19 @@
 //!   (reserved at initiate from the indicated size) and are written once at
 //!   the end, so validation and the write hook see the whole value.
 
+use crate::wire::*;
 use alloc::vec::Vec;
 use drivebus_can::{CanId, Duration, Frame, Instant, TxSink};
 use drivebus_od::{DataType, EntryRef, ObjectDictionary, ObjectHooks, SdoAbort};
+
+// Client command specifiers as `scs` reads them from a request.
+const DOWNLOAD_SEGMENT: u8 = CCS_DOWNLOAD_SEGMENT >> 5;
+const INITIATE_DOWNLOAD: u8 = CCS_INITIATE_DOWNLOAD >> 5;
+const INITIATE_UPLOAD: u8 = CCS_INITIATE_UPLOAD >> 5;
+const UPLOAD_SEGMENT: u8 = CCS_UPLOAD_SEGMENT >> 5;
+const ABORT: u8 = CS_ABORT >> 5;
+const BLOCK_UPLOAD: u8 = CCS_BLOCK_UPLOAD >> 5;
+const BLOCK_DOWNLOAD: u8 = CCS_BLOCK_DOWNLOAD >> 5;
 
 mod block;
 mod params;
@@ -302,13 +312,15 @@ impl SdoServer {
         hooks: &mut H,
         out: &mut impl TxSink,
     ) {
-        match d[0] >> 5 {
-            1 => self.initiate_download(d, now, od, hooks, out),
-            2 => self.initiate_upload(d, now, od, hooks, out),
+        match scs(d[0]) {
+            INITIATE_DOWNLOAD => self.initiate_download(d, now, od, hooks, out),
+            INITIATE_UPLOAD => self.initiate_upload(d, now, od, hooks, out),
             // Abort from the client: nothing to end, never answered.
-            4 => {}
-            5 if d[0] & 0x03 == 0 => self.block_upload_initiate(d, now, od, hooks, out),
-            6 if d[0] & 0x01 == 0 => self.block_download_initiate(d, now, od, out),
+            ABORT => {}
+            BLOCK_UPLOAD if d[0] & 0x03 == BLOCK_INITIATE => {
+                self.block_upload_initiate(d, now, od, hooks, out)
+            }
+            BLOCK_DOWNLOAD if d[0] & 0x01 == BLOCK_INITIATE => self.block_download_initiate(d, now, od, out),
             _ => self.abort_with(&[d[1], d[2], d[3]], SdoAbort::INVALID_COMMAND, out),
         }
     }
@@ -323,22 +335,24 @@ impl SdoServer {
         out: &mut impl TxSink,
     ) {
         let b0 = d[0];
-        if b0 == 0x80 || (b0 >> 5 == 4 && !matches!(self.state, State::BlkDownSub { .. })) {
+        if b0 == CS_ABORT || (scs(b0) == ABORT && !matches!(self.state, State::BlkDownSub { .. })) {
             // Client abort (§7.2.4.3.17): end silently, no response.
             self.state = State::Idle;
             return;
         }
         self.deadline = now + self.config.timeout;
-        match (self.state, b0 >> 5) {
+        match (self.state, scs(b0)) {
             (State::BlkDownSub { last, resync }, _) => self.block_segment(d, last, resync, out),
-            (State::UpSeg { toggle }, 3) => self.upload_segment(b0, toggle, out),
-            (State::DownSeg { toggle }, 0) => self.download_segment(d, toggle, od, hooks, out),
-            (State::BlkDownEnd, 6) if b0 & 0x01 == 0x01 => self.block_download_end(d, od, hooks, out),
-            (State::BlkUpStart, 5) if b0 & 0x03 == 0x03 => self.block_upload_start(out),
-            (State::BlkUpAck { seqs, last }, 5) if b0 & 0x03 == 0x02 => {
+            (State::UpSeg { toggle }, UPLOAD_SEGMENT) => self.upload_segment(b0, toggle, out),
+            (State::DownSeg { toggle }, DOWNLOAD_SEGMENT) => self.download_segment(d, toggle, od, hooks, out),
+            (State::BlkDownEnd, BLOCK_DOWNLOAD) if b0 & 0x01 == BLOCK_END => {
+                self.block_download_end(d, od, hooks, out)
+            }
+            (State::BlkUpStart, BLOCK_UPLOAD) if b0 & 0x03 == BLOCK_START => self.block_upload_start(out),
+            (State::BlkUpAck { seqs, last }, BLOCK_UPLOAD) if b0 & 0x03 == BLOCK_ACK => {
                 self.block_upload_ack(d, seqs, last, out)
             }
-            (State::BlkUpEnd, 5) if b0 & 0x03 == 0x01 => self.state = State::Idle,
+            (State::BlkUpEnd, BLOCK_UPLOAD) if b0 & 0x03 == BLOCK_END => self.state = State::Idle,
             // A new initiate: start over (see the module documentation).
             _ if is_initiate(b0) => {
                 self.state = State::Idle;
@@ -373,7 +387,7 @@ impl SdoServer {
     fn answer_upload(&mut self, mux: [u8; 3], value: &[u8], now: Instant, out: &mut impl TxSink) {
         let n = value.len();
         if (1..=4).contains(&n) {
-            let mut resp = [0x43 | (((4 - n) as u8) << 2), mux[0], mux[1], mux[2], 0, 0, 0, 0];
+            let mut resp = [expedited(SCS_INITIATE_UPLOAD << 5, n), mux[0], mux[1], mux[2], 0, 0, 0, 0];
             resp[4..4 + n].copy_from_slice(value);
             self.state = State::Idle;
             self.send(resp, out);
@@ -388,7 +402,8 @@ impl SdoServer {
         self.state = State::UpSeg { toggle: 0 };
         self.deadline = now + self.config.timeout;
         let s = size.to_le_bytes();
-        self.send([0x41, mux[0], mux[1], mux[2], s[0], s[1], s[2], s[3]], out);
+        let b0 = (SCS_INITIATE_UPLOAD << 5) | SIZE_INDICATED;
+        self.send([b0, mux[0], mux[1], mux[2], s[0], s[1], s[2], s[3]], out);
     }
 
     /// Copy an upload value into the reusable buffer; returns its size as
@@ -403,16 +418,16 @@ impl SdoServer {
 
     /// Upload segment request (ccs=3): the next 7 bytes at most.
     fn upload_segment(&mut self, b0: u8, toggle: u8, out: &mut impl TxSink) {
-        if b0 & 0x10 != toggle {
+        if b0 & TOGGLE != toggle {
             return self.abort(SdoAbort::TOGGLE_NOT_ALTERNATED, out);
         }
         let rest = self.buf.get(self.pos..).unwrap_or(&[]);
-        let k = rest.len().min(7);
-        let last = rest.len() <= 7;
-        let mut resp = [toggle | (((7 - k) as u8) << 1) | u8::from(last), 0, 0, 0, 0, 0, 0, 0];
+        let k = rest.len().min(SEG);
+        let last = rest.len() <= SEG;
+        let mut resp = [segment(SCS_UPLOAD_SEGMENT << 5, toggle, k, last), 0, 0, 0, 0, 0, 0, 0];
         copy_segment(&mut resp, rest);
         self.pos += k;
-        self.state = if last { State::Idle } else { State::UpSeg { toggle: toggle ^ 0x10 } };
+        self.state = if last { State::Idle } else { State::UpSeg { toggle: toggle ^ TOGGLE } };
         self.send(resp, out);
     }
 
@@ -432,27 +447,23 @@ impl SdoServer {
             Ok(r) => r,
             Err(e) => return self.abort_with(&mux, e, out),
         };
-        if b0 & 0x02 != 0 {
+        if b0 & EXPEDITED != 0 {
             // Expedited (e=1): n is only meaningful with s=1.
-            let len = if b0 & 0x01 != 0 {
-                4 - usize::from((b0 >> 2) & 0x03)
-            } else {
-                expedited_unsized_len(od.entry(r).data_type)
-            };
+            let len = expedited_len(b0).unwrap_or_else(|| expedited_unsized_len(od.entry(r).data_type));
             match od.write_ref(hooks, r, &d[4..4 + len]) {
-                Ok(()) => self.send([0x60, mux[0], mux[1], mux[2], 0, 0, 0, 0], out),
+                Ok(()) => self.send([SCS_INITIATE_DOWNLOAD << 5, mux[0], mux[1], mux[2], 0, 0, 0, 0], out),
                 Err(e) => self.abort_with(&mux, e, out),
             }
             return;
         }
-        let size = (b0 & 0x01 != 0).then(|| u32::from_le_bytes([d[4], d[5], d[6], d[7]]) as usize);
+        let size = (b0 & SIZE_INDICATED != 0).then(|| u32::from_le_bytes([d[4], d[5], d[6], d[7]]) as usize);
         if let Err(e) = self.prepare_download(od, r, size) {
             return self.abort_with(&mux, e, out);
         }
         self.mux = mux;
         self.state = State::DownSeg { toggle: 0 };
         self.deadline = now + self.config.timeout;
-        self.send([0x60, mux[0], mux[1], mux[2], 0, 0, 0, 0], out);
+        self.send([SCS_INITIATE_DOWNLOAD << 5, mux[0], mux[1], mux[2], 0, 0, 0, 0], out);
     }
 
     /// Check a segmented or block download against the object before any
@@ -515,10 +526,10 @@ impl SdoServer {
         out: &mut impl TxSink,
     ) {
         let b0 = d[0];
-        if b0 & 0x10 != toggle {
+        if b0 & TOGGLE != toggle {
             return self.abort(SdoAbort::TOGGLE_NOT_ALTERNATED, out);
         }
-        let k = 7 - usize::from((b0 >> 1) & 0x07);
+        let k = segment_len(b0);
         if self.buf.len() + k > self.limit {
             let e = self.over_limit();
             return self.abort(e, out);
@@ -531,11 +542,12 @@ impl SdoServer {
         } else {
             self.buf.extend_from_slice(&d[1..1 + k]);
         }
-        if b0 & 0x01 == 0 {
-            self.state = State::DownSeg { toggle: toggle ^ 0x10 };
-            self.send([0x20 | toggle, 0, 0, 0, 0, 0, 0, 0], out);
+        let ack = (SCS_DOWNLOAD_SEGMENT << 5) | toggle;
+        if b0 & LAST_SEGMENT == 0 {
+            self.state = State::DownSeg { toggle: toggle ^ TOGGLE };
+            self.send([ack, 0, 0, 0, 0, 0, 0, 0], out);
         } else {
-            self.finish_download(0x20 | toggle, od, hooks, out);
+            self.finish_download(ack, od, hooks, out);
         }
     }
 
@@ -620,7 +632,7 @@ impl SdoServer {
     fn abort_with(&mut self, mux: &[u8; 3], code: SdoAbort, out: &mut impl TxSink) {
         self.state = State::Idle;
         let c = code.0.to_le_bytes();
-        self.send([0x80, mux[0], mux[1], mux[2], c[0], c[1], c[2], c[3]], out);
+        self.send([CS_ABORT, mux[0], mux[1], mux[2], c[0], c[1], c[2], c[3]], out);
     }
 
     /// Emit one response on the server→client COB-ID.
@@ -642,10 +654,10 @@ impl SdoServer {
 /// upload cs=0; block download cs=0).
 #[inline]
 fn is_initiate(b0: u8) -> bool {
-    match b0 >> 5 {
-        1 | 2 => true,
-        5 => b0 & 0x03 == 0,
-        6 => b0 & 0x01 == 0,
+    match scs(b0) {
+        INITIATE_DOWNLOAD | INITIATE_UPLOAD => true,
+        BLOCK_UPLOAD => b0 & 0x03 == BLOCK_INITIATE,
+        BLOCK_DOWNLOAD => b0 & 0x01 == BLOCK_INITIATE,
         _ => false,
     }
 }

@@ -49,7 +49,7 @@ pub enum FaultVerdict {
 /// A rule the hub cannot apply: it relays frames in one synchronous step
 /// and has no error frames, so [`FaultAction::Corrupt`] (an error frame and
 /// the automatic retransmission) and [`FaultAction::Delay`] exist only on
-/// the simulated bus (`drivebus_bus::Bus`).
+/// the simulated bus (`drivebus-bus`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct UnsupportedFault(pub FaultAction);
 
@@ -100,7 +100,7 @@ pub type FaultHook = Arc<dyn Fn(&Frame) -> FaultVerdict + Send + Sync>;
 pub struct HubConfig {
     /// Pace relaying at this CAN bit rate (bit/s): each frame occupies the
     /// hub for its exact stuffed length plus intermission
-    /// ([`drivebus_bus::timing::frame_bits`]). Senders wait for their slot.
+    /// ([`drivebus_can::timing::frame_bits`]). Senders wait for their slot.
     /// Timers have about 1 ms resolution, so the rate is exact on average
     /// and frames go out in bursts of up to 1 ms. `None`: as fast as possible.
     pub bitrate: Option<u32>,
@@ -253,8 +253,8 @@ impl Hub {
     /// hub, first waits for the frame's slot on the bus.
     pub async fn publish(&self, from: ParticipantId, frame: Frame) {
         if let Some(bitrate) = self.inner.bitrate {
-            let bits = drivebus_bus::timing::frame_bits(&frame).total();
-            let dur = drivebus_bus::timing::bits_duration(bits, bitrate);
+            let bits = drivebus_can::timing::frame_bits(&frame).total();
+            let dur = drivebus_can::timing::bits_duration(bits, bitrate);
             let now = std::time::Instant::now();
             let end = match self.inner.busy_until.lock() {
                 Ok(mut busy) => {

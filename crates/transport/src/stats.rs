@@ -4,11 +4,11 @@
 //!
 //! Sans-IO: the caller passes each frame with its time. A frame's length
 //! on the wire is its exact stuffed bit count plus intermission
-//! (`drivebus_bus::timing`, the virtual bus's own pacing).
+//! (`drivebus_can::timing`, the virtual bus's own pacing).
 
 use std::collections::BTreeMap;
 
-use drivebus_bus::timing::frame_bits;
+use drivebus_can::timing::frame_bits;
 use drivebus_can::{CanId, Frame, Instant};
 
 /// Frame, bit and per-identifier counts over a span of time.

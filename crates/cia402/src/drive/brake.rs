@@ -26,7 +26,7 @@
 //! ([`Drive::set_brake_control`]) override the sequence.
 
 use super::Drive;
-use crate::model::Command;
+use crate::model::Demand;
 use crate::state_machine::{DriveFunction, State};
 
 /// Who commands the holding brake ([`Drive::set_brake_control`]).
@@ -110,7 +110,7 @@ impl Drive {
     /// axis at the demand while it releases after an enable (the mode
     /// waits) or closes after a disable (not after a fault); `None`: the
     /// drive function's own command.
-    pub(crate) fn brake_hold(&mut self, f: DriveFunction) -> Option<Command> {
+    pub(crate) fn brake_hold(&mut self, f: DriveFunction) -> Option<Demand> {
         let b = self.model.brake();
         let pending = match self.cfg.io.brake_delays {
             // The drive's own times from its last command.

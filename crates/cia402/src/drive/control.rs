@@ -5,7 +5,7 @@ use super::mode::{ModeCommand, ModeIo, op};
 use super::pp::{PpIn, wrap};
 use super::profile::{Limits, Ramp};
 use super::{Drive, EmcyRequest};
-use crate::model::Command;
+use crate::model::Demand;
 use crate::state_machine::{DriveFunction, Outcome, Reaction, State};
 use core::f64::consts::PI;
 use drivebus_od::ObjectDictionary;
@@ -80,10 +80,10 @@ impl Drive {
         }
         if out.took(4) || out.took(16) {
             // Enabled again: the errors that only stopped the motor
-            // (FaultAction::QuickStop) are over; a new stop reports anew.
+            // (ErrorReaction::QuickStop) are over; a new stop reports anew.
             let actions = &self.fault_actions;
             let stopped =
-                |c: &u16| actions.iter().any(|&(r, a)| r == *c && a == super::FaultAction::QuickStop);
+                |c: &u16| actions.iter().any(|&(r, a)| r == *c && a == super::ErrorReaction::QuickStop);
             let emcy = &mut self.emcy;
             self.raised.retain(|c| {
                 let keep = !stopped(c);
@@ -241,17 +241,17 @@ impl Drive {
     }
 
     /// Position-frame demand → model command.
-    pub(super) fn position_command(&self, p: f64, v: f64, a: f64) -> Command {
+    pub(super) fn position_command(&self, p: f64, v: f64, a: f64) -> Demand {
         let u = &self.units;
-        Command::Position {
+        Demand::Position {
             position: u.inc_to_rad(u.pos_to_inc_f(p) - self.inc_offset_f()),
             velocity: u.pos_to_rad(v),
             acceleration: u.pos_to_rad(a),
         }
     }
 
-    fn velocity_command(&self, v: f64, a: f64) -> Command {
-        Command::Velocity { velocity: self.units.pos_to_rad(v), acceleration: self.units.pos_to_rad(a) }
+    fn velocity_command(&self, v: f64, a: f64) -> Demand {
+        Demand::Velocity { velocity: self.units.pos_to_rad(v), acceleration: self.units.pos_to_rad(a) }
     }
 
     /// Profile limits in position units: 6081h ≤ 607Fh ≤ 6080h, ramps ≤ 60C5h/60C6h.
@@ -317,7 +317,7 @@ impl Drive {
             Some(hold) => hold,
             None => self.function_command(f),
         };
-        self.model.set_command(cmd);
+        self.model.set_demand(cmd);
         self.model.step(self.dt);
         self.events.clone_from(self.model.events());
         for i in 0..self.events.len() {
@@ -340,7 +340,7 @@ impl Drive {
     }
 
     /// The power stage's command for the drive function.
-    fn function_command(&mut self, f: DriveFunction) -> Command {
+    fn function_command(&mut self, f: DriveFunction) -> Demand {
         match f {
             DriveFunction::Disabled => {
                 self.stop = None;
@@ -349,7 +349,7 @@ impl Drive {
                 self.dem.acc = 0.0;
                 self.dem.torque = 0.0;
                 self.status_bits = 0;
-                Command::Off
+                Demand::Off
             }
             DriveFunction::Enabled => self.mode_step(),
             DriveFunction::Stopping(r) => self.stop_step(r),
@@ -363,7 +363,7 @@ impl Drive {
         }
     }
 
-    fn mode_step(&mut self) -> Command {
+    fn mode_step(&mut self) -> Demand {
         let dt = self.dt;
         self.stop = None;
         let mode = self.mode;
@@ -490,7 +490,7 @@ impl Drive {
                 self.dem.pos = self.actual_pos_f();
                 self.dem.vel = actual_vel;
                 self.status_bits = u16::from(t == target) << 10;
-                Command::Torque(t / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0)
+                Demand::Torque(t / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0)
             }
             op::VL => {
                 let x = &self.extra;
@@ -511,7 +511,7 @@ impl Drive {
                 self.dem.pos = self.actual_pos_f();
                 self.dem.torque = torque_now;
                 self.status_bits = 0;
-                Command::Velocity { velocity: rad, acceleration: self.vel_ramp.rate * 2.0 * PI / 60.0 }
+                Demand::Velocity { velocity: rad, acceleration: self.vel_ramp.rate * 2.0 * PI / 60.0 }
             }
             _ => self.handler_step(),
         }
@@ -531,7 +531,7 @@ impl Drive {
         self.window_timer * 1000.0 + 1e-9 >= f64::from(self.params.position_window_time)
     }
 
-    fn handler_step(&mut self) -> Command {
+    fn handler_step(&mut self) -> Demand {
         let mode = self.mode;
         let (pos, inc) = (self.position(), self.position_increments());
         let vel = self.actual_vel_frame();
@@ -593,7 +593,7 @@ impl Drive {
                 (self.dem.pos, self.dem.vel, self.dem.acc) = (position, velocity, acceleration);
                 self.dem.torque = torque;
                 let mut c = self.position_command(position, velocity, acceleration);
-                if let Command::Position { acceleration, .. } = &mut c {
+                if let Demand::Position { acceleration, .. } = &mut c {
                     *acceleration += acc_ff_rad;
                 }
                 c
@@ -604,7 +604,7 @@ impl Drive {
                 self.dem.pos = self.actual_pos_f();
                 self.dem.torque = torque;
                 let mut c = self.velocity_command(velocity, acceleration);
-                if let Command::Velocity { acceleration, .. } = &mut c {
+                if let Demand::Velocity { acceleration, .. } = &mut c {
                     *acceleration += acc_ff_rad;
                 }
                 c
@@ -615,7 +615,7 @@ impl Drive {
                 self.dem.torque = t;
                 self.dem.pos = self.actual_pos_f();
                 self.dem.vel = vel;
-                Command::Torque(t / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0)
+                Demand::Torque(t / 1000.0 * f64::from(self.extra.rated_torque) / 1000.0)
             }
             ModeCommand::Hold => {
                 self.dem.vel = 0.0;
@@ -626,7 +626,7 @@ impl Drive {
     }
 
     /// Executes a stopping reaction (CiA 402-2 §6.2: 605Ah–605Eh codings).
-    fn stop_step(&mut self, r: Reaction) -> Command {
+    fn stop_step(&mut self, r: Reaction) -> Demand {
         if self.stop.is_none() {
             // Position-controlled modes ramp from their demand; velocity and
             // torque modes from the measured speed.
@@ -649,7 +649,7 @@ impl Drive {
                 if let Some(s) = &mut self.stop {
                     s.ramp.value = 0.0;
                 }
-                return Command::Velocity { velocity: 0.0, acceleration: 0.0 };
+                return Demand::Velocity { velocity: 0.0, acceleration: 0.0 };
             }
             Reaction::VoltageLimit => {
                 self.dem.pos = self.actual_pos_f();
@@ -657,13 +657,13 @@ impl Drive {
                 if let Some(s) = &mut self.stop {
                     s.ramp.value = 0.0;
                 }
-                return Command::ShortCircuit;
+                return Demand::ShortCircuit;
             }
-            Reaction::DisableDrive => return Command::Off,
+            Reaction::DisableDrive => return Demand::Off,
         };
         let dec = self.units.acc_to_pos(f64::from(dec));
         let dt = self.dt;
-        let Some(s) = &mut self.stop else { return Command::Off };
+        let Some(s) = &mut self.stop else { return Demand::Off };
         let v0 = s.ramp.value;
         let v = s.ramp.step(0.0, dec, dec, dt);
         self.dem.pos += (v0 + v) / 2.0 * dt;

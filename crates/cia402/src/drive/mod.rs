@@ -81,7 +81,7 @@ pub enum Injection {
 /// 6007h's) reaction: a manufacturer's per-error option code (Technosoft
 /// iPOS 2113h/2114h, 605Eh −1 "no action" for its non-fatal errors).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FaultAction {
+pub enum ErrorReaction {
     /// Signal it (EMCY while the condition lasts) and go on.
     NoAction,
     /// EMCY and statusword bit 7 (warning) until a fault reset; the motion
@@ -193,8 +193,8 @@ pub struct Drive {
     /// 60F2h rado: how pp reaches a target on a modulo axis.
     rado: pp::Rado,
     /// Per-code fault actions ([`Drive::set_fault_action`]).
-    fault_actions: Vec<(u16, FaultAction)>,
-    /// A fault taken with [`FaultAction::NoAction`] whose condition lasts.
+    fault_actions: Vec<(u16, ErrorReaction)>,
+    /// A fault taken with [`ErrorReaction::NoAction`] whose condition lasts.
     ignored_fault: Option<u16>,
     /// NMT operational (for [`DriveView::operational`]).
     operational: bool,
@@ -208,7 +208,7 @@ pub struct Drive {
     /// [`DriveConfig::scurve_forbids_change_immediately`]: its EMCY code,
     /// latched (statusword bit 7) until a fault reset.
     command_error: Option<u16>,
-    /// A fault with [`FaultAction::Warning`] was raised (statusword bit 7
+    /// A fault with [`ErrorReaction::Warning`] was raised (statusword bit 7
     /// until a fault reset).
     error_warning: bool,
     /// Who commands the holding brake.

@@ -130,12 +130,14 @@ pub struct ModeParams {
 impl ModeParams {
     /// 60C2h as seconds (`value · 10^index`); `None` for a zero or absurd period.
     pub fn interpolation_period_s(&self) -> Option<f64> {
+        // Asked every control period (the KC1 family's PLL): a table, not `pow`.
+        const TEN_TO_MINUS: [f64; 7] = [1.0, 1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6];
         let v = f64::from(self.interpolation_period_value);
-        let i = i32::from(self.interpolation_period_index);
+        let i = self.interpolation_period_index;
         if v == 0.0 || !(-6..=0).contains(&i) {
             return None;
         }
-        Some(v * libm::pow(10.0, f64::from(i)))
+        Some(v * TEN_TO_MINUS[usize::from(i.unsigned_abs())])
     }
 }
 
@@ -341,5 +343,38 @@ pub trait ModeHandler {
     /// implementing hm; `None` (the default) for other handlers.
     fn homing_methods(&self) -> Option<Vec<i8>> {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ModeParams;
+
+    #[test]
+    fn interpolation_period_is_value_times_ten_to_the_index() {
+        let p = |value, index| ModeParams {
+            interpolation_period_value: value,
+            interpolation_period_index: index,
+            ..ModeParams::default()
+        };
+        assert_eq!(p(1, 0).interpolation_period_s(), Some(1.0));
+        assert_eq!(p(4, -3).interpolation_period_s(), Some(0.004));
+        assert_eq!(p(250, -6).interpolation_period_s(), Some(0.000_25));
+        assert_eq!(p(2, -1).interpolation_period_s(), Some(0.2));
+        // What `pow` gave, to the last bit or two (the table's 1e-5 is the
+        // nearer one), and the same whole nanoseconds.
+        for index in -6..=0i8 {
+            for value in 1..=255u8 {
+                let want = f64::from(value) * libm::pow(10.0, f64::from(index));
+                let got = p(value, index).interpolation_period_s().unwrap();
+                assert!((got - want).abs() <= want * 4.0 * f64::EPSILON, "{value}·10^{index}: {got} {want}");
+                assert_eq!((got * 1e9).round(), (want * 1e9).round(), "{value}·10^{index}");
+            }
+        }
+        // Zero, and indices outside -6..=0: no period.
+        assert_eq!(p(0, -3).interpolation_period_s(), None);
+        assert_eq!(p(1, -7).interpolation_period_s(), None);
+        assert_eq!(p(1, 1).interpolation_period_s(), None);
+        assert_eq!(p(1, i8::MIN).interpolation_period_s(), None);
     }
 }

@@ -63,21 +63,21 @@ impl Drive {
     /// What a fault with `code` does from now on instead of 605Eh's (and,
     /// for a lost connection with 6007h = 1, instead of its fault); `None`
     /// goes back to 605Eh.
-    pub fn set_fault_action(&mut self, code: u16, action: Option<FaultAction>) {
+    pub fn set_fault_action(&mut self, code: u16, action: Option<ErrorReaction>) {
         self.fault_actions.retain(|(c, _)| *c != code);
         if let Some(a) = action {
             self.fault_actions.push((code, a));
         }
     }
 
-    /// The fault taken with [`FaultAction::NoAction`] whose condition still
+    /// The fault taken with [`ErrorReaction::NoAction`] whose condition still
     /// lasts, if any.
     pub fn ignored_fault(&self) -> Option<u16> {
         self.ignored_fault
     }
 
     /// The action for a fault with `code`, if a personality set one.
-    pub(crate) fn fault_action(&self, code: u16) -> Option<FaultAction> {
+    pub(crate) fn fault_action(&self, code: u16) -> Option<ErrorReaction> {
         self.fault_actions.iter().find(|(c, _)| *c == code).map(|(_, a)| *a)
     }
 

@@ -294,14 +294,15 @@ impl Drive {
     }
 
     /// A fault with a personality's action (`Drive::set_fault_action`).
-    pub(crate) fn take_fault(&mut self, c: u16, a: super::FaultAction) {
+    pub(crate) fn take_fault(&mut self, c: u16, a: super::ErrorReaction) {
         match a {
-            super::FaultAction::React(r) => {
+            super::ErrorReaction::React(r) => {
                 let out = self.sm.fault_with(c, r);
                 self.after_transition(out);
             }
-            super::FaultAction::Warning | super::FaultAction::QuickStop => {
-                let stops = a == super::FaultAction::QuickStop && self.sm.state() == State::OperationEnabled;
+            super::ErrorReaction::Warning | super::ErrorReaction::QuickStop => {
+                let stops =
+                    a == super::ErrorReaction::QuickStop && self.sm.state() == State::OperationEnabled;
                 // Each stop it causes is reported; a condition that stays
                 // is reported once (until a fault reset).
                 if stops || !self.raised.contains(&c) {
@@ -310,7 +311,7 @@ impl Drive {
                     }
                     self.emcy.push(EmcyRequest::Raise(c));
                 }
-                self.error_warning |= a == super::FaultAction::Warning;
+                self.error_warning |= a == super::ErrorReaction::Warning;
                 if stops {
                     self.sup.fe_timer = 0.0;
                     self.sup.force_following_error = false;
@@ -318,7 +319,7 @@ impl Drive {
                     self.after_transition(out);
                 }
             }
-            super::FaultAction::NoAction => {
+            super::ErrorReaction::NoAction => {
                 // Signalled once; the latch is cleared so that the fault
                 // comes back only while its condition lasts.
                 self.model.clear_faults();

@@ -66,7 +66,7 @@ fn error_reactions_replace_the_fault_reaction() {
     use crate::state_machine::{Reaction, State};
     // Quick stop: EMCY, Quick stop active, no fault; cleared when enabled again.
     let (mut node, mut d) = enabled_pp();
-    d.set_fault_action(0x1234, Some(FaultAction::QuickStop));
+    d.set_fault_action(0x1234, Some(ErrorReaction::QuickStop));
     d.inject(Injection::Fault(0x1234));
     d.step_n(node.od_mut(), 2);
     assert_eq!(d.state_machine().state(), State::QuickStopActive);
@@ -78,20 +78,20 @@ fn error_reactions_replace_the_fault_reaction() {
     assert_eq!(d.emcy, alloc::vec![EmcyRequest::Clear(0x1234)]);
     // Warning: EMCY and statusword bit 7, the motion goes on.
     let (mut node, mut d) = enabled_pp();
-    d.set_fault_action(0x1234, Some(FaultAction::Warning));
+    d.set_fault_action(0x1234, Some(ErrorReaction::Warning));
     d.inject(Injection::Fault(0x1234));
     d.step_n(node.od_mut(), 2);
     assert_eq!(d.state_machine().state(), State::OperationEnabled);
     assert_eq!(d.statusword() & 0x80, 0x80);
     // Fault with its own reaction: disable at once despite 605Eh = 2.
     let (mut node, mut d) = enabled_pp();
-    d.set_fault_action(0x1234, Some(FaultAction::React(Reaction::DisableDrive)));
+    d.set_fault_action(0x1234, Some(ErrorReaction::React(Reaction::DisableDrive)));
     d.inject(Injection::Fault(0x1234));
     d.step_n(node.od_mut(), 2);
     assert_eq!(d.state_machine().state(), State::Fault);
     // `None` restores 605Eh: a fault again.
     let (mut node, mut d) = enabled_pp();
-    d.set_fault_action(0x1234, Some(FaultAction::Warning));
+    d.set_fault_action(0x1234, Some(ErrorReaction::Warning));
     d.set_fault_action(0x1234, None);
     d.inject(Injection::Fault(0x1234));
     d.step_n(node.od_mut(), 2);

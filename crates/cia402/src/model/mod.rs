@@ -44,7 +44,7 @@ use core::f64::consts::PI;
 
 /// Set-point from the operating mode, in motor-shaft units.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Command {
+pub enum Demand {
     /// Power stage off: no torque, the motor coasts.
     Off,
     /// Cascaded position → velocity → current loops, with feed-forward.
@@ -71,27 +71,27 @@ pub enum Command {
     ShortCircuit,
 }
 
-impl Command {
+impl Demand {
     fn kind(&self) -> u8 {
         match self {
-            Command::Off => 0,
-            Command::Position { .. } => 1,
-            Command::Velocity { .. } => 2,
-            Command::Torque(_) => 3,
-            Command::ShortCircuit => 4,
+            Demand::Off => 0,
+            Demand::Position { .. } => 1,
+            Demand::Velocity { .. } => 2,
+            Demand::Torque(_) => 3,
+            Demand::ShortCircuit => 4,
         }
     }
 
-    /// Finite and within ±[`Command::MAX_SETPOINT`].
+    /// Finite and within ±[`Demand::MAX_SETPOINT`].
     fn is_valid(&self) -> bool {
         let ok = |v: f64| v.is_finite() && v.abs() <= Self::MAX_SETPOINT;
         match *self {
-            Command::Position { position, velocity, acceleration } => {
+            Demand::Position { position, velocity, acceleration } => {
                 ok(position) && ok(velocity) && ok(acceleration)
             }
-            Command::Velocity { velocity, acceleration } => ok(velocity) && ok(acceleration),
-            Command::Torque(t) => ok(t),
-            Command::Off | Command::ShortCircuit => true,
+            Demand::Velocity { velocity, acceleration } => ok(velocity) && ok(acceleration),
+            Demand::Torque(t) => ok(t),
+            Demand::Off | Demand::ShortCircuit => true,
         }
     }
 
@@ -135,7 +135,7 @@ pub struct DriveModel {
     p: DriveParams,
     d: Derived,
     k: Coeffs,
-    cmd: Command,
+    cmd: Demand,
     // mechanical and electrical state
     theta: f64,
     omega: f64,
@@ -192,7 +192,7 @@ fn opt_rad(v: Option<f64>, f: f64, field: &'static str) -> Result<Option<f64>, P
 
 impl DriveModel {
     /// Builds a model at rest at `axis.initial_position`, ambient
-    /// temperature, nominal bus voltage, command [`Command::Off`].
+    /// temperature, nominal bus voltage, command [`Demand::Off`].
     pub fn new(params: DriveParams) -> Result<Self, ParamError> {
         params.validate()?;
         let a = &params.axis;
@@ -237,7 +237,7 @@ impl DriveModel {
             p: params,
             d,
             k: Coeffs { dt: 0.0, current: 0.0, viscous: 1.0, thermal: 0.0, vel_filter: 1.0, brake: 1.0 },
-            cmd: Command::Off,
+            cmd: Demand::Off,
             theta,
             omega: 0.0,
             current: 0.0,
@@ -282,11 +282,11 @@ impl DriveModel {
         &self.p
     }
 
-    /// Sets the command applied from the next step on. A set-point that is
-    /// not finite or beyond ±[`Command::MAX_SETPOINT`] is refused (returns
-    /// `false`, the previous command stays). Changing the kind of command
+    /// Sets the demand applied from the next step on. A set-point that is
+    /// not finite or beyond ±[`Demand::MAX_SETPOINT`] is refused (returns
+    /// `false`, the previous demand stays). Changing the kind of demand
     /// re-initialises the loop integrators bumplessly.
-    pub fn set_command(&mut self, cmd: Command) -> bool {
+    pub fn set_demand(&mut self, cmd: Demand) -> bool {
         if !cmd.is_valid() {
             return false;
         }
@@ -310,8 +310,8 @@ impl DriveModel {
         true
     }
 
-    /// The command in force.
-    pub fn command(&self) -> Command {
+    /// The demand in force.
+    pub fn demand(&self) -> Demand {
         self.cmd
     }
 

@@ -1,6 +1,6 @@
 //! Per-step physics and the drive's inner control loops.
 
-use super::{Coeffs, Command, DriveModel, DriveParams, LoadTorque, StepperParams};
+use super::{Coeffs, Demand, DriveModel, DriveParams, LoadTorque, StepperParams};
 use core::f64::consts::{FRAC_PI_2, PI};
 
 /// `1 − e^(−dt/τ)` (1 for τ = 0: no lag).
@@ -90,13 +90,13 @@ impl DriveModel {
         let (lo, hi) = self.current_window(w);
         let ff = self.current_feedforward();
         let i_ref = match self.cmd {
-            Command::Off => 0.0,
-            Command::ShortCircuit => (-m.ke * w / m.resistance).clamp(-m.max_current, m.max_current),
-            Command::Torque(t) => (t / m.kt + ff).clamp(lo, hi),
-            Command::Velocity { velocity, acceleration } => {
+            Demand::Off => 0.0,
+            Demand::ShortCircuit => (-m.ke * w / m.resistance).clamp(-m.max_current, m.max_current),
+            Demand::Torque(t) => (t / m.kt + ff).clamp(lo, hi),
+            Demand::Velocity { velocity, acceleration } => {
                 self.velocity_loop(velocity, acceleration, ff, lo, hi, dt)
             }
-            Command::Position { position, velocity, acceleration } => {
+            Demand::Position { position, velocity, acceleration } => {
                 let v = self.position_loop(position, velocity, dt);
                 self.velocity_loop(v, acceleration, ff, lo, hi, dt)
             }
@@ -120,17 +120,17 @@ impl DriveModel {
         let m = self.p.motor;
         let vmax = m.max_speed;
         let energised = match self.cmd {
-            Command::Off | Command::ShortCircuit => false,
-            Command::Position { position, .. } => {
+            Demand::Off | Demand::ShortCircuit => false,
+            Demand::Position { position, .. } => {
                 self.step_target = position;
                 true
             }
-            Command::Velocity { velocity, .. } => {
+            Demand::Velocity { velocity, .. } => {
                 self.step_target += velocity.clamp(-vmax, vmax) * dt;
                 true
             }
             // Open-loop steppers have no torque mode: hold the demand.
-            Command::Torque(_) => true,
+            Demand::Torque(_) => true,
         };
         let n = self.d.teeth;
         let a = if energised {
@@ -267,7 +267,7 @@ impl DriveModel {
         // Power drawn by the inverter (negative while braking = regeneration);
         // short-circuit braking and a free motor exchange nothing with the bus.
         let p_drawn = match self.cmd {
-            Command::Off | Command::ShortCircuit => 0.0,
+            Demand::Off | Demand::ShortCircuit => 0.0,
             _ if self.d.teeth > 0.0 => m.resistance * self.current * self.current,
             _ => (m.resistance * self.current + m.ke * self.omega) * self.current,
         };

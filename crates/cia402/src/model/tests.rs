@@ -58,8 +58,8 @@ fn invalid_parameters_are_refused() {
 #[test]
 fn bad_inputs_do_nothing() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
-    assert!(!m.set_command(Command::Torque(f64::INFINITY)));
-    assert_eq!(m.command(), Command::Off);
+    assert!(!m.set_demand(Demand::Torque(f64::INFINITY)));
+    assert_eq!(m.demand(), Demand::Off);
     let before = m.clone();
     for dt in [0.0, -1.0, f64::NAN, 1.0] {
         assert!(m.step(dt).is_empty());
@@ -74,7 +74,7 @@ fn bad_inputs_do_nothing() {
 fn constant_torque_accelerates_inertia() {
     let mut m = DriveModel::new(frictionless(DriveParams::servo_small())).unwrap();
     let (t, j) = (0.1, 3.2e-5);
-    m.set_command(Command::Torque(t));
+    m.set_demand(Demand::Torque(t));
     for k in 1..=4 {
         run(&mut m, 0.05);
         let time = 0.05 * f64::from(k);
@@ -113,10 +113,10 @@ fn coulomb_friction_stops_without_chatter() {
     }
     assert_eq!(m.velocity(), 0.0);
     // A torque below break-away does not move the shaft.
-    m.set_command(Command::Torque(0.012));
+    m.set_demand(Demand::Torque(0.012));
     run(&mut m, 0.1);
     assert_eq!(m.velocity(), 0.0);
-    m.set_command(Command::Torque(0.02));
+    m.set_demand(Demand::Torque(0.02));
     run(&mut m, 0.01);
     assert!(m.velocity() > 0.0);
 }
@@ -129,7 +129,7 @@ fn bus_voltage_limits_speed() {
     p.bus.capacitance = 0.0;
     p.axis.load = LoadTorque::Constant(-0.4); // I = 1 A at steady state
     let mut m = DriveModel::new(p).unwrap();
-    m.set_command(Command::Torque(2.0));
+    m.set_demand(Demand::Torque(2.0));
     run(&mut m, 0.1);
     let expect = (320.0 - 5.0 * 1.0) / 0.4;
     assert!(rel(m.velocity(), expect) < 0.005, "{}", m.velocity());
@@ -150,7 +150,7 @@ fn thermal_step_response_and_over_temperature() {
     // Blocked rotor: the load balances the motor torque, stiction holds.
     p.axis.load = LoadTorque::Constant(-0.8);
     let mut m = DriveModel::new(p).unwrap();
-    m.set_command(Command::Torque(0.8)); // 2 A → P = 5 Ω · 4 A² = 20 W
+    m.set_demand(Demand::Torque(0.8)); // 2 A → P = 5 Ω · 4 A² = 20 W
     let rise = 2.0 * 20.0;
     run(&mut m, 1.0);
     assert_eq!(m.velocity(), 0.0);
@@ -162,7 +162,7 @@ fn thermal_step_response_and_over_temperature() {
     assert_eq!(m.faults().error_code(), Some(0x4310));
     // Still hot: a fault reset does not clear it.
     assert!(m.clear_faults().over_temperature);
-    m.set_command(Command::Off);
+    m.set_demand(Demand::Off);
     run(&mut m, 5.0);
     assert!(!m.clear_faults().any());
 }
@@ -172,7 +172,7 @@ fn thermal_step_response_and_over_temperature() {
 #[test]
 fn velocity_step_settles_without_windup() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
-    m.set_command(Command::Velocity { velocity: 600.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 600.0, acceleration: 0.0 });
     let dt = 1.0 / 8000.0;
     let mut peak: f64 = 0.0;
     let mut saturated = 0;
@@ -202,7 +202,7 @@ fn position_holds_against_gravity() {
     let one_count = 2.0 * core::f64::consts::PI / f64::from(1u32 << 20);
     let hold = |p: DriveParams| {
         let mut m = DriveModel::new(p).unwrap();
-        m.set_command(Command::Position { position: 0.0, velocity: 0.0, acceleration: 0.0 });
+        m.set_demand(Demand::Position { position: 0.0, velocity: 0.0, acceleration: 0.0 });
         run(&mut m, 1.0);
         m
     };
@@ -226,10 +226,10 @@ fn regeneration_raises_bus_to_over_voltage() {
     p.bus.brake_on_voltage = None;
     let brake = |p: DriveParams| {
         let mut m = DriveModel::new(p).unwrap();
-        m.set_command(Command::Velocity { velocity: 600.0, acceleration: 0.0 });
+        m.set_demand(Demand::Velocity { velocity: 600.0, acceleration: 0.0 });
         run(&mut m, 0.1);
         assert!(!m.faults().any());
-        m.set_command(Command::Velocity { velocity: 0.0, acceleration: 0.0 });
+        m.set_demand(Demand::Velocity { velocity: 0.0, acceleration: 0.0 });
         let mut vmax: f64 = 0.0;
         for _ in 0..800 {
             m.step(1.0 / 8000.0);
@@ -252,7 +252,7 @@ fn regeneration_raises_bus_to_over_voltage() {
 fn short_circuit_braking_stops_the_motor() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
     m.set_motion(0.0, 600.0);
-    m.set_command(Command::ShortCircuit);
+    m.set_demand(Demand::ShortCircuit);
     run(&mut m, 0.2);
     assert!(m.velocity().abs() < 1.0, "{}", m.velocity());
     assert!(!m.faults().any());
@@ -300,7 +300,7 @@ fn medium_servo_tracks_a_position_ramp() {
     let mut err: f64 = 0.0;
     for k in 0..8000 {
         let t = f64::from(k) * dt;
-        m.set_command(Command::Position { position: v * t, velocity: v, acceleration: 0.0 });
+        m.set_demand(Demand::Position { position: v * t, velocity: v, acceleration: 0.0 });
         m.step(dt);
         if k > 2000 {
             err = err.max((v * (t + dt) - m.position()).abs());
@@ -344,7 +344,7 @@ fn presets_stable_from_4_to_16_khz() {
             let mut p = base;
             p.control.control_rate_hz = rate;
             let mut m = DriveModel::new(p).unwrap();
-            m.set_command(Command::Velocity { velocity: 50.0, acceleration: 0.0 });
+            m.set_demand(Demand::Velocity { velocity: 50.0, acceleration: 0.0 });
             let mut peak: f64 = 0.0;
             for _ in 0..(rate as usize / 5) {
                 m.step(1.0 / rate);
@@ -352,7 +352,7 @@ fn presets_stable_from_4_to_16_khz() {
             }
             assert!(rel(m.velocity(), 50.0) < 0.01, "{rate}: {}", m.velocity());
             assert!(peak < 50.0 * 1.3, "{rate}: overshoot {peak}");
-            m.set_command(Command::Position { position: 1.0, velocity: 0.0, acceleration: 0.0 });
+            m.set_demand(Demand::Position { position: 1.0, velocity: 0.0, acceleration: 0.0 });
             run(&mut m, 0.3);
             assert!((m.position() - 1.0).abs() < 1e-4, "{rate}: {}", m.position());
         }

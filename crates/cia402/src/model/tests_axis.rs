@@ -124,7 +124,7 @@ fn hard_stop_stalls_the_motor() {
     let mut p = DriveParams::servo_small();
     p.axis.positive_stop = Some(45.0);
     let mut m = DriveModel::new(p).unwrap();
-    m.set_command(Command::Velocity { velocity: 100.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 100.0, acceleration: 0.0 });
     let ev = collect(&mut m, 8000 * 3 / 10);
     let stop = PI / 4.0;
     let hit = ev.iter().find(|e| e.kind == EventKind::HardStop).unwrap();
@@ -135,7 +135,7 @@ fn hard_stop_stalls_the_motor() {
     assert!(m.stalled());
     assert_eq!(m.at_hard_stop(), Some(true));
     assert!(m.current() > 0.99 * 6.4, "velocity loop winds up to the limit: {}", m.current());
-    m.set_command(Command::Velocity { velocity: -10.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: -10.0, acceleration: 0.0 });
     run(&mut m, 0.1);
     assert!(m.position() < stop);
     assert!(!m.stalled());
@@ -173,9 +173,9 @@ const FULL_STEP: f64 = 2.0 * PI / 200.0;
 #[test]
 fn stepper_follows_below_pull_out() {
     let mut m = stepper(-0.8, false);
-    m.set_command(Command::Velocity { velocity: 2.0 * PI, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 2.0 * PI, acceleration: 0.0 });
     run(&mut m, 1.0);
-    m.set_command(Command::Position { position: m.demand_position(), velocity: 0.0, acceleration: 0.0 });
+    m.set_demand(Demand::Position { position: m.demand_position(), velocity: 0.0, acceleration: 0.0 });
     run(&mut m, 0.5);
     assert!((m.demand_position() - 2.0 * PI).abs() < 1e-9);
     let lag = (0.8f64 / 1.2).asin() / 50.0;
@@ -185,7 +185,7 @@ fn stepper_follows_below_pull_out() {
     assert_eq!(m.lost_steps(), 0);
     assert!(!m.stalled());
     // Micro-step quantisation of the demand.
-    m.set_command(Command::Position { position: 0.3 * FULL_STEP / 16.0, velocity: 0.0, acceleration: 0.0 });
+    m.set_demand(Demand::Position { position: 0.3 * FULL_STEP / 16.0, velocity: 0.0, acceleration: 0.0 });
     assert!((m.demand_position() - 2.0 * PI).abs() < 1e-9);
     m.step(1.0 / 4000.0);
     assert_eq!(m.demand_position(), 0.0);
@@ -196,7 +196,7 @@ fn stepper_follows_below_pull_out() {
 #[test]
 fn stepper_stalls_above_pull_out() {
     let mut m = stepper(-1.5, false);
-    m.set_command(Command::Position { position: 0.0, velocity: 0.0, acceleration: 0.0 });
+    m.set_demand(Demand::Position { position: 0.0, velocity: 0.0, acceleration: 0.0 });
     let mut stall_events = 0;
     for _ in 0..400 {
         stall_events += m.step(1.0 / 4000.0).iter().filter(|e| e.kind == EventKind::Stall).count();
@@ -212,9 +212,9 @@ fn stepper_stalls_above_pull_out() {
 #[test]
 fn closed_loop_stepper_does_not_lose_steps() {
     let mut m = stepper(-1.0, true);
-    m.set_command(Command::Velocity { velocity: 2.0 * PI, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 2.0 * PI, acceleration: 0.0 });
     run(&mut m, 1.0);
-    m.set_command(Command::Position { position: m.demand_position(), velocity: 0.0, acceleration: 0.0 });
+    m.set_demand(Demand::Position { position: m.demand_position(), velocity: 0.0, acceleration: 0.0 });
     run(&mut m, 0.5);
     assert_eq!(m.lost_steps(), 0);
     assert!((m.demand_position() - m.position()).abs() < FULL_STEP);

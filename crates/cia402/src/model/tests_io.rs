@@ -25,7 +25,7 @@ fn engaged_brake_holds_a_loaded_axis() {
     run(&mut m, 1.0);
     assert_eq!(m.position(), 0.0, "the brake holds the load with the power stage off");
     // The motor pushing with 1 Nm (less than brake and load) moves nothing.
-    m.set_command(Command::Torque(1.0));
+    m.set_demand(Demand::Torque(1.0));
     run(&mut m, 0.5);
     assert_eq!(m.position(), 0.0);
     // Without a brake the same axis falls.

@@ -6,7 +6,7 @@ use proptest::prelude::*;
 
 #[derive(Debug, Clone)]
 enum Op {
-    Cmd(Command),
+    Cmd(Demand),
     Step(f64),
     Inject(ModelInjection),
     Motion(f64, f64),
@@ -20,11 +20,11 @@ fn big() -> impl Strategy<Value = f64> {
 fn op() -> impl Strategy<Value = Op> {
     prop_oneof![
         2 => prop_oneof![
-            Just(Command::Off),
-            Just(Command::ShortCircuit),
-            big().prop_map(Command::Torque),
-            (big(), big()).prop_map(|(velocity, acceleration)| Command::Velocity { velocity, acceleration }),
-            (big(), big(), big()).prop_map(|(position, velocity, acceleration)| Command::Position { position, velocity, acceleration }),
+            Just(Demand::Off),
+            Just(Demand::ShortCircuit),
+            big().prop_map(Demand::Torque),
+            (big(), big()).prop_map(|(velocity, acceleration)| Demand::Velocity { velocity, acceleration }),
+            (big(), big(), big()).prop_map(|(position, velocity, acceleration)| Demand::Position { position, velocity, acceleration }),
         ].prop_map(Op::Cmd),
         6 => prop_oneof![Just(1.0 / 8000.0), Just(1.0 / 4000.0), -1.0..0.02f64].prop_map(Op::Step),
         1 => prop_oneof![
@@ -72,7 +72,7 @@ proptest! {
         let mut m = DriveModel::new(params(kind)).unwrap();
         for o in ops {
             match o {
-                Op::Cmd(c) => { m.set_command(c); }
+                Op::Cmd(c) => { m.set_demand(c); }
                 Op::Step(dt) => {
                     let ev = m.step(dt);
                     prop_assert!(ev.len() <= MAX_EVENTS);

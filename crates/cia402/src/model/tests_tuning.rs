@@ -12,7 +12,7 @@ fn ramp_error(m: &mut DriveModel, speed: f64, seconds: f64) -> f64 {
     let mut worst: f64 = 0.0;
     for k in 1..=n {
         let p = speed * k as f64 * dt;
-        m.set_command(Command::Position { position: p, velocity: speed, acceleration: 0.0 });
+        m.set_demand(Demand::Position { position: p, velocity: speed, acceleration: 0.0 });
         m.step(dt);
         worst = worst.max((p - m.position()).abs());
     }
@@ -55,7 +55,7 @@ fn velocity_feedforward_share_matters() {
 fn higher_velocity_gain_rejects_a_load_step_better() {
     let sag = |kp: f64| {
         let mut m = tuned(|p| p.control.velocity_kp = kp);
-        m.set_command(Command::Velocity { velocity: 50.0, acceleration: 0.0 });
+        m.set_demand(Demand::Velocity { velocity: 50.0, acceleration: 0.0 });
         run(&mut m, 0.3);
         m.inject(ModelInjection::LoadTorqueStep(-0.5));
         let dt = m.params().control_period();
@@ -74,7 +74,7 @@ fn higher_velocity_gain_rejects_a_load_step_better() {
 fn larger_inertia_accelerates_slower_at_the_same_torque() {
     let speed_after = |j: f64| {
         let mut m = tuned(|p| p.motor.rotor_inertia = j);
-        m.set_command(Command::Torque(0.2));
+        m.set_demand(Demand::Torque(0.2));
         run(&mut m, 0.01);
         m.velocity()
     };
@@ -87,7 +87,7 @@ fn larger_inertia_accelerates_slower_at_the_same_torque() {
 #[test]
 fn torque_constant_scales_the_torque_of_a_current() {
     let mut m = tuned(|p| p.motor.kt = 0.8);
-    m.set_command(Command::Torque(0.4));
+    m.set_demand(Demand::Torque(0.4));
     run(&mut m, 0.01);
     assert!((m.current() - 0.5).abs() < 0.01, "0.4 Nm at 0.8 Nm/A: {} A", m.current());
 }
@@ -111,10 +111,10 @@ fn machine_fixed_parameters_are_refused() {
 fn current_limits_differ_by_direction() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
     m.set_current_limits(2.0, 1.0).unwrap();
-    m.set_command(Command::Torque(10.0));
+    m.set_demand(Demand::Torque(10.0));
     run(&mut m, 0.005);
     assert!((m.current() - 2.0).abs() < 1e-6, "positive: {}", m.current());
-    m.set_command(Command::Torque(-10.0));
+    m.set_demand(Demand::Torque(-10.0));
     run(&mut m, 0.005);
     assert!((m.current() + 1.0).abs() < 1e-6, "negative: {}", m.current());
     assert!(m.set_current_limits(f64::NAN, 1.0).is_err());
@@ -125,10 +125,10 @@ fn current_limits_differ_by_direction() {
 fn velocity_limits_differ_by_direction() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
     m.set_velocity_limits(100.0, 30.0).unwrap();
-    m.set_command(Command::Velocity { velocity: 300.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 300.0, acceleration: 0.0 });
     run(&mut m, 0.3);
     assert!((m.velocity() - 100.0).abs() < 1.0, "positive: {}", m.velocity());
-    m.set_command(Command::Velocity { velocity: -300.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: -300.0, acceleration: 0.0 });
     run(&mut m, 0.3);
     assert!((m.velocity() + 30.0).abs() < 1.0, "negative: {}", m.velocity());
 }
@@ -140,7 +140,7 @@ fn foldback_brings_a_blocked_motor_down_to_its_continuous_current() {
     let mut m = DriveModel::new(p).unwrap();
     let f = FoldbackParams { continuous: 1.6, peak: 6.4, time_constant: 0.1 };
     m.set_foldback(Some(f)).unwrap();
-    m.set_command(Command::Torque(10.0));
+    m.set_demand(Demand::Torque(10.0));
     run(&mut m, 0.01);
     assert!(m.current() > 6.0, "cold: the peak current, {}", m.current());
     run(&mut m, 2.0);
@@ -149,7 +149,7 @@ fn foldback_brings_a_blocked_motor_down_to_its_continuous_current() {
     assert!((i - 1.6).abs() < 0.2, "folded back to the continuous current: {i}");
     assert!(m.foldback_current().unwrap() < 1.8);
     // Unloaded it recovers towards the peak.
-    m.set_command(Command::Off);
+    m.set_demand(Demand::Off);
     run(&mut m, 1.0);
     assert!(m.foldback_current().unwrap() > 6.0, "{:?}", m.foldback_current());
     assert!(m.set_foldback(Some(FoldbackParams { peak: 1.0, ..f })).is_err());
@@ -161,7 +161,7 @@ fn foldback_brings_a_blocked_motor_down_to_its_continuous_current() {
 fn current_feedforward_adds_an_offset_and_friction_compensation() {
     let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
     m.set_current_feedforward(0.5, 0.0).unwrap();
-    m.set_command(Command::Torque(0.0));
+    m.set_demand(Demand::Torque(0.0));
     run(&mut m, 0.005);
     assert!((m.current() - 0.5).abs() < 1e-3, "offset: {}", m.current());
     // Friction compensation pushes the way the motor turns.
@@ -178,7 +178,7 @@ fn voltage_limit_caps_the_speed_at_the_back_emf() {
     let top = |limit: f64| {
         let mut m = DriveModel::new(DriveParams::servo_small()).unwrap();
         m.set_voltage_limit(limit).unwrap();
-        m.set_command(Command::Velocity { velocity: 600.0, acceleration: 0.0 });
+        m.set_demand(Demand::Velocity { velocity: 600.0, acceleration: 0.0 });
         run(&mut m, 0.5);
         m.velocity()
     };
@@ -193,10 +193,10 @@ fn regen_power_while_braking_into_the_chopper() {
     let mut p = DriveParams::servo_small();
     p.axis.load_inertia = 1e-3;
     let mut m = DriveModel::new(p).unwrap();
-    m.set_command(Command::Velocity { velocity: 300.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 300.0, acceleration: 0.0 });
     run(&mut m, 0.5);
     assert_eq!(m.regen_power(), 0.0, "motoring");
-    m.set_command(Command::Velocity { velocity: 0.0, acceleration: 0.0 });
+    m.set_demand(Demand::Velocity { velocity: 0.0, acceleration: 0.0 });
     let dt = m.params().control_period();
     let mut peak: f64 = 0.0;
     for _ in 0..2000 {

@@ -5,7 +5,7 @@
 use drivebus_cia402::homing::{
     Homing, HomingCommand, HomingConfig, HomingEvent, HomingEvents, HomingInput, HomingRegistry, HomingState,
 };
-use drivebus_cia402::model::{AxisParams, Command, DriveModel, DriveParams};
+use drivebus_cia402::model::{AxisParams, Demand, DriveModel, DriveParams};
 
 pub const DT: f64 = 1.0 / 8000.0;
 /// Index pulse angle \[rad\] → 0.3 rad = 17.188 733 853 924 7°.
@@ -123,14 +123,14 @@ impl Rig {
             self.resets += 1;
         }
         let cmd = match out.command {
-            HomingCommand::Position { position, velocity, acceleration } => Command::Position {
+            HomingCommand::Position { position, velocity, acceleration } => Demand::Position {
                 position: self.model.units_to_rad(position - self.offset),
                 velocity: self.model.units_to_rad(velocity),
                 acceleration: self.model.units_to_rad(acceleration),
             },
-            HomingCommand::Torque(t) => Command::Torque(t / 1000.0 * 0.64),
+            HomingCommand::Torque(t) => Demand::Torque(t / 1000.0 * 0.64),
         };
-        assert!(self.model.set_command(cmd), "invalid command {cmd:?}");
+        assert!(self.model.set_demand(cmd), "invalid command {cmd:?}");
         self.model.step(DT);
         self.steps += 1;
         if self.statuses.last() != Some(&out.status) {

@@ -4,7 +4,7 @@
 //! (`drivebus_ethercat::master::Master::read_object`); without SDO
 //! Information, by the CiA 301/402 and ETG.1000.6 tables, else by size.
 
-use drivebus_ethercat::master::{self, Described, Entry, Master, ObjectInfo, ObjectRead};
+use drivebus_ethercat::master::{self, DescribedBy, Entry, Master, ObjectDescription, ObjectRead};
 use drivebus_master::DataType;
 
 use super::EcatSdoRead;
@@ -97,7 +97,7 @@ pub async fn sdo_read(g: &Global, a: &EcatSdoRead) -> anyhow::Result<()> {
             return Ok((None, vec![Entry { sub: s, info: None, data }]));
         }
         let mut read = m.read_object(&sd, pos, index).await.map_err(master_err)?;
-        if let Described::NoSdoInfo(_) = read.described {
+        if let DescribedBy::NoSdoInfo(_) = read.described {
             let zero = master::sdo_read(&sd, pos, index, 0).await.map_err(master_err)?;
             let (mut subs, guess) = tables.subs(&zero);
             if guess && master::sdo_read(&sd, pos, index, 1).await.is_err() {
@@ -131,11 +131,17 @@ fn by_size(d: &[u8]) -> Option<DataType> {
 /// An entry as a row: named and typed by `--type`, then the slave's SDO
 /// Information (`object`, the entry's description), then the CiA 301/402
 /// dictionary and ETG.1000.6, else by size.
-fn row(dict: &Dict, forced: Option<DataType>, index: u16, object: Option<&ObjectInfo>, e: &Entry) -> Row {
+fn row(
+    dict: &Dict,
+    forced: Option<DataType>,
+    index: u16,
+    object: Option<&ObjectDescription<Vec<u8>>>,
+    e: &Entry,
+) -> Row {
     let info = e.info.as_ref();
     let name = match (object, info) {
-        (Some(o), Some(i)) if o.compound() => Some(format!("{} / {}", o.name, i.name)),
-        (Some(o), _) if !o.compound() => Some(o.name.clone()),
+        (Some(o), Some(i)) if o.compound() => Some(format!("{} / {}", o.name_text(), i.name_text())),
+        (Some(o), _) if !o.compound() => Some(o.name_text()),
         _ => None,
     };
     let etg = etg_array(index, e.sub);
@@ -153,10 +159,10 @@ fn row(dict: &Dict, forced: Option<DataType>, index: u16, object: Option<&Object
 /// What to tell the user when the names and types are not the slave's.
 fn note(pos: usize, read: &ObjectRead) -> Option<String> {
     match &read.described {
-        Described::NoSdoInfo(why) => Some(format!(
+        DescribedBy::NoSdoInfo(why) => Some(format!(
             "slave {pos} has no SDO Information ({why}): names and types from CiA 301/402 and ETG.1000.6 where known, else by size"
         )),
-        Described::SdoInfo(_) => None,
+        DescribedBy::SdoInfo(_) => None,
     }
 }
 
@@ -169,7 +175,7 @@ fn print(
     (read, entries): (Option<ObjectRead>, Vec<Entry>),
 ) -> anyhow::Result<()> {
     let object = match read.as_ref().map(|r| &r.described) {
-        Some(Described::SdoInfo(o)) => Some(o),
+        Some(DescribedBy::SdoInfo(o)) => Some(o),
         _ => None,
     };
     let row = |e: &Entry| row(dict, forced, index, object, e);
@@ -192,7 +198,7 @@ fn print(
                     "names_from": if object.is_some() { "sdo_info" } else { "tables" },
                     "complete_access": r.read_complete});
                 if let Some(o) = object {
-                    j["name"] = o.name.clone().into();
+                    j["name"] = o.name_text().into();
                     j["object_code"] = o.code_name().into();
                 }
                 if let Some(n) = note {
@@ -226,13 +232,17 @@ fn slave_json(slave: usize, mut j: serde_json::Value) -> serde_json::Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use drivebus_ethercat::master::EntryInfo;
+    use drivebus_ethercat::master::EntryDescription;
 
     fn entry(sub: u8, info: Option<(&str, u16, u16)>, data: &[u8]) -> Entry {
-        let info = info.map(|(name, data_type, bit_length)| EntryInfo {
+        let info = info.map(|(name, data_type, bit_length)| EntryDescription {
+            index: 0,
+            sub,
+            value_info: 0,
             data_type,
             bit_length,
             access: 0x3F,
+            values: Vec::new(),
             name: name.into(),
         });
         Entry { sub, info, data: data.to_vec() }
@@ -241,7 +251,13 @@ mod tests {
     #[test]
     fn names_and_types_come_from_the_slave_first() {
         let dict = Dict::default();
-        let o = ObjectInfo { object_code: 8, data_type: 6, max_sub: 4, name: "TxPDO assign".into() };
+        let o = ObjectDescription {
+            index: 0x1C13,
+            object_code: 8,
+            data_type: 6,
+            max_sub: 4,
+            name: b"TxPDO assign".to_vec(),
+        };
         let e = entry(1, Some(("PDO 1st", 7, 32)), &[0x00, 0x1A, 0, 0]);
         let r = row(&dict, None, 0x1C13, Some(&o), &e);
         assert_eq!(r.1.as_deref(), Some("TxPDO assign / PDO 1st"));
@@ -253,7 +269,13 @@ mod tests {
             (Some("Sync manager 3 PDO assignment / PDO 2"), Some(DataType::Integer32))
         );
         // A VAR is named after its object.
-        let v = ObjectInfo { object_code: 7, data_type: 9, max_sub: 0, name: "Name".into() };
+        let v = ObjectDescription {
+            index: 0x2000,
+            object_code: 7,
+            data_type: 9,
+            max_sub: 0,
+            name: b"Name".to_vec(),
+        };
         let r = row(&dict, None, 0x2000, Some(&v), &entry(0, Some(("x", 9, 32)), b"iPOS"));
         assert_eq!((r.1.as_deref(), r.2), (Some("Name"), Some(DataType::VisibleString)));
     }
@@ -263,7 +285,7 @@ mod tests {
         let dict = Dict::default();
         let read = ObjectRead {
             index: 0x1C13,
-            described: Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into()),
+            described: DescribedBy::NoSdoInfo("its SII announces no SDO Information (CoE details)".into()),
             complete_access: false,
             read_complete: false,
             entries: Vec::new(),

@@ -38,7 +38,9 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let signals = Signals::install()?;
+    // Installed before the ready line so a signal right after it ends in a
+    // clean exit 0.
+    let signals = crate::serve::Signals::install()?;
     let stop = Arc::new(AtomicBool::new(false));
     let served = {
         let (stop, host) = (stop.clone(), host.clone());
@@ -87,29 +89,4 @@ fn names(members: &[Member]) -> Vec<String> {
             Member::Device(d) => d.type_name().to_owned(),
         })
         .collect()
-}
-
-/// SIGINT and SIGTERM, installed before the ready line so a signal right
-/// after it ends in a clean exit 0.
-struct Signals {
-    term: tokio::signal::unix::Signal,
-    int: tokio::signal::unix::Signal,
-}
-
-impl Signals {
-    fn install() -> anyhow::Result<Signals> {
-        use tokio::signal::unix::{SignalKind, signal};
-        Ok(Signals {
-            term: signal(SignalKind::terminate()).context("installing the SIGTERM handler")?,
-            int: signal(SignalKind::interrupt()).context("installing the SIGINT handler")?,
-        })
-    }
-
-    async fn wait(mut self) -> anyhow::Result<()> {
-        tokio::select! {
-            _ = self.term.recv() => {}
-            _ = self.int.recv() => {}
-        }
-        Ok(())
-    }
 }

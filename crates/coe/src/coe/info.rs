@@ -224,8 +224,8 @@ fn entry_description<A: ObjectAccess + ?Sized>(
         data_type: s.data_type as u16,
         bit_length: bit_length(s),
         access,
-        values: &[],
-        name: &[],
+        values: &[][..],
+        name: &[][..],
     };
     head.encode_head(w);
     let mut given = asked & value_info::ECHO;

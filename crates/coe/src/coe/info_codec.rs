@@ -10,6 +10,7 @@
 //! header first, as many bytes as the mailbox header's length says.
 
 use crate::mailbox::Put;
+use alloc::string::String;
 use alloc::vec::Vec;
 
 /// CoE header plus info header, in front of every service's data.
@@ -138,9 +139,11 @@ pub(crate) fn put_text(w: &mut Vec<u8>, text: &[u8], limit: usize) {
     w.extend_from_slice(&text[..text.len().min(room)]);
 }
 
-/// Get Object Description response (§5.6.3, Get Object Description).
+/// Get Object Description response (§5.6.3, Get Object Description):
+/// `B` holds the name, `&[u8]` borrowed from a mailbox or `Vec<u8>` kept
+/// by a master ([`ObjectDescription::into_owned`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ObjectDescription<'a> {
+pub struct ObjectDescription<B> {
     /// Object.
     pub index: u16,
     /// Data type index: of a VAR's value, of an ARRAY's elements, a
@@ -151,10 +154,10 @@ pub struct ObjectDescription<'a> {
     /// Object code: 7 VAR, 8 ARRAY, 9 RECORD.
     pub object_code: u8,
     /// Name (VISIBLE_STRING, not terminated).
-    pub name: &'a [u8],
+    pub name: B,
 }
 
-impl<'a> ObjectDescription<'a> {
+impl<B: AsRef<[u8]>> ObjectDescription<B> {
     /// Appends the response's service data, the name cut so that `w`
     /// stays within `limit` bytes (the mailbox).
     pub fn encode(&self, w: &mut Vec<u8>, limit: usize) {
@@ -162,11 +165,39 @@ impl<'a> ObjectDescription<'a> {
         w.put_u16(self.index);
         w.put_u16(self.data_type);
         w.extend_from_slice(&[self.max_sub, self.object_code]);
-        put_text(w, self.name, limit);
+        put_text(w, self.name.as_ref(), limit);
     }
 
+    /// An ARRAY or RECORD (entries behind sub 0).
+    pub fn compound(&self) -> bool {
+        matches!(self.object_code, 8 | 9)
+    }
+
+    /// VAR, ARRAY or RECORD.
+    pub fn code_name(&self) -> &'static str {
+        match self.object_code {
+            8 => "ARRAY",
+            9 => "RECORD",
+            7 => "VAR",
+            _ => "unknown object code",
+        }
+    }
+
+    /// The name as text ([`name_text`]).
+    pub fn name_text(&self) -> String {
+        name_text(self.name.as_ref())
+    }
+
+    /// The same description with its name copied out of the mailbox.
+    pub fn into_owned(self) -> ObjectDescription<Vec<u8>> {
+        let ObjectDescription { index, data_type, max_sub, object_code, name } = self;
+        ObjectDescription { index, data_type, max_sub, object_code, name: name.as_ref().to_vec() }
+    }
+}
+
+impl<'a> ObjectDescription<&'a [u8]> {
     /// From the data after the info header.
-    fn decode(d: &'a [u8]) -> Option<ObjectDescription<'a>> {
+    fn decode(d: &'a [u8]) -> Option<ObjectDescription<&'a [u8]>> {
         Some(ObjectDescription {
             index: u16::from_le_bytes([*d.first()?, *d.get(1)?]),
             data_type: u16::from_le_bytes([*d.get(2)?, *d.get(3)?]),
@@ -177,9 +208,10 @@ impl<'a> ObjectDescription<'a> {
     }
 }
 
-/// Get Entry Description response (§5.6.3, Get Entry Description).
+/// Get Entry Description response (§5.6.3, Get Entry Description): `B`
+/// holds the optional values and the name, as [`ObjectDescription`]'s.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EntryDescription<'a> {
+pub struct EntryDescription<B> {
     /// Object.
     pub index: u16,
     /// Sub-index.
@@ -193,12 +225,12 @@ pub struct EntryDescription<'a> {
     /// Object access bits (`access_bits`: read/write per state, PDO mapping).
     pub access: u16,
     /// The optional fields `value_info` announces, as sent (decoding only).
-    pub values: &'a [u8],
+    pub values: B,
     /// Name (VISIBLE_STRING, not terminated).
-    pub name: &'a [u8],
+    pub name: B,
 }
 
-impl<'a> EntryDescription<'a> {
+impl<B: AsRef<[u8]>> EntryDescription<B> {
     /// Fixed fields after the info header.
     const FIXED: usize = 10;
 
@@ -213,9 +245,43 @@ impl<'a> EntryDescription<'a> {
         w.put_u16(self.access);
     }
 
+    /// `rw`, `ro`, `wo` or `none` from the access bits (bits 0-2 readable
+    /// in PRE-OP/SAFE-OP/OP, 3-5 writable).
+    pub fn access_text(&self) -> &'static str {
+        match (self.access & 0x07 != 0, self.access & 0x38 != 0) {
+            (true, true) => "rw",
+            (true, false) => "ro",
+            (false, true) => "wo",
+            (false, false) => "none",
+        }
+    }
+
+    /// The name as text ([`name_text`]).
+    pub fn name_text(&self) -> String {
+        name_text(self.name.as_ref())
+    }
+
+    /// The same description with its values and name copied out of the
+    /// mailbox.
+    pub fn into_owned(self) -> EntryDescription<Vec<u8>> {
+        let EntryDescription { index, sub, value_info, data_type, bit_length, access, values, name } = self;
+        EntryDescription {
+            index,
+            sub,
+            value_info,
+            data_type,
+            bit_length,
+            access,
+            values: values.as_ref().to_vec(),
+            name: name.as_ref().to_vec(),
+        }
+    }
+}
+
+impl<'a> EntryDescription<&'a [u8]> {
     /// From the data after the info header: the optional fields take 2
     /// bytes (unit type) and the entry's length in bytes (each value).
-    fn decode(d: &'a [u8]) -> Option<EntryDescription<'a>> {
+    fn decode(d: &'a [u8]) -> Option<EntryDescription<&'a [u8]>> {
         let u = |at: usize| Some(u16::from_le_bytes([*d.get(at)?, *d.get(at + 1)?]));
         let value_info = *d.get(3)?;
         let bit_length = u(6)?;
@@ -258,9 +324,9 @@ pub enum InfoResponse<'a> {
         fragments_left: u16,
     },
     /// Get Object Description.
-    ObjectDescription(ObjectDescription<'a>),
+    ObjectDescription(ObjectDescription<&'a [u8]>),
     /// Get Entry Description.
-    EntryDescription(EntryDescription<'a>),
+    EntryDescription(EntryDescription<&'a [u8]>),
     /// SDO Info Error: an abort code (`0602 0000` no object, ...).
     Error(u32),
 }
@@ -285,6 +351,12 @@ impl<'a> InfoResponse<'a> {
             _ => return None,
         })
     }
+}
+
+/// A VISIBLE_STRING name as text: invalid UTF-8 replaced, a terminating
+/// NUL some slaves send and surrounding blanks dropped.
+pub fn name_text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).trim_end_matches('\0').trim().into()
 }
 
 #[cfg(test)]
@@ -318,7 +390,7 @@ mod tests {
             data_type: 6,
             max_sub: 4,
             object_code: 8,
-            name: b"TxPDO assign",
+            name: &b"TxPDO assign"[..],
         };
         o.encode(&mut w, 64);
         assert_eq!(InfoResponse::decode(&w), Some(InfoResponse::ObjectDescription(o)));
@@ -333,8 +405,8 @@ mod tests {
             data_type: 6,
             bit_length: 16,
             access: 0x003F,
-            values: &[],
-            name: b"",
+            values: &[][..],
+            name: &b""[..],
         };
         w.clear();
         e.encode_head(&mut w);
@@ -348,5 +420,36 @@ mod tests {
         assert_eq!(InfoResponse::decode(&err), Some(InfoResponse::Error(0x0602_0000)));
         assert_eq!(InfoResponse::decode(&[0x00, 0x30, 0x04, 0, 0, 0, 0, 0]), None);
         assert_eq!(InfoResponse::decode(&[0x00, 0x80, 0x06, 0, 0, 0, 1]), None);
+    }
+
+    #[test]
+    fn a_master_keeps_a_description_as_sent_and_reads_its_name() {
+        let mut w = Vec::new();
+        let o = ObjectDescription {
+            index: 0x1008,
+            data_type: 9,
+            max_sub: 0,
+            object_code: 7,
+            name: &b"Name\0"[..],
+        };
+        o.encode(&mut w, 64);
+        let Some(InfoResponse::ObjectDescription(d)) = InfoResponse::decode(&w) else { panic!("{w:02X?}") };
+        let kept = d.into_owned();
+        assert_eq!(kept.name, b"Name\0");
+        assert_eq!((kept.name_text().as_str(), kept.code_name(), kept.compound()), ("Name", "VAR", false));
+        let e = EntryDescription {
+            index: 0x1018,
+            sub: 1,
+            value_info: 0,
+            data_type: 7,
+            bit_length: 32,
+            access: 0x0007,
+            values: &[][..],
+            name: &b" Vendor ID "[..],
+        };
+        let kept = e.into_owned();
+        assert_eq!((kept.name_text().as_str(), kept.access_text()), ("Vendor ID", "ro"));
+        assert_eq!(EntryDescription { access: 0x38, ..kept.clone() }.access_text(), "wo");
+        assert_eq!(name_text(&[0xFF, b'x']), "\u{FFFD}x", "invalid UTF-8 is replaced, not refused");
     }
 }

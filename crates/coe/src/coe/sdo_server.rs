@@ -12,6 +12,10 @@ use crate::access::ObjectAccess;
 use crate::mailbox::{HEADER_LEN, MailboxType, Put};
 use drivebus_can::Instant;
 use drivebus_od::SdoAbort;
+use drivebus_sdo::wire::{
+    CCS_DOWNLOAD_SEGMENT, CCS_INITIATE_DOWNLOAD, CCS_INITIATE_UPLOAD, CCS_UPLOAD_SEGMENT, CS_ABORT,
+    EXPEDITED, SCS_INITIATE_DOWNLOAD, SCS_INITIATE_UPLOAD, SIZE_INDICATED, expedited, expedited_len, scs,
+};
 
 /// Service data of an SDO mailbox without normal-transfer data: CoE header,
 /// command, index, sub-index, 4 data bytes. Also the shortest valid request
@@ -50,7 +54,7 @@ impl Transfer {
 pub(crate) fn abort(out: &mut Out<'_>, mux: Mux, code: SdoAbort) {
     let w = out.q.begin();
     w.extend_from_slice(&COE_SDO_REQUEST);
-    w.push(0x80);
+    w.push(CS_ABORT);
     w.extend_from_slice(&mux.bytes());
     w.put_u32(code.0);
     out.q.commit(MailboxType::Coe);
@@ -77,7 +81,7 @@ fn download_response(out: &mut Out<'_>, mux: Mux, result: Result<(), SdoAbort>) 
     }
     let w = out.q.begin();
     w.extend_from_slice(&COE_SDO_RESPONSE);
-    w.push(0x60 | mux.ca_bit());
+    w.push((SCS_INITIATE_DOWNLOAD << 5) | mux.ca_bit());
     w.extend_from_slice(&mux.bytes());
     w.put_u32(0);
     out.q.commit(MailboxType::Coe);
@@ -92,14 +96,14 @@ fn upload_response(out: &mut Out<'_>, mux: Mux, value: &[u8]) -> Option<usize> {
     let w = out.q.begin();
     w.extend_from_slice(&COE_SDO_RESPONSE);
     if (1..=4).contains(&n) {
-        w.push(0x43 | mux.ca_bit() | (((4 - n) as u8) << 2));
+        w.push(expedited(SCS_INITIATE_UPLOAD << 5, n) | mux.ca_bit());
         w.extend_from_slice(&mux.bytes());
         w.extend_from_slice(value);
         w.resize(HEADER_LEN + SDO_LEN, 0);
         out.q.commit(MailboxType::Coe);
         return None;
     }
-    w.push(0x41 | mux.ca_bit());
+    w.push((SCS_INITIATE_UPLOAD << 5) | SIZE_INDICATED | mux.ca_bit());
     w.extend_from_slice(&mux.bytes());
     // Callers refuse values beyond u32 first.
     w.put_u32(n as u32);
@@ -120,23 +124,28 @@ impl CoeServer {
     ) {
         let cmd = body[2];
         let req = Mux { index: u16::from_le_bytes([body[3], body[4]]), sub: body[5], ca: cmd & CA_BIT != 0 };
-        match (cmd >> 5, self.transfer) {
-            (1, _) => {
+        const DOWNLOAD_SEGMENT: u8 = CCS_DOWNLOAD_SEGMENT >> 5;
+        const INITIATE_DOWNLOAD: u8 = CCS_INITIATE_DOWNLOAD >> 5;
+        const INITIATE_UPLOAD: u8 = CCS_INITIATE_UPLOAD >> 5;
+        const UPLOAD_SEGMENT: u8 = CCS_UPLOAD_SEGMENT >> 5;
+        const ABORT: u8 = CS_ABORT >> 5;
+        match (scs(cmd), self.transfer) {
+            (INITIATE_DOWNLOAD, _) => {
                 self.transfer = Transfer::Idle;
                 self.initiate_download(body, req, now, objects, out);
             }
-            (2, _) => {
+            (INITIATE_UPLOAD, _) => {
                 self.transfer = Transfer::Idle;
                 self.initiate_upload(req, now, objects, out);
             }
-            (0, Transfer::Download { mux, total, toggle }) => {
+            (DOWNLOAD_SEGMENT, Transfer::Download { mux, total, toggle }) => {
                 self.download_segment(body, mux, total, toggle, now, objects, out);
             }
-            (3, Transfer::Upload { mux, pos, toggle }) => {
+            (UPLOAD_SEGMENT, Transfer::Upload { mux, pos, toggle }) => {
                 self.upload_segment(cmd, mux, pos, toggle, now, out)
             }
             // An abort from the master ends the transfer; it is not answered.
-            (4, _) => self.transfer = Transfer::Idle,
+            (ABORT, _) => self.transfer = Transfer::Idle,
             // Block transfer does not exist in CoE: these bytes look like an
             // initiate, so the abort echoes their index and sub-index.
             (5..=7, _) => {
@@ -207,11 +216,10 @@ impl CoeServer {
         if mux.ca && !self.cfg.complete_access {
             return abort(out, mux, SdoAbort::UNSUPPORTED_ACCESS);
         }
-        if cmd & 0x02 != 0 {
+        if cmd & EXPEDITED != 0 {
             // Expedited (§5.6.2.1): the data is in the 4 bytes; without the
             // size indicator the object's own size says how many count.
-            let len =
-                if cmd & 0x01 != 0 { 4 - usize::from((cmd >> 2) & 0x03) } else { unsized_len(objects, mux) };
+            let len = expedited_len(cmd).unwrap_or_else(|| unsized_len(objects, mux));
             let result = store(objects, mux, &body[6..6 + len]);
             return download_response(out, mux, result);
         }

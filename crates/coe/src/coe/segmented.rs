@@ -13,9 +13,9 @@ use crate::access::ObjectAccess;
 use crate::mailbox::{HEADER_LEN, MailboxType};
 use drivebus_can::Instant;
 use drivebus_od::SdoAbort;
-
-const TOGGLE: u8 = 0x10;
-const LAST: u8 = 0x01;
+use drivebus_sdo::wire::{
+    LAST_SEGMENT, SCS_DOWNLOAD_SEGMENT, SCS_UPLOAD_SEGMENT, TOGGLE, segment, segment_len,
+};
 /// Data bytes every segment carries at least (padding included).
 const MIN_SEGMENT: usize = 7;
 /// CoE header and command byte in front of segment data.
@@ -29,7 +29,7 @@ fn toggle_bit(t: bool) -> u8 {
 /// the 7-byte minimum segment where bits 1-3 count the padding.
 pub(crate) fn segment_data_len(body_len: usize, cmd: u8) -> usize {
     let k = body_len.saturating_sub(SEGMENT_HEADER);
-    if k == MIN_SEGMENT { MIN_SEGMENT - usize::from((cmd >> 1) & 0x07) } else { k }
+    if k == MIN_SEGMENT { segment_len(cmd) } else { k }
 }
 
 impl CoeServer {
@@ -53,8 +53,8 @@ impl CoeServer {
         let unused = MIN_SEGMENT.saturating_sub(k);
         let w = out.q.begin();
         w.extend_from_slice(&COE_SDO_RESPONSE);
-        // Upload segment response: command specifier 0.
-        w.push(toggle_bit(toggle) | ((unused as u8) << 1) | if last { LAST } else { 0 });
+        // n counts the padding of a short segment; a longer one says 0.
+        w.push(segment(SCS_UPLOAD_SEGMENT << 5, toggle_bit(toggle), k.min(MIN_SEGMENT), last));
         w.extend_from_slice(&rest[..k]);
         w.resize(w.len() + unused, 0);
         out.q.commit(MailboxType::Coe);
@@ -87,7 +87,7 @@ impl CoeServer {
         }
         // Within the capacity reserved at initiate: no allocation.
         self.buf.extend_from_slice(&body[SEGMENT_HEADER..SEGMENT_HEADER + k]);
-        if cmd & LAST == 0 {
+        if cmd & LAST_SEGMENT == 0 {
             self.transfer = Transfer::Download { mux, total, toggle: !toggle };
             self.deadline = now + self.cfg.timeout;
             return segment_ack(out, toggle);
@@ -108,7 +108,7 @@ impl CoeServer {
 fn segment_ack(out: &mut Out<'_>, toggle: bool) {
     let w = out.q.begin();
     w.extend_from_slice(&COE_SDO_RESPONSE);
-    w.push(0x20 | toggle_bit(toggle));
+    w.push((SCS_DOWNLOAD_SEGMENT << 5) | toggle_bit(toggle));
     w.resize(HEADER_LEN + SDO_LEN, 0);
     out.q.commit(MailboxType::Coe);
 }

@@ -14,7 +14,9 @@
 pub mod drive;
 mod objects;
 
-pub use objects::{Described, Entry, EntryInfo, ObjectInfo, ObjectRead, coe_details, read_entries};
+pub use objects::{
+    DescribedBy, Entry, EntryDescription, ObjectDescription, ObjectRead, coe_details, read_entries,
+};
 
 /// Runs a master future to completion on this thread (ethercrab's timers
 /// are async-io's).

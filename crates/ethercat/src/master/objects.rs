@@ -17,6 +17,7 @@
 
 use super::{Master, MasterError, Raw, sdo_read};
 use drivebus_can::Duration;
+pub use drivebus_coe::coe::info_codec::{EntryDescription, ObjectDescription};
 use drivebus_coe::coe::info_codec::{InfoRequest, InfoResponse};
 use drivebus_coe::coe::split_image;
 use drivebus_coe::{MailboxErrorCode, MailboxHeader, MailboxType};
@@ -38,77 +39,22 @@ const NO_SUB_INDEX: u32 = 0x0609_0011;
 /// The CoE abort "object does not exist".
 const NO_OBJECT: u32 = 0x0602_0000;
 
-/// An object as the slave's SDO Information describes it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ObjectInfo {
-    /// Object code: 7 VAR, 8 ARRAY, 9 RECORD.
-    pub object_code: u8,
-    /// Data type index (of a VAR, of an ARRAY's elements; a RECORD's structure).
-    pub data_type: u16,
-    /// Highest sub-index.
-    pub max_sub: u8,
-    /// The slave's name for it.
-    pub name: String,
-}
-
-impl ObjectInfo {
-    /// An ARRAY or RECORD (entries behind sub 0).
-    pub fn compound(&self) -> bool {
-        matches!(self.object_code, 8 | 9)
-    }
-
-    /// VAR, ARRAY or RECORD.
-    pub fn code_name(&self) -> &'static str {
-        match self.object_code {
-            8 => "ARRAY",
-            9 => "RECORD",
-            7 => "VAR",
-            _ => "unknown object code",
-        }
-    }
-}
-
-/// An entry as the slave's SDO Information describes it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct EntryInfo {
-    /// Data type index (CiA 301 Table 44: 0005h UNSIGNED8, 0006h UNSIGNED16, ...).
-    pub data_type: u16,
-    /// Length in bits.
-    pub bit_length: u16,
-    /// Object access bits: bits 0-2 readable in PRE-OP/SAFE-OP/OP, 3-5 writable.
-    pub access: u16,
-    /// The slave's name for it.
-    pub name: String,
-}
-
-impl EntryInfo {
-    /// `rw`, `ro`, `wo` or `none` from the access bits.
-    pub fn access_text(&self) -> &'static str {
-        match (self.access & 0x07 != 0, self.access & 0x38 != 0) {
-            (true, true) => "rw",
-            (true, false) => "ro",
-            (false, true) => "wo",
-            (false, false) => "none",
-        }
-    }
-}
-
 /// One entry read from the slave.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Entry {
     /// Sub-index.
     pub sub: u8,
     /// Its SDO Information description, when the slave gave one.
-    pub info: Option<EntryInfo>,
+    pub info: Option<EntryDescription<Vec<u8>>>,
     /// The value's bytes.
     pub data: Vec<u8>,
 }
 
 /// Where the description of an object read came from.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Described {
+pub enum DescribedBy {
     /// The slave's SDO Information.
-    SdoInfo(ObjectInfo),
+    SdoInfo(ObjectDescription<Vec<u8>>),
     /// The slave has no SDO Information (why, in words): the entries are
     /// still to be read with what the caller knows of the object.
     NoSdoInfo(String),
@@ -120,12 +66,12 @@ pub struct ObjectRead {
     /// Object.
     pub index: u16,
     /// Names and types: the slave's, or why there are none.
-    pub described: Described,
+    pub described: DescribedBy,
     /// The slave announces complete access.
     pub complete_access: bool,
     /// The entries 1.. came in one complete-access upload (else one upload each).
     pub read_complete: bool,
-    /// The entries (sub 0 first); empty with [`Described::NoSdoInfo`].
+    /// The entries (sub 0 first); empty with [`DescribedBy::NoSdoInfo`].
     pub entries: Vec<Entry>,
 }
 
@@ -327,17 +273,12 @@ impl Master {
         sd: &SubDeviceRef<'_, S>,
         position: usize,
         index: u16,
-    ) -> Result<Option<ObjectInfo>, MasterError> {
+    ) -> Result<Option<ObjectDescription<Vec<u8>>>, MasterError> {
         let Some(b) = self.info(sd, position, InfoRequest::ObjectDescription(index), 0).await? else {
             return Ok(None);
         };
         match InfoResponse::decode(&b) {
-            Some(InfoResponse::ObjectDescription(d)) if d.index == index => Ok(Some(ObjectInfo {
-                object_code: d.object_code,
-                data_type: d.data_type,
-                max_sub: d.max_sub,
-                name: text(d.name),
-            })),
+            Some(InfoResponse::ObjectDescription(d)) if d.index == index => Ok(Some(d.into_owned())),
             Some(InfoResponse::Error(code)) => {
                 Err(MasterError::Abort { position, index, sub: 0, write: false, code })
             }
@@ -353,19 +294,14 @@ impl Master {
         position: usize,
         index: u16,
         sub: u8,
-    ) -> Result<Option<EntryInfo>, MasterError> {
+    ) -> Result<Option<EntryDescription<Vec<u8>>>, MasterError> {
         let req = InfoRequest::EntryDescription { index, sub, value_info: 0 };
         let Some(b) = self.info(sd, position, req, sub).await? else {
             return Ok(None);
         };
         match InfoResponse::decode(&b) {
             Some(InfoResponse::EntryDescription(d)) if d.index == index && d.sub == sub => {
-                Ok(Some(EntryInfo {
-                    data_type: d.data_type,
-                    bit_length: d.bit_length,
-                    access: d.access,
-                    name: text(d.name),
-                }))
+                Ok(Some(d.into_owned()))
             }
             Some(InfoResponse::Error(code)) => {
                 Err(MasterError::Abort { position, index, sub, write: false, code })
@@ -378,7 +314,7 @@ impl Master {
     /// as sub 0, an ARRAY or RECORD as sub 0 and every entry up to its
     /// count (gaps of a RECORD left out), entries 1.. by complete access
     /// where the slave announces it. Without SDO Information (not in the
-    /// SII, or refused), [`Described::NoSdoInfo`] says why and no entry
+    /// SII, or refused), [`DescribedBy::NoSdoInfo`] says why and no entry
     /// is read: the caller reads them with [`read_entries`] and its tables.
     pub async fn read_object<S: Deref<Target = SubDevice>>(
         &self,
@@ -390,18 +326,18 @@ impl Master {
         let complete_access = details & coe_details::COMPLETE_ACCESS != 0;
         let mut read = ObjectRead {
             index,
-            described: Described::NoSdoInfo(String::new()),
+            described: DescribedBy::NoSdoInfo(String::new()),
             complete_access,
             read_complete: false,
             entries: Vec::new(),
         };
         if details & coe_details::SDO_INFO == 0 {
             read.described =
-                Described::NoSdoInfo("its SII announces no SDO Information (CoE details)".into());
+                DescribedBy::NoSdoInfo("its SII announces no SDO Information (CoE details)".into());
             return Ok(read);
         }
         let Some(object) = self.object_description(sd, position, index).await? else {
-            read.described = Described::NoSdoInfo("it refuses SDO Information (mailbox error)".into());
+            read.described = DescribedBy::NoSdoInfo("it refuses SDO Information (mailbox error)".into());
             return Ok(read);
         };
         let zero = sdo_read(sd, position, index, 0).await?;
@@ -432,7 +368,7 @@ impl Master {
         } else {
             read.entries.push(Entry { sub: 0, info: zero_info, data: zero });
         }
-        read.described = Described::SdoInfo(object);
+        read.described = DescribedBy::SdoInfo(object);
         Ok(read)
     }
 }
@@ -473,11 +409,6 @@ fn index_of(req: InfoRequest) -> u16 {
         InfoRequest::ObjectDescription(i) | InfoRequest::EntryDescription { index: i, .. } => i,
         _ => 0,
     }
-}
-
-/// A name as text (VISIBLE_STRING; a terminating NUL some slaves send is dropped).
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).trim_end_matches('\0').trim().to_owned()
 }
 
 fn bad_answer(position: usize, index: u16, sub: u8, b: &[u8]) -> MasterError {

@@ -41,13 +41,8 @@ pub const MODES_OF_OPERATION: u16 = 0x6060;
 /// Modes of operation display 6061h.
 pub const MODES_DISPLAY: u16 = 0x6061;
 
-/// Statusword bit 10: target reached.
-pub const SW_TARGET_REACHED: u16 = 1 << 10;
-/// Statusword bit 12: set-point acknowledge / homing attained / mode-specific.
-pub const SW_BIT12: u16 = 1 << 12;
-/// Statusword bit 13: following error / homing error.
-pub const SW_BIT13: u16 = 1 << 13;
-
+/// Controlword (6040h) commands and bits (`drivebus_cia402::codes::cw`).
+pub use drivebus_cia402::codes::cw;
 /// Modes of operation (6060h) values (`drivebus_cia402::codes::mode`).
 pub use drivebus_cia402::codes::mode;
 /// Statusword (6041h) bits (`drivebus_cia402::codes::sw`).
@@ -127,7 +122,7 @@ impl fmt::Display for DriveState {
 
 /// Profile parameters for [`Drive::move_to`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Profile {
+pub struct MoveProfile {
     /// 6081h profile velocity.
     pub velocity: u32,
     /// 6083h profile acceleration.
@@ -541,8 +536,8 @@ impl Drive {
             return Ok(false);
         }
         // In Fault the drive ignores every command but the bit 7 edge.
-        self.controlword(0x0000).await?;
-        self.controlword(0x0080).await?;
+        self.controlword(cw::DISABLE_VOLTAGE).await?;
+        self.controlword(cw::FAULT_RESET).await?;
         self.wait_sw("fault reset", true, |sw| {
             !matches!(DriveState::from_statusword(sw), DriveState::Fault | DriveState::FaultReactionActive)
         })
@@ -588,7 +583,7 @@ impl Drive {
 
     /// Quick stop (controlword 02h); waits for Quick stop active or Switch on disabled.
     pub async fn quick_stop(&self) -> Result<(), DriveError> {
-        self.controlword(0x02).await?;
+        self.controlword(cw::QUICK_STOP).await?;
         self.wait_sw("quick stop", false, |sw| {
             matches!(
                 DriveState::from_statusword(sw),

@@ -8,15 +8,7 @@ use std::time::Duration;
 use tokio::sync::broadcast;
 
 use super::outcome::pp_at_rest;
-use super::{
-    Drive, DriveError, DriveState, MotionProgress, MotionReport, Profile, SW_BIT12, SW_BIT13,
-    SW_TARGET_REACHED, mode,
-};
-
-/// Controlword: halt (bit 8).
-pub(super) const CW_HALT: u16 = 1 << 8;
-/// Controlword: enable operation.
-const CW_ENABLED: u16 = 0x0F;
+use super::{Drive, DriveError, DriveState, MotionProgress, MotionReport, MoveProfile, cw, mode, sw};
 
 /// How a motion was stopped by [`Drive::stop_motion`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -234,7 +226,7 @@ impl Drive {
         &self,
         target: i32,
         relative: bool,
-        profile: Option<Profile>,
+        profile: Option<MoveProfile>,
         timeout: Duration,
     ) -> Result<MotionReport, DriveError> {
         let started = self.master.now();
@@ -249,12 +241,12 @@ impl Drive {
         let absolute =
             if relative { self.position().await.map(|p| p.saturating_add(target)) } else { Some(target) };
         self.write_raw(0x607A, 0, &target.to_le_bytes()).await?;
-        let base = CW_ENABLED | 0x20 | if relative { 0x40 } else { 0 };
+        let base = cw::ENABLE_OPERATION | cw::CHANGE_IMMEDIATELY | if relative { cw::RELATIVE } else { 0 };
         self.controlword(base).await?;
-        self.controlword(base | 0x10).await?;
+        self.controlword(base | cw::NEW_SET_POINT).await?;
         let sw = self
             .wait_sw("set-point acknowledge", true, |sw| {
-                sw & SW_BIT12 != 0 || Drive::ended_abnormally(sw, false)
+                sw & sw::MODE_12 != 0 || Drive::ended_abnormally(sw, false)
             })
             .await?;
         if Drive::ended_abnormally(sw, false) {
@@ -298,32 +290,32 @@ impl Drive {
         let started = self.master.now();
         self.sdo.write(0x6098, 0, method).await?;
         self.set_mode(mode::HM).await?;
-        self.controlword(CW_ENABLED).await?;
+        self.controlword(cw::ENABLE_OPERATION).await?;
         // A drive enabled just now shows homing in 6061h only then.
         self.confirm_mode().await?;
-        let stale = self.statusword().await? & SW_BIT12 != 0;
+        let stale = self.statusword().await? & sw::MODE_12 != 0;
         let instant = matches!(method, 35 | 37);
         let offset = if instant && stale { self.read_i32(0x607C, 0).await } else { None };
-        self.controlword(CW_ENABLED | 0x10).await?;
+        self.controlword(cw::ENABLE_OPERATION | cw::NEW_SET_POINT).await?;
         let deadline = self.master.now() + timeout;
         let seen_low = AtomicBool::new(!stale);
         let sw = loop {
             let left = deadline.saturating_duration_since(self.master.now());
             let sw = self
                 .wait_sw_for("homing attained", true, left, |sw| {
-                    if sw & SW_BIT12 == 0 {
+                    if sw & sw::MODE_12 == 0 {
                         seen_low.store(true, Relaxed);
                     }
                     // CiA 402-2 homing: bit 12 with bit 10 is "completed"; bit 12
                     // alone is "attained, target not reached" (still moving).
-                    sw & SW_BIT13 != 0
+                    sw & sw::MODE_13 != 0
                         || Drive::ended_abnormally(sw, true)
-                        || (sw & SW_BIT12 != 0
-                            && sw & SW_TARGET_REACHED != 0
+                        || (sw & sw::MODE_12 != 0
+                            && sw & sw::TARGET_REACHED != 0
                             && (seen_low.load(Relaxed) || offset.is_some()))
                 })
                 .await?;
-            if sw & SW_BIT13 != 0 || Drive::ended_abnormally(sw, true) || seen_low.load(Relaxed) {
+            if sw & sw::MODE_13 != 0 || Drive::ended_abnormally(sw, true) || seen_low.load(Relaxed) {
                 break sw;
             }
             // An instant method with bit 12 still set from before: done once
@@ -337,7 +329,7 @@ impl Drive {
             self.master.sleep(self.poll).await;
         };
         if !Drive::ended_abnormally(sw, true) {
-            self.controlword(CW_ENABLED).await?;
+            self.controlword(cw::ENABLE_OPERATION).await?;
         }
         Drive::settle(self.classify(sw, None, Some(method), started).await)
     }
@@ -357,10 +349,10 @@ impl Drive {
                 statusword: sw,
             });
         }
-        self.controlword(CW_ENABLED | CW_HALT).await?;
+        self.controlword(cw::ENABLE_OPERATION | cw::HALT).await?;
         let deadline = self.master.now() + timeout;
         let halted =
-            self.wait_sw_for("standstill after halt", true, timeout, |sw| sw & SW_TARGET_REACHED != 0).await;
+            self.wait_sw_for("standstill after halt", true, timeout, |sw| sw & sw::TARGET_REACHED != 0).await;
         if let Err(e) = &halted
             && !matches!(e, DriveError::Timeout { .. })
         {
@@ -387,7 +379,7 @@ impl Drive {
             }
             self.master.sleep(self.poll).await;
         }
-        self.controlword(0x02).await?;
+        self.controlword(cw::QUICK_STOP).await?;
         let statusword = self
             .wait_sw_for("quick stop", true, timeout, |sw| {
                 matches!(

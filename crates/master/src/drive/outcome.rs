@@ -12,7 +12,7 @@
 use std::fmt;
 use std::time::Duration;
 
-use super::{Drive, DriveError, DriveState, SW_BIT12, SW_BIT13, SW_TARGET_REACHED};
+use super::{Drive, DriveError, DriveState, cw};
 use drivebus_cia402::codes::sw;
 
 /// 60FDh bit 0: negative limit switch.
@@ -222,7 +222,7 @@ impl DriveFlags {
         if s & sw::INTERNAL_LIMIT != 0 {
             v.push("internal limit active (bit 11)".to_owned());
         }
-        if s & SW_BIT13 != 0 {
+        if s & sw::MODE_13 != 0 {
             v.push(match self.mode {
                 Some(super::mode::HM) => "homing error (bit 13)".to_owned(),
                 Some(super::mode::PP | super::mode::CSP | super::mode::IP) => {
@@ -259,7 +259,7 @@ impl Drive {
     /// drive left operation enabled, or bit 13 in profile position
     /// (following error).
     pub(super) fn ended_abnormally(sw: u16, homing: bool) -> bool {
-        DriveState::from_statusword(sw) != DriveState::OperationEnabled || (!homing && sw & SW_BIT13 != 0)
+        DriveState::from_statusword(sw) != DriveState::OperationEnabled || (!homing && sw & sw::MODE_13 != 0)
     }
 
     /// Classifies the end of a motion from its last statusword.
@@ -288,8 +288,8 @@ impl Drive {
                 if homing.is_some() {
                     // Homing ends on attained (bits 12 and 10) or error (bit
                     // 13); attained on an active switch is still attained.
-                    if sw & SW_BIT13 != 0 { MotionEnd::HomingError } else { MotionEnd::HomingAttained }
-                } else if sw & SW_BIT13 != 0 {
+                    if sw & sw::MODE_13 != 0 { MotionEnd::HomingError } else { MotionEnd::HomingAttained }
+                } else if sw & sw::MODE_13 != 0 {
                     MotionEnd::FollowingError
                 } else if sw & sw::INTERNAL_LIMIT != 0 {
                     let i = inputs.unwrap_or(0);
@@ -306,9 +306,12 @@ impl Drive {
                             _ => MotionEnd::InternalLimit,
                         }
                     }
-                } else if self.read_raw(super::CONTROLWORD, 0).await.ok().is_some_and(|v| {
-                    v.len() >= 2 && u16::from_le_bytes([v[0], v[1]]) & super::motion::CW_HALT != 0
-                }) {
+                } else if self
+                    .read_raw(super::CONTROLWORD, 0)
+                    .await
+                    .ok()
+                    .is_some_and(|v| v.len() >= 2 && u16::from_le_bytes([v[0], v[1]]) & cw::HALT != 0)
+                {
                     MotionEnd::Halted
                 } else {
                     MotionEnd::TargetReached
@@ -340,7 +343,7 @@ impl Drive {
 
 /// Bit 12 clear and bit 10 set: a profile move at rest after its set-point.
 pub(super) fn pp_at_rest(sw: u16) -> bool {
-    sw & SW_BIT12 == 0 && sw & SW_TARGET_REACHED != 0
+    sw & sw::MODE_12 == 0 && sw & sw::TARGET_REACHED != 0
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@
 //! 3080h:02 (default 2).
 
 use super::error_class;
-use drivebus_cia402::drive::{Drive, FaultAction};
+use drivebus_cia402::drive::{Drive, ErrorReaction};
 use drivebus_cia402::state_machine::Reaction;
 
 /// EMCY 8611h "Following error" (class 2480h:01).
@@ -29,12 +29,12 @@ pub const EMCY_SYNC_BREACH: u16 = 0x82B2;
 
 /// The drive's reaction to an error of `class`; `None` for a value that is
 /// no class.
-pub fn reaction(class: u8) -> Option<FaultAction> {
+pub fn reaction(class: u8) -> Option<ErrorReaction> {
     Some(match class {
-        0 => FaultAction::Warning,
-        2 => FaultAction::QuickStop,
-        4 => FaultAction::React(Reaction::QuickStopRamp),
-        6 | 8 => FaultAction::React(Reaction::DisableDrive),
+        0 => ErrorReaction::Warning,
+        2 => ErrorReaction::QuickStop,
+        4 => ErrorReaction::React(Reaction::QuickStopRamp),
+        6 | 8 => ErrorReaction::React(Reaction::DisableDrive),
         _ => return None,
     })
 }
@@ -74,11 +74,11 @@ mod tests {
 
     #[test]
     fn classes_react_as_section_5_says() {
-        assert_eq!(reaction(0), Some(FaultAction::Warning));
-        assert_eq!(reaction(2), Some(FaultAction::QuickStop));
-        assert_eq!(reaction(4), Some(FaultAction::React(Reaction::QuickStopRamp)));
-        assert_eq!(reaction(6), Some(FaultAction::React(Reaction::DisableDrive)));
-        assert_eq!(reaction(8), Some(FaultAction::React(Reaction::DisableDrive)));
+        assert_eq!(reaction(0), Some(ErrorReaction::Warning));
+        assert_eq!(reaction(2), Some(ErrorReaction::QuickStop));
+        assert_eq!(reaction(4), Some(ErrorReaction::React(Reaction::QuickStopRamp)));
+        assert_eq!(reaction(6), Some(ErrorReaction::React(Reaction::DisableDrive)));
+        assert_eq!(reaction(8), Some(ErrorReaction::React(Reaction::DisableDrive)));
         assert_eq!(reaction(3), None);
         assert_eq!(class_of(0x8611, 6, 2), Some(6));
         assert_eq!(class_of(0x82B2, 6, 0), Some(0));

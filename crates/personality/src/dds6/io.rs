@@ -4,7 +4,7 @@
 
 /// What a digital output source (2830h–2832h:01) looks at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Signals {
+pub struct OutputConditions {
     /// The statusword as published.
     pub statusword: u16,
     /// The holding brake output (active = released, §4.3).
@@ -19,7 +19,7 @@ pub struct Signals {
 /// 0000h "General Purpose" (3230h:01 decides). Bit 15 of a source inverts
 /// its condition (8040h "No Fault", 8060h–806Fh "statusword bit n = 0");
 /// an unknown source keeps the output inactive.
-pub fn source_level(source: u16, s: &Signals) -> Option<bool> {
+pub fn source_level(source: u16, s: &OutputConditions) -> Option<bool> {
     let sw = s.statusword;
     let condition = match source & 0x7FFF {
         0x0000 if source == 0 => return None,
@@ -39,7 +39,7 @@ pub fn source_level(source: u16, s: &Signals) -> Option<bool> {
 
 /// 3230h:01 from the sources of DO0..DO2 and the general-purpose bits the
 /// master set.
-pub fn outputs(sources: [u16; 3], general: u16, s: &Signals) -> u16 {
+pub fn outputs(sources: [u16; 3], general: u16, s: &OutputConditions) -> u16 {
     (0..3).fold(0, |acc, n| {
         let on = source_level(sources[n], s).unwrap_or(general & (1 << n) != 0);
         acc | u16::from(on) << n
@@ -109,8 +109,8 @@ pub fn edge_fired(assign: u16, before: u16, now: u16) -> bool {
 mod tests {
     use super::*;
 
-    fn sig(sw: u16) -> Signals {
-        Signals { statusword: sw, ..Signals::default() }
+    fn sig(sw: u16) -> OutputConditions {
+        OutputConditions { statusword: sw, ..OutputConditions::default() }
     }
 
     #[test]
@@ -129,7 +129,7 @@ mod tests {
         assert_eq!(source_level(0x0042, &sig(0x0207)), Some(true));
         assert_eq!(source_level(0x0000, &sig(0)), None);
         assert_eq!(source_level(0x1234, &sig(0)), Some(false));
-        let moving = Signals { positive: true, brake: true, ..sig(0) };
+        let moving = OutputConditions { positive: true, brake: true, ..sig(0) };
         assert_eq!(source_level(0x0050, &moving), Some(true));
         assert_eq!(source_level(0x8051, &moving), Some(true));
         assert_eq!(source_level(0x0044, &moving), Some(true));

@@ -148,8 +148,12 @@ impl Live {
             drive.set_brake_control(control);
         }
         let v = drive.demand_velocity();
-        let signals =
-            io::Signals { statusword: sw, brake: self.brake.output(), positive: v > 0.0, negative: v < 0.0 };
+        let signals = io::OutputConditions {
+            statusword: sw,
+            brake: self.brake.output(),
+            positive: v > 0.0,
+            negative: v < 0.0,
+        };
         let out = io::outputs(self.sources, self.general, &signals);
         if drive.output_lines() & 0b111 != out {
             drive.set_output_lines(out);

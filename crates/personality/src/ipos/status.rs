@@ -19,7 +19,7 @@ pub const ANALOG_FULL_SCALE_V: f64 = 5.0;
 pub const EMCY_IO_NOT_AVAILABLE: u16 = 0xFF05;
 
 use super::*;
-use drivebus_cia402::drive::{DriveView, FaultAction};
+use drivebus_cia402::drive::{DriveView, ErrorReaction};
 use drivebus_cia402::state_machine::Reaction;
 
 /// 2000h bits this module keeps (Table 4.4.2): 3 control error, 4
@@ -214,20 +214,20 @@ const PROTECTIONS: [(u16, u16, u8, bool); 8] = [
 /// in bits 0–7; bit 15, a TML interrupt, is not emulated); else a
 /// non-fatal error follows 605Eh (−1 no action; 0 and 2 as the drive
 /// does them), a fatal one disables the drive.
-fn action(od: &ObjectDictionary, bit: u16, sub: u8, non_fatal: bool) -> Option<FaultAction> {
+fn action(od: &ObjectDictionary, bit: u16, sub: u8, non_fatal: bool) -> Option<ErrorReaction> {
     let overridden = od.get_u32(0x2114, 0).unwrap_or(0x8000) & 1 << bit != 0;
     if overridden && sub != 0 {
         match od.get_u32(0x2113, sub).unwrap_or(0) as u8 as i8 {
-            0 => return Some(FaultAction::React(Reaction::DisableDrive)),
-            2 => return Some(FaultAction::React(Reaction::QuickStopRamp)),
-            -1 => return Some(FaultAction::NoAction),
+            0 => return Some(ErrorReaction::React(Reaction::DisableDrive)),
+            2 => return Some(ErrorReaction::React(Reaction::QuickStopRamp)),
+            -1 => return Some(ErrorReaction::NoAction),
             _ => {}
         }
     }
     if !non_fatal {
-        return Some(FaultAction::React(Reaction::DisableDrive));
+        return Some(ErrorReaction::React(Reaction::DisableDrive));
     }
-    (od.get_i64(0x605E, 0) == Some(-1)).then_some(FaultAction::NoAction)
+    (od.get_i64(0x605E, 0) == Some(-1)).then_some(ErrorReaction::NoAction)
 }
 
 impl Ipos {

@@ -73,7 +73,7 @@ pub fn position_limit_switches(profile: Profile) {
 /// times instead (the mode starts TBRAKERLS after the enable, the power
 /// stage holds TBRAKEAPP after a disable); 0 waits for the brake.
 pub fn brake_times(profile: Profile) {
-    use drivebus_cia402::model::Command;
+    use drivebus_cia402::model::Demand;
     let run = |times: &[(u16, i32)]| {
         let mut r = super::kc_objects::with_brake(profile);
         for &(i, v) in times {
@@ -96,7 +96,7 @@ pub fn brake_times(profile: Profile) {
         let mut held = 0;
         for _ in 0..400 {
             r.run_ms(1);
-            if matches!(r.pn().app.drive.model().command(), Command::Position { .. }) {
+            if matches!(r.pn().app.drive.model().demand(), Demand::Position { .. }) {
                 held += 1;
             }
         }

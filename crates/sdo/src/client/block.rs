@@ -1,8 +1,8 @@
 //! Block download and block upload (CiA 301 §7.2.4.3.11..16), client side.
 
-use super::wire::*;
 use super::{SdoClient, State};
 use crate::crc::crc16;
+use crate::wire::*;
 use drivebus_can::TxSink;
 use drivebus_od::SdoAbort;
 
@@ -27,7 +27,7 @@ impl SdoClient {
         }
         self.blksize = d[4];
         // CRC only when both sides support it (sc bit of the response).
-        self.crc = self.cfg.crc && d[0] & 0x04 != 0;
+        self.crc = self.cfg.crc && d[0] & BLOCK_CRC != 0;
         self.seg_base = 0;
         self.send_sub_block(out);
     }
@@ -101,12 +101,12 @@ impl SdoClient {
         if !self.mux_ok(d, out) {
             return;
         }
-        let size = (d[0] & 0x02 != 0).then(|| u32_at4(d) as usize);
+        let size = (d[0] & BLOCK_SIZE_INDICATED != 0).then(|| u32_at4(d) as usize);
         if !self.reserve_upload(size, out) {
             return;
         }
         self.size = size;
-        self.crc = self.cfg.crc && d[0] & 0x04 != 0;
+        self.crc = self.cfg.crc && d[0] & BLOCK_CRC != 0;
         self.expected = 1;
         self.send(out, [CCS_BLOCK_UPLOAD | BLOCK_START, 0, 0, 0, 0, 0, 0, 0]);
         self.state = State::BlockUpData;
@@ -158,7 +158,7 @@ impl SdoClient {
         if scs(d[0]) != SCS_BLOCK_UPLOAD || d[0] & 0x03 != BLOCK_END {
             return self.violation(SdoAbort::INVALID_COMMAND, out);
         }
-        let n = usize::from((d[0] >> 2) & 0x07);
+        let n = block_end_unused(d[0]);
         let len = self.data.len().saturating_sub(n);
         self.data.truncate(len);
         self.pos = len;

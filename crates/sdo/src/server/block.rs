@@ -14,8 +14,14 @@
 
 use super::{MAX_BLOCK_SIZE, SdoServer, State};
 use crate::crc::crc16;
+use crate::wire::*;
 use drivebus_can::{Instant, TxSink};
 use drivebus_od::{ObjectDictionary, ObjectHooks, SdoAbort};
+
+/// The server's block download response to `ss`.
+const BLOCK_DOWN: u8 = SCS_BLOCK_DOWNLOAD << 5;
+/// The server's block upload command `ss`.
+const BLOCK_UP: u8 = SCS_BLOCK_UPLOAD << 5;
 
 impl SdoServer {
     /// Block upload initiate (A0h | cc<<2): blksize in byte 4, pst in byte 5.
@@ -56,12 +62,12 @@ impl SdoServer {
         self.mux = mux;
         self.pos = 0;
         self.blksize = blksize;
-        self.use_crc = d[0] & 0x04 != 0 && self.config.crc;
+        self.use_crc = d[0] & BLOCK_CRC != 0 && self.config.crc;
         self.state = State::BlkUpStart;
         self.deadline = now + self.config.timeout;
         let s = size.to_le_bytes();
         // scs=6, sc, s=1 (size indicated), ss=0.
-        let b0 = 0xC2 | (u8::from(self.config.crc) << 2);
+        let b0 = BLOCK_UP | self.crc_bit() | BLOCK_SIZE_INDICATED | BLOCK_INITIATE;
         self.send([b0, mux[0], mux[1], mux[2], s[0], s[1], s[2], s[3]], out);
     }
 
@@ -106,7 +112,7 @@ impl SdoServer {
             let n = if len == 0 { 7 } else { (7 - len % 7) % 7 };
             let crc = if self.use_crc { crc16(&self.buf) } else { 0 }.to_le_bytes();
             self.state = State::BlkUpEnd;
-            self.send([0xC1 | ((n as u8) << 2), crc[0], crc[1], 0, 0, 0, 0, 0], out);
+            self.send([BLOCK_UP | ((n as u8) << 2) | BLOCK_END, crc[0], crc[1], 0, 0, 0, 0, 0], out);
             return;
         }
         // Advance past what was acknowledged; a partial ack makes the next
@@ -131,24 +137,25 @@ impl SdoServer {
             Ok(r) => r,
             Err(e) => return self.abort_with(&mux, e, out),
         };
-        let size = (d[0] & 0x02 != 0).then(|| u32::from_le_bytes([d[4], d[5], d[6], d[7]]) as usize);
+        let size =
+            (d[0] & BLOCK_SIZE_INDICATED != 0).then(|| u32::from_le_bytes([d[4], d[5], d[6], d[7]]) as usize);
         if let Err(e) = self.prepare_download(od, r, size) {
             return self.abort_with(&mux, e, out);
         }
         self.mux = mux;
         self.blksize = self.config.block_size;
-        self.use_crc = d[0] & 0x04 != 0 && self.config.crc;
+        self.use_crc = d[0] & BLOCK_CRC != 0 && self.config.crc;
         self.state = State::BlkDownSub { last: 0, resync: false };
         self.deadline = now + self.config.timeout;
         // scs=5, sc, ss=0; blksize in byte 4.
-        let b0 = 0xA0 | (u8::from(self.config.crc) << 2);
+        let b0 = BLOCK_DOWN | self.crc_bit() | BLOCK_INITIATE;
         self.send([b0, mux[0], mux[1], mux[2], self.blksize, 0, 0, 0], out);
     }
 
     /// One segment of a block download sub-block: c<<7 | seqno, 7 bytes.
     pub(super) fn block_segment(&mut self, d: &[u8; 8], last: u8, resync: bool, out: &mut impl TxSink) {
-        let seq = d[0] & 0x7F;
-        let c = d[0] & 0x80 != 0;
+        let seq = d[0] & !BLOCK_LAST;
+        let c = d[0] & BLOCK_LAST != 0;
         if seq == 0 || seq > self.blksize {
             return self.abort(SdoAbort::INVALID_SEQUENCE, out);
         }
@@ -158,7 +165,7 @@ impl SdoServer {
             // client retransmits from ackseq+1 (CiA 301 block download).
             if seq > last && !resync {
                 self.state = State::BlkDownSub { last: 0, resync: true };
-                self.send([0xA2, last, self.blksize, 0, 0, 0, 0, 0], out);
+                self.send([BLOCK_DOWN | BLOCK_ACK, last, self.blksize, 0, 0, 0, 0, 0], out);
             }
             return;
         }
@@ -171,10 +178,10 @@ impl SdoServer {
         self.buf.extend_from_slice(&d[1..8]);
         if c {
             self.state = State::BlkDownEnd;
-            self.send([0xA2, seq, self.blksize, 0, 0, 0, 0, 0], out);
+            self.send([BLOCK_DOWN | BLOCK_ACK, seq, self.blksize, 0, 0, 0, 0, 0], out);
         } else if seq == self.blksize {
             self.state = State::BlkDownSub { last: 0, resync: false };
-            self.send([0xA2, seq, self.blksize, 0, 0, 0, 0, 0], out);
+            self.send([BLOCK_DOWN | BLOCK_ACK, seq, self.blksize, 0, 0, 0, 0, 0], out);
         } else {
             self.state = State::BlkDownSub { last: seq, resync: false };
         }
@@ -188,7 +195,7 @@ impl SdoServer {
         hooks: &mut H,
         out: &mut impl TxSink,
     ) {
-        let n = usize::from((d[0] >> 2) & 0x07);
+        let n = block_end_unused(d[0]);
         let len = self.buf.len().saturating_sub(n);
         self.buf.truncate(len);
         if self.size.is_none_or(|s| s == len)
@@ -197,6 +204,14 @@ impl SdoServer {
         {
             return self.abort(SdoAbort::CRC_ERROR, out);
         }
-        self.finish_download(0xA1, od, hooks, out);
+        self.finish_download(BLOCK_DOWN | BLOCK_END, od, hooks, out);
+    }
+}
+
+impl SdoServer {
+    /// The sc bit: this server checks and sends CRCs.
+    #[inline]
+    fn crc_bit(&self) -> u8 {
+        if self.config.crc { BLOCK_CRC } else { 0 }
     }
 }

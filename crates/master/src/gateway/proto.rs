@@ -3,7 +3,7 @@
 //! Lely's `coctl` accept them. Parsing never panics: a bad line is a
 //! syntax error (code 101) naming the token.
 
-use drivebus_master::DataType;
+use crate::DataType;
 
 /// Gateway error codes (CiA 309-3 §"Error codes").
 pub mod code {
@@ -178,17 +178,42 @@ pub fn tokens(line: &str) -> Result<Vec<String>, usize> {
     Ok(out)
 }
 
-/// A parsed request.
+/// A parsed CiA 309-3 service request (one line).
 #[derive(Clone, Debug, PartialEq)]
-pub enum Request {
+pub enum ServiceRequest {
     /// Empty line or comment.
     Empty,
     /// SDO upload.
-    Read { node: Option<u8>, index: u16, sub: u8, ty: Option<GwType> },
-    /// SDO download; `value` is the rest of the command as tokens.
-    Write { node: Option<u8>, index: u16, sub: u8, ty: GwType, value: Vec<String> },
-    /// NMT command (cs).
-    Nmt { node: Option<u8>, cs: u8 },
+    Read {
+        /// The node given in the line (else the session's default).
+        node: Option<u8>,
+        /// Object index.
+        index: u16,
+        /// Sub-index.
+        sub: u8,
+        /// How to show the value (raw bytes when absent).
+        ty: Option<GwType>,
+    },
+    /// SDO download.
+    Write {
+        /// The node given in the line (else the session's default).
+        node: Option<u8>,
+        /// Object index.
+        index: u16,
+        /// Sub-index.
+        sub: u8,
+        /// The value's type.
+        ty: GwType,
+        /// The rest of the command as tokens.
+        value: Vec<String>,
+    },
+    /// NMT command.
+    Nmt {
+        /// The node given in the line (else the session's default).
+        node: Option<u8>,
+        /// NMT command specifier (01h start, 02h stop, 80h, 81h, 82h).
+        cs: u8,
+    },
     /// `set network N`.
     SetNetwork(u16),
     /// `set node N`.
@@ -201,14 +226,31 @@ pub enum Request {
     InfoVersion,
     /// `help [datatype|lss]`.
     Help(Option<String>),
-    /// LSS commands, with their argument tokens.
-    Lss { cmd: String, args: Vec<String> },
+    /// LSS commands.
+    Lss {
+        /// The command word.
+        cmd: String,
+        /// Its argument tokens.
+        args: Vec<String>,
+    },
     /// `r[ead] p[do] N`.
     PdoRead(u16),
     /// `w[rite] p[do] N n v1..vn`.
-    PdoWrite { num: u16, values: Vec<u64> },
+    PdoWrite {
+        /// PDO number.
+        num: u16,
+        /// The mapped values, in order.
+        values: Vec<u64>,
+    },
     /// `set rpdo|tpdo[x] N COBID TRANS [...] n entries`.
-    SetPdo { tx: bool, ext: bool, args: Vec<String> },
+    SetPdo {
+        /// `tpdo` (else `rpdo`).
+        tx: bool,
+        /// The `x` form (Lely's extended syntax).
+        ext: bool,
+        /// The argument tokens.
+        args: Vec<String>,
+    },
 }
 
 /// A line: sequence number (when bracketed) and the request or an error code.
@@ -218,7 +260,7 @@ pub struct Parsed {
     /// Net given before the command.
     pub net: Option<u16>,
     /// The request, or the error code and why.
-    pub request: Result<Request, (u16, String)>,
+    pub request: Result<ServiceRequest, (u16, String)>,
 }
 
 fn syntax(why: impl Into<String>) -> (u16, String) {
@@ -238,7 +280,7 @@ pub fn parse(line: &str) -> Parsed {
         }
     };
     if toks.is_empty() {
-        return Parsed { seq: None, net: None, request: Ok(Request::Empty) };
+        return Parsed { seq: None, net: None, request: Ok(ServiceRequest::Empty) };
     }
     let mut it = toks.into_iter().peekable();
     let first = it.next().unwrap_or_default();
@@ -308,14 +350,14 @@ pub fn parse(line: &str) -> Parsed {
     Parsed { seq: Some(seq), net, request: command(node, &rest) }
 }
 
-fn command(node: Option<u8>, t: &[String]) -> Result<Request, (u16, String)> {
+fn command(node: Option<u8>, t: &[String]) -> Result<ServiceRequest, (u16, String)> {
     let Some(cmd) = t.first() else { return Err(syntax("missing command")) };
     let cmd = cmd.to_ascii_lowercase();
     let args = &t[1..];
     let num = |i: usize, what: &str| -> Result<u64, (u16, String)> {
         args.get(i).and_then(|s| c_number(s)).ok_or_else(|| syntax(format!("expected {what}")))
     };
-    let done = |n: usize, r: Request| -> Result<Request, (u16, String)> {
+    let done = |n: usize, r: ServiceRequest| -> Result<ServiceRequest, (u16, String)> {
         if args.len() > n { Err(syntax(format!("unexpected `{}`", args[n]))) } else { Ok(r) }
     };
     let pdo_kw =
@@ -326,7 +368,7 @@ fn command(node: Option<u8>, t: &[String]) -> Result<Request, (u16, String)> {
             if !(1..=512).contains(&n) {
                 return Err(syntax("PDO number must be 1..512"));
             }
-            done(2, Request::PdoRead(n as u16))
+            done(2, ServiceRequest::PdoRead(n as u16))
         }
         "w" | "write" if pdo_kw(args.first()) => {
             let n = num(1, "a PDO number")?;
@@ -335,7 +377,7 @@ fn command(node: Option<u8>, t: &[String]) -> Result<Request, (u16, String)> {
                 return Err(syntax("expected w p N COUNT VALUE..."));
             }
             let values = (0..count).map(|i| num(3 + i, "a value")).collect::<Result<Vec<_>, _>>()?;
-            Ok(Request::PdoWrite { num: n as u16, values })
+            Ok(ServiceRequest::PdoWrite { num: n as u16, values })
         }
         "r" | "read" => {
             let index = num(0, "an index")?;
@@ -347,7 +389,7 @@ fn command(node: Option<u8>, t: &[String]) -> Result<Request, (u16, String)> {
                 Some(t) => Some(GwType::parse(t).ok_or_else(|| syntax(format!("unknown data type `{t}`")))?),
                 None => None,
             };
-            done(3, Request::Read { node, index: index as u16, sub: sub as u8, ty })
+            done(3, ServiceRequest::Read { node, index: index as u16, sub: sub as u8, ty })
         }
         "w" | "write" => {
             let index = num(0, "an index")?;
@@ -360,14 +402,20 @@ fn command(node: Option<u8>, t: &[String]) -> Result<Request, (u16, String)> {
             if args.len() < 4 {
                 return Err(syntax("expected a value"));
             }
-            Ok(Request::Write { node, index: index as u16, sub: sub as u8, ty, value: args[3..].to_vec() })
+            Ok(ServiceRequest::Write {
+                node,
+                index: index as u16,
+                sub: sub as u8,
+                ty,
+                value: args[3..].to_vec(),
+            })
         }
-        "start" => done(0, Request::Nmt { node, cs: 0x01 }),
-        "stop" => done(0, Request::Nmt { node, cs: 0x02 }),
-        "preop" | "preoperational" => done(0, Request::Nmt { node, cs: 0x80 }),
+        "start" => done(0, ServiceRequest::Nmt { node, cs: 0x01 }),
+        "stop" => done(0, ServiceRequest::Nmt { node, cs: 0x02 }),
+        "preop" | "preoperational" => done(0, ServiceRequest::Nmt { node, cs: 0x80 }),
         "reset" => match args.first().map(|s| s.to_ascii_lowercase()).as_deref() {
-            Some("node") => done(1, Request::Nmt { node, cs: 0x81 }),
-            Some("comm" | "communication") => done(1, Request::Nmt { node, cs: 0x82 }),
+            Some("node") => done(1, ServiceRequest::Nmt { node, cs: 0x81 }),
+            Some("comm" | "communication") => done(1, ServiceRequest::Nmt { node, cs: 0x82 }),
             _ => Err(syntax("expected reset node or reset comm[unication]")),
         },
         "set" => {
@@ -386,33 +434,33 @@ fn command(node: Option<u8>, t: &[String]) -> Result<Request, (u16, String)> {
                     let n = v()?;
                     u16::try_from(n)
                         .map_err(|_| syntax("network must be 0..65535"))
-                        .and_then(|n| end(Request::SetNetwork(n)))
+                        .and_then(|n| end(ServiceRequest::SetNetwork(n)))
                 }
                 "node" => match v()? {
-                    n @ 1..=127 => end(Request::SetNode(n as u8)),
+                    n @ 1..=127 => end(ServiceRequest::SetNode(n as u8)),
                     _ => Err(syntax("node must be 1..127")),
                 },
                 "sdo_timeout" => match v()? {
-                    n @ 1..=0xFFFF => end(Request::SetSdoTimeout(n as u32)),
+                    n @ 1..=0xFFFF => end(ServiceRequest::SetSdoTimeout(n as u32)),
                     _ => Err(syntax("sdo_timeout must be 1..65535 ms")),
                 },
                 "sdo_block" => match v()? {
-                    n @ 0..=1 => end(Request::SetSdoBlock(n == 1)),
+                    n @ 0..=1 => end(ServiceRequest::SetSdoBlock(n == 1)),
                     _ => Err(syntax("sdo_block must be 0 or 1")),
                 },
-                "rpdo" => Ok(Request::SetPdo { tx: false, ext: false, args: args2.to_vec() }),
-                "tpdo" => Ok(Request::SetPdo { tx: true, ext: false, args: args2.to_vec() }),
-                "tpdox" => Ok(Request::SetPdo { tx: true, ext: true, args: args2.to_vec() }),
+                "rpdo" => Ok(ServiceRequest::SetPdo { tx: false, ext: false, args: args2.to_vec() }),
+                "tpdo" => Ok(ServiceRequest::SetPdo { tx: true, ext: false, args: args2.to_vec() }),
+                "tpdox" => Ok(ServiceRequest::SetPdo { tx: true, ext: true, args: args2.to_vec() }),
                 _ => Err((code::NOT_SUPPORTED, format!("set {what} is not supported"))),
             }
         }
         "info" => match args.first().map(|s| s.to_ascii_lowercase()).as_deref() {
-            Some("version") => done(1, Request::InfoVersion),
+            Some("version") => done(1, ServiceRequest::InfoVersion),
             _ => Err(syntax("expected info version")),
         },
-        "help" => done(1, Request::Help(args.first().map(|s| s.to_ascii_lowercase()))),
+        "help" => done(1, ServiceRequest::Help(args.first().map(|s| s.to_ascii_lowercase()))),
         c if c.starts_with("lss_") || c == "_lss_fastscan" => {
-            Ok(Request::Lss { cmd: c.to_owned(), args: args.to_vec() })
+            Ok(ServiceRequest::Lss { cmd: c.to_owned(), args: args.to_vec() })
         }
         c => Err((code::NOT_SUPPORTED, format!("unknown command `{c}`"))),
     }
@@ -450,7 +498,7 @@ mod tests {
         assert_eq!(p.seq, Some(1));
         assert_eq!(
             p.request,
-            Ok(Request::Read {
+            Ok(ServiceRequest::Read {
                 node: Some(4),
                 index: 0x1017,
                 sub: 0,
@@ -459,18 +507,21 @@ mod tests {
         );
         let p = parse("[2] 1 4 w 0x1017 0 u16 500");
         assert_eq!(p.net, Some(1));
-        assert!(matches!(p.request, Ok(Request::Write { node: Some(4), index: 0x1017, .. })));
+        assert!(matches!(p.request, Ok(ServiceRequest::Write { node: Some(4), index: 0x1017, .. })));
         assert_eq!(
             parse("[3] r 0x1000 0").request,
-            Ok(Request::Read { node: None, index: 0x1000, sub: 0, ty: None })
+            Ok(ServiceRequest::Read { node: None, index: 0x1000, sub: 0, ty: None })
         );
-        assert_eq!(parse("[4] 5 reset comm").request, Ok(Request::Nmt { node: Some(5), cs: 0x82 }));
-        assert_eq!(parse("[5] 0 start").request, Ok(Request::Nmt { node: Some(0), cs: 0x01 }));
-        assert_eq!(parse("[6] set node 4").request, Ok(Request::SetNode(4)));
-        assert_eq!(parse("[7] info version").request, Ok(Request::InfoVersion));
-        assert_eq!(parse("[8] r p 1").request, Ok(Request::PdoRead(1)));
-        assert_eq!(parse("[9] w p 1 2 0x1 5").request, Ok(Request::PdoWrite { num: 1, values: vec![1, 5] }));
-        assert_eq!(parse("").request, Ok(Request::Empty));
+        assert_eq!(parse("[4] 5 reset comm").request, Ok(ServiceRequest::Nmt { node: Some(5), cs: 0x82 }));
+        assert_eq!(parse("[5] 0 start").request, Ok(ServiceRequest::Nmt { node: Some(0), cs: 0x01 }));
+        assert_eq!(parse("[6] set node 4").request, Ok(ServiceRequest::SetNode(4)));
+        assert_eq!(parse("[7] info version").request, Ok(ServiceRequest::InfoVersion));
+        assert_eq!(parse("[8] r p 1").request, Ok(ServiceRequest::PdoRead(1)));
+        assert_eq!(
+            parse("[9] w p 1 2 0x1 5").request,
+            Ok(ServiceRequest::PdoWrite { num: 1, values: vec![1, 5] })
+        );
+        assert_eq!(parse("").request, Ok(ServiceRequest::Empty));
         // Errors with their codes.
         assert_eq!(parse("4 read 0x1017 0").request.unwrap_err().0, code::SYNTAX);
         assert_eq!(parse("[1] 200 start").request.unwrap_err().0, code::UNSUPPORTED_NODE);

@@ -1,18 +1,22 @@
-//! Executes CiA 309-3 requests on the master and words the answers the
-//! way CANopenNode's gateway does (so `cocomm` reads them): `[seq] OK`,
+//! The CiA 309-3 ASCII gateway as a master service: [`Session`] parses a
+//! request line ([`proto`]), executes it on the master and words the answer
+//! the way CANopenNode's gateway does (so `cocomm` reads them): `[seq] OK`,
 //! `[seq] VALUE`, `[seq] ERROR:CODE #text`, `[seq] ERROR:0xABORT #text`,
-//! each ending in CR LF.
+//! each ending in CR LF. Where the lines come from (stdin, TCP, a shell) is
+//! the caller's: `drivebus gateway` (`cli/src/gateway.rs`).
+
+pub mod proto;
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use drivebus_master::{
+use crate::{
     DataType, FastScan, Frame, Identity, LssError, LssField, LssMode, Master, PdoCallback, Protocol,
     SdoError, Value,
 };
 
-use super::proto::{GwType, Request, c_number, c_signed, code, parse};
+use proto::{GwType, ServiceRequest, c_number, c_signed, code, parse};
 
 /// A PDO of the gateway itself (Lely's `set rpdo`/`set tpdo`).
 struct LocalPdo {
@@ -58,7 +62,7 @@ fn sdo_error(seq: u32, e: &SdoError) -> String {
         // The last attempt's failure, as a lone client would have seen it.
         SdoError::OtherClient { cause, .. } => return sdo_error(seq, cause),
     };
-    let text = drivebus_master::SdoAbort(abort).description().unwrap_or("-");
+    let text = crate::SdoAbort(abort).description().unwrap_or("-");
     format!("[{seq}] ERROR:0x{abort:08X} #{text}\r\n")
 }
 
@@ -224,10 +228,10 @@ impl Session {
         }
     }
 
-    async fn execute(&mut self, seq: u32, r: Request) -> String {
+    async fn execute(&mut self, seq: u32, r: ServiceRequest) -> String {
         match r {
-            Request::Empty => "\r\n".to_owned(),
-            Request::Read { node, index, sub, ty } => {
+            ServiceRequest::Empty => "\r\n".to_owned(),
+            ServiceRequest::Read { node, index, sub, ty } => {
                 let node = match self.target(node) {
                     Ok(n) if n > 0 => n,
                     Ok(_) => return error(seq, code::UNSUPPORTED_NODE),
@@ -242,13 +246,13 @@ impl Session {
                         // The data do not fit the type asked for (CiA 301 0607 0010h).
                         None => sdo_error(
                             seq,
-                            &SdoError::Abort { code: drivebus_master::SdoAbort::TYPE_MISMATCH, text: None },
+                            &SdoError::Abort { code: crate::SdoAbort::TYPE_MISMATCH, text: None },
                         ),
                     },
                     Err(e) => sdo_error(seq, &e),
                 }
             }
-            Request::Write { node, index, sub, ty, value: v } => {
+            ServiceRequest::Write { node, index, sub, ty, value: v } => {
                 let node = match self.target(node) {
                     Ok(n) if n > 0 => n,
                     Ok(_) => return error(seq, code::UNSUPPORTED_NODE),
@@ -265,14 +269,14 @@ impl Session {
                     Err(e) => sdo_error(seq, &e),
                 }
             }
-            Request::Nmt { node, cs } => match self.target(node) {
+            ServiceRequest::Nmt { node, cs } => match self.target(node) {
                 Ok(n) => match self.master.send(Frame::new(0x000, &[cs, n])).await {
                     Ok(()) => ok(seq),
                     Err(_) => error(seq, code::INTERNAL_STATE),
                 },
                 Err(c) => error(seq, c),
             },
-            Request::SetNetwork(n) => {
+            ServiceRequest::SetNetwork(n) => {
                 if n == 0 || n == 1 {
                     self.net = 1;
                     ok(seq)
@@ -280,32 +284,32 @@ impl Session {
                     error(seq, code::UNSUPPORTED_NET)
                 }
             }
-            Request::SetNode(n) => {
+            ServiceRequest::SetNode(n) => {
                 self.node = Some(n);
                 ok(seq)
             }
-            Request::SetSdoTimeout(ms) => {
+            ServiceRequest::SetSdoTimeout(ms) => {
                 self.sdo_timeout = Duration::from_millis(u64::from(ms));
                 ok(seq)
             }
-            Request::SetSdoBlock(b) => {
+            ServiceRequest::SetSdoBlock(b) => {
                 self.block = b;
                 ok(seq)
             }
-            Request::InfoVersion => {
+            ServiceRequest::InfoVersion => {
                 // No CANopen identity of its own: vendor/product/serial 0; gateway
                 // class 4 (SDO, NMT, PDO, LSS), CiA 309-3 protocol 3.0.
                 let (maj, min) = version();
                 value(seq, &format!("0 0 {maj}.{min} 0 4 3.0 {maj}.{min}"))
             }
-            Request::Help(topic) => match topic.as_deref() {
+            ServiceRequest::Help(topic) => match topic.as_deref() {
                 None => HELP.to_owned(),
                 Some("datatype") => HELP_TYPES.to_owned(),
                 Some("lss") => HELP_LSS.to_owned(),
                 Some(_) => error(seq, code::SYNTAX),
             },
-            Request::Lss { cmd, args } => self.lss(seq, &cmd, &args).await,
-            Request::PdoRead(num) => match self.rpdo.get(&num) {
+            ServiceRequest::Lss { cmd, args } => self.lss(seq, &cmd, &args).await,
+            ServiceRequest::PdoRead(num) => match self.rpdo.get(&num) {
                 None => error(seq, code::INTERNAL_STATE),
                 Some(p) => {
                     let frame = *p.latest.lock().unwrap_or_else(|e| e.into_inner());
@@ -320,7 +324,7 @@ impl Session {
                     value(seq, &s)
                 }
             },
-            Request::PdoWrite { num, values } => match self.tpdo.get(&num) {
+            ServiceRequest::PdoWrite { num, values } => match self.tpdo.get(&num) {
                 None => error(seq, code::INTERNAL_STATE),
                 Some(p) if p.bits.len() != values.len() => error(seq, code::SYNTAX),
                 Some(p) => {
@@ -341,7 +345,7 @@ impl Session {
                     }
                 }
             },
-            Request::SetPdo { tx, ext, args } => self.set_pdo(seq, tx, ext, &args),
+            ServiceRequest::SetPdo { tx, ext, args } => self.set_pdo(seq, tx, ext, &args),
         }
     }
 

@@ -5,8 +5,8 @@
 //! bits are counted over SOF..CRC sequence, and the unstuffed trailer
 //! (CRC delimiter, ACK slot, ACK delimiter, EOF) plus intermission is added.
 
+use crate::{CanId, Frame};
 use core::time::Duration;
-use drivebus_can::{CanId, Frame};
 
 /// CRC-15/CAN generator x¹⁵+x¹⁴+x¹⁰+x⁸+x⁷+x⁴+x³+1 (ISO 11898-1, CRC field).
 pub const CRC15_POLY: u16 = 0x4599;

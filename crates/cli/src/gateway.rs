@@ -4,9 +4,6 @@
 //! to). Each TCP client has its own default node and SDO settings; all
 //! share the master. Lines end in LF or CR LF; answers end in CR LF.
 
-pub mod exec;
-pub mod proto;
-
 use std::io::IsTerminal;
 
 use anyhow::{Context, anyhow};
@@ -14,7 +11,7 @@ use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
 
 use crate::args::{GatewayArgs, Global};
 use crate::conn::Conn;
-use exec::Session;
+use drivebus_master::gateway::{self as exec, Session, proto};
 
 /// Longest request line accepted (CANopenNode's buffer is 1000 bytes).
 const MAX_LINE: usize = 64 * 1024;
