@@ -12,8 +12,8 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use anyhow::{Context, anyhow, bail};
-use drivebus_can::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
 use drivebus_can::LinkState;
+use drivebus_can::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
 use drivebus_personality::PersonalityDevice;
 use drivebus_personality::build::EdsDevice;
 use drivebus_personality::machine::{Change, MachineError};
