@@ -13,6 +13,7 @@ use std::sync::Arc;
 
 use anyhow::{Context, anyhow, bail};
 use drivebus_can::LinkState;
+use drivebus_can::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
 use drivebus_personality::PersonalityDevice;
 use drivebus_personality::build::EdsDevice;
 use drivebus_personality::machine::{Change, MachineError};
@@ -22,6 +23,9 @@ use drivebus_transport::host::{Controller, DeviceHost, spawn};
 use serde::{Deserialize, Serialize};
 use tokio::io::{AsyncBufReadExt, AsyncRead, AsyncWrite, AsyncWriteExt, BufReader};
 use tokio::sync::Mutex;
+
+/// The bitrate a bus-off recovery is timed at on an unpaced bus.
+const UNPACED_BITRATE: u32 = 125_000;
 
 /// One request line.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -68,6 +72,11 @@ pub enum ControlRequest {
         node: u8,
         /// Bus-off (`true`) or back on the bus (`false`).
         bus_off: bool,
+        /// Bus-off that ends by itself after 128 × 11 bit times at the
+        /// bus's bitrate (125 kbit/s when unpaced), as a controller with
+        /// automatic recovery; without it only `bus_off: false` ends it.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        recover: bool,
     },
     /// A drive's power.
     Power {
@@ -129,10 +138,15 @@ impl NodeHost {
         }
     }
 
-    async fn set_link(&self, state: LinkState) -> Option<()> {
+    /// Bus-off (recovering by itself after `recovery`, if given) or back on.
+    async fn set_link(&self, bus_off: bool, recovery: Option<std::time::Duration>) -> Option<()> {
+        let state = move |now: drivebus_can::Instant| match bus_off {
+            true => LinkState::BusOff { recover_at: recovery.map(|d| now + d) },
+            false => LinkState::Active,
+        };
         match self {
-            NodeHost::Drive(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
-            NodeHost::Device(h) => h.with_out(move |d, now, out| d.set_link(state, now, out)).await,
+            NodeHost::Drive(h) => h.with_out(move |d, now, out| d.set_link(state(now), now, out)).await,
+            NodeHost::Device(h) => h.with_out(move |d, now, out| d.set_link(state(now), now, out)).await,
         }
     }
 
@@ -224,11 +238,12 @@ impl Control {
                 hub.add_fault(r)?;
                 Ok(())
             }
-            ControlRequest::Link { node, bus_off } => {
-                let state = if bus_off { LinkState::BusOff { recover_at: None } } else { LinkState::Active };
+            ControlRequest::Link { node, bus_off, recover } => {
+                let rate = hub.bitrate().unwrap_or(UNPACED_BITRATE);
+                let recovery = recover.then(|| bits_duration(BUS_OFF_RECOVERY_BITS, rate));
                 let nodes = nodes.lock().await;
                 let host = running(&nodes, node)?;
-                host.set_link(state).await.ok_or_else(|| stopped(node))
+                host.set_link(bus_off, recovery).await.ok_or_else(|| stopped(node))
             }
             ControlRequest::Power { node, on } => Self::power(hub, nodes, node, on).await,
         }

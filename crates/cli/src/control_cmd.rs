@@ -58,7 +58,7 @@ pub enum ControlCmd {
     /// the link after a slave, lose or corrupt frames, skew a slave's working counter.
     Bus {
         /// drop, corrupt, clear, rule (then --rule in `serve --fault` syntax), off or on; EtherCAT:
-        /// break, lose, corrupt (without --id), wkc, drift, clear.
+        /// break, lose, corrupt (without --id), wkc, drift, jitter, clear.
         action: String,
         /// off, on: the drive's node-ID.
         #[arg(value_name = "NODE")]
@@ -75,6 +75,10 @@ pub enum ControlCmd {
         /// rule: a whole `--fault` rule, e.g. drop:0x180-0x1FF,every=2.
         #[arg(long, value_name = "RULE")]
         rule: Option<String>,
+        /// off: the controller recovers by itself after 128 × 11 bit times (at serve's --bitrate,
+        /// 125 kbit/s when unpaced) and the node sends EMCY 8140h; without it, `bus on NODE`.
+        #[arg(long)]
+        recover: bool,
         /// EtherCAT line faults.
         #[command(flatten)]
         line: LineOpts,
@@ -113,6 +117,9 @@ pub struct LineOpts {
     /// drift: the slave's clock runs this many parts per million fast (negative: slow).
     #[arg(long, value_name = "PPM", allow_negative_numbers = true)]
     pub ppm: Option<f64>,
+    /// jitter: the largest deviation of the slave's time stamps, ns (--seed picks the sequence).
+    #[arg(long, value_name = "NS")]
+    pub amplitude: Option<u32>,
 }
 
 /// The rule of an EtherCAT line fault (docs/control.md), `None` when the
@@ -152,6 +159,12 @@ fn line_rule(
             (Some(n), Some(p)) => format!("drift:{n}:{p}"),
             _ => bail!("bus drift needs --slave N --ppm X, e.g. --slave 2 --ppm 800"),
         },
+        "jitter" => match (o.slave, o.amplitude) {
+            (Some(n), Some(a)) => {
+                format!("jitter:{n}:{a}{}", o.seed.map_or_else(String::new, |s| format!(",seed={s}")))
+            }
+            _ => bail!("bus jitter needs --slave N --amplitude NS, e.g. --slave 2 --amplitude 5000"),
+        },
         _ => return Ok(None),
     }))
 }
@@ -170,6 +183,7 @@ Examples:
   drivebus control --connect /tmp/ecat.sock bus lose --probability 0.01 --seed 7
   drivebus control --connect /tmp/ecat.sock bus wkc --slave 2 --skew 1
   drivebus control --connect /tmp/ecat.sock bus drift --slave 2 --ppm 800
+  drivebus control --connect /tmp/ecat.sock bus jitter --slave 2 --amplitude 5000 --seed 7
   drivebus control --connect /tmp/ecat.sock power 2 off";
 
 fn level(s: &str) -> Option<f64> {
@@ -204,11 +218,21 @@ pub fn to_request(cmd: &ControlCmd) -> anyhow::Result<ControlRequest> {
             duration: *duration,
         },
         ControlCmd::Bus {
-            action, drive: Some(node), id: None, count: None, mask: None, rule: None, ..
-        } if action == "off" || action == "on" => {
-            ControlRequest::Link { node: *node, bus_off: action == "off" }
+            action,
+            drive: Some(node),
+            id: None,
+            count: None,
+            mask: None,
+            rule: None,
+            recover,
+            ..
+        } if action == "off" || (action == "on" && !recover) => {
+            ControlRequest::Link { node: *node, bus_off: action == "off", recover: *recover }
         }
-        ControlCmd::Bus { action, drive: None, id, count, mask, rule, line } => {
+        ControlCmd::Bus { recover: true, .. } => {
+            bail!("--recover goes with `bus off NODE`: the controller recovers by itself")
+        }
+        ControlCmd::Bus { action, drive: None, id, count, mask, rule, line, recover: false } => {
             if let Some(rule) = line_rule(action, id.is_some() || mask.is_some(), *count, line)? {
                 return Ok(ControlRequest::Bus { rule });
             }
@@ -280,9 +304,27 @@ mod tests {
             count: None,
             mask: None,
             rule: None,
+            recover: false,
             line: LineOpts::default(),
         };
-        assert_eq!(to_request(&off).unwrap(), ControlRequest::Link { node: 5, bus_off: true });
+        assert_eq!(
+            to_request(&off).unwrap(),
+            ControlRequest::Link { node: 5, bus_off: true, recover: false }
+        );
+        let link = |action: &str, recover| ControlCmd::Bus {
+            action: action.into(),
+            drive: Some(5),
+            id: None,
+            count: None,
+            mask: None,
+            rule: None,
+            recover,
+            line: LineOpts::default(),
+        };
+        let auto = ControlRequest::Link { node: 5, bus_off: true, recover: true };
+        assert_eq!(to_request(&link("off", true)).unwrap(), auto);
+        let e = to_request(&link("on", true)).unwrap_err().to_string();
+        assert!(e.contains("--recover goes with `bus off NODE`"), "{e}");
         let bus = ControlCmd::Bus {
             action: "drop".into(),
             drive: None,
@@ -290,6 +332,7 @@ mod tests {
             count: Some(5),
             mask: None,
             rule: None,
+            recover: false,
             line: LineOpts::default(),
         };
         assert_eq!(to_request(&bus).unwrap(), ControlRequest::Bus { rule: "drop:0x181,times=5".into() });
@@ -300,6 +343,7 @@ mod tests {
             count: None,
             mask: None,
             rule: None,
+            recover: false,
             line: LineOpts::default(),
         };
         assert!(to_request(&bad).unwrap_err().to_string().contains("needs --id"));
@@ -310,6 +354,7 @@ mod tests {
             count: None,
             mask: None,
             rule: None,
+            recover: false,
             line,
         };
         let rule = |c| match to_request(&c).unwrap() {
@@ -327,6 +372,8 @@ mod tests {
         assert_eq!(rule(ecat("wkc", wkc)), "wkc:2:-1");
         let drift = LineOpts { slave: Some(1), ppm: Some(800.0), ..LineOpts::default() };
         assert_eq!(rule(ecat("drift", drift)), "drift:1:800");
+        let jitter = LineOpts { slave: Some(2), amplitude: Some(5000), seed: Some(7), ..LineOpts::default() };
+        assert_eq!(rule(ecat("jitter", jitter)), "jitter:2:5000,seed=7");
         assert!(to_request(&ecat("break", LineOpts::default())).unwrap_err().to_string().contains("--after"));
         let p = ControlCmd::Power { drive: 5, state: "of".into() };
         assert!(to_request(&p).is_err());

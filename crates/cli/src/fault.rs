@@ -82,16 +82,20 @@ pub fn install(hub: &Hub, rules: &[String]) -> anyhow::Result<()> {
 /// `break:N` (the link behind slave N), `lose[,OPTS]`,
 /// `corrupt[:N][,OPTS]` (damaged in front of slave N, default 1),
 /// `wkc:N:SKEW` (slave N adds SKEW to each working counter it counts in),
-/// `drift:N:PPM` (slave N's clock runs PPM parts per million fast);
+/// `drift:N:PPM` (slave N's clock runs PPM parts per million fast),
+/// `jitter:N:NS[,seed=S]` (slave N's time stamps jitter by up to ±NS ns);
 /// OPTS are `every=N`, `skip=N`, `times=N`, `probability=P`, `seed=S`.
 /// Returns the fault and the seed to give the line's generator, if any.
+/// The seed of a jitter fault given without one.
+const JITTER_SEED: u64 = 0x5EED;
+
 pub fn parse_line(text: &str, slaves: usize) -> anyhow::Result<(drivebus_ethercat::LineFault, Option<u64>)> {
     use drivebus_can::Recurrence;
     use drivebus_ethercat::LineFault;
     let bad = || {
         format!(
             "bad EtherCAT fault `{text}`: expected break:N, lose[,every=N][,probability=P][,seed=S], \
-             corrupt[:N][,every=N], wkc:N:SKEW or drift:N:PPM (slaves 1..{slaves})"
+             corrupt[:N][,every=N], wkc:N:SKEW, drift:N:PPM or jitter:N:NS[,seed=S] (slaves 1..{slaves})"
         )
     };
     let (head, opts) = match text.split_once(',') {
@@ -151,6 +155,19 @@ pub fn parse_line(text: &str, slaves: usize) -> anyhow::Result<(drivebus_etherca
             }
             LineFault::Drift { slave: slave(n, slaves)?, ppb: (ppm * 1000.0).round() as i32 }
         }
+        // The seed is the fault's own generator's, not the line's.
+        ["jitter", n, ns] if pick == Recurrence::always() => {
+            let amplitude_ns: u32 = ns.trim().parse().with_context(bad)?;
+            if !(1..=drivebus_ethercat::MAX_JITTER_NS).contains(&amplitude_ns) {
+                bail!("{}: NS must be 1..{}", bad(), drivebus_ethercat::MAX_JITTER_NS);
+            }
+            let fault = LineFault::Jitter {
+                slave: slave(n, slaves)?,
+                amplitude_ns,
+                seed: seed.unwrap_or(JITTER_SEED),
+            };
+            return Ok((fault, None));
+        }
         _ => bail!("{}", bad()),
     };
     Ok((fault, seed))
@@ -189,6 +206,17 @@ mod tests {
         assert_eq!(parse_line("wkc:1:-2", 3).unwrap().0, LineFault::WkcSkew { slave: 0, skew: -2 });
         assert_eq!(parse_line("drift:2:-1.5", 3).unwrap().0, LineFault::Drift { slave: 1, ppb: -1500 });
         assert!(matches!(parse_line("corrupt:2,every=4", 3).unwrap().0, LineFault::Corrupt { at: 1, .. }));
+        assert_eq!(
+            parse_line("jitter:2:5000,seed=9", 3).unwrap(),
+            (LineFault::Jitter { slave: 1, amplitude_ns: 5000, seed: 9 }, None)
+        );
+        assert!(matches!(
+            parse_line("jitter:1:20", 3).unwrap().0,
+            LineFault::Jitter { amplitude_ns: 20, .. }
+        ));
+        for bad in ["jitter:1:0", "jitter:1:2000000", "jitter:1:20,every=2", "jitter:4:20"] {
+            assert!(parse_line(bad, 3).unwrap_err().to_string().contains("bad EtherCAT fault"), "{bad}");
+        }
         let (f, seed) = parse_line("lose,probability=0.1,seed=7", 3).unwrap();
         assert!(matches!(f, LineFault::Lose(_)));
         assert_eq!(seed, Some(7));

@@ -76,6 +76,13 @@ async fn control_sets_inputs_faults_bus_rules_and_power() {
     ok(sock, &["bus", "on", "5"]);
     assert!(wait_frame(&mut bus, Duration::from_secs(1), |f| f.std_id() == Some(0x705)).await.is_some());
     assert_eq!(sdo_read(&mut bus, 5, 0x1000, 0).await, Ok(0x0002_0192));
+    // With --recover the controller is back by itself after 128 × 11 bits
+    // and the node says so: EMCY 8140h with 1001h bit 4.
+    ok(sock, &["bus", "off", "5", "--recover"]);
+    let recovered = |f: &Frame| f.std_id() == Some(0x85) && f.data()[..2] == [0x40, 0x81];
+    let emcy = wait_frame(&mut bus, Duration::from_secs(1), recovered).await;
+    assert_eq!(emcy.map(|f| f.data()[2] & 0x11), Some(0x11));
+    assert_eq!(sdo_read(&mut bus, 5, 0x1000, 0).await, Ok(0x0002_0192));
 
     // Errors: the cause first, then what to do; --json like the others.
     let out = control(sock, &["input", "9", "digital", "3", "on"]);

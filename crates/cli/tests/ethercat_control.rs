@@ -98,6 +98,8 @@ fn control_breaks_loses_skews_and_power_cycles_the_line() {
     ok(sock, &["bus", "wkc", "--slave", "2", "--skew", "1"]);
     assert_eq!(count(&raw), Some(4));
     ok(sock, &["bus", "drift", "--slave", "3", "--ppm", "2000"]);
+    ok(sock, &["bus", "jitter", "--slave", "3", "--amplitude", "5000", "--seed", "7"]);
+    refused(sock, &["bus", "jitter", "--slave", "3", "--amplitude", "0"], "NS must be 1..1000000");
     ok(sock, &["bus", "clear"]);
 
     ok(sock, &["power", "2", "off"]);

@@ -143,6 +143,7 @@ impl Esc {
         let now = self.now;
         if touches(a, end, 0x0910, 8) {
             let t = self.system_time(now);
+            let t = self.stamp(t);
             self.mem[0x0910..0x0918].copy_from_slice(&t.to_le_bytes());
         }
         if self.sync.active {
@@ -430,11 +431,13 @@ impl Esc {
         let t = self.timing;
         for (p, rx) in t.port_rx.iter().enumerate() {
             if let Some(i) = rx {
-                let l = self.clock.local(*i) as u32;
+                let l = self.clock.local(*i);
+                let l = self.stamp(l) as u32;
                 self.mem[0x0900 + 4 * p..0x0904 + 4 * p].copy_from_slice(&l.to_le_bytes());
             }
         }
         let l = self.clock.local(t.at);
+        let l = self.stamp(l);
         self.mem[0x0918..0x0920].copy_from_slice(&l.to_le_bytes());
     }
 
@@ -442,6 +445,7 @@ impl Esc {
     fn dc_sample(&mut self, at: &dyn Fn(usize) -> Option<u8>) {
         let now = self.now;
         let sys = self.system_time(now);
+        let sys = self.stamp(sys);
         let mut rb = sys.to_le_bytes();
         let mut hi = false;
         for (i, b) in rb.iter_mut().enumerate() {

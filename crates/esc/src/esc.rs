@@ -64,6 +64,9 @@ impl Default for EscConfig {
     }
 }
 
+/// Largest jitter amplitude of the time stamps (1 ms).
+pub const MAX_JITTER_NS: u32 = 1_000_000;
+
 impl EscConfig {
     /// Default hardware with the given SII image.
     pub fn with_sii(sii: SiiImage) -> Self {
@@ -130,6 +133,8 @@ pub struct Esc {
     pub(crate) sync: SyncUnit,
     pub(crate) dc_last_sample: Option<Instant>,
     pub(crate) dc_mean: i64,
+    /// Jitter of the time stamps (a fault): amplitude (ns) and generator.
+    pub(crate) jitter: Option<(u32, drivebus_can::fault::XorShift64)>,
     pub(crate) wd: Watchdogs,
     pub(crate) events: EventQueue,
     pub(crate) now: Instant,
@@ -175,6 +180,7 @@ impl Esc {
             sync: SyncUnit::default(),
             dc_last_sample: None,
             dc_mean: 0,
+            jitter: None,
             wd: Watchdogs::default(),
             events: EventQueue::default(),
             now: Instant::ZERO,
@@ -398,6 +404,28 @@ impl Esc {
     /// stays continuous. [`EscConfig::clock`] keeps the one it was built with.
     pub fn set_clock_drift(&mut self, drift_ppb: i32) {
         self.clock.set_drift(self.now, drift_ppb);
+    }
+
+    /// Gives the clock's time stamps bounded random jitter (a fault), or
+    /// ends it (`None`): from now on every stamp the ESC takes (the receive
+    /// times 0x0900–0x091F, a read of the system time 0x0910, the compare
+    /// of a master's 0x0910 write that steers the control loop) is off by
+    /// a value in ±`amplitude_ns` (at most [`MAX_JITTER_NS`]) drawn from a
+    /// generator seeded with `seed`, so a run replays.
+    pub fn set_clock_jitter(&mut self, jitter: Option<(u32, u64)>) {
+        self.jitter =
+            jitter.map(|(a, seed)| (a.min(MAX_JITTER_NS), drivebus_can::fault::XorShift64::new(seed)));
+    }
+
+    /// A time `t` as the ESC stamps it: plus the jitter, if on.
+    pub(crate) fn stamp(&mut self, t: u64) -> u64 {
+        match &mut self.jitter {
+            Some((a, rng)) => {
+                let a = u64::from(*a);
+                t.wrapping_add(rng.below(2 * a + 1)).wrapping_sub(a)
+            }
+            None => t,
+        }
     }
 
     /// Frequency correction of the time control loop, in ppb.

@@ -233,19 +233,32 @@ impl<D: Device> Segment<D> {
         {
             d.esc_mut().set_clock_drift(ppb);
         }
+        if let LineFault::Jitter { slave, amplitude_ns, seed } = f
+            && let Some(d) = self.devices.get_mut(slave)
+        {
+            d.esc_mut().set_clock_jitter(Some((amplitude_ns, seed)));
+        }
         self.faults.push(f);
         self.update_links();
     }
 
     /// Ends every fault of the line (power stays as it is); a drifting
-    /// clock gets its own drift back.
+    /// clock gets its own drift back, a jittering one stamps exactly again.
     pub fn clear_faults(&mut self) {
         for f in self.faults.drain(..) {
-            if let LineFault::Drift { slave, .. } = f
-                && let Some(d) = self.devices.get_mut(slave)
-            {
-                let own = d.esc().config().clock.drift_ppb;
-                d.esc_mut().set_clock_drift(own);
+            match f {
+                LineFault::Drift { slave, .. } => {
+                    if let Some(d) = self.devices.get_mut(slave) {
+                        let own = d.esc().config().clock.drift_ppb;
+                        d.esc_mut().set_clock_drift(own);
+                    }
+                }
+                LineFault::Jitter { slave, .. } => {
+                    if let Some(d) = self.devices.get_mut(slave) {
+                        d.esc_mut().set_clock_jitter(None);
+                    }
+                }
+                _ => {}
             }
         }
         self.update_links();

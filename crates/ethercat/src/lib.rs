@@ -36,5 +36,6 @@ pub mod probe;
 pub mod server;
 
 pub use clock::Clock;
+pub use drivebus_esc::MAX_JITTER_NS;
 pub use drivebus_esc::segment::LineFault;
 pub use host::{BoxDevice, Host, HostStats};

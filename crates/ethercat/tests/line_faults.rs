@@ -283,3 +283,79 @@ fn a_drifting_clock_shows_in_its_system_time_difference_and_settles_when_cleared
         assert!(after < drifted / 4, "{drifted} ns, then {after} ns");
     });
 }
+
+#[test]
+fn a_jittering_clock_shows_in_its_system_time_difference_and_ends_when_cleared() {
+    static S: PduFrames = PduFrames::new();
+    let host = drives();
+    let m = Master::on_host(&S, host.clone()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        d.enable(Duration::from_secs(2)).await.unwrap();
+        // 0x092C: sign and magnitude of the system time difference (ns).
+        let diff = || async {
+            let v: u32 = ethercrab::Command::aprd(1, 0x092C).receive(m.main_device()).await.unwrap();
+            v & 0x7FFF_FFFF
+        };
+        for _ in 0..200 {
+            d.cycle().await.unwrap();
+        }
+        let mut settled = 0;
+        for _ in 0..100 {
+            d.cycle().await.unwrap();
+            settled = settled.max(diff().await);
+        }
+        fault(&host, LineFault::Jitter { slave: 1, amplitude_ns: 20_000, seed: 7 });
+        let mut jittered = 0;
+        for _ in 0..100 {
+            d.cycle().await.unwrap();
+            jittered = jittered.max(diff().await);
+        }
+        assert!(jittered > 2_000 && jittered > 10 * settled.max(1), "{settled} ns, then {jittered} ns");
+        assert_eq!(d.bad_wkc, 0, "the process data keeps moving");
+        clear(&host);
+        for _ in 0..1000 {
+            d.cycle().await.unwrap();
+        }
+        let mut after = 0;
+        for _ in 0..100 {
+            d.cycle().await.unwrap();
+            after = after.max(diff().await);
+        }
+        assert!(after < jittered / 4, "{jittered} ns, then {after} ns");
+    });
+}
+
+#[test]
+fn a_power_cycled_drive_comes_back_as_at_power_on_and_the_master_brings_it_to_op() {
+    static S: PduFrames = PduFrames::new();
+    let host = drives();
+    let m = Master::on_host(&S, host.clone()).unwrap();
+    async_io::block_on(async {
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
+        let at_power_on = (d.read(0x6041, 0).await.unwrap(), d.read(0x6064, 0).await.unwrap());
+        d.enable(Duration::from_secs(2)).await.unwrap();
+        let pos = d.move_to(5000, false, Some(100_000), Duration::from_secs(10), |_| {}).await.unwrap();
+        assert!((pos - 5000).abs() <= 10, "{pos}");
+        assert_eq!(d.read(0x6041, 0).await.unwrap() & 0x6F, 0x27, "operation enabled");
+        drop(d);
+
+        host.with_segment(|s| s.power_off(1));
+        host.advance(Duration::from_millis(10));
+        host.with_segment(|s| s.power_on(1));
+        assert_eq!(m.al_status(2).await.unwrap().state, Ok(AlState::Init));
+
+        // The twin starts again: switch on disabled, the power-on position.
+        let g = m.init().await.unwrap();
+        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
+        let now = (d.read(0x6041, 0).await.unwrap(), d.read(0x6064, 0).await.unwrap());
+        assert_eq!(now.0 & 0x4F, 0x40, "switch on disabled: {:04X}h", now.0);
+        assert_eq!(now, at_power_on, "6041h and 6064h as at power-on (moved to {pos} before)");
+        d.enable(Duration::from_secs(2)).await.unwrap();
+        assert_eq!(m.al_status(2).await.unwrap().state, Ok(AlState::Op));
+        let pos = d.move_to(1000, false, Some(100_000), Duration::from_secs(10), |_| {}).await.unwrap();
+        assert!((pos - 1000).abs() <= 10, "{pos}");
+    });
+}

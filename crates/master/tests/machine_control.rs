@@ -1,14 +1,15 @@
 //! Inputs and faults changed while the bus runs (issue 17 §3), seen by
 //! our master on the virtual bus in simulated time: a digital input in
 //! 60FDh, an encoder fault's EMCY and its recovery after the clear, a node
-//! powered off and on, a node bus-off and recovered, frames dropped or
+//! powered off and on, a node bus-off and recovered (by hand, and by itself
+//! with the EMCY 8140h), frames dropped or
 //! corrupted by a rule.
 
 use std::time::Duration;
 
 use drivebus_bus::{Bus, BusConfig, FaultRule, ProbeId};
 use drivebus_can::Instant;
-use drivebus_master::{DriveState, MasterConfig, SdoError, SimBus};
+use drivebus_master::{DriveState, MasterConfig, MasterEvent, SdoError, SimBus};
 use drivebus_personality::machine::{Change, FaultKind, Input};
 use drivebus_personality::{PersonalityDevice, Profile};
 
@@ -152,6 +153,41 @@ fn a_bus_off_node_is_silent_until_it_recovers() {
     let on_at = sim.now();
     sim.run_for(Duration::from_millis(120));
     assert!(heard(sim.bus(), on_at) >= 2, "heartbeats again");
+    let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
+    assert_eq!(r.unwrap(), 0x0002_0192);
+}
+
+#[test]
+fn a_node_that_keeps_going_bus_off_is_lost_then_recovers_by_itself_with_8140h() {
+    // A broken transceiver: every frame of the node ends in an error
+    // frame, its controller goes bus-off, recovers by itself after
+    // 128 × 11 bits, and goes bus-off again, until the fault goes.
+    let (mut sim, _, id) = generic();
+    let m = sim.master().clone();
+    sim.block_on(async { m.sdo(NODE).write::<u16>(0x1017, 0, 10).await.unwrap() }).unwrap();
+    let mut ev = m.subscribe_events();
+    m.monitor_heartbeat(NODE, Some(Duration::from_millis(30)));
+    sim.run_for(Duration::from_millis(50));
+    let rule = sim.bus_mut().add_fault(FaultRule::corrupt().from(id));
+    sim.run_for(Duration::from_millis(100));
+    assert!(sim.bus().stats().bus_off >= 2, "bus-off again after each recovery: {:?}", sim.bus().stats());
+    sim.bus_mut().remove_fault(rule);
+    sim.run_for(Duration::from_millis(100));
+    let mut seen = Vec::new();
+    while let Ok(e) = ev.try_recv() {
+        match e {
+            MasterEvent::HeartbeatLost { node: NODE } => seen.push("lost"),
+            MasterEvent::Emcy { node: NODE, code: 0x8140, register, ref text, .. } => {
+                assert_eq!(register & 0x11, 0x11, "generic + communication error");
+                assert_eq!(text.as_deref(), Some("Recovered from bus off"));
+                seen.push("8140h");
+            }
+            MasterEvent::HeartbeatRecovered { node: NODE } => seen.push("recovered"),
+            _ => {}
+        }
+    }
+    assert_eq!(seen, ["lost", "8140h", "recovered"]);
+    assert!(!m.node_status(NODE).unwrap().lost);
     let r = sim.block_on(async { m.sdo(NODE).read::<u32>(0x1000, 0).await }).unwrap();
     assert_eq!(r.unwrap(), 0x0002_0192);
 }

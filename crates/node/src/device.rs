@@ -73,8 +73,10 @@ impl<A: Application + 'static> Device for NodeDevice<A> {
 }
 
 impl Node {
-    /// The controller's link state changed: the application hears it
-    /// ([`NodeEvent::Link`]) and its requests are carried out.
+    /// The controller's link state changed: bus-off raises 8140h (1001h
+    /// bit 4) and the recovery sends it and its error reset (CiA 301
+    /// §7.2.7); the application hears it ([`NodeEvent::Link`]) and its
+    /// requests are carried out.
     pub fn link_changed<A: Application + ?Sized>(
         &mut self,
         state: LinkState,
@@ -83,6 +85,11 @@ impl Node {
         out: &mut impl TxSink,
     ) {
         self.s.link.now = now;
+        match state {
+            LinkState::BusOff { .. } => self.bus_off(now, app, out),
+            LinkState::Active | LinkState::ErrorPassive => self.bus_recovered(now),
+            LinkState::Disconnected => {}
+        }
         app.on_event(&mut self.s.cx(&mut self.od), NodeEvent::Link(state));
         if self.run_requests(now, app, out) {
             self.poll_services(now, app, out);

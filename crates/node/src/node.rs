@@ -50,6 +50,8 @@ pub struct Node {
     pub(crate) running: Vec<crate::app::Request>,
     /// Errors raised with a device-defined register (code, bits).
     pub(crate) app_errors: Vec<(u16, u8)>,
+    /// The controller is bus-off (8140h is active until it recovers).
+    pub(crate) bus_off: bool,
 }
 
 /// A node's configuration and its finished dictionary (the services'
@@ -277,6 +279,7 @@ impl Node {
             seen_generation: 0,
             running: Vec::with_capacity(8),
             app_errors: Vec::new(),
+            bus_off: false,
         };
         node.load_lss_config();
         node
@@ -346,6 +349,13 @@ impl Node {
     /// The parameter storage.
     pub fn storage_mut(&mut self) -> &mut (dyn Storage + Send) {
         &mut *self.s.storage
+    }
+
+    /// Puts `storage` in place of the parameter storage and returns the
+    /// old one: the non-volatile memory handed to a device built again at
+    /// power-on (before its boot loads it).
+    pub fn replace_storage(&mut self, storage: Box<dyn Storage + Send>) -> Box<dyn Storage + Send> {
+        core::mem::replace(&mut self.s.storage, storage)
     }
 
     /// Power on: load stored parameters, start the services, send the

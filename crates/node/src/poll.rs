@@ -17,6 +17,8 @@ use drivebus_sync::TimeService;
 
 /// EMCY for a heartbeat or life-guarding loss (CiA 301 Table 21).
 const EMCY_GUARD: u16 = 0x8130;
+/// EMCY "recovered from bus off" (CiA 301 Table 21).
+pub(crate) const EMCY_BUS_OFF: u16 = 0x8140;
 /// 1029h class of communication errors (sub 1).
 const COMM_ERROR: ErrorClass = ErrorClass(1);
 
@@ -316,6 +318,54 @@ impl Node {
         }
         if let Some(ev) = self.s.nmt.on_error(COMM_ERROR) {
             self.on_nmt_event(ev, now, app, out);
+        }
+    }
+
+    /// The controller went bus-off: 8140h becomes active (1001h bit 4, the
+    /// communication error, and 1003h; its frame cannot reach the bus) and
+    /// 1029h sub 1 reacts, as CiA 301 §7.5.2.32 counts bus-off among the
+    /// communication errors.
+    pub(crate) fn bus_off<A: Application + ?Sized>(
+        &mut self,
+        now: Instant,
+        app: &mut A,
+        out: &mut impl TxSink,
+    ) {
+        if self.bus_off {
+            return;
+        }
+        self.bus_off = true;
+        match self.config().comm_error_emcy {
+            Some((bits, bytes)) => self.raise_defined(EMCY_BUS_OFF, bits, bytes, now),
+            None => {
+                self.raise_emcy(EMCY_BUS_OFF, [0; 5], now);
+            }
+        }
+        if let Some(ev) = self.s.nmt.on_error(COMM_ERROR) {
+            self.on_nmt_event(ev, now, app, out);
+        }
+    }
+
+    /// Back on the bus after bus-off: the EMCY 8140h "recovered from bus
+    /// off" goes out (the one raised at bus-off was lost with the
+    /// controller's queue), then the error clears with its error-reset
+    /// EMCY (0000h and the register of what is still active).
+    pub(crate) fn bus_recovered(&mut self, now: Instant) {
+        if !core::mem::take(&mut self.bus_off) {
+            return;
+        }
+        let defined = self.app_errors.iter().find(|(c, _)| *c == EMCY_BUS_OFF).copied();
+        match (defined, self.config().comm_error_emcy) {
+            (Some(_), Some((_, bytes))) => {
+                let reg = self.app_errors.iter().fold(0, |a, (_, r)| a | r);
+                self.send_raw_emcy(EMCY_BUS_OFF, reg, bytes, now);
+                self.clear_defined(EMCY_BUS_OFF, now);
+            }
+            _ => {
+                let reg = self.s.emcy.error_register();
+                self.send_raw_emcy(EMCY_BUS_OFF, reg, [0; 5], now);
+                self.clear_emcy(EMCY_BUS_OFF, now);
+            }
         }
     }
 

@@ -133,7 +133,8 @@ pub fn bridge(hub: &Hub, bus: CanBus) -> JoinHandle<()> {
 /// A device behind a CAN controller whose link state the host's owner
 /// sets (a bus-off injected at run time, `drivebus serve --control`):
 /// off the bus it hears nothing and what it sends is lost, as on the
-/// simulated bus's stations.
+/// simulated bus's stations. A bus-off with a `recover_at` ends by itself
+/// then (the controller's automatic recovery), as on the simulated bus.
 pub struct Controller<D> {
     /// The device.
     pub device: D,
@@ -180,7 +181,17 @@ impl<D: Device + 'static> Device for Controller<D> {
         }
     }
     fn poll(&mut self, now: Instant, out: &mut dyn TxSink) -> Option<Instant> {
-        if self.link.is_on_bus() { self.device.poll(now, out) } else { self.device.poll(now, &mut Lost) }
+        if let LinkState::BusOff { recover_at: Some(r) } = self.link
+            && r <= now
+        {
+            self.set_link(LinkState::Active, now, out);
+        }
+        let next =
+            if self.link.is_on_bus() { self.device.poll(now, out) } else { self.device.poll(now, &mut Lost) };
+        match self.link {
+            LinkState::BusOff { recover_at } => drivebus_can::earliest(next, recover_at),
+            _ => next,
+        }
     }
     fn link_changed(&mut self, state: LinkState, now: Instant, out: &mut dyn TxSink) {
         self.set_link(state, now, out);
@@ -242,5 +253,30 @@ async fn run<D: Device>(mut dev: D, mut bus: CanBus, mut cmds: mpsc::UnboundedRe
         if !flush(&bus, &mut out).await {
             return;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drivebus_node::{Node, NodeConfig, NodeDevice};
+    use drivebus_od::NoHooks;
+
+    #[test]
+    fn a_bus_off_with_a_recovery_time_ends_by_itself_with_8140h() {
+        let mut c = Controller::new(NodeDevice::new(Node::new(NodeConfig::new(5)), NoHooks));
+        let mut out: Vec<Frame> = Vec::new();
+        c.start(Instant::ZERO, &mut out);
+        c.poll(Instant::ZERO, &mut out);
+        out.clear();
+        let back = Instant::from_micros(11_264);
+        c.set_link(LinkState::BusOff { recover_at: Some(back) }, Instant::ZERO, &mut out);
+        let next = c.poll(Instant::from_micros(10), &mut out);
+        assert!(next.is_some_and(|t| t <= back), "polled again at the recovery: {next:?}");
+        assert!(out.is_empty());
+        assert!(matches!(c.link(), LinkState::BusOff { .. }));
+        c.poll(back, &mut out);
+        assert_eq!(c.link(), LinkState::Active);
+        assert_eq!(out, [Frame::new(0x85, &[0x40, 0x81, 0x11, 0, 0, 0, 0, 0]), Frame::new(0x85, &[0; 8])]);
     }
 }

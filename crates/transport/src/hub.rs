@@ -238,6 +238,11 @@ impl Hub {
         self.inner.dropped.load(Ordering::Relaxed)
     }
 
+    /// The bitrate frames are paced to, `None` when unpaced.
+    pub fn bitrate(&self) -> Option<u32> {
+        self.inner.bitrate
+    }
+
     /// True when frames are paced to a bitrate ([`publish`](Self::publish)
     /// may wait).
     pub fn is_paced(&self) -> bool {

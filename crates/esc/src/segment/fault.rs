@@ -50,6 +50,19 @@ pub enum LineFault {
         /// Frequency error in parts per billion.
         ppb: i32,
     },
+    /// Slave `slave`'s (0-based) time stamps jitter: each one (receive
+    /// times, system time reads, the compare that steers its DC control
+    /// loop) is off by a random value in ±`amplitude_ns`
+    /// ([`Esc::set_clock_jitter`](crate::Esc::set_clock_jitter)), drawn
+    /// from a generator seeded with `seed`, so a run replays.
+    Jitter {
+        /// The slave.
+        slave: usize,
+        /// Largest deviation of a stamp, ns (at most 1 ms).
+        amplitude_ns: u32,
+        /// Seed of the generator.
+        seed: u64,
+    },
 }
 
 impl LineFault {

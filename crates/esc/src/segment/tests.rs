@@ -255,3 +255,40 @@ fn a_drift_fault_changes_the_rate_of_one_clock_until_cleared() {
     s.clear_faults();
     assert_eq!(rate(&mut s, 0x1001, 6000), 1_000_000);
 }
+
+#[test]
+fn a_jitter_fault_scatters_one_clock_within_its_bound_replayably_until_cleared() {
+    let stamps = |seed| {
+        let mut s = line(2);
+        address_all(&mut s);
+        s.add_fault(LineFault::Jitter { slave: 1, amplitude_ns: 500, seed });
+        let mut out = Vec::new();
+        for k in 0..50u64 {
+            for a in [0x1000, 0x1001] {
+                let d = send(&mut s, Command::Fprd, station_address(a, 0x0910), &[0; 8], 1000 + k * 1000).0;
+                out.push((a, k, u64::from_le_bytes(d.try_into().unwrap())));
+            }
+        }
+        (s, out)
+    };
+    let (mut s, got) = stamps(7);
+    // Each read 1 ms apart: the clean clock advances by exactly 1 ms,
+    // the jittering one by 1 ms ± 2 × 500 ns, not always the same.
+    let steps = |a| -> Vec<i64> {
+        let t: Vec<u64> = got.iter().filter(|(x, ..)| *x == a).map(|(.., t)| *t).collect();
+        t.windows(2).map(|w| w[1] as i64 - w[0] as i64 - 1_000_000).collect()
+    };
+    assert!(steps(0x1000).iter().all(|&d| d == 0));
+    let j = steps(0x1001);
+    assert!(j.iter().all(|d| d.abs() <= 1000), "{j:?}");
+    assert!(j.iter().filter(|&&d| d != 0).count() > 40, "{j:?}");
+    assert_eq!(stamps(7).1, got, "the same seed replays");
+    assert_ne!(stamps(8).1, got, "another seed, other stamps");
+    s.clear_faults();
+    let t = |s: &mut Segment<Esc>, us| {
+        let d = send(s, Command::Fprd, station_address(0x1001, 0x0910), &[0; 8], us).0;
+        u64::from_le_bytes(d.try_into().unwrap())
+    };
+    let t0 = t(&mut s, 100_000);
+    assert_eq!(t(&mut s, 101_000) - t0, 1_000_000, "exact again");
+}

@@ -196,6 +196,11 @@ pub trait SlaveApp {
     fn take_error(&mut self) -> Option<(AlStatusCode, AlState)> {
         None
     }
+
+    /// Power comes back ([`Device::power_on`](crate::segment::Device::power_on)):
+    /// the firmware starts again from its power-on state (what it keeps
+    /// is what non-volatile memory holds). Default: nothing to rebuild.
+    fn power_on(&mut self) {}
 }
 
 /// Framework options.

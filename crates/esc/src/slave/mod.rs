@@ -654,6 +654,10 @@ impl<A: SlaveApp + 'static> Device for Slave<A> {
     fn as_any_mut(&mut self) -> Option<&mut dyn core::any::Any> {
         Some(self)
     }
+    fn power_on(&mut self) {
+        self.esc.reset();
+        self.app.power_on();
+    }
 }
 
 #[cfg(test)]

@@ -10,6 +10,8 @@ use drivebus_esc::slave::{
     AlState, AlStatusCode, MailboxOut, ProcessDataSizes, SlaveApp, SyncConfig, SyncMode, SyncSupport,
     Transition,
 };
+use drivebus_node::MemoryStorage;
+use drivebus_od::Value;
 use drivebus_personality::ecat::{self, DriveFiles, EcatFacts, EsmEvent};
 use drivebus_personality::machine::{Change, MachineError};
 use drivebus_personality::{PersonalityDevice, Profile};
@@ -239,6 +241,33 @@ impl DriveApp {
 }
 
 impl SlaveApp for DriveApp {
+    /// The drive is built again from its profile as at power-on (state
+    /// machine, position, parameters from its non-volatile storage, the
+    /// same serial number); it starts at the next poll.
+    fn power_on(&mut self) {
+        let od = self.dev.node.od();
+        let serial =
+            od.find(0x1018, 4).ok().and_then(|r| od.bytes(r).try_into().ok()).map(u32::from_le_bytes);
+        // The profile built once already; should it fail now, the old drive stays.
+        let Ok(mut dev) = ecat::build(self.profile, Box::new(MemoryStorage::new())) else { return };
+        if let Some(serial) = serial {
+            drivebus_personality::build::set_default(dev.node.od_mut(), 0x1018, 4, &Value::U32(serial));
+        }
+        let storage = self.dev.node.replace_storage(Box::new(MemoryStorage::new()));
+        dev.node.replace_storage(storage);
+        self.dev = dev;
+        self.frames.clear();
+        self.esm = AlState::Init;
+        self.rx = Image::default();
+        self.tx = Image::default();
+        self.sync = SyncConfig::default();
+        self.params = SyncParams::default();
+        self.resync = false;
+        self.started = false;
+        self.pulse = None;
+        self.mbx.reset(&mut *self.files);
+    }
+
     fn process_data_sizes(&self) -> ProcessDataSizes {
         let od = self.dev.node.od();
         ProcessDataSizes { output_bits: Image::bits_of(od, 0x1C12), input_bits: Image::bits_of(od, 0x1C13) }
