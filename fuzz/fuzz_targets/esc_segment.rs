@@ -6,7 +6,7 @@
 #![no_main]
 
 use drivebus_can::{Duration, Instant};
-use drivebus_esc::frame::{Command, FrameBuilder, datagrams, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, station_address};
 use drivebus_esc::segment::{Device, Segment, SegmentConfig};
 use drivebus_esc::sii::{MailboxArea, SiiImage, SiiSyncManager, protocols};
 use drivebus_esc::slave::{MailboxOut, ProcessDataSizes, Slave, SlaveApp, SlaveConfig};
@@ -67,7 +67,7 @@ fuzz_target!(|data: &[u8]| {
     seg.poll(now);
     let mut f = [0u8; 64];
     let mut b = FrameBuilder::new(&mut f, [0x10; 6]);
-    b.push(Command::Brd, 0, station_address(0, 0), &[0]).expect("fits");
+    b.push(DatagramCommand::Brd, 0, station_address(0, 0), &[0]).expect("fits");
     let n = b.finish();
     let r = seg.process_frame(&mut f[..n], now);
     let d = datagrams(&f[14..n]).next().expect("one datagram");

@@ -24,7 +24,7 @@
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use drivebus_can::{Duration, Instant};
 use drivebus_esc::fmmu::Fmmu;
-use drivebus_esc::frame::{Command, FrameBuilder, position_address, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, position_address, station_address};
 use drivebus_esc::segment::{Device, Segment, SegmentConfig};
 use drivebus_esc::sii::{SiiImage, SiiSyncManager};
 use drivebus_esc::slave::{ProcessDataSizes, Slave, SlaveApp, SlaveConfig};
@@ -53,7 +53,7 @@ impl SlaveApp for Loopback {
 }
 
 /// Sends one frame with one datagram through `dev`.
-fn send<D: Device>(seg: &mut Segment<D>, cmd: Command, addr: u32, data: &[u8]) {
+fn send<D: Device>(seg: &mut Segment<D>, cmd: DatagramCommand, addr: u32, data: &[u8]) {
     let mut buf = [0u8; 256];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     b.push(cmd, 0, addr, data).unwrap();
@@ -66,12 +66,12 @@ fn send<D: Device>(seg: &mut Segment<D>, cmd: Command, addr: u32, data: &[u8]) {
 fn configure<D: Device>(seg: &mut Segment<D>) {
     let n = seg.len();
     for i in 0..n as u16 {
-        send(seg, Command::Apwr, position_address(i, 0x0010), &(0x1000 + i).to_le_bytes());
+        send(seg, DatagramCommand::Apwr, position_address(i, 0x0010), &(0x1000 + i).to_le_bytes());
     }
     for i in 0..n as u16 {
         let a = 0x1000 + i;
-        send(seg, Command::Fpwr, station_address(a, 0x0800), &[0x00, 0x10, 2, 0, 0x64, 0, 1, 0]);
-        send(seg, Command::Fpwr, station_address(a, 0x0808), &[0x00, 0x11, 2, 0, 0x20, 0, 1, 0]);
+        send(seg, DatagramCommand::Fpwr, station_address(a, 0x0800), &[0x00, 0x10, 2, 0, 0x64, 0, 1, 0]);
+        send(seg, DatagramCommand::Fpwr, station_address(a, 0x0808), &[0x00, 0x11, 2, 0, 0x20, 0, 1, 0]);
         let fmmu = |logical: u32, phys: u16, read: bool| Fmmu {
             logical_start: logical,
             length: 2,
@@ -85,16 +85,16 @@ fn configure<D: Device>(seg: &mut Segment<D>) {
         };
         let inputs = fmmu(2 * u32::from(i), 0x1100, true);
         let outputs = fmmu(2 * (n as u32 + u32::from(i)), 0x1000, false);
-        send(seg, Command::Fpwr, station_address(a, 0x0600), &inputs.to_registers());
-        send(seg, Command::Fpwr, station_address(a, 0x0610), &outputs.to_registers());
+        send(seg, DatagramCommand::Fpwr, station_address(a, 0x0600), &inputs.to_registers());
+        send(seg, DatagramCommand::Fpwr, station_address(a, 0x0610), &outputs.to_registers());
     }
     for (state, _) in [(2u8, 0), (4, 0), (8, 0)] {
-        send(seg, Command::Bwr, station_address(0, 0x0120), &[state, 0]);
+        send(seg, DatagramCommand::Bwr, station_address(0, 0x0120), &[state, 0]);
         seg.poll(Instant::ZERO);
     }
 }
 
-fn one_frame(cmd: Command, addr: u32, data: &[u8]) -> ([u8; 1600], usize) {
+fn one_frame(cmd: DatagramCommand, addr: u32, data: &[u8]) -> ([u8; 1600], usize) {
     let mut buf = [0u8; 1600];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     b.push(cmd, 0, addr, data).unwrap();
@@ -105,10 +105,10 @@ fn one_frame(cmd: Command, addr: u32, data: &[u8]) -> ([u8; 1600], usize) {
 fn cycle_frame(n: usize) -> ([u8; 1600], usize) {
     let mut buf = [0u8; 1600];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
-    b.push(Command::Frmw, 0, station_address(0x1000, 0x0910), &[0; 8]).unwrap();
-    b.push(Command::Lrw, 1, 0, &vec![0u8; 4 * n]).unwrap();
+    b.push(DatagramCommand::Frmw, 0, station_address(0x1000, 0x0910), &[0; 8]).unwrap();
+    b.push(DatagramCommand::Lrw, 1, 0, &vec![0u8; 4 * n]).unwrap();
     for i in 0..n as u16 {
-        b.push(Command::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
+        b.push(DatagramCommand::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
     }
     let len = b.finish();
     (buf, len)
@@ -118,7 +118,7 @@ fn fprd_per_slave(n: usize) -> ([u8; 1600], usize) {
     let mut buf = [0u8; 1600];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     for i in 0..n as u16 {
-        b.push(Command::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
+        b.push(DatagramCommand::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
     }
     let len = b.finish();
     (buf, len)
@@ -133,21 +133,21 @@ fn line(n: usize) -> Segment<Esc> {
 
 fn benches(c: &mut Criterion) {
     let mut one = line(1);
-    let (mut f, n) = one_frame(Command::Fprd, station_address(0x1000, 0x0130), &[0; 2]);
+    let (mut f, n) = one_frame(DatagramCommand::Fprd, station_address(0x1000, 0x0130), &[0; 2]);
     c.bench_function("fprd_one_slave", |b| {
         b.iter(|| black_box(one.device_mut(0).unwrap().process_frame(black_box(&mut f[..n]), Instant::ZERO)))
     });
-    let (mut f, n) = one_frame(Command::Lrw, 0, &[0; 4]);
+    let (mut f, n) = one_frame(DatagramCommand::Lrw, 0, &[0; 4]);
     c.bench_function("lrw_one_slave", |b| {
         b.iter(|| black_box(one.device_mut(0).unwrap().process_frame(black_box(&mut f[..n]), Instant::ZERO)))
     });
 
     let mut l64 = line(64);
-    let (mut f, n) = one_frame(Command::Fprd, station_address(0x1000 + 63, 0x0130), &[0; 2]);
+    let (mut f, n) = one_frame(DatagramCommand::Fprd, station_address(0x1000 + 63, 0x0130), &[0; 2]);
     c.bench_function("fprd_64_line", |b| {
         b.iter(|| black_box(l64.process_frame(black_box(&mut f[..n]), Instant::ZERO)))
     });
-    let (mut f, n) = one_frame(Command::Lrw, 0, &[0; 4 * 64]);
+    let (mut f, n) = one_frame(DatagramCommand::Lrw, 0, &[0; 4 * 64]);
     c.bench_function("lrw_64_line", |b| {
         b.iter(|| black_box(l64.process_frame(black_box(&mut f[..n]), Instant::ZERO)))
     });
@@ -172,11 +172,11 @@ fn benches(c: &mut Criterion) {
     c.bench_function("fprd_x64_64_line", |b| {
         b.iter(|| black_box(l64.process_frame(black_box(&mut f[..n]), Instant::ZERO)))
     });
-    let (mut f, n) = one_frame(Command::Fprd, station_address(0x1000 + 63, 0x0130), &[0; 2]);
+    let (mut f, n) = one_frame(DatagramCommand::Fprd, station_address(0x1000 + 63, 0x0130), &[0; 2]);
     c.bench_function("fprd_64_line_firmware", |b| {
         b.iter(|| black_box(fw.process_frame(black_box(&mut f[..n]), t)))
     });
-    let (mut f, n) = one_frame(Command::Lrw, 0, &[0; 4 * 64]);
+    let (mut f, n) = one_frame(DatagramCommand::Lrw, 0, &[0; 4 * 64]);
     c.bench_function("lrw_64_line_firmware", |b| {
         b.iter(|| black_box(fw.process_frame(black_box(&mut f[..n]), t)))
     });

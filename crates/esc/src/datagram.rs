@@ -31,7 +31,7 @@
 
 use crate::esc::{Esc, FrameReport, FrameTiming};
 use crate::fmmu::Fmmu;
-use crate::frame::{self, Command, DATAGRAM_HEADER_LEN, DatagramHeader, ECAT_HEADER_LEN, TYPE_DLPDU};
+use crate::frame::{self, DATAGRAM_HEADER_LEN, DatagramCommand, DatagramHeader, ECAT_HEADER_LEN, TYPE_DLPDU};
 use crate::registers::REGISTER_SPACE;
 use crate::sm::Side;
 use drivebus_can::Instant;
@@ -116,7 +116,7 @@ impl Esc {
         if irq != 0 {
             d[8..10].copy_from_slice(&(h.irq | irq).to_le_bytes());
         }
-        let Some(cmd) = Command::from_u8(h.command) else {
+        let Some(cmd) = DatagramCommand::from_u8(h.command) else {
             return;
         };
         let len = usize::from(h.len);
@@ -125,23 +125,25 @@ impl Esc {
         let adp = h.adp();
         let ado = usize::from(h.ado());
         let add = match cmd {
-            Command::Nop => 0,
-            Command::Aprd | Command::Apwr | Command::Aprw | Command::Armw => {
+            DatagramCommand::Nop => 0,
+            DatagramCommand::Aprd | DatagramCommand::Apwr | DatagramCommand::Aprw | DatagramCommand::Armw => {
                 head[2..4].copy_from_slice(&adp.wrapping_add(1).to_le_bytes());
                 self.physical(cmd, adp == 0, ado, data)
             }
-            Command::Fprd | Command::Fpwr | Command::Fprw | Command::Frmw => {
+            DatagramCommand::Fprd | DatagramCommand::Fpwr | DatagramCommand::Fprw | DatagramCommand::Frmw => {
                 let station = u16::from_le_bytes([self.mem[0x0010], self.mem[0x0011]]);
                 let me = adp == station
                     || (self.mem[0x0103] & 1 != 0
                         && adp == u16::from_le_bytes([self.mem[0x0012], self.mem[0x0013]]));
                 self.physical(cmd, me, ado, data)
             }
-            Command::Brd | Command::Bwr | Command::Brw => {
+            DatagramCommand::Brd | DatagramCommand::Bwr | DatagramCommand::Brw => {
                 head[2..4].copy_from_slice(&adp.wrapping_add(1).to_le_bytes());
                 self.physical(cmd, true, ado, data)
             }
-            Command::Lrd | Command::Lwr | Command::Lrw => self.logical(cmd, h.address, data),
+            DatagramCommand::Lrd | DatagramCommand::Lwr | DatagramCommand::Lrw => {
+                self.logical(cmd, h.address, data)
+            }
         };
         if add != 0 {
             let wkc = u16::from_le_bytes([wkc_bytes[0], wkc_bytes[1]]).wrapping_add(add);
@@ -149,14 +151,16 @@ impl Esc {
         }
     }
 
-    fn physical(&mut self, cmd: Command, me: bool, ado: usize, data: &mut [u8]) -> u16 {
+    fn physical(&mut self, cmd: DatagramCommand, me: bool, ado: usize, data: &mut [u8]) -> u16 {
         let n = data.len();
         match cmd {
-            Command::Aprd | Command::Fprd if me => u16::from(self.read(Side::Ecat, ado, data) > 0),
-            Command::Apwr | Command::Fpwr | Command::Bwr if me => {
+            DatagramCommand::Aprd | DatagramCommand::Fprd if me => {
+                u16::from(self.read(Side::Ecat, ado, data) > 0)
+            }
+            DatagramCommand::Apwr | DatagramCommand::Fpwr | DatagramCommand::Bwr if me => {
                 u16::from(self.write(Side::Ecat, ado, data) > 0)
             }
-            Command::Aprw | Command::Fprw if me => {
+            DatagramCommand::Aprw | DatagramCommand::Fprw if me => {
                 let mut tmp = core::mem::take(&mut self.scratch);
                 tmp[..n].copy_from_slice(data);
                 let r = self.read(Side::Ecat, ado, data) > 0;
@@ -164,16 +168,16 @@ impl Esc {
                 self.scratch = tmp;
                 u16::from(r) + 2 * u16::from(w)
             }
-            Command::Brd | Command::Brw => {
+            DatagramCommand::Brd | DatagramCommand::Brw => {
                 let mut tmp = core::mem::take(&mut self.scratch);
                 tmp[..n].fill(0);
                 let r = self.read(Side::Ecat, ado, &mut tmp[..n]) > 0;
-                let w = cmd == Command::Brw && self.write(Side::Ecat, ado, data) > 0;
+                let w = cmd == DatagramCommand::Brw && self.write(Side::Ecat, ado, data) > 0;
                 data.iter_mut().zip(&tmp[..n]).for_each(|(d, t)| *d |= *t);
                 self.scratch = tmp;
                 u16::from(r) + 2 * u16::from(w)
             }
-            Command::Armw | Command::Frmw => {
+            DatagramCommand::Armw | DatagramCommand::Frmw => {
                 if me {
                     u16::from(self.read(Side::Ecat, ado, data) > 0)
                 } else {
@@ -184,10 +188,10 @@ impl Esc {
         }
     }
 
-    fn logical(&mut self, cmd: Command, addr: u32, data: &mut [u8]) -> u16 {
+    fn logical(&mut self, cmd: DatagramCommand, addr: u32, data: &mut [u8]) -> u16 {
         let (want_read, want_write) = match cmd {
-            Command::Lrd => (true, false),
-            Command::Lwr => (false, true),
+            DatagramCommand::Lrd => (true, false),
+            DatagramCommand::Lwr => (false, true),
             _ => (true, true),
         };
         let n = data.len();

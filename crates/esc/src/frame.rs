@@ -32,7 +32,7 @@ pub const TYPE_DLPDU: u8 = 1;
 /// EtherCAT commands (ETG.1000.4 Table 12).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u8)]
-pub enum Command {
+pub enum DatagramCommand {
     /// No operation: slaves ignore the datagram.
     Nop = 0,
     /// Auto-increment physical read.
@@ -65,32 +65,32 @@ pub enum Command {
     Frmw = 14,
 }
 
-impl Command {
+impl DatagramCommand {
     /// Decodes a command byte; `None` for reserved codes (15–255).
-    pub const fn from_u8(v: u8) -> Option<Command> {
+    pub const fn from_u8(v: u8) -> Option<DatagramCommand> {
         Some(match v {
-            0 => Command::Nop,
-            1 => Command::Aprd,
-            2 => Command::Apwr,
-            3 => Command::Aprw,
-            4 => Command::Fprd,
-            5 => Command::Fpwr,
-            6 => Command::Fprw,
-            7 => Command::Brd,
-            8 => Command::Bwr,
-            9 => Command::Brw,
-            10 => Command::Lrd,
-            11 => Command::Lwr,
-            12 => Command::Lrw,
-            13 => Command::Armw,
-            14 => Command::Frmw,
+            0 => DatagramCommand::Nop,
+            1 => DatagramCommand::Aprd,
+            2 => DatagramCommand::Apwr,
+            3 => DatagramCommand::Aprw,
+            4 => DatagramCommand::Fprd,
+            5 => DatagramCommand::Fpwr,
+            6 => DatagramCommand::Fprw,
+            7 => DatagramCommand::Brd,
+            8 => DatagramCommand::Bwr,
+            9 => DatagramCommand::Brw,
+            10 => DatagramCommand::Lrd,
+            11 => DatagramCommand::Lwr,
+            12 => DatagramCommand::Lrw,
+            13 => DatagramCommand::Armw,
+            14 => DatagramCommand::Frmw,
             _ => return None,
         })
     }
 
     /// True for the logical (FMMU-mapped) commands.
     pub const fn is_logical(self) -> bool {
-        matches!(self, Command::Lrd | Command::Lwr | Command::Lrw)
+        matches!(self, DatagramCommand::Lrd | DatagramCommand::Lwr | DatagramCommand::Lrw)
     }
 }
 
@@ -270,7 +270,7 @@ impl<'a> FrameBuilder<'a> {
     /// Returns the offset of the data in the buffer.
     pub fn push(
         &mut self,
-        command: Command,
+        command: DatagramCommand,
         index: u8,
         address: u32,
         data: &[u8],
@@ -342,8 +342,8 @@ mod tests {
     fn builds_and_parses_a_two_datagram_frame() {
         let mut buf = [0u8; 128];
         let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
-        b.push(Command::Brd, 7, station_address(0, 0x0000), &[0; 2]).unwrap();
-        b.push(Command::Fpwr, 8, station_address(0x1000, 0x0120), &[2, 0]).unwrap();
+        b.push(DatagramCommand::Brd, 7, station_address(0, 0x0000), &[0; 2]).unwrap();
+        b.push(DatagramCommand::Fpwr, 8, station_address(0x1000, 0x0120), &[2, 0]).unwrap();
         let n = b.finish();
         assert_eq!(n, MIN_FRAME_LEN);
         assert_eq!(ethercat_offset(&buf[..n]), Some(14));

@@ -20,13 +20,13 @@
 //!
 //! ```
 //! use drivebus_can::Instant;
-//! use drivebus_esc::frame::{Command, FrameBuilder, datagrams, station_address};
+//! use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, station_address};
 //! use drivebus_esc::{Esc, EscConfig};
 //!
 //! let mut esc = Esc::new(EscConfig::default());
 //! let mut buf = [0u8; 64];
 //! let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
-//! b.push(Command::Brd, 1, station_address(0, 0x0000), &[0; 2]).unwrap(); // count slaves
+//! b.push(DatagramCommand::Brd, 1, station_address(0, 0x0000), &[0; 2]).unwrap(); // count slaves
 //! let n = b.finish();
 //! esc.process_frame(&mut buf[..n], Instant::from_micros(10));
 //! let d = datagrams(&buf[14..n]).next().unwrap();

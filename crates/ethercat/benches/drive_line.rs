@@ -30,14 +30,14 @@ mod replay;
 
 use criterion::{BenchmarkId, Criterion, black_box, criterion_group, criterion_main};
 use drivebus_can::Duration;
-use drivebus_esc::frame::{Command, FrameBuilder, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, station_address};
 use ethercrab::PduStorage;
 use replay::{Storage, cycle, line_in_op, mailbox_polls};
 
 static STORAGE_1: Storage = PduStorage::new();
 static STORAGE_64: Storage = PduStorage::new();
 
-fn one_datagram(cmd: Command, addr: u32, len: usize) -> Vec<u8> {
+fn one_datagram(cmd: DatagramCommand, addr: u32, len: usize) -> Vec<u8> {
     let mut buf = vec![0u8; 1600];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     b.push(cmd, 0, addr, &vec![0; len]).unwrap();
@@ -61,8 +61,8 @@ fn bench_line(c: &mut Criterion, n: usize, storage: &'static Storage) {
         });
         g.bench_function("drives_only", |b| b.iter(|| host.advance(Duration::from_millis(1))));
     }
-    let fprd = one_datagram(Command::Fprd, station_address(0x1000 + n as u16 - 1, 0x0130), 2);
-    let lrw = one_datagram(Command::Lrw, 0, 22 * n);
+    let fprd = one_datagram(DatagramCommand::Fprd, station_address(0x1000 + n as u16 - 1, 0x0130), 2);
+    let lrw = one_datagram(DatagramCommand::Lrw, 0, 22 * n);
     for (name, f) in [("fprd", &fprd), ("lrw", &lrw)] {
         g.bench_with_input(BenchmarkId::new(name, f.len()), f, |b, f| {
             b.iter(|| {

@@ -28,7 +28,7 @@
 #[path = "../benches/support/ipos_line.rs"]
 mod ipos_line;
 
-use drivebus_esc::frame::{Command, FrameBuilder, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, station_address};
 use drivebus_ethercat::drive::DriveLine;
 use drivebus_ethercat::server::{self, RawSocket};
 use drivebus_ethercat::{Clock, Host};
@@ -123,10 +123,10 @@ fn serve(wire: &Wire, host: Option<Host>, stop: Arc<AtomicBool>) -> JoinHandle<u
 fn cycle_frame(n: usize) -> Vec<u8> {
     let mut buf = vec![0u8; 1600];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
-    b.push(Command::Frmw, 0, station_address(0x1000, 0x0910), &[0; 8]).unwrap();
-    b.push(Command::Lrw, 1, 0, &vec![0; 22 * n]).unwrap();
+    b.push(DatagramCommand::Frmw, 0, station_address(0x1000, 0x0910), &[0; 8]).unwrap();
+    b.push(DatagramCommand::Lrw, 1, 0, &vec![0; 22 * n]).unwrap();
     for i in 0..n as u16 {
-        b.push(Command::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
+        b.push(DatagramCommand::Fprd, 2, station_address(0x1000 + i, 0x0130), &[0; 2]).unwrap();
     }
     let len = b.finish();
     buf.truncate(len);

@@ -8,7 +8,7 @@
 
 use drivebus_esc::sii::{SiiPdo, sm_type};
 use drivebus_esi::{CheckOptions, SmKind};
-use drivebus_ethercat::drive::{DriveSlaveExt, DriveSpec, Image, facts, slave};
+use drivebus_ethercat::drive::{DriveSlaveExt, DriveSlaveSpec, Image, facts, slave};
 use drivebus_personality::Profile;
 use drivebus_personality::ecat::{self, rules};
 use std::collections::BTreeSet;
@@ -25,7 +25,7 @@ fn entries(p: &SiiPdo) -> Vec<u32> {
 #[test]
 fn sii_esi_and_dictionary_agree() {
     for p in PROFILES {
-        let s = slave(&DriveSpec::new(p, 42)).unwrap();
+        let s = slave(&DriveSlaveSpec::new(p, 42)).unwrap();
         let od = s.app().device().node.od().clone();
         let id: Vec<u32> = (1..=4).map(|sub| od.get_u32(0x1018, sub).unwrap()).collect();
         assert_eq!(id[3], 42, "{p}: serial");
@@ -88,7 +88,7 @@ fn sii_esi_and_dictionary_agree() {
 #[test]
 fn eds_differs_exactly_by_the_can_objects() {
     for p in PROFILES {
-        let s = slave(&DriveSpec::new(p, 1)).unwrap();
+        let s = slave(&DriveSlaveSpec::new(p, 1)).unwrap();
         let od = s.app().device().node.od();
         let eds = p.parse_eds().eds;
         let di = &eds.device_info;

@@ -7,7 +7,7 @@ use drivebus_can::fault::Recurrence;
 use drivebus_can::{Duration, Instant};
 use drivebus_ethercat::dio::{self, DioConfig};
 use drivebus_ethercat::drive::{DriveLine as Line, with_drive};
-use drivebus_ethercat::master::drive::DriveLine;
+use drivebus_ethercat::master::drive::CyclicDrive;
 use drivebus_ethercat::master::{AlState, Master, PduFrames};
 use drivebus_ethercat::{BoxDevice, Clock, Host, LineFault, link};
 use drivebus_personality::Profile;
@@ -155,7 +155,7 @@ fn the_tool_master_counts_broken_and_lost_cycles_and_keeps_driving() {
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         assert_eq!(d.bad_wkc, 0);
 
@@ -199,7 +199,7 @@ fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         let now = host.clock().now();
         with_drive(&host, 1, |s| {
@@ -231,7 +231,7 @@ fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_t
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         host.with_segment(|s| s.power_off(1));
         d.cycle().await.unwrap();
@@ -243,7 +243,7 @@ fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_t
         drop(d);
         // Recovery: the line set up again, drive 2 under control in OP.
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         assert_eq!(m.al_status(2).await.unwrap().state, Ok(AlState::Op));
         assert_eq!(d.bad_wkc, 0);
@@ -257,7 +257,7 @@ fn a_drifting_clock_shows_in_its_system_time_difference_and_settles_when_cleared
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         // 0x092C: sign and magnitude of the system time difference (ns).
         let diff = || async {
@@ -291,7 +291,7 @@ fn a_jittering_clock_shows_in_its_system_time_difference_and_ends_when_cleared()
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         d.enable(Duration::from_secs(2)).await.unwrap();
         // 0x092C: sign and magnitude of the system time difference (ns).
         let diff = || async {
@@ -334,7 +334,7 @@ fn a_power_cycled_drive_comes_back_as_at_power_on_and_the_master_brings_it_to_op
     let m = Master::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
         let at_power_on = (d.read(0x6041, 0).await.unwrap(), d.read(0x6064, 0).await.unwrap());
         d.enable(Duration::from_secs(2)).await.unwrap();
         let pos = d.move_to(5000, false, Some(100_000), Duration::from_secs(10), |_| {}).await.unwrap();
@@ -349,7 +349,7 @@ fn a_power_cycled_drive_comes_back_as_at_power_on_and_the_master_brings_it_to_op
 
         // The twin starts again: switch on disabled, the power-on position.
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
         let now = (d.read(0x6041, 0).await.unwrap(), d.read(0x6064, 0).await.unwrap());
         assert_eq!(now.0 & 0x4F, 0x40, "switch on disabled: {:04X}h", now.0);
         assert_eq!(now, at_power_on, "6041h and 6064h as at power-on (moved to {pos} before)");

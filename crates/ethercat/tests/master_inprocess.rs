@@ -10,8 +10,8 @@
 use drivebus_can::{Duration, Instant};
 use drivebus_esi::CoeDetails;
 use drivebus_ethercat::drive::DriveLine as Line;
-use drivebus_ethercat::drive::DriveSpec;
-use drivebus_ethercat::master::drive::DriveLine;
+use drivebus_ethercat::drive::DriveSlaveSpec;
+use drivebus_ethercat::master::drive::CyclicDrive;
 use drivebus_ethercat::master::{self, AlState, DescribedBy, Master, MasterError, PduFrames, coe_details};
 use drivebus_ethercat::{BoxDevice, Clock, Host};
 use drivebus_personality::Profile;
@@ -79,7 +79,7 @@ fn drive_enable_home_move_and_csp_with_dc() {
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         assert!(d.dc());
         assert_eq!(d.expected_wkc(), 6);
         d.enable(Duration::from_secs(2)).await.unwrap();
@@ -114,7 +114,7 @@ fn drive_in_free_run_on_the_generic_servo() {
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 2, Duration::from_millis(1), false, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), false, None).await.unwrap();
         assert!(!d.dc());
         let pos = d.move_to(-3000, false, Some(100_000), Duration::from_secs(20), |_| {}).await.unwrap();
         assert!((pos + 3000).abs() <= 10, "{pos}");
@@ -128,7 +128,7 @@ fn drive_in_free_run_on_the_generic_servo() {
 
 /// A line of one iPOS offering the CoE services `coe` (`None`: its own).
 fn ipos_offering(coe: Option<CoeDetails>) -> Host {
-    let spec = DriveSpec { coe, ..DriveSpec::new(Profile::Ipos, 1) };
+    let spec = DriveSlaveSpec { coe, ..DriveSlaveSpec::new(Profile::Ipos, 1) };
     let d: BoxDevice = Box::new(drivebus_ethercat::drive::slave(&spec).unwrap());
     Host::line(vec![d], Clock::simulated(Instant::from_millis(1)))
 }
@@ -235,7 +235,7 @@ fn ipos_modes_set_before_enabling() {
     let m = Master::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
-        let mut d = DriveLine::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
+        let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
         assert_eq!(d.fb.state(), Some(drivebus_cia402::codes::State::SwitchOnDisabled));
         let at = d.home(35, Duration::from_secs(10), |_| {}).await.unwrap();
         assert_eq!(at, 0, "method 35: the current position is 0");

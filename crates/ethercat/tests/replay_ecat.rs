@@ -9,7 +9,7 @@ mod drive_rig;
 
 use drive_rig::{FoeResult, Rig, al, mbx};
 use drivebus_can::Duration;
-use drivebus_esc::frame::{Command, station_address};
+use drivebus_esc::frame::{DatagramCommand, station_address};
 use drivebus_ethercat::drive::DriveSlaveExt;
 use drivebus_personality::Profile;
 use drivebus_personality::ipos::foe::{F515X_PASSWORD, FA0XX_PASSWORD, FileKind, IposFiles, SwImage};
@@ -52,7 +52,7 @@ fn until(r: &mut Rig, cw: u16, target: i32, mask: u16, want: u16, n: u32) -> (u1
 #[test]
 fn e01_detecting_the_drive() {
     let mut r = ipos();
-    let (_, wkc) = r.dg(Command::Brd, station_address(0, 0x0000), &[0, 0]);
+    let (_, wkc) = r.dg(DatagramCommand::Brd, station_address(0, 0x0000), &[0, 0]);
     assert_eq!(wkc, 1, "one slave");
     let c = r.s.esc().sii_image().parse().unwrap();
     let g = c.general.unwrap();
@@ -361,9 +361,9 @@ fn e46_foe_setup_file() {
     // With a state directory the setup file is kept there (it survives a
     // restart of `drivebus ethercat serve --state-dir`).
     let dir = std::env::temp_dir().join(format!("drivebus-e46-{}", std::process::id()));
-    let spec = drivebus_ethercat::drive::DriveSpec {
+    let spec = drivebus_ethercat::drive::DriveSlaveSpec {
         state_dir: Some(dir.clone()),
-        ..drivebus_ethercat::drive::DriveSpec::new(Profile::Ipos, 1)
+        ..drivebus_ethercat::drive::DriveSlaveSpec::new(Profile::Ipos, 1)
     };
     let mut r = Rig::with_spec(&spec);
     r.preop();

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use anyhow::{Context, anyhow, bail};
 use drivebus_can::{Duration, Instant};
 use drivebus_ethercat::drive::DriveLine as Line;
-use drivebus_ethercat::master::drive::{DriveLine, Feedback};
+use drivebus_ethercat::master::drive::{CyclicDrive, Feedback};
 use drivebus_ethercat::master::{Master, PduFrames, SlaveInfo, block_on};
 use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
@@ -163,7 +163,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
         let (found, group) = m.scan_group().await?;
         r.found = found;
         pb.set_message("INIT -> OP with DC SYNC0 at 1 ms");
-        let mut d = DriveLine::start(&m, group, 1, CYCLE, true, None).await?;
+        let mut d = CyclicDrive::start(&m, group, 1, CYCLE, true, None).await?;
         r.dc = d.dc();
         r.expected_wkc = d.expected_wkc();
         pb.set_message("enable");

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::anyhow;
 use drivebus_can::Duration;
 use drivebus_ethercat::master::codes::{State, mode};
-use drivebus_ethercat::master::drive::{DriveError, DriveLine, Feedback};
+use drivebus_ethercat::master::drive::{CyclicDrive, DriveError, Feedback};
 use drivebus_ethercat::master::{self, Master};
 
 use super::line::{master_err, with_master};
@@ -173,7 +173,7 @@ async fn act(
             });
         }
     };
-    let mut d = DriveLine::start(m, group, pos, cycle, dc, Some(&STOP)).await.map_err(drive_err)?;
+    let mut d = CyclicDrive::start(m, group, pos, cycle, dc, Some(&STOP)).await.map_err(drive_err)?;
     let dc = d.dc();
     let mut p = Progress { on: progress, n: 0 };
     let r = match action {

@@ -1,5 +1,5 @@
 use super::*;
-use crate::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
+use crate::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
 use crate::tests::image;
 use crate::{ClockConfig, EscConfig};
 use alloc::vec::Vec;
@@ -18,7 +18,7 @@ fn line(n: usize) -> Segment<Esc> {
 /// One datagram through the segment; returns (data, wkc, report).
 fn send(
     s: &mut Segment<Esc>,
-    cmd: Command,
+    cmd: DatagramCommand,
     addr: u32,
     data: &[u8],
     t_us: u64,
@@ -35,20 +35,20 @@ fn send(
 fn address_all(s: &mut Segment<Esc>) {
     for i in 0..s.len() as u16 {
         let a = 0x1000 + i;
-        assert_eq!(send(s, Command::Apwr, position_address(i, 0x0010), &a.to_le_bytes(), 0).1, 1);
+        assert_eq!(send(s, DatagramCommand::Apwr, position_address(i, 0x0010), &a.to_le_bytes(), 0).1, 1);
     }
 }
 
 #[test]
 fn every_slave_counts_and_positions_increment() {
     let mut s = line(4);
-    let (_, wkc, r) = send(&mut s, Command::Brd, station_address(0, 0), &[0], 0);
+    let (_, wkc, r) = send(&mut s, DatagramCommand::Brd, station_address(0, 0), &[0], 0);
     assert_eq!((wkc, r.reached), (4, 4));
     address_all(&mut s);
     for i in 0..4 {
         assert_eq!(s.device(i).unwrap().station_address(), 0x1000 + i as u16);
     }
-    let (_, wkc, _) = send(&mut s, Command::Fprd, station_address(0x1002, 0x0010), &[0, 0], 0);
+    let (_, wkc, _) = send(&mut s, DatagramCommand::Fprd, station_address(0x1002, 0x0010), &[0, 0], 0);
     assert_eq!(wkc, 1);
 }
 
@@ -57,7 +57,7 @@ fn dl_status_first_slaves_two_ports_last_one() {
     let mut s = line(3);
     address_all(&mut s);
     let dl = |s: &mut Segment<Esc>, a: u16| {
-        let (d, _, _) = send(s, Command::Fprd, station_address(a, 0x0110), &[0, 0], 0);
+        let (d, _, _) = send(s, DatagramCommand::Fprd, station_address(a, 0x0110), &[0, 0], 0);
         u16::from_le_bytes([d[0], d[1]])
     };
     assert_eq!(dl(&mut s, 0x1000) & 0x00F0, 0x0030, "ports 0 and 1 linked");
@@ -70,19 +70,19 @@ fn cable_break_hides_downstream_slaves_and_counts_lost_links() {
     let mut s = line(4);
     address_all(&mut s);
     s.set_cable(1, false);
-    let (_, wkc, r) = send(&mut s, Command::Brd, station_address(0, 0), &[0], 0);
+    let (_, wkc, r) = send(&mut s, DatagramCommand::Brd, station_address(0, 0), &[0], 0);
     assert_eq!((wkc, r.reached), (2, 2));
-    let (d, _, _) = send(&mut s, Command::Fprd, station_address(0x1001, 0x0311), &[0], 0);
+    let (d, _, _) = send(&mut s, DatagramCommand::Fprd, station_address(0x1001, 0x0311), &[0], 0);
     assert_eq!(d, [1], "slave 1 lost the link on port 1");
     s.set_cable(1, true);
-    assert_eq!(send(&mut s, Command::Brd, station_address(0, 0), &[0], 0).1, 4);
+    assert_eq!(send(&mut s, DatagramCommand::Brd, station_address(0, 0), &[0], 0).1, 4);
     // Remove slave 2: the line closes up.
     let removed = s.remove(2).unwrap();
     assert_eq!(removed.station_address(), 0x1002);
-    assert_eq!(send(&mut s, Command::Brd, station_address(0, 0), &[0], 0).1, 3);
+    assert_eq!(send(&mut s, DatagramCommand::Brd, station_address(0, 0), &[0], 0).1, 3);
     s.insert(0, Esc::new(EscConfig::with_sii(image())));
-    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1000, 0), &[0], 0).1, 1);
-    assert_eq!(send(&mut s, Command::Aprd, position_address(1, 0x0010), &[0, 0], 0).0, [0x00, 0x10]);
+    assert_eq!(send(&mut s, DatagramCommand::Fprd, station_address(0x1000, 0), &[0], 0).1, 1);
+    assert_eq!(send(&mut s, DatagramCommand::Aprd, position_address(1, 0x0010), &[0, 0], 0).0, [0x00, 0x10]);
 }
 
 #[test]
@@ -90,8 +90,8 @@ fn dl_control_loop_closed_stops_forwarding() {
     let mut s = line(3);
     address_all(&mut s);
     // Close port 1 of slave 0 (0x0101 bits 3:2 = 11).
-    send(&mut s, Command::Fpwr, station_address(0x1000, 0x0101), &[0x0C], 0);
-    assert_eq!(send(&mut s, Command::Brd, station_address(0, 0), &[0], 0).1, 1);
+    send(&mut s, DatagramCommand::Fpwr, station_address(0x1000, 0x0101), &[0x0C], 0);
+    assert_eq!(send(&mut s, DatagramCommand::Brd, station_address(0, 0), &[0], 0).1, 1);
 }
 
 /// The master's propagation delay computation (ethercrab dc.rs: halve the
@@ -101,18 +101,19 @@ fn port_receive_times_give_consistent_delays() {
     let n = 5;
     let mut s = line(n);
     address_all(&mut s);
-    let (_, wkc, r) = send(&mut s, Command::Bwr, station_address(0, 0x0900), &[0; 4], 50);
+    let (_, wkc, r) = send(&mut s, DatagramCommand::Bwr, station_address(0, 0x0900), &[0; 4], 50);
     assert_eq!(wkc, n as u16);
     let cfg = SegmentConfig::default();
     let hop = (cfg.link_delay + cfg.esc_delay).as_nanos() as u64;
     let mut totals = Vec::new();
     let mut rx_pu = Vec::new();
     for i in 0..n as u16 {
-        let (d, _, _) = send(&mut s, Command::Fprd, station_address(0x1000 + i, 0x0900), &[0; 16], 60);
+        let (d, _, _) =
+            send(&mut s, DatagramCommand::Fprd, station_address(0x1000 + i, 0x0900), &[0; 16], 60);
         let p0 = u32::from_le_bytes(d[0..4].try_into().unwrap());
         let p1 = u32::from_le_bytes(d[4..8].try_into().unwrap());
         totals.push(if i + 1 < n as u16 { p1.wrapping_sub(p0) as u64 } else { 0 });
-        let (d, _, _) = send(&mut s, Command::Fprd, station_address(0x1000 + i, 0x0918), &[0; 8], 60);
+        let (d, _, _) = send(&mut s, DatagramCommand::Fprd, station_address(0x1000 + i, 0x0918), &[0; 8], 60);
         rx_pu.push(u64::from_le_bytes(d.try_into().unwrap()));
     }
     for i in 0..n - 1 {
@@ -131,14 +132,14 @@ fn port_receive_times_give_consistent_delays() {
 fn frmw_distributes_the_reference_time_down_the_line() {
     let mut s = line(3);
     address_all(&mut s);
-    let (d, wkc, _) = send(&mut s, Command::Frmw, station_address(0x1000, 0x0910), &[0; 8], 100);
+    let (d, wkc, _) = send(&mut s, DatagramCommand::Frmw, station_address(0x1000, 0x0910), &[0; 8], 100);
     assert_eq!(wkc, 3, "reference reads, two followers write");
     let reference = u64::from_le_bytes(d.try_into().unwrap());
     assert_eq!(reference, 17 + 100_000 + 300);
 }
 
 fn brd_wkc(s: &mut Segment<Esc>) -> (u16, SegmentReport) {
-    let (_, wkc, r) = send(s, Command::Brd, station_address(0, 0), &[0], 0);
+    let (_, wkc, r) = send(s, DatagramCommand::Brd, station_address(0, 0), &[0], 0);
     (wkc, r)
 }
 
@@ -149,7 +150,7 @@ fn a_broken_link_fault_hides_the_slaves_behind_it_until_cleared() {
     s.add_fault(LineFault::Break { after: 1 });
     let (wkc, r) = brd_wkc(&mut s);
     assert_eq!((wkc, r.reached, r.lost), (2, 2, false));
-    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1001, 0x0311), &[0], 0).0, [1]);
+    assert_eq!(send(&mut s, DatagramCommand::Fprd, station_address(0x1001, 0x0311), &[0], 0).0, [1]);
     s.clear_faults();
     assert_eq!(brd_wkc(&mut s).0, 4);
     // The cable itself was never touched.
@@ -168,9 +169,9 @@ fn lost_frames_reach_no_slave_and_come_back_lost() {
     // A lost write did not happen.
     s.clear_faults();
     s.add_fault(LineFault::Lose(Recurrence::always().times(1)));
-    let (_, _, r) = send(&mut s, Command::Fpwr, station_address(0x1001, 0x0600), &[0x34, 0x12], 0);
+    let (_, _, r) = send(&mut s, DatagramCommand::Fpwr, station_address(0x1001, 0x0600), &[0x34, 0x12], 0);
     assert!(r.lost);
-    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1001, 0x0600), &[0, 0], 0).0, [0, 0]);
+    assert_eq!(send(&mut s, DatagramCommand::Fprd, station_address(0x1001, 0x0600), &[0, 0], 0).0, [0, 0]);
 }
 
 #[test]
@@ -192,14 +193,15 @@ fn a_corrupted_frame_is_lost_unexecuted_behind_the_damage_and_counted() {
     let mut s = line(3);
     address_all(&mut s);
     s.add_fault(LineFault::Corrupt { at: 1, pick: Recurrence::always().times(1) });
-    let (_, wkc, r) = send(&mut s, Command::Bwr, station_address(0, 0x0600), &[0x21, 0x43], 0);
+    let (_, wkc, r) = send(&mut s, DatagramCommand::Bwr, station_address(0, 0x0600), &[0x21, 0x43], 0);
     assert!(r.lost);
     assert_eq!(wkc, 1, "only slave 0 executed it");
-    let fmmu = |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0600), &[0, 0], 0).0;
+    let fmmu =
+        |s: &mut Segment<Esc>, a| send(s, DatagramCommand::Fprd, station_address(a, 0x0600), &[0, 0], 0).0;
     assert_eq!(fmmu(&mut s, 0x1000), [0x21, 0x43]);
     assert_eq!(fmmu(&mut s, 0x1001), [0, 0]);
     let counters =
-        |s: &mut Segment<Esc>, a| send(s, Command::Fprd, station_address(a, 0x0300), &[0; 12], 0).0;
+        |s: &mut Segment<Esc>, a| send(s, DatagramCommand::Fprd, station_address(a, 0x0300), &[0; 12], 0).0;
     assert_eq!(counters(&mut s, 0x1000)[8..10], [0, 1], "forwarded on the way back (port 1)");
     assert_eq!(counters(&mut s, 0x1001)[0], 1, "invalid frame on port 0");
     assert_eq!(counters(&mut s, 0x1002)[8], 1, "forwarded RX error on port 0");
@@ -213,8 +215,8 @@ fn a_skewed_slave_miscounts_only_where_it_counts() {
     address_all(&mut s);
     s.add_fault(LineFault::WkcSkew { slave: 1, skew: 1 });
     assert_eq!(brd_wkc(&mut s).0, 4);
-    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1000, 0), &[0], 0).1, 1);
-    assert_eq!(send(&mut s, Command::Fprd, station_address(0x1001, 0), &[0], 0).1, 2);
+    assert_eq!(send(&mut s, DatagramCommand::Fprd, station_address(0x1000, 0), &[0], 0).1, 1);
+    assert_eq!(send(&mut s, DatagramCommand::Fprd, station_address(0x1001, 0), &[0], 0).1, 2);
     s.clear_faults();
     assert_eq!(brd_wkc(&mut s).0, 3);
 }
@@ -229,11 +231,11 @@ fn a_power_cycled_slave_comes_back_reset_with_its_eeprom() {
     s.power_on(1);
     assert_eq!(brd_wkc(&mut s).0, 3);
     // Its station address is back at the reset value; the others kept theirs.
-    assert_eq!(send(&mut s, Command::Aprd, position_address(1, 0x0010), &[0, 0], 0).0, [0, 0]);
-    assert_eq!(send(&mut s, Command::Aprd, position_address(2, 0x0010), &[0, 0], 0).0, [0x02, 0x10]);
+    assert_eq!(send(&mut s, DatagramCommand::Aprd, position_address(1, 0x0010), &[0, 0], 0).0, [0, 0]);
+    assert_eq!(send(&mut s, DatagramCommand::Aprd, position_address(2, 0x0010), &[0, 0], 0).0, [0x02, 0x10]);
     // The EEPROM's configured station alias (word 4) loaded again.
-    let alias = send(&mut s, Command::Aprd, position_address(1, 0x0012), &[0, 0], 0).0;
-    assert_eq!(alias, send(&mut s, Command::Aprd, position_address(0, 0x0012), &[0, 0], 0).0);
+    let alias = send(&mut s, DatagramCommand::Aprd, position_address(1, 0x0012), &[0, 0], 0).0;
+    assert_eq!(alias, send(&mut s, DatagramCommand::Aprd, position_address(0, 0x0012), &[0, 0], 0).0);
 }
 
 #[test]
@@ -241,7 +243,7 @@ fn a_drift_fault_changes_the_rate_of_one_clock_until_cleared() {
     let mut s = line(2);
     address_all(&mut s);
     let time = |s: &mut Segment<Esc>, a, us| {
-        let d = send(s, Command::Fprd, station_address(a, 0x0910), &[0; 8], us).0;
+        let d = send(s, DatagramCommand::Fprd, station_address(a, 0x0910), &[0; 8], us).0;
         u64::from_le_bytes(d.try_into().unwrap())
     };
     let rate = |s: &mut Segment<Esc>, a, from| {
@@ -265,7 +267,9 @@ fn a_jitter_fault_scatters_one_clock_within_its_bound_replayably_until_cleared()
         let mut out = Vec::new();
         for k in 0..50u64 {
             for a in [0x1000, 0x1001] {
-                let d = send(&mut s, Command::Fprd, station_address(a, 0x0910), &[0; 8], 1000 + k * 1000).0;
+                let d =
+                    send(&mut s, DatagramCommand::Fprd, station_address(a, 0x0910), &[0; 8], 1000 + k * 1000)
+                        .0;
                 out.push((a, k, u64::from_le_bytes(d.try_into().unwrap())));
             }
         }
@@ -286,7 +290,7 @@ fn a_jitter_fault_scatters_one_clock_within_its_bound_replayably_until_cleared()
     assert_ne!(stamps(8).1, got, "another seed, other stamps");
     s.clear_faults();
     let t = |s: &mut Segment<Esc>, us| {
-        let d = send(s, Command::Fprd, station_address(0x1001, 0x0910), &[0; 8], us).0;
+        let d = send(s, DatagramCommand::Fprd, station_address(0x1001, 0x0910), &[0; 8], us).0;
         u64::from_le_bytes(d.try_into().unwrap())
     };
     let t0 = t(&mut s, 100_000);

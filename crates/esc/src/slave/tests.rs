@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::EscConfig;
-use crate::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
+use crate::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
 use crate::sii::{SiiImage, SiiSyncManager, fmmu_usage};
 use alloc::vec;
 use drivebus_can::Duration;
@@ -95,11 +95,11 @@ impl Rig {
     fn new() -> Rig {
         let esc = Esc::new(EscConfig::with_sii(image()));
         let mut r = Rig { s: Slave::new(esc, App::default(), SlaveConfig::default()), t: Instant::ZERO };
-        r.dg(Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
+        r.dg(DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
         r
     }
 
-    fn dg(&mut self, cmd: Command, addr: u32, data: &[u8]) -> (Vec<u8>, u16) {
+    fn dg(&mut self, cmd: DatagramCommand, addr: u32, data: &[u8]) -> (Vec<u8>, u16) {
         self.t += Duration::from_micros(10);
         let mut buf = [0u8; 256];
         let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
@@ -112,11 +112,11 @@ impl Rig {
     }
 
     fn rd(&mut self, ado: u16, len: usize) -> (Vec<u8>, u16) {
-        self.dg(Command::Fprd, station_address(0x1000, ado), &vec![0; len])
+        self.dg(DatagramCommand::Fprd, station_address(0x1000, ado), &vec![0; len])
     }
 
     fn wr(&mut self, ado: u16, data: &[u8]) -> u16 {
-        self.dg(Command::Fpwr, station_address(0x1000, ado), data).1
+        self.dg(DatagramCommand::Fpwr, station_address(0x1000, ado), data).1
     }
 
     fn status(&mut self) -> (u8, u16) {
@@ -475,7 +475,7 @@ fn device_emulation_state_is_followed_with_process_data() {
     let esc = Esc::new(EscConfig::with_sii(img));
     assert!(esc.device_emulation());
     let mut r = Rig { s: Slave::new(esc, App::default(), SlaveConfig::default()), t: Instant::ZERO };
-    r.dg(Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
+    r.dg(DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
     // The test app wants 2 output bytes: SM0 set up for them, no mailbox.
     r.wr(0x0800, &[0x00, 0x0F, 2, 0, 0x44, 0, 1, 0]);
     assert_eq!(r.request(2), (0x02, 0));

@@ -45,7 +45,7 @@ fn device_emulation_copies_al_control_to_al_status() {
     let img = SiiImage::builder().config(ConfigArea { pdi_control: 0x0100, ..Default::default() }).build();
     let mut e = Esc::new(EscConfig::with_sii(img));
     assert!(e.device_emulation());
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
     wr(&mut e, 0x0120, &[0x18, 0]);
     assert_eq!(rd(&mut e, 0x0130, 2).0, [0x08, 0], "state copied, acknowledge bit not");
     assert_eq!(wr(&mut e, 0x0120, &[0x02, 0]), 1, "no mailbox behaviour");
@@ -64,7 +64,7 @@ fn pdi_control_and_config_come_from_sii_and_are_read_only() {
         })
         .build();
     let mut e = Esc::new(EscConfig::with_sii(img));
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
     assert_eq!(rd(&mut e, 0x0140, 2).0, [0x05, 0x00]);
     assert_eq!(rd(&mut e, 0x0150, 4).0, [0x34, 0x12, 0x78, 0x56]);
     assert_eq!(rd(&mut e, 0x0982, 2).0, [100, 0]);

@@ -10,11 +10,11 @@ fn dc_esc(offset: u64, drift_ppb: i32) -> Esc {
         clock: ClockConfig { offset_ns: offset, drift_ppb },
         ..EscConfig::with_sii(image())
     });
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
     e
 }
 
-fn frame_at(e: &mut Esc, timing: FrameTiming, cmd: Command, ado: u16, data: &[u8]) -> (Vec<u8>, u16) {
+fn frame_at(e: &mut Esc, timing: FrameTiming, cmd: DatagramCommand, ado: u16, data: &[u8]) -> (Vec<u8>, u16) {
     let mut buf = [0u8; 128];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     b.push(cmd, 1, station_address(0x1000, ado), data).unwrap();
@@ -30,7 +30,7 @@ fn write_to_0x0900_latches_port_and_processing_unit_times() {
     let t0 = Instant::from_micros(100);
     let t1 = Instant::from_nanos(100_000 + 740);
     let timing = FrameTiming { at: t0, port_rx: [Some(t0), Some(t1), None, None] };
-    let (_, wkc) = frame_at(&mut e, timing, Command::Bwr, 0x0900, &[0; 4]);
+    let (_, wkc) = frame_at(&mut e, timing, DatagramCommand::Bwr, 0x0900, &[0; 4]);
     assert_eq!(wkc, 1);
     let (d, _) = rd(&mut e, 0x0900, 16);
     let p0 = u32::from_le_bytes(d[0..4].try_into().unwrap());
@@ -49,7 +49,7 @@ fn write_to_0x0900_latches_port_and_processing_unit_times() {
 fn system_time_is_local_plus_offset() {
     let mut e = dc_esc(500, 0);
     wr(&mut e, 0x0920, &10_000u64.to_le_bytes());
-    let (d, _, _) = xfer(&mut e, Command::Fprd, station_address(0x1000, 0x0910), &[0; 8], 7);
+    let (d, _, _) = xfer(&mut e, DatagramCommand::Fprd, station_address(0x1000, 0x0910), &[0; 8], 7);
     assert_eq!(u64::from_le_bytes(d.try_into().unwrap()), 500 + 7_000 + 10_000);
 }
 
@@ -69,11 +69,11 @@ fn frmw_samples_make_the_follower_converge() {
     let mut last_err = i64::MAX;
     for i in 0..3000 {
         let at = Instant::from_nanos(t);
-        let (sys, w1) = frame_at(&mut reference, FrameTiming::at(at), Command::Frmw, 0x0910, &[0; 8]);
+        let (sys, w1) = frame_at(&mut reference, FrameTiming::at(at), DatagramCommand::Frmw, 0x0910, &[0; 8]);
         let at_f = Instant::from_nanos(t + delay);
         let mut wrong_station = [0u8; 128];
         let mut b = FrameBuilder::new(&mut wrong_station, [0x10; 6]);
-        b.push(Command::Frmw, 1, station_address(0x1000 + 1, 0x0910), &sys).unwrap();
+        b.push(DatagramCommand::Frmw, 1, station_address(0x1000 + 1, 0x0910), &sys).unwrap();
         let n = b.finish();
         follower.process_ethercat(&mut wrong_station[14..n], &FrameTiming::at(at_f));
         assert_eq!(w1, 1);
@@ -95,7 +95,7 @@ fn frmw_samples_make_the_follower_converge() {
 #[test]
 fn writing_speed_counter_start_resets_the_loop() {
     let mut e = dc_esc(0, 0);
-    xfer(&mut e, Command::Bwr, station_address(0, 0x0910), &[0; 8], 1_000);
+    xfer(&mut e, DatagramCommand::Bwr, station_address(0, 0x0910), &[0; 8], 1_000);
     assert_ne!(rd(&mut e, 0x092C, 4).0, [0; 4]);
     wr(&mut e, 0x0934, &[0x00, 0x0C]);
     wr(&mut e, 0x0930, &[0x00, 0x10]);

@@ -29,7 +29,7 @@ fn ethercrab_style_reads_return_image_words() {
 #[test]
 fn four_byte_reads_when_configured() {
     let mut e = Esc::new(EscConfig { sii_8_byte_reads: false, ..EscConfig::with_sii(image()) });
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
     assert_eq!(sii_read(&mut e, 0x0004).len(), 4);
     // Bit 6 is read-only: writing it does not change the read size.
     wr(&mut e, 0x0502, &[0x40, 0x00]);
@@ -40,16 +40,16 @@ fn four_byte_reads_when_configured() {
 fn busy_for_the_configured_time_then_data() {
     let t = SiiTiming { read: Duration::from_micros(30), ..SiiTiming::default() };
     let mut e = Esc::new(EscConfig { sii_timing: t, ..EscConfig::with_sii(image()) });
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
-    xfer(&mut e, Command::Fpwr, station_address(0x1000, 0x0502), &[0, 1, 8, 0, 0, 0], 100);
-    let (ctl, _, _) = xfer(&mut e, Command::Fprd, station_address(0x1000, 0x0502), &[0, 0], 110);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Fpwr, station_address(0x1000, 0x0502), &[0, 1, 8, 0, 0, 0], 100);
+    let (ctl, _, _) = xfer(&mut e, DatagramCommand::Fprd, station_address(0x1000, 0x0502), &[0, 0], 110);
     assert_eq!(ctl[1], 0x81, "busy, read command");
     assert_eq!(e.poll(Instant::from_micros(110)), Some(Instant::from_micros(130)), "deadline = end of read");
     // Address writes while busy are ignored.
-    xfer(&mut e, Command::Fpwr, station_address(0x1000, 0x0504), &[0x40, 0], 120);
-    let (ctl, _, _) = xfer(&mut e, Command::Fprd, station_address(0x1000, 0x0502), &[0, 0], 130);
+    xfer(&mut e, DatagramCommand::Fpwr, station_address(0x1000, 0x0504), &[0x40, 0], 120);
+    let (ctl, _, _) = xfer(&mut e, DatagramCommand::Fprd, station_address(0x1000, 0x0502), &[0, 0], 130);
     assert_eq!(ctl[1] & 0x80, 0);
-    let (d, _, _) = xfer(&mut e, Command::Fprd, station_address(0x1000, 0x0508), &[0; 4], 130);
+    let (d, _, _) = xfer(&mut e, DatagramCommand::Fprd, station_address(0x1000, 0x0508), &[0; 4], 130);
     assert_eq!(d, image().bytes()[16..20].to_vec(), "word 8, not 0x40");
 }
 
@@ -98,7 +98,7 @@ fn bad_checksum_reports_errors_and_skips_the_alias() {
     let mut img = image();
     img.bytes_mut()[14] ^= 0xFF;
     let mut e = Esc::new(EscConfig::with_sii(img));
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
     assert_eq!(rd(&mut e, 0x0502, 2).0[1] & 0x18, 0x18, "checksum + device info error");
     assert_eq!(rd(&mut e, 0x0012, 2).0, [0, 0]);
     assert_eq!(rd(&mut e, 0x0110, 1).0[0] & 1, 0, "PDI not operational");

@@ -1,6 +1,6 @@
 //! ESC behaviour through frames, register by register.
 
-use crate::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
+use crate::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
 use crate::sii::{SiiImage, SiiSyncManager, fmmu_usage, sm_type};
 use crate::{Esc, EscConfig};
 use alloc::vec::Vec;
@@ -42,7 +42,13 @@ pub(crate) fn esc() -> Esc {
 }
 
 /// Sends one datagram to `esc` at `t_us` and returns (data, wkc, adp).
-pub(crate) fn xfer(esc: &mut Esc, cmd: Command, address: u32, data: &[u8], t_us: u64) -> (Vec<u8>, u16, u16) {
+pub(crate) fn xfer(
+    esc: &mut Esc,
+    cmd: DatagramCommand,
+    address: u32,
+    data: &[u8],
+    t_us: u64,
+) -> (Vec<u8>, u16, u16) {
     let mut buf = [0u8; 1600];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     b.push(cmd, 0x42, address, data).unwrap();
@@ -55,18 +61,18 @@ pub(crate) fn xfer(esc: &mut Esc, cmd: Command, address: u32, data: &[u8], t_us:
 
 /// FPRD at station 0x1000 (after [`addressed`]).
 pub(crate) fn rd(esc: &mut Esc, ado: u16, len: usize) -> (Vec<u8>, u16) {
-    let (d, w, _) = xfer(esc, Command::Fprd, station_address(0x1000, ado), &alloc::vec![0; len], 0);
+    let (d, w, _) = xfer(esc, DatagramCommand::Fprd, station_address(0x1000, ado), &alloc::vec![0; len], 0);
     (d, w)
 }
 
 /// FPWR at station 0x1000.
 pub(crate) fn wr(esc: &mut Esc, ado: u16, data: &[u8]) -> u16 {
-    xfer(esc, Command::Fpwr, station_address(0x1000, ado), data, 0).1
+    xfer(esc, DatagramCommand::Fpwr, station_address(0x1000, ado), data, 0).1
 }
 
 /// An ESC with station address 0x1000.
 pub(crate) fn addressed() -> Esc {
     let mut e = esc();
-    xfer(&mut e, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
+    xfer(&mut e, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10], 0);
     e
 }

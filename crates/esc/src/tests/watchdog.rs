@@ -11,9 +11,9 @@ fn sm_write_arms_the_process_data_watchdog_which_expires() {
     wr(&mut e, 0x0810, &[0x00, 0x11, 1, 0, 0x44, 0, 1, 0]);
     while e.pop_event().is_some() {}
     assert_eq!(e.poll(Instant::ZERO), e.wd.pdi_deadline, "not armed before the first write");
-    xfer(&mut e, Command::Fpwr, station_address(0x1000, 0x1100), &[1], 1_000);
+    xfer(&mut e, DatagramCommand::Fpwr, station_address(0x1000, 0x1100), &[1], 1_000);
     assert_eq!(e.wd.pd_deadline, Some(Instant::from_micros(2_000)));
-    xfer(&mut e, Command::Fpwr, station_address(0x1000, 0x1100), &[1], 1_500);
+    xfer(&mut e, DatagramCommand::Fpwr, station_address(0x1000, 0x1100), &[1], 1_500);
     e.poll(Instant::from_micros(2_400));
     assert_eq!(rd(&mut e, 0x0440, 1).0, [1]);
     e.poll(Instant::from_micros(2_500));
@@ -28,7 +28,7 @@ fn sm_write_arms_the_process_data_watchdog_which_expires() {
     wr(&mut e, 0x0443, &[0]);
     assert_eq!(rd(&mut e, 0x0442, 2).0, [0, 0], "writing a counter clears both");
     // A new write re-arms and the status is good again.
-    xfer(&mut e, Command::Fpwr, station_address(0x1000, 0x1100), &[1], 3_000);
+    xfer(&mut e, DatagramCommand::Fpwr, station_address(0x1000, 0x1100), &[1], 3_000);
     assert_eq!(rd(&mut e, 0x0440, 1).0, [1]);
     // Time 0 disables it.
     wr(&mut e, 0x0420, &[0, 0]);

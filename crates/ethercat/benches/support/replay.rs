@@ -4,7 +4,7 @@
 
 use crate::ipos_line;
 use drivebus_can::{Duration, Instant};
-use drivebus_esc::frame::{Command, FrameBuilder, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, station_address};
 use drivebus_ethercat::drive::DriveLine;
 use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
@@ -112,7 +112,7 @@ pub fn lrw_wkc(frame: &[u8]) -> u16 {
     loop {
         let word = u16::from_le_bytes([frame[off + 6], frame[off + 7]]);
         let len = usize::from(word & 0x7FF);
-        if frame[off] == Command::Lrw as u8 {
+        if frame[off] == DatagramCommand::Lrw as u8 {
             sum += u16::from_le_bytes([frame[off + 10 + len], frame[off + 11 + len]]);
         }
         if word & 0x8000 == 0 {
@@ -143,7 +143,7 @@ pub fn mailbox_polls(n: usize) -> Vec<u8> {
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     for i in 0..n as u16 {
         // SM1 status byte (0x080D): "mailbox full" tells the master to read.
-        b.push(Command::Fprd, i as u8, station_address(0x1000 + i, 0x080D), &[0]).unwrap();
+        b.push(DatagramCommand::Fprd, i as u8, station_address(0x1000 + i, 0x080D), &[0]).unwrap();
     }
     let len = b.finish();
     buf.truncate(len);

@@ -2,7 +2,7 @@
 //! `drivebus ethercat serve --drive … --device …` gives them.
 
 use super::{Described, Loopback, slave};
-use crate::drive::{self, DriveLine, DriveSpec};
+use crate::drive::{self, DriveLine, DriveSlaveSpec};
 use crate::host::BoxDevice;
 use drivebus_personality::Profile;
 use std::path::Path;
@@ -26,9 +26,9 @@ pub fn devices(members: &[Member], state_dir: Option<&Path>) -> Result<Vec<BoxDe
         .enumerate()
         .map(|(i, m)| match m {
             Member::Drive(p) => {
-                let spec = DriveSpec {
+                let spec = DriveSlaveSpec {
                     state_dir: state_dir.map(|d| DriveLine::slave_dir(d, i, *p)),
-                    ..DriveSpec::new(*p, i as u32 + 1)
+                    ..DriveSlaveSpec::new(*p, i as u32 + 1)
                 };
                 drive::slave(&spec).map(|s| Box::new(s) as BoxDevice).map_err(|e| e.to_string())
             }

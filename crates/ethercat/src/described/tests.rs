@@ -1,6 +1,6 @@
 use super::*;
 use drivebus_can::Instant;
-use drivebus_esc::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
 use drivebus_esc::slave::SlaveApp;
 
 macro_rules! vector {
@@ -119,7 +119,7 @@ fn malformed_files_say_where() {
 }
 
 /// One datagram to the slave at station 0x1000, then a poll.
-fn dg(s: &mut DescribedSlave, t: &mut Instant, cmd: Command, addr: u32, data: &[u8]) -> Vec<u8> {
+fn dg(s: &mut DescribedSlave, t: &mut Instant, cmd: DatagramCommand, addr: u32, data: &[u8]) -> Vec<u8> {
     *t += drivebus_can::Duration::from_micros(10);
     let mut buf = [0u8; 128];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
@@ -139,14 +139,14 @@ fn image_served_byte_for_byte_and_keeps_a_write_through_reload() {
     assert_eq!(s.esc().sii_image().bytes(), vector!("el2004.bin"));
     assert!(s.esc().device_emulation(), "EL2004 word 0: device emulation");
     let mut t = Instant::ZERO;
-    dg(&mut s, &mut t, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
+    dg(&mut s, &mut t, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
     let st = |ado| station_address(0x1000, ado);
     // Word 0x0E (serial number, low half): data, then write enable + write.
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0508), &[0xCD, 0xAB]);
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0502), &[0x01, 0x02, 0x0E, 0, 0, 0]);
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0502), &[0x00, 0x04]);
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0502), &[0x00, 0x01, 0x0E, 0, 0, 0]);
-    assert_eq!(dg(&mut s, &mut t, Command::Fprd, st(0x0508), &[0; 2]), [0xCD, 0xAB]);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0508), &[0xCD, 0xAB]);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0502), &[0x01, 0x02, 0x0E, 0, 0, 0]);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0502), &[0x00, 0x04]);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0502), &[0x00, 0x01, 0x0E, 0, 0, 0]);
+    assert_eq!(dg(&mut s, &mut t, DatagramCommand::Fprd, st(0x0508), &[0; 2]), [0xCD, 0xAB]);
     let mut want = vector!("el2004.bin").to_vec();
     want[0x1C..0x1E].copy_from_slice(&[0xCD, 0xAB]);
     assert_eq!(s.esc().sii_image().bytes(), want, "only the written word changed");
@@ -158,16 +158,16 @@ fn el2004_outputs_reach_the_device() {
     let d = image("el2004.bin", vector!("el2004.bin"));
     let mut s = slave(&d, 1, Box::new(Loopback)).unwrap();
     let mut t = Instant::ZERO;
-    dg(&mut s, &mut t, Command::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
+    dg(&mut s, &mut t, DatagramCommand::Apwr, position_address(0, 0x0010), &[0x00, 0x10]);
     let st = |ado| station_address(0x1000, ado);
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0800), &[0x00, 0x0F, 1, 0, 0x44, 0, 1, 0]);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0800), &[0x00, 0x0F, 1, 0, 0x44, 0, 1, 0]);
     for state in [2u8, 4, 8] {
-        dg(&mut s, &mut t, Command::Fpwr, st(0x0120), &[state, 0]);
+        dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0120), &[state, 0]);
     }
-    assert_eq!(dg(&mut s, &mut t, Command::Fprd, st(0x0130), &[0; 2])[0], 8);
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0F00), &[0x0A]);
+    assert_eq!(dg(&mut s, &mut t, DatagramCommand::Fprd, st(0x0130), &[0; 2])[0], 8);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0F00), &[0x0A]);
     assert_eq!(s.app().outputs(), [0x0A]);
-    dg(&mut s, &mut t, Command::Fpwr, st(0x0120), &[4, 0]);
+    dg(&mut s, &mut t, DatagramCommand::Fpwr, st(0x0120), &[4, 0]);
     assert_eq!(s.app().outputs(), [0], "outputs off outside OP");
 }
 

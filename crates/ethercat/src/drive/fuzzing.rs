@@ -16,10 +16,10 @@
 //! field that fits the mailbox and a known type; afterwards, back in
 //! INIT and PRE-OP, an expedited upload of 1000h answers the device type.
 
-use super::{DriveSpec, slave};
+use super::{DriveSlaveSpec, slave};
 use crate::host::BoxDevice;
 use drivebus_can::{Duration, Instant};
-use drivebus_esc::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
 use drivebus_esc::segment::{Segment, SegmentConfig};
 use drivebus_personality::Profile;
 
@@ -33,7 +33,7 @@ struct Line {
 }
 
 impl Line {
-    fn dg(&mut self, cmd: Command, addr: u32, data: &[u8]) -> (Vec<u8>, u16) {
+    fn dg(&mut self, cmd: DatagramCommand, addr: u32, data: &[u8]) -> (Vec<u8>, u16) {
         self.now += Duration::from_micros(20);
         let n = {
             let mut b = FrameBuilder::new(&mut self.buf, [0x10; 6]);
@@ -51,11 +51,11 @@ impl Line {
     }
 
     fn wr(&mut self, ado: u16, data: &[u8]) {
-        self.dg(Command::Fpwr, station_address(ADDR, ado), data);
+        self.dg(DatagramCommand::Fpwr, station_address(ADDR, ado), data);
     }
 
     fn rd(&mut self, ado: u16, len: usize) -> Vec<u8> {
-        self.dg(Command::Fprd, station_address(ADDR, ado), &vec![0; len]).0
+        self.dg(DatagramCommand::Fprd, station_address(ADDR, ado), &vec![0; len]).0
     }
 
     fn mailbox_sms(&mut self) {
@@ -100,14 +100,14 @@ impl Line {
 /// Runs one fuzz input (see the module docs); panics on a finding.
 pub fn drive_mailbox(data: &[u8]) {
     let profile = if data.first().is_some_and(|b| b & 1 == 1) { Profile::Generic } else { Profile::Ipos };
-    let Ok(s) = slave(&DriveSpec::new(profile, 1)) else { panic!("the drive builds") };
+    let Ok(s) = slave(&DriveSlaveSpec::new(profile, 1)) else { panic!("the drive builds") };
     let mut l = Line {
         seg: Segment::with_devices(SegmentConfig::default(), vec![Box::new(s) as BoxDevice]),
         now: Instant::ZERO,
         buf: vec![0u8; 1514],
     };
     l.seg.poll(l.now);
-    l.dg(Command::Apwr, position_address(0, 0x0010), &ADDR.to_le_bytes());
+    l.dg(DatagramCommand::Apwr, position_address(0, 0x0010), &ADDR.to_le_bytes());
     l.mailbox_sms();
     l.state(0x02);
     let mut p = 1;

@@ -66,7 +66,7 @@ pub type DriveSlave = Slave<DriveApp>;
 
 /// Why a drive slave could not be made.
 #[derive(Debug)]
-pub enum DriveError {
+pub enum DriveSlaveError {
     /// Not a profile that runs on EtherCAT (`ipos`, `generic`).
     Profile(String),
     /// The personality did not build.
@@ -77,29 +77,29 @@ pub enum DriveError {
     Mailbox(drivebus_coe::MailboxSizeError),
 }
 
-impl std::fmt::Display for DriveError {
+impl std::fmt::Display for DriveSlaveError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            DriveError::Profile(p) => write!(f, "{p}: not an EtherCAT drive (ipos or generic)"),
-            DriveError::Build(e) => write!(f, "building the drive: {e}"),
-            DriveError::State(d, e) => write!(f, "state directory {}: {e}", d.display()),
-            DriveError::Mailbox(e) => write!(f, "mailbox: {e}"),
+            DriveSlaveError::Profile(p) => write!(f, "{p}: not an EtherCAT drive (ipos or generic)"),
+            DriveSlaveError::Build(e) => write!(f, "building the drive: {e}"),
+            DriveSlaveError::State(d, e) => write!(f, "state directory {}: {e}", d.display()),
+            DriveSlaveError::Mailbox(e) => write!(f, "mailbox: {e}"),
         }
     }
 }
 
-impl std::error::Error for DriveError {}
+impl std::error::Error for DriveSlaveError {}
 
 /// The profile named `name` if it runs on EtherCAT.
-pub fn profile(name: &str) -> Result<Profile, DriveError> {
+pub fn profile(name: &str) -> Result<Profile, DriveSlaveError> {
     Profile::from_name(name.trim())
         .filter(|p| ecat::facts(*p).is_some())
-        .ok_or_else(|| DriveError::Profile(name.to_owned()))
+        .ok_or_else(|| DriveSlaveError::Profile(name.to_owned()))
 }
 
 /// One drive slave to make.
 #[derive(Debug, Clone)]
-pub struct DriveSpec {
+pub struct DriveSlaveSpec {
     /// `ipos` or `generic`.
     pub profile: Profile,
     /// 1018h:04 and the SII serial number.
@@ -113,21 +113,22 @@ pub struct DriveSpec {
     pub coe: Option<CoeDetails>,
 }
 
-impl DriveSpec {
+impl DriveSlaveSpec {
     /// `profile` with serial number `serial`, no state directory.
-    pub fn new(profile: Profile, serial: u32) -> DriveSpec {
-        DriveSpec { profile, serial, state_dir: None, clock: ClockConfig::default(), coe: None }
+    pub fn new(profile: Profile, serial: u32) -> DriveSlaveSpec {
+        DriveSlaveSpec { profile, serial, state_dir: None, clock: ClockConfig::default(), coe: None }
     }
 }
 
 /// Makes one drive slave.
-pub fn slave(spec: &DriveSpec) -> Result<DriveSlave, DriveError> {
-    let facts = ecat::facts(spec.profile).ok_or_else(|| DriveError::Profile(spec.profile.to_string()))?;
+pub fn slave(spec: &DriveSlaveSpec) -> Result<DriveSlave, DriveSlaveError> {
+    let facts =
+        ecat::facts(spec.profile).ok_or_else(|| DriveSlaveError::Profile(spec.profile.to_string()))?;
     let storage: Box<dyn Storage + Send> = match &spec.state_dir {
-        Some(d) => Box::new(FileStorage::new(d).map_err(|e| DriveError::State(d.clone(), e))?),
+        Some(d) => Box::new(FileStorage::new(d).map_err(|e| DriveSlaveError::State(d.clone(), e))?),
         None => Box::new(MemoryStorage::new()),
     };
-    let mut dev = ecat::build(spec.profile, storage).map_err(DriveError::Build)?;
+    let mut dev = ecat::build(spec.profile, storage).map_err(DriveSlaveError::Build)?;
     drivebus_personality::build::set_default(dev.node.od_mut(), 0x1018, 4, &Value::U32(spec.serial));
     let mut desc = describe(spec.profile, dev.node.od());
     if let (Some(c), Some(m)) = (spec.coe, desc.mailbox.as_mut()) {
@@ -138,7 +139,7 @@ pub fn slave(spec: &DriveSpec) -> Result<DriveSlave, DriveError> {
     if let Some(c) = desc.mailbox.as_ref().and_then(|m| m.coe) {
         (cfg.sdo_info, cfg.complete_access) = (c.sdo_info, c.complete_access);
     }
-    let mbx = MailboxServer::new(cfg).map_err(DriveError::Mailbox)?;
+    let mbx = MailboxServer::new(cfg).map_err(DriveSlaveError::Mailbox)?;
     let files = ecat::files(spec.profile, spec.state_dir.as_ref().map(|d| d.join("foe")));
     let app = DriveApp::new(dev, spec.profile, facts, mbx, files);
     let esc = Esc::new(EscConfig { clock: spec.clock, ..EscConfig::with_sii(SiiImage::from(&desc)) });
@@ -202,25 +203,25 @@ impl DriveLine {
     }
 
     /// The slaves to make: serial numbers are the 1-based positions.
-    pub fn specs(&self) -> Vec<DriveSpec> {
+    pub fn specs(&self) -> Vec<DriveSlaveSpec> {
         self.profiles
             .iter()
             .enumerate()
-            .map(|(i, &p)| DriveSpec {
+            .map(|(i, &p)| DriveSlaveSpec {
                 state_dir: self.state_dir.as_deref().map(|d| Self::slave_dir(d, i, p)),
-                ..DriveSpec::new(p, i as u32 + 1)
+                ..DriveSlaveSpec::new(p, i as u32 + 1)
             })
             .collect()
     }
 
     /// The slaves as boxed devices for a [`Host`].
-    pub fn devices(&self) -> Result<Vec<BoxDevice>, DriveError> {
+    pub fn devices(&self) -> Result<Vec<BoxDevice>, DriveSlaveError> {
         self.specs().iter().map(|s| slave(s).map(|d| Box::new(d) as BoxDevice)).collect()
     }
 
     /// The line hosted on `clock` (simulated for deterministic tests, real
     /// for a socket server).
-    pub fn host(&self, clock: Clock) -> Result<Host, DriveError> {
+    pub fn host(&self, clock: Clock) -> Result<Host, DriveSlaveError> {
         Ok(Host::line(self.devices()?, clock))
     }
 }

@@ -201,7 +201,7 @@ fn wr(b: &mut [u8], at: Option<usize>, v: &[u8]) {
 }
 
 /// The line in OP with one drive under control.
-pub struct DriveLine<'m> {
+pub struct CyclicDrive<'m> {
     m: &'m Master,
     group: Group,
     position: usize,
@@ -226,9 +226,9 @@ pub struct DriveLine<'m> {
     stop: Option<&'m AtomicBool>,
 }
 
-impl fmt::Debug for DriveLine<'_> {
+impl fmt::Debug for CyclicDrive<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("DriveLine").field("position", &self.position).field("fb", &self.fb).finish()
+        f.debug_struct("CyclicDrive").field("position", &self.position).field("fb", &self.fb).finish()
     }
 }
 
@@ -243,7 +243,7 @@ fn le(d: &[u8]) -> i64 {
     }
 }
 
-impl<'m> DriveLine<'m> {
+impl<'m> CyclicDrive<'m> {
     /// Reads the drive's mapping, brings the line to OP (DC SYNC0 at
     /// `cycle` when `dc` is asked for and every slave supports it, else
     /// free run) and exchanges a first cycle. The drive must map 6040h and
@@ -255,7 +255,7 @@ impl<'m> DriveLine<'m> {
         cycle: Duration,
         dc: bool,
         stop: Option<&'m AtomicBool>,
-    ) -> Result<DriveLine<'m>, DriveError> {
+    ) -> Result<CyclicDrive<'m>, DriveError> {
         let md = m.main_device();
         let layout = {
             let sd = m.slave(&group, position)?;
@@ -301,7 +301,7 @@ impl<'m> DriveLine<'m> {
                 return Err(m.refusal(to, &all, e.0).await.into());
             }
         };
-        let mut d = DriveLine {
+        let mut d = CyclicDrive {
             m,
             group,
             position,

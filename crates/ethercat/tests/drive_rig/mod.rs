@@ -6,8 +6,8 @@
 #![allow(dead_code)]
 
 use drivebus_can::{Duration, Instant};
-use drivebus_esc::frame::{Command, FrameBuilder, datagrams, position_address, station_address};
-use drivebus_ethercat::drive::{DriveSlave, DriveSpec, slave};
+use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
+use drivebus_ethercat::drive::{DriveSlave, DriveSlaveSpec, slave};
 use drivebus_personality::Profile;
 
 pub const ADDR: u16 = 0x1000;
@@ -48,19 +48,19 @@ pub struct Rig {
 
 impl Rig {
     pub fn new(profile: Profile) -> Rig {
-        Rig::with_spec(&DriveSpec::new(profile, 7))
+        Rig::with_spec(&DriveSlaveSpec::new(profile, 7))
     }
 
-    pub fn with_spec(spec: &DriveSpec) -> Rig {
+    pub fn with_spec(spec: &DriveSlaveSpec) -> Rig {
         let mut r =
             Rig { s: slave(spec).unwrap(), t: Instant::ZERO, cnt: 0, pd: (0, 0), emergencies: Vec::new() };
         r.s.poll(r.t);
-        r.dg(Command::Apwr, position_address(0, 0x0010), &ADDR.to_le_bytes());
+        r.dg(DatagramCommand::Apwr, position_address(0, 0x0010), &ADDR.to_le_bytes());
         r
     }
 
     /// One datagram in its own frame; the slave's firmware runs after it.
-    pub fn dg(&mut self, cmd: Command, addr: u32, data: &[u8]) -> (Vec<u8>, u16) {
+    pub fn dg(&mut self, cmd: DatagramCommand, addr: u32, data: &[u8]) -> (Vec<u8>, u16) {
         self.t += Duration::from_micros(20);
         let mut buf = vec![0u8; 64 + data.len()];
         let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
@@ -73,7 +73,7 @@ impl Rig {
     }
 
     pub fn rd(&mut self, ado: u16, len: usize) -> Vec<u8> {
-        self.dg(Command::Fprd, station_address(ADDR, ado), &vec![0; len]).0
+        self.dg(DatagramCommand::Fprd, station_address(ADDR, ado), &vec![0; len]).0
     }
 
     pub fn rd16(&mut self, ado: u16) -> u16 {
@@ -82,7 +82,7 @@ impl Rig {
     }
 
     pub fn wr(&mut self, ado: u16, data: &[u8]) -> u16 {
-        self.dg(Command::Fpwr, station_address(ADDR, ado), data).1
+        self.dg(DatagramCommand::Fpwr, station_address(ADDR, ado), data).1
     }
 
     /// Time passes; the firmware runs at every deadline on the way.
