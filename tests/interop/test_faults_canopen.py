@@ -1,7 +1,7 @@
 """canopen 2.4.1 (over python-can's socketcand interface) sees the CAN
 faults of `drivebus serve --control` (docs/control.md) and recovers from
 them (issue 17 §3): a node's bus-off with automatic recovery, its power cut
-and restored, and SDO responses lost by a drop rule.
+and restored, and SDO responses lost or corrupted by a rule.
 
 The faults are requested with `drivebus control --connect ADDR …`, as a
 test script beside a master would.
@@ -178,3 +178,21 @@ def test_dropped_sdo_responses_time_out_then_the_client_succeeds(ctl):
             node.sdo[0x1000].raw
     control(addr, "bus", "clear")
     assert node.sdo[0x1000].raw == 0x0002_0192
+
+
+@pytest.mark.limit(60)
+def test_corrupted_sdo_responses_are_refused_or_read_then_the_client_succeeds(ctl):
+    addr, node = ctl
+    assert node.sdo[0x1000].raw == 0x0002_0192
+    # The index in the next response is flipped (the CRC is assumed to
+    # miss it): canopen sees an answer for another object and refuses it.
+    control(addr, "bus", "corrupt", "--id", "0x585", "--mask", "00FF", "--count", "1")
+    with pytest.raises(canopen.SdoCommunicationError, match="Node returned a value for"):
+        node.sdo[0x1000].raw
+    assert node.sdo[0x1000].raw == 0x0002_0192
+    # A bit of the data flipped: no client can tell; the value read is off
+    # by exactly that bit, and the next read is right again.
+    control(addr, "bus", "corrupt", "--id", "0x585", "--mask", "0000000001", "--count", "1")
+    assert node.sdo[0x1000].raw == 0x0002_0192 ^ 0x01
+    for _ in range(3):
+        assert node.sdo[0x1000].raw == 0x0002_0192

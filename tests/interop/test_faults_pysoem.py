@@ -1,7 +1,8 @@
 """SOEM (through pysoem, pinned in requirements.txt) sees the EtherCAT line
 faults of `drivebus ethercat serve --control` (docs/control.md) and
-recovers from them (issue 17 §3): lost frames, a slave that miscounts the
-working counter, and a slave power-cycled back to INIT.
+recovers from them (issue 17 §3): lost and corrupted frames, a broken
+link, a slave that miscounts the working counter, and a slave
+power-cycled back to INIT.
 
 The line (`--drive ipos --drive generic`) runs in a network namespace on
 one end of a veth pair, pysoem on the other, as in
@@ -161,6 +162,36 @@ def test_lost_frames_show_as_missing_cycles_then_the_cycles_are_whole(cyclic, li
     assert got == [NO_FRAME] * 3, f"working counters {got}"
     assert cyclic.whole(200) == [], "cycles after the count was used up"
     assert cyclic.m.state_check(pysoem.OP_STATE, 50_000) == pysoem.OP_STATE
+
+
+@pytest.mark.limit(90)
+def test_corrupted_frame_is_discarded_then_the_cycles_are_whole(cyclic, line):
+    _, sock = line
+    assert cyclic.whole(50) == []
+    # A bit error in front of slave 2: the reply's FCS is bad and the
+    # receiving NIC drops it; SOEM sees that exchange without a reply.
+    control(sock, "bus", "corrupt", "--slave", "2", "--count", "1")
+    assert cyclic.cycle() == NO_FRAME
+    assert cyclic.whole(200) == [], "cycles after the count was used up"
+    assert cyclic.m.state_check(pysoem.OP_STATE, 50_000) == pysoem.OP_STATE
+
+
+@pytest.mark.limit(90)
+def test_broken_link_counts_slave_1_only_and_the_line_joins_again(cyclic, line):
+    _, sock = line
+    m = cyclic.m
+    assert cyclic.whole(50) == []
+    control(sock, "bus", "break", "--after", "1")
+    # Slave 1 loops the frame back: only its part of the LRW (3 of 6) is
+    # counted, and SOEM no longer reaches slave 2's AL status.
+    wkcs = [cyclic.cycle() for _ in range(20)]
+    assert set(wkcs) - {NO_FRAME} == {cyclic.expected // 2}, f"working counters behind the break: {wkcs}"
+    m.read_state()
+    assert (m.slaves[0].state, m.slaves[1].state) == (pysoem.OP_STATE, pysoem.NONE_STATE)
+    control(sock, "bus", "clear")
+    # Joined again: slave 2 kept OP (1 s watchdog) and every cycle is whole.
+    assert cyclic.whole(200) == [], "cycles after `bus clear`"
+    assert m.read_state() == pysoem.OP_STATE
 
 
 @pytest.mark.limit(90)
