@@ -1,8 +1,8 @@
 """SOEM (through pysoem, pinned in requirements.txt) sees the EtherCAT line
 faults of `drivebus ethercat serve --control` (docs/control.md) and
 recovers from them (issue 17 §3): lost and corrupted frames, a broken
-link, a slave that miscounts the working counter, and a slave
-power-cycled back to INIT.
+link, a slave that miscounts the working counter, the reference clock
+drifting and jittering, and a slave power-cycled back to INIT.
 
 The line (`--drive ipos --drive generic`) runs in a network namespace on
 one end of a veth pair, pysoem on the other, as in
@@ -74,12 +74,15 @@ def control(sock: str, *args) -> None:
 class Cyclic:
     """A pysoem master with the line in OP, its process data cycled by hand."""
 
-    def __init__(self, m: pysoem.Master, proc):
+    def __init__(self, m: pysoem.Master, proc, dc: bool = False):
         self.m, self.proc = m, proc
         self.steps: list[tuple[int, str, int]] = []
         # A 1 s process-data watchdog: Python's loop is no real-time cycle.
         for s in m.slaves:
             s.set_watchdog("processdata", 1000)
+        # With DC, every process data frame also reads the reference
+        # clock's (slave 1's) system time into `dc_time`.
+        assert not dc or m.config_dc(), "both drives have DC"
         m.config_map()
         assert m.state_check(pysoem.SAFEOP_STATE, 2_000_000) == pysoem.SAFEOP_STATE, [hex(s.al_status) for s in m.slaves]
         self.expected = m.expected_wkc
@@ -138,17 +141,26 @@ class Cyclic:
                     s.is_lost = False
 
 
-@pytest.fixture
-def cyclic(wire, line):
+def _cyclic(wire, line, dc: bool):
     proc, _ = line
     m = pysoem.Master()
     m.open(wire.outer)
     try:
         found = m.config_init()
         assert found == 2, f"config_init found {found} slaves, expected 2\n{proc.describe()}"
-        yield Cyclic(m, proc)
+        yield Cyclic(m, proc, dc)
     finally:
         m.close()
+
+
+@pytest.fixture
+def cyclic(wire, line):
+    yield from _cyclic(wire, line, dc=False)
+
+
+@pytest.fixture
+def cyclic_dc(wire, line):
+    yield from _cyclic(wire, line, dc=True)
 
 
 @pytest.mark.limit(90)
@@ -258,3 +270,61 @@ def test_power_cycled_slave_is_back_in_init_and_soem_brings_it_to_op(cyclic, lin
     # A slave at its power-on values: the iPOS dictionary answers again.
     assert int.from_bytes(ipos.sdo_read(0x1018, 1), "little") == 0x1A3
     assert int.from_bytes(ipos.sdo_read(0x6041, 0), "little") & 0x4F == 0x40, "switch on disabled after power-on"
+
+
+def _dc_rate(cyclic: Cyclic, n: int = 500) -> float:
+    """The reference clock's system time (SOEM's `dc_time`, read in every
+    frame) over the host's monotonic clock across `n` cycles: the least
+    squares slope, which one late sample (a stalled host) hardly moves."""
+    pts = []
+    for _ in range(n):
+        if cyclic.cycle() == cyclic.expected:  # else no time came back
+            pts.append((time.monotonic(), cyclic.m.dc_time / 1e9))
+        time.sleep(0.002)
+    assert len(pts) * 10 >= 9 * n, f"{n - len(pts)} of {n} cycles without a reply"
+    n = len(pts)
+    mx = sum(x for x, _ in pts) / n
+    my = sum(y for _, y in pts) / n
+    return sum((x - mx) * (y - my) for x, y in pts) / sum((x - mx) ** 2 for x, _ in pts)
+
+
+def _dc_backwards(cyclic: Cyclic, n: int = 400) -> int:
+    """How often `dc_time` went backwards from one frame to the next
+    (back to back, no pause: frames 10 µs or more apart)."""
+    prev, back, missed = None, 0, 0
+    for _ in range(n):
+        cyclic.m.send_processdata()
+        if cyclic.m.receive_processdata(TIMEOUT_US) != cyclic.expected:
+            missed += 1  # no time came back
+            continue
+        dc = cyclic.m.dc_time
+        back += prev is not None and dc < prev
+        prev = dc
+    assert missed * 10 <= n, f"{missed} of {n} cycles without a reply"
+    return back
+
+
+@pytest.mark.limit(90)
+def test_reference_clock_drift_shows_in_soem_dc_time_until_cleared(cyclic_dc, line):
+    _, sock = line
+    # 5 % fast (far beyond any DC loop's ±500 ppm) on the reference clock:
+    # its system time runs 1.05 s per second of the host's clock. A 2 ms
+    # Python loop over 500 cycles measures the rate within well under 1 %.
+    assert abs(_dc_rate(cyclic_dc) - 1) < 0.01
+    control(sock, "bus", "drift", "--slave", "1", "--ppm", "50000")
+    assert abs(_dc_rate(cyclic_dc) - 1.05) < 0.01
+    control(sock, "bus", "clear")
+    assert abs(_dc_rate(cyclic_dc) - 1) < 0.01
+
+
+@pytest.mark.limit(90)
+def test_reference_clock_jitter_shows_in_soem_dc_time_until_cleared(cyclic_dc, line):
+    _, sock = line
+    # Back-to-back frames read the reference clock's system time 10 µs or
+    # more apart: exact stamps never go backwards; stamps off by up
+    # to ±1 ms do, often.
+    assert _dc_backwards(cyclic_dc) == 0
+    control(sock, "bus", "jitter", "--slave", "1", "--amplitude", "1000000", "--seed", "7")
+    assert _dc_backwards(cyclic_dc) >= 10
+    control(sock, "bus", "clear")
+    assert _dc_backwards(cyclic_dc) == 0
