@@ -125,7 +125,10 @@ impl Host {
         if let Some(c) = g.capture.as_mut() {
             let _ = c.write(frame, unix, Direction::Inbound);
         }
-        let r = g.segment.process_frame(frame, now);
+        let mut r = g.segment.process_frame(frame, now);
+        // No slave reached (the first one has no power): the master's port
+        // has no link, so nothing comes back.
+        r.lost |= r.reached == 0 && !r.frame.ignored;
         g.stats.frames += 1;
         if r.frame.ignored || r.frame.malformed {
             g.stats.bad_frames += 1;

@@ -140,6 +140,35 @@ async fn ethercrab_finds_a_power_cycled_slave_in_init_and_brings_it_back_to_op()
     assert!(r.subdevice_states.iter().all(|s| *s == SubDeviceState::Op));
 }
 
+/// A broadcast read of 2 bytes at 0x0000: each slave that executes it
+/// adds 1 to its working counter (bytes 28..30).
+fn brd() -> Vec<u8> {
+    let mut f = vec![0xFF; 6];
+    f.extend_from_slice(&[0x10; 6]);
+    f.extend_from_slice(&[0x88, 0xA4]);
+    f.extend_from_slice(&(14u16 | 1 << 12).to_le_bytes());
+    f.extend_from_slice(&[0x07, 0x42, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0, 0]);
+    f
+}
+
+#[test]
+fn a_line_whose_first_slave_has_no_power_gives_the_master_no_frame_back() {
+    let host = dio_line(2);
+    let mut f = brd();
+    let r = host.process_frame(&mut f);
+    assert_eq!((r.reached, r.lost), (2, false));
+    assert_eq!(u16::from_le_bytes([f[28], f[29]]), 2);
+    // The master's port has no link partner: nothing comes back (SOEM over
+    // veth got the frame back untouched, working counter 0).
+    host.with_segment(|s| s.power_off(0));
+    let r = host.process_frame(&mut brd());
+    assert_eq!((r.reached, r.lost), (0, true));
+    host.with_segment(|s| s.power_on(0));
+    let mut f = brd();
+    assert!(!host.process_frame(&mut f).lost);
+    assert_eq!(u16::from_le_bytes([f[28], f[29]]), 2);
+}
+
 fn drives() -> Host {
     Line::new()
         .drive(Profile::Ipos)
