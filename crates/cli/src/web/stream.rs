@@ -21,6 +21,7 @@ use tokio::task::JoinHandle;
 
 use super::Web;
 use super::api::{nmt_name, seen_node};
+use super::frames::{self, FrameFilter};
 use super::values;
 
 /// Messages queued per client before the oldest is dropped.
@@ -29,14 +30,16 @@ const QUEUE: usize = 4096;
 const MIN_PERIOD_MS: u64 = 1;
 
 /// A client's bounded queue.
-struct Queue {
+pub struct Queue {
     q: Mutex<VecDeque<String>>,
-    dropped: AtomicU64,
+    /// Messages dropped so far (sent in every `status`).
+    pub dropped: AtomicU64,
     ready: Notify,
 }
 
 impl Queue {
-    fn push(&self, v: &Json_) {
+    /// Queues `v`, dropping the oldest message when full.
+    pub fn push(&self, v: &Json_) {
         let mut q = self.q.lock().unwrap_or_else(|e| e.into_inner());
         if q.len() >= QUEUE {
             q.pop_front();
@@ -71,15 +74,23 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
         Arc::new(Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() });
     let _events = Tasks(vec![tokio::spawn(events(web.clone(), queue.clone()))]);
     let mut polls = Tasks(Vec::new());
+    let mut frames = Tasks(Vec::new());
     let mut status = tokio::time::interval(Duration::from_secs(1));
     loop {
         tokio::select! {
             m = socket.recv() => match m {
-                Some(Ok(Message::Text(t))) => match subscribe(&web, &queue, t.as_str()) {
-                    Ok(tasks) => {
-                        let n = tasks.len();
-                        polls = Tasks(tasks);
-                        queue.push(&json!({"type": "subscribed", "channels": n}));
+                Some(Ok(Message::Text(t))) => match request(&web, &queue, t.as_str()) {
+                    Ok((channels, filter)) => {
+                        let mut answer = json!({"type": "subscribed"});
+                        if let Some(tasks) = channels {
+                            answer["channels"] = json!(tasks.len());
+                            polls = Tasks(tasks);
+                        }
+                        if let Some(task) = filter {
+                            answer["frames"] = json!(task.is_some());
+                            frames = Tasks(task.into_iter().collect());
+                        }
+                        queue.push(&answer);
                     }
                     Err(e) => queue.push(&json!({"type": "error", "error": e})),
                 },
@@ -95,7 +106,7 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
             }
             _ = status.tick() => {
                 let s = json!({"type": "status", "t": web.t(), "dropped": queue.dropped.load(Ordering::Relaxed),
-                    "channels": polls.0.len()});
+                    "channels": polls.0.len(), "frames": !frames.0.is_empty()});
                 if socket.send(Message::Text(s.to_string().into())).await.is_err() {
                     return;
                 }
@@ -104,9 +115,45 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
     }
 }
 
+/// A client message: object channels, raw frames, or both.
 #[derive(serde::Deserialize)]
-struct Subscribe {
-    subscribe: Vec<Channel>,
+#[serde(deny_unknown_fields)]
+struct Request {
+    subscribe: Option<Vec<Channel>>,
+    /// Absent: unchanged; `null`: no frames; an object: the filter.
+    #[serde(default, deserialize_with = "present")]
+    frames: Option<Json_>,
+}
+
+/// `Some` for any value given, `null` included.
+fn present<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Json_>, D::Error> {
+    <Json_ as serde::Deserialize>::deserialize(d).map(Some)
+}
+
+const SHAPE: &str = r#"{"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 10}]} or {"frames": {"ids": ["0x180-0x1FF"]}}"#;
+
+/// What a message asks for: the new polling tasks (if it has
+/// `subscribe`) and the new frame task (if it has `frames`; `None` inside
+/// for `null`). An error names the first fault and starts nothing.
+#[allow(clippy::type_complexity)]
+fn request(
+    web: &Arc<Web>,
+    queue: &Arc<Queue>,
+    text: &str,
+) -> Result<(Option<Vec<JoinHandle<()>>>, Option<Option<JoinHandle<()>>>), String> {
+    let r: Request =
+        serde_json::from_str(text).map_err(|e| format!("malformed subscription: {e}; send {SHAPE}"))?;
+    if r.subscribe.is_none() && r.frames.is_none() {
+        return Err(format!("nothing asked: send {SHAPE}"));
+    }
+    let filter = match &r.frames {
+        Some(Json_::Null) => Some(None),
+        Some(v) => Some(Some(FrameFilter::parse(v)?)),
+        None => None,
+    };
+    let channels = r.subscribe.as_deref().map(|c| subscribe(web, queue, c)).transpose()?;
+    let frames = filter.map(|f| f.map(|f| tokio::spawn(frames::forward(web.clone(), queue.clone(), f))));
+    Ok((channels, frames))
 }
 
 #[derive(serde::Deserialize)]
@@ -123,16 +170,17 @@ struct Channel {
 /// Starts one polling task per channel of a `{"subscribe": [...]}`
 /// message (replacing the previous subscription); an error names the
 /// first bad channel and starts nothing.
-fn subscribe(web: &Arc<Web>, queue: &Arc<Queue>, text: &str) -> Result<Vec<JoinHandle<()>>, String> {
-    let shape = r#"{"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 10}]}"#;
-    let s: Subscribe =
-        serde_json::from_str(text).map_err(|e| format!("malformed subscription: {e}; send {shape}"))?;
+fn subscribe(
+    web: &Arc<Web>,
+    queue: &Arc<Queue>,
+    channels: &[Channel],
+) -> Result<Vec<JoinHandle<()>>, String> {
     let text_of = |v: &Json_| match v {
         Json_::String(s) => s.clone(),
         other => other.to_string(),
     };
     let mut plan = Vec::new();
-    for c in &s.subscribe {
+    for c in channels {
         let node = seen_node(web, &text_of(&c.node)).map_err(|e| e.message)?;
         let (index, sub) = values::object(&web.dict, &text_of(&c.index), Some(&format!("{:X}", c.sub)))
             .map_err(|e| e.message)?;
