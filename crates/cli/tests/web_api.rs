@@ -562,3 +562,33 @@ async fn raw_frames_pass_the_filter_and_a_tpdo_follows_sync() {
         assert!(msg["type"] != "frame" || msg["id"] == "701", "{msg}");
     }
 }
+
+/// 6064h, mapped in TPDO3 of the AKD (transmission type 1), arrives at
+/// every SYNC with `source: "pdo"`, not at the 1 s polling period; 607Ah,
+/// in no TPDO, is polled by SDO.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pdo_mapped_objects_arrive_at_every_sync() {
+    let d = synced_drive("20").await;
+    let sub = json!({"subscribe": [{"node": 1, "index": "6064", "period_ms": 1000}, {"node": 1, "index": "607A", "period_ms": 200}]});
+    let mut ws = ws_connect(&d.ui, sub).await;
+    let (mut pdo, mut sdo) = (Vec::new(), 0);
+    let t0 = Instant::now();
+    while pdo.len() < 50 || sdo < 2 {
+        assert!(t0.elapsed() < Duration::from_secs(60), "pdo samples {} sdo samples {sdo}", pdo.len());
+        let msg = next_msg(&mut ws).await;
+        if msg["type"] != "sample" {
+            continue;
+        }
+        match (msg["index"].as_str(), msg["source"].as_str()) {
+            (Some("6064"), Some("pdo")) => pdo.push(msg["t"].as_f64().unwrap()),
+            (Some("607A"), Some("sdo")) => sdo += 1,
+            // Until the master saw the node operational (its heartbeat).
+            (Some("6064"), Some("sdo")) if pdo.is_empty() => {}
+            _ => panic!("{msg}"),
+        }
+    }
+    // About one sample per 20 ms SYNC (the 1 s poll would give one per second).
+    let span = pdo.last().unwrap() - pdo[10];
+    let per = span / (pdo.len() - 11) as f64;
+    assert!((10.0..=40.0).contains(&per), "one 6064h sample every {per:.1} ms");
+}

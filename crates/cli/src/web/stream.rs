@@ -1,6 +1,7 @@
 //! `GET /api/stream` (WebSocket): samples of the objects a client
-//! subscribes to, polled by SDO at the period it asks, and NMT, EMCY and
-//! motion events. Everything goes through one bounded queue per client:
+//! subscribes to (from their TPDO when mapped, else polled by SDO at the
+//! period it asks), raw frames (`frames.rs`), and NMT, EMCY and motion
+//! events. Everything goes through one bounded queue per client:
 //! when the client reads slower than the bus gives, the oldest messages
 //! are dropped and counted, and the count is in every `status` message,
 //! so the bus side never waits for a browser.
@@ -14,7 +15,7 @@ use std::time::Duration;
 use axum::extract::State;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::response::Response;
-use drivebus_master::{MasterEvent, RemoteState, Value};
+use drivebus_master::{MasterEvent, PdoCallback, PdoDir, RemoteState, Value};
 use serde_json::{Value as Json_, json};
 use tokio::sync::{Notify, broadcast};
 use tokio::task::JoinHandle;
@@ -23,6 +24,7 @@ use super::Web;
 use super::api::{nmt_name, seen_node};
 use super::frames::{self, FrameFilter};
 use super::values;
+use crate::decode;
 
 /// Messages queued per client before the oldest is dropped.
 const QUEUE: usize = 4096;
@@ -198,19 +200,22 @@ fn subscribe(
 
 async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master::DataType, Duration)) {
     let (node, index, sub, dt, period) = p;
+    // Mapped in a TPDO: a sample per TPDO; by SDO only while the node
+    // does not send its TPDOs (not operational).
+    let pdo = from_tpdo(&web, &queue, node, index, sub, dt).await;
     let sdo = web.master.sdo(node);
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut failing = false;
     loop {
         tick.tick().await;
+        if pdo.is_some() && web.master.node_state(node) == Some(RemoteState::Operational) {
+            continue;
+        }
         match sdo.upload(index, sub).await.map(|raw| Value::decode(dt, &raw)) {
             Ok(Ok(v)) => {
                 failing = false;
-                queue.push(
-                    &json!({"type": "sample", "t": web.t(), "node": node, "index": format!("{index:04X}"),
-                    "sub": sub, "value": values::to_json(&v)}),
-                );
+                queue.push(&sample(&web, node, index, sub, &v, "sdo"));
             }
             // Said once per run of failures, not at every period.
             r if !failing => {
@@ -228,6 +233,38 @@ async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master
             _ => {}
         }
     }
+}
+
+fn sample(web: &Web, node: u8, index: u16, sub: u8, v: &Value, source: &str) -> Json_ {
+    json!({"type": "sample", "t": web.t(), "node": node, "index": format!("{index:04X}"), "sub": sub,
+        "value": values::to_json(v), "source": source})
+}
+
+/// When `index:sub` is mapped in a valid TPDO of `node` (as the master
+/// reads the mapping now), a sample of it from every frame of that TPDO
+/// until the returned guard is dropped.
+async fn from_tpdo(
+    web: &Arc<Web>,
+    queue: &Arc<Queue>,
+    node: u8,
+    index: u16,
+    sub: u8,
+    dt: drivebus_master::DataType,
+) -> Option<PdoCallback> {
+    for num in 1..=512u16 {
+        let Ok(rec) = web.master.read_pdo(node, PdoDir::Tx, num).await else { break };
+        let Some((at, bits)) = decode::mapped_at(&rec.mapping, index, sub).filter(|_| rec.valid()) else {
+            continue;
+        };
+        let (web2, queue) = (web.clone(), queue.clone());
+        return Some(web.master.on_pdo(rec.can_id(), move |f, _| {
+            if let Some(v) = decode::entry_bytes(f.data(), at, bits).and_then(|b| Value::decode(dt, &b).ok())
+            {
+                queue.push(&sample(&web2, node, index, sub, &v, "pdo"));
+            }
+        }));
+    }
+    None
 }
 
 /// NMT state changes, EMCYs and the server's motion events.
