@@ -15,7 +15,7 @@ use std::time::Duration;
 use axum::extract::State;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::response::Response;
-use drivebus_master::{MasterEvent, PdoCallback, PdoDir, RemoteState, Value};
+use drivebus_master::{Frame, MasterEvent, PdoDir, RemoteState, Value};
 use serde_json::{Value as Json_, json};
 use tokio::sync::{Notify, broadcast};
 use tokio::task::JoinHandle;
@@ -200,15 +200,34 @@ fn subscribe(
 
 async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master::DataType, Duration)) {
     let (node, index, sub, dt, period) = p;
-    // Mapped in a TPDO: a sample per TPDO; by SDO only while the node
-    // does not send its TPDOs (not operational).
-    let pdo = from_tpdo(&web, &queue, node, index, sub, dt).await;
+    // Mapped in a TPDO: a sample per frame of it; by SDO only while the
+    // node does not send its TPDOs (not operational).
+    let (mut pdo, at, bits) = match tpdo_of(&web, node, index, sub).await {
+        Some((rx, at, bits)) => (Some(rx), at, bits),
+        None => (None, 0, 0),
+    };
     let sdo = web.master.sdo(node);
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut failing = false;
     loop {
-        tick.tick().await;
+        tokio::select! {
+            f = next_pdo(&mut pdo) => {
+                match f {
+                    Ok(f) => {
+                        if let Some(v) = decode::entry_bytes(f.data(), at, bits).and_then(|b| Value::decode(dt, &b).ok()) {
+                            queue.push(&sample(&web, node, index, sub, &v, "pdo"));
+                        }
+                    }
+                    Err(broadcast::error::RecvError::Lagged(n)) => {
+                        queue.dropped.fetch_add(n, Ordering::Relaxed);
+                    }
+                    Err(broadcast::error::RecvError::Closed) => pdo = None,
+                }
+                continue;
+            }
+            _ = tick.tick() => {}
+        }
         if pdo.is_some() && web.master.node_state(node) == Some(RemoteState::Operational) {
             continue;
         }
@@ -235,34 +254,34 @@ async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master
     }
 }
 
+/// The next frame of the TPDO, never without one.
+async fn next_pdo(rx: &mut Option<broadcast::Receiver<Frame>>) -> Result<Frame, broadcast::error::RecvError> {
+    match rx {
+        Some(rx) => rx.recv().await,
+        None => std::future::pending().await,
+    }
+}
+
 fn sample(web: &Web, node: u8, index: u16, sub: u8, v: &Value, source: &str) -> Json_ {
     json!({"type": "sample", "t": web.t(), "node": node, "index": format!("{index:04X}"), "sub": sub,
         "value": values::to_json(v), "source": source})
 }
 
 /// When `index:sub` is mapped in a valid TPDO of `node` (as the master
-/// reads the mapping now), a sample of it from every frame of that TPDO
-/// until the returned guard is dropped.
-async fn from_tpdo(
-    web: &Arc<Web>,
-    queue: &Arc<Queue>,
+/// reads the mapping now): the frames of that TPDO from now on, and the
+/// entry's bit offset and length in them. Decoded in the client's task,
+/// not in the master's frame path.
+async fn tpdo_of(
+    web: &Web,
     node: u8,
     index: u16,
     sub: u8,
-    dt: drivebus_master::DataType,
-) -> Option<PdoCallback> {
+) -> Option<(broadcast::Receiver<Frame>, usize, usize)> {
     for num in 1..=512u16 {
         let Ok(rec) = web.master.read_pdo(node, PdoDir::Tx, num).await else { break };
-        let Some((at, bits)) = decode::mapped_at(&rec.mapping, index, sub).filter(|_| rec.valid()) else {
-            continue;
-        };
-        let (web2, queue) = (web.clone(), queue.clone());
-        return Some(web.master.on_pdo(rec.can_id(), move |f, _| {
-            if let Some(v) = decode::entry_bytes(f.data(), at, bits).and_then(|b| Value::decode(dt, &b).ok())
-            {
-                queue.push(&sample(&web2, node, index, sub, &v, "pdo"));
-            }
-        }));
+        if let Some((at, bits)) = decode::mapped_at(&rec.mapping, index, sub).filter(|_| rec.valid()) {
+            return Some((web.master.subscribe_pdo(rec.can_id()), at, bits));
+        }
     }
     None
 }
