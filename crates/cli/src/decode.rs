@@ -29,6 +29,27 @@ fn bits_at(data: &[u8], at: usize, bits: usize) -> Option<u64> {
     Some(v)
 }
 
+/// Where `index:sub` sits in a PDO of `mapping`: (bit offset, bits).
+pub fn mapped_at(mapping: &[PdoMapEntry], index: u16, sub: u8) -> Option<(usize, usize)> {
+    let mut at = 0usize;
+    for m in mapping {
+        if m.index == index && m.sub == sub {
+            return Some((at, usize::from(m.bits)));
+        }
+        at += usize::from(m.bits);
+    }
+    None
+}
+
+/// The little-endian bytes of the `bits` bits (whole bytes) at bit `at`
+/// of a PDO's `data`, or `None` past the end or for a partial byte.
+pub fn entry_bytes(data: &[u8], at: usize, bits: usize) -> Option<Vec<u8>> {
+    if !bits.is_multiple_of(8) {
+        return None;
+    }
+    bits_at(data, at, bits).map(|raw| raw.to_le_bytes()[..bits / 8].to_vec())
+}
+
 /// One PDO, value by value.
 fn pdo(f: &Frame, dict: &Dict, (label, mapping): &(String, Vec<PdoMapEntry>)) -> String {
     let mut parts = Vec::new();
@@ -245,6 +266,18 @@ fn sdo(d: &[u8; 8], from_server: bool, dict: &Dict) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_entry_is_found_and_cut_from_its_pdo() {
+        let map = [PdoMapEntry::new(0x6041, 0, 16), PdoMapEntry::new(0x6064, 0, 32)];
+        assert_eq!(mapped_at(&map, 0x6064, 0), Some((16, 32)));
+        assert_eq!(mapped_at(&map, 0x606C, 0), None);
+        let data = [0x37, 0x02, 0xA0, 0x0F, 0x00, 0x00];
+        assert_eq!(entry_bytes(&data, 16, 32), Some(vec![0xA0, 0x0F, 0, 0]));
+        // Short frame, partial byte.
+        assert_eq!(entry_bytes(&data[..4], 16, 32), None);
+        assert_eq!(entry_bytes(&data, 0, 4), None);
+    }
 
     #[test]
     fn decodes_the_predefined_connection_set() {

@@ -24,7 +24,7 @@ use crate::output::outln;
 pub fn id_range(s: &str) -> anyhow::Result<RangeInclusive<u32>> {
     let one = |t: &str| {
         crate::dict::hex(t).filter(|v| *v <= 0x1FFF_FFFF).ok_or_else(|| {
-            coded("usage", anyhow!("bad --id `{s}`: CAN-IDs are hex, e.g. 181, 0x181 or 0x180-0x1FF"))
+            coded("usage", anyhow!("bad CAN-ID range `{s}`: CAN-IDs are hex, e.g. 181, 0x181 or 0x180-0x1FF"))
         })
     };
     let (lo, hi) = match s.split_once('-') {
@@ -32,7 +32,7 @@ pub fn id_range(s: &str) -> anyhow::Result<RangeInclusive<u32>> {
         None => (one(s)?, one(s)?),
     };
     if lo > hi {
-        return Err(coded("usage", anyhow!("bad --id `{s}`: {lo:X} is above {hi:X}")));
+        return Err(coded("usage", anyhow!("bad CAN-ID range `{s}`: {lo:X} is above {hi:X}")));
     }
     Ok(lo..=hi)
 }

@@ -85,3 +85,61 @@ fn refuses_a_drive_that_is_not_an_ethercat_drive() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("akd: not an EtherCAT drive"), "{err}");
 }
+
+/// `--http`: `GET /api/ethercat` gives every slave's name, identity, ESM
+/// state and AL status code, and the line's frame counters, which count
+/// what the master sends.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn http_gives_the_line_state() {
+    let veth = match Veth::create("dbhttp") {
+        Ok(v) => v,
+        Err(why) => {
+            println!("SKIPPED http_gives_the_line_state: {why}");
+            return;
+        }
+    };
+    let (a, b) = (veth.a.clone(), veth.b.clone());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drivebus"))
+        .args([
+            "ethercat",
+            "serve",
+            "--iface",
+            &a,
+            "--drive",
+            "ipos",
+            "--drive",
+            "generic",
+            "--http",
+            "127.0.0.1:0",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn drivebus");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let at = line.find("; state on http://").unwrap_or_else(|| panic!("no state URL in `{line}`"));
+    let url = line[at + 11..].trim().to_owned();
+    let get =
+        || async { reqwest::get(&url).await.expect("GET").json::<serde_json::Value>().await.expect("JSON") };
+    let v = get().await;
+    let slaves = v["slaves"].as_array().unwrap_or_else(|| panic!("{v}"));
+    assert_eq!(slaves.len(), 2, "{v}");
+    for (i, s) in slaves.iter().enumerate() {
+        assert_eq!(s["position"], i + 1, "{s}");
+        assert_eq!((s["state"].as_str(), s["al_status_code"].as_u64()), (Some("INIT"), Some(0)), "{s}");
+        assert!(s["identity"]["product_code"].as_u64().is_some_and(|x| x != 0), "{s}");
+        assert!(s["name"].as_str().is_some_and(|n| !n.is_empty()), "{s}");
+    }
+    assert_ne!(slaves[0]["identity"], slaves[1]["identity"], "{v}");
+    let before = v["line"]["frames"].as_u64().expect("frames");
+    let sock = RawSocket::open(&b).expect("socket on the other end");
+    sock.send(&count_frame()).unwrap();
+    let t0 = Instant::now();
+    while get().await["line"]["frames"].as_u64() <= Some(before) {
+        assert!(t0.elapsed() < Duration::from_secs(10), "the frame was not counted");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+}

@@ -442,3 +442,153 @@ async fn objects_of_a_device_come_from_eds() {
     assert!(v["objects"].as_array().unwrap().iter().all(|o| o["index"] == "60E3"), "{v}");
     assert!(v["objects"].as_array().unwrap().len() > 1, "{v}");
 }
+
+type Ws = tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+async fn ws_connect(ui: &Ui, first: Value) -> Ws {
+    let ws_url = ui.url("/api/stream").replacen("http://", "ws://", 1);
+    let (mut ws, _) = tokio_tungstenite::connect_async(ws_url).await.expect("WebSocket");
+    ws.send(tokio_tungstenite::tungstenite::Message::Text(first.to_string().into())).await.unwrap();
+    ws
+}
+
+/// The next JSON message of the stream.
+async fn next_msg(ws: &mut Ws) -> Value {
+    loop {
+        let m = tokio::time::timeout(Duration::from_secs(30), ws.next())
+            .await
+            .expect("stream silent")
+            .expect("stream closed")
+            .expect("stream error");
+        if let Ok(text) = m.to_text() {
+            return serde_json::from_str(text).expect("JSON message");
+        }
+    }
+}
+
+/// `serve --drive akd:1 --http` with TPDO1 (6041h) and TPDO3 (6041h,
+/// 6064h) of node 1 sent at every SYNC
+/// and heartbeats every 50 ms, operational; and a second process that
+/// produces SYNC every `sync_ms` on its socketcand bus (killed on drop).
+struct SyncedDrive {
+    ui: Ui,
+    sync: Child,
+}
+
+impl Drop for SyncedDrive {
+    fn drop(&mut self) {
+        let _ = self.sync.kill();
+        let _ = self.sync.wait();
+    }
+}
+
+async fn synced_drive(sync_ms: &str) -> SyncedDrive {
+    let listen = format!("127.0.0.1:{}", common::free_port());
+    let ui = Ui::start(&["serve", "--listen", &listen, "--drive", "akd:1", "--http", "127.0.0.1:0"]);
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/1800/2", json!({"value": 1})).await.0, 200);
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/1802/2", json!({"value": 1})).await.0, 200);
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/1017/0", json!({"value": 50})).await.0, 200);
+    assert_eq!(post(&ui, "/api/nodes/1/nmt", json!({"command": "start"})).await.0, 200);
+    let sync = Command::new(common::bin())
+        .args(["--bus", &format!("socketcand://{listen}/can0"), "produce", "--sync", sync_ms])
+        .env_remove("RUST_LOG")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn drivebus produce");
+    SyncedDrive { ui, sync }
+}
+
+/// Raw frames with a filter: only SYNC and TPDO1 identifiers arrive
+/// (heartbeats and SDO answers are on the bus too), each with its time
+/// and data, and the drive's TPDO1 follows a SYNC.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn raw_frames_pass_the_filter_and_a_tpdo_follows_sync() {
+    let d = synced_drive("20").await;
+    let mut ws = ws_connect(&d.ui, json!({"frames": {"ids": ["0x180-0x1FF", "080"]}})).await;
+    let (mut subscribed, mut after_sync, mut status) = (false, false, false);
+    let mut last_sync = false;
+    let mut seen = Vec::new();
+    let t0 = Instant::now();
+    while !(subscribed && after_sync && status && seen.len() > 20) {
+        assert!(t0.elapsed() < Duration::from_secs(60), "frames {seen:?}");
+        // SDO answers (581h) on the bus meanwhile must not pass.
+        if seen.len() == 5 {
+            assert_eq!(get(&d.ui, "/api/nodes/1/sdo/6041/0").await.0, 200);
+        }
+        let msg = next_msg(&mut ws).await;
+        match msg["type"].as_str() {
+            Some("subscribed") => subscribed = msg["frames"] == true,
+            Some("frame") => {
+                let id = u32::from_str_radix(msg["id"].as_str().unwrap(), 16).unwrap();
+                assert!(id == 0x080 || (0x180..=0x1FF).contains(&id), "{msg}");
+                assert!(msg["t"].is_number() && msg["data"].is_string(), "{msg}");
+                after_sync |= last_sync && id == 0x181;
+                last_sync = id == 0x080;
+                seen.push(id);
+            }
+            Some("status") => status = msg["frames"] == true && msg["dropped"].is_u64(),
+            _ => {}
+        }
+    }
+    // Both kinds came: SYNCs and TPDOs; and the filter can be changed.
+    assert!(seen.contains(&0x080) && seen.contains(&0x181), "{seen:?}");
+    ws.send(tokio_tungstenite::tungstenite::Message::Text(
+        json!({"frames": {"functions": ["heartbeat"]}}).to_string().into(),
+    ))
+    .await
+    .unwrap();
+    let t0 = Instant::now();
+    loop {
+        assert!(t0.elapsed() < Duration::from_secs(30), "no heartbeat frame");
+        let msg = next_msg(&mut ws).await;
+        if msg["type"] == "frame" && msg["id"] == "701" {
+            assert_eq!(msg["data"], "05", "{msg}");
+            break;
+        }
+    }
+    // A bad filter is an error message and changes nothing.
+    ws.send(tokio_tungstenite::tungstenite::Message::Text(
+        json!({"frames": {"ids": ["0x200-0x100"]}}).to_string().into(),
+    ))
+    .await
+    .unwrap();
+    loop {
+        let msg = next_msg(&mut ws).await;
+        if msg["type"] == "error" {
+            assert!(msg["error"].as_str().unwrap().contains("200 is above 100"), "{msg}");
+            break;
+        }
+        assert!(msg["type"] != "frame" || msg["id"] == "701", "{msg}");
+    }
+}
+
+/// 6064h, mapped in TPDO3 of the AKD (transmission type 1), arrives at
+/// every SYNC with `source: "pdo"`, not at the 1 s polling period; 607Ah,
+/// in no TPDO, is polled by SDO.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pdo_mapped_objects_arrive_at_every_sync() {
+    let d = synced_drive("20").await;
+    let sub = json!({"subscribe": [{"node": 1, "index": "6064", "period_ms": 1000}, {"node": 1, "index": "607A", "period_ms": 200}]});
+    let mut ws = ws_connect(&d.ui, sub).await;
+    let (mut pdo, mut sdo) = (Vec::new(), 0);
+    let t0 = Instant::now();
+    while pdo.len() < 50 || sdo < 2 {
+        assert!(t0.elapsed() < Duration::from_secs(60), "pdo samples {} sdo samples {sdo}", pdo.len());
+        let msg = next_msg(&mut ws).await;
+        if msg["type"] != "sample" {
+            continue;
+        }
+        match (msg["index"].as_str(), msg["source"].as_str()) {
+            (Some("6064"), Some("pdo")) => pdo.push(msg["t"].as_f64().unwrap()),
+            (Some("607A"), Some("sdo")) => sdo += 1,
+            // Until the master saw the node operational (its heartbeat).
+            (Some("6064"), Some("sdo")) if pdo.is_empty() => {}
+            _ => panic!("{msg}"),
+        }
+    }
+    // About one sample per 20 ms SYNC (the 1 s poll would give one per second).
+    let span = pdo.last().unwrap() - pdo[10];
+    let per = span / (pdo.len() - 11) as f64;
+    assert!((10.0..=40.0).contains(&per), "one 6064h sample every {per:.1} ms");
+}

@@ -16,6 +16,23 @@ use std::sync::{Arc, Mutex, MutexGuard};
 /// A device on a hosted segment.
 pub type BoxDevice = Box<dyn Device + Send>;
 
+/// One slave of a host as it is now (what a status page shows).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SlaveState {
+    /// Line position, from 1.
+    pub position: usize,
+    /// The SII General "order" string (the name `scan` gives), empty without one.
+    pub name: String,
+    /// Vendor, product, revision, serial from the SII.
+    pub identity: drivebus_can::Identity,
+    /// AL status register (0x0130): the ESM state and the error bit.
+    pub al_status: u16,
+    /// AL status code register (0x0134).
+    pub al_status_code: u16,
+    /// False while the slave is powered off (a fault of the line).
+    pub powered: bool,
+}
+
 /// Counters of a host.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct HostStats {
@@ -180,8 +197,64 @@ impl Host {
         r
     }
 
+    /// Every slave's identity and ESM state, in line order.
+    pub fn slaves(&self) -> Vec<SlaveState> {
+        let g = self.lock();
+        g.segment
+            .devices()
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let esc = d.esc();
+                let sii = esc.sii_image().parse().ok();
+                let name = sii
+                    .as_ref()
+                    .and_then(|c| {
+                        let at = usize::from(c.general.as_ref()?.order_idx).checked_sub(1)?;
+                        c.strings.get(at).cloned()
+                    })
+                    .unwrap_or_default();
+                SlaveState {
+                    position: i + 1,
+                    name,
+                    identity: sii.map(|c| c.identity).unwrap_or_default(),
+                    al_status: esc.al_status(),
+                    al_status_code: esc.peek_u16(drivebus_esc::registers::AL_STATUS_CODE),
+                    powered: g.segment.is_powered(i),
+                }
+            })
+            .collect()
+    }
+
     /// Counters.
     pub fn stats(&self) -> HostStats {
         self.lock().stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::described::{self, Member};
+
+    /// A fresh line: every slave in INIT (AL status 1, code 0) with the
+    /// identity and name of its SII.
+    #[test]
+    fn slaves_report_identity_and_esm_state() {
+        let members = vec![
+            Member::Drive(crate::drive::profile("ipos").unwrap()),
+            Member::Drive(crate::drive::profile("generic").unwrap()),
+        ];
+        let host = Host::line(described::devices(&members, None).unwrap(), Clock::simulated(Instant::ZERO));
+        let s = host.slaves();
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].position, s[1].position), (1, 2));
+        for x in &s {
+            assert_eq!((x.al_status & 0x0F, x.al_status_code, x.powered), (1, 0, true), "{x:?}");
+            assert!(!x.name.is_empty() && x.identity.product_code != 0, "{x:?}");
+        }
+        assert_ne!(s[0].identity, s[1].identity);
+        host.with_segment(|seg| seg.power_off(1));
+        assert!(!host.slaves()[1].powered);
     }
 }

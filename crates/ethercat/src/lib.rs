@@ -38,4 +38,4 @@ pub mod server;
 pub use clock::Clock;
 pub use drivebus_esc::MAX_JITTER_NS;
 pub use drivebus_esc::segment::LineFault;
-pub use host::{BoxDevice, Host, HostStats};
+pub use host::{BoxDevice, Host, HostStats, SlaveState};

@@ -9,6 +9,7 @@
 pub mod control;
 pub mod demo;
 mod drive;
+mod http;
 mod line;
 mod read;
 mod serve;
@@ -295,6 +296,10 @@ pub struct EcatServeArgs {
     /// docs/control.md. Off unless given.
     #[arg(long, value_name = "ADDR")]
     pub control: Option<String>,
+    /// Serve the line's state over HTTP on this address (`GET /api/ethercat`,
+    /// docs/http-api.md); port 0 picks a free one. Off unless given.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub http: Option<String>,
 }
 
 /// One slave of `ethercat serve`'s line.

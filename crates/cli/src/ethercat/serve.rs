@@ -38,6 +38,10 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
+    let http = match &a.http {
+        Some(addr) => Some(super::http::start(host.clone(), addr).await?),
+        None => None,
+    };
     // Installed before the ready line so a signal right after it ends in a
     // clean exit 0.
     let signals = crate::serve::Signals::install()?;
@@ -51,10 +55,16 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
         let control =
             control_task.as_ref().map_or_else(String::new, |(_, addr)| format!("; control on {addr}"));
         let line = names(&members).join(" ");
-        writeln!(out, "drivebus ethercat serve: ready on {} (line {line}){control}", a.iface)?;
+        let page = http
+            .as_ref()
+            .map_or_else(String::new, |(_, addr)| format!("; state on http://{addr}/api/ethercat"));
+        writeln!(out, "drivebus ethercat serve: ready on {} (line {line}){control}{page}", a.iface)?;
         out.flush()?;
     }
     signals.wait().await?;
+    if let Some((task, _)) = http {
+        task.abort();
+    }
     if let Some((task, addr)) = control_task {
         task.abort();
         if let crate::control::Addr::Unix(p) = addr {

@@ -11,6 +11,7 @@
 mod api;
 mod drive;
 mod error;
+mod frames;
 mod objects;
 mod stream;
 mod values;

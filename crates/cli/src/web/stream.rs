@@ -1,6 +1,7 @@
 //! `GET /api/stream` (WebSocket): samples of the objects a client
-//! subscribes to, polled by SDO at the period it asks, and NMT, EMCY and
-//! motion events. Everything goes through one bounded queue per client:
+//! subscribes to (from their TPDO when mapped, else polled by SDO at the
+//! period it asks), raw frames (`frames.rs`), and NMT, EMCY and motion
+//! events. Everything goes through one bounded queue per client:
 //! when the client reads slower than the bus gives, the oldest messages
 //! are dropped and counted, and the count is in every `status` message,
 //! so the bus side never waits for a browser.
@@ -14,14 +15,16 @@ use std::time::Duration;
 use axum::extract::State;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::response::Response;
-use drivebus_master::{MasterEvent, RemoteState, Value};
+use drivebus_master::{Frame, MasterEvent, PdoDir, RemoteState, Value};
 use serde_json::{Value as Json_, json};
 use tokio::sync::{Notify, broadcast};
 use tokio::task::JoinHandle;
 
 use super::Web;
 use super::api::{nmt_name, seen_node};
+use super::frames::{self, FrameFilter};
 use super::values;
+use crate::decode;
 
 /// Messages queued per client before the oldest is dropped.
 const QUEUE: usize = 4096;
@@ -29,14 +32,16 @@ const QUEUE: usize = 4096;
 const MIN_PERIOD_MS: u64 = 1;
 
 /// A client's bounded queue.
-struct Queue {
+pub struct Queue {
     q: Mutex<VecDeque<String>>,
-    dropped: AtomicU64,
+    /// Messages dropped so far (sent in every `status`).
+    pub dropped: AtomicU64,
     ready: Notify,
 }
 
 impl Queue {
-    fn push(&self, v: &Json_) {
+    /// Queues `v`, dropping the oldest message when full.
+    pub fn push(&self, v: &Json_) {
         let mut q = self.q.lock().unwrap_or_else(|e| e.into_inner());
         if q.len() >= QUEUE {
             q.pop_front();
@@ -71,15 +76,23 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
         Arc::new(Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() });
     let _events = Tasks(vec![tokio::spawn(events(web.clone(), queue.clone()))]);
     let mut polls = Tasks(Vec::new());
+    let mut frames = Tasks(Vec::new());
     let mut status = tokio::time::interval(Duration::from_secs(1));
     loop {
         tokio::select! {
             m = socket.recv() => match m {
-                Some(Ok(Message::Text(t))) => match subscribe(&web, &queue, t.as_str()) {
-                    Ok(tasks) => {
-                        let n = tasks.len();
-                        polls = Tasks(tasks);
-                        queue.push(&json!({"type": "subscribed", "channels": n}));
+                Some(Ok(Message::Text(t))) => match request(&web, &queue, t.as_str()) {
+                    Ok((channels, filter)) => {
+                        let mut answer = json!({"type": "subscribed"});
+                        if let Some(tasks) = channels {
+                            answer["channels"] = json!(tasks.len());
+                            polls = Tasks(tasks);
+                        }
+                        if let Some(task) = filter {
+                            answer["frames"] = json!(task.is_some());
+                            frames = Tasks(task.into_iter().collect());
+                        }
+                        queue.push(&answer);
                     }
                     Err(e) => queue.push(&json!({"type": "error", "error": e})),
                 },
@@ -95,7 +108,7 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
             }
             _ = status.tick() => {
                 let s = json!({"type": "status", "t": web.t(), "dropped": queue.dropped.load(Ordering::Relaxed),
-                    "channels": polls.0.len()});
+                    "channels": polls.0.len(), "frames": !frames.0.is_empty()});
                 if socket.send(Message::Text(s.to_string().into())).await.is_err() {
                     return;
                 }
@@ -104,9 +117,45 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
     }
 }
 
+/// A client message: object channels, raw frames, or both.
 #[derive(serde::Deserialize)]
-struct Subscribe {
-    subscribe: Vec<Channel>,
+#[serde(deny_unknown_fields)]
+struct Request {
+    subscribe: Option<Vec<Channel>>,
+    /// Absent: unchanged; `null`: no frames; an object: the filter.
+    #[serde(default, deserialize_with = "present")]
+    frames: Option<Json_>,
+}
+
+/// `Some` for any value given, `null` included.
+fn present<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Json_>, D::Error> {
+    <Json_ as serde::Deserialize>::deserialize(d).map(Some)
+}
+
+const SHAPE: &str = r#"{"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 10}]} or {"frames": {"ids": ["0x180-0x1FF"]}}"#;
+
+/// What a message asks for: the new polling tasks (if it has
+/// `subscribe`) and the new frame task (if it has `frames`; `None` inside
+/// for `null`). An error names the first fault and starts nothing.
+#[allow(clippy::type_complexity)]
+fn request(
+    web: &Arc<Web>,
+    queue: &Arc<Queue>,
+    text: &str,
+) -> Result<(Option<Vec<JoinHandle<()>>>, Option<Option<JoinHandle<()>>>), String> {
+    let r: Request =
+        serde_json::from_str(text).map_err(|e| format!("malformed subscription: {e}; send {SHAPE}"))?;
+    if r.subscribe.is_none() && r.frames.is_none() {
+        return Err(format!("nothing asked: send {SHAPE}"));
+    }
+    let filter = match &r.frames {
+        Some(Json_::Null) => Some(None),
+        Some(v) => Some(Some(FrameFilter::parse(v)?)),
+        None => None,
+    };
+    let channels = r.subscribe.as_deref().map(|c| subscribe(web, queue, c)).transpose()?;
+    let frames = filter.map(|f| f.map(|f| tokio::spawn(frames::forward(web.clone(), queue.clone(), f))));
+    Ok((channels, frames))
 }
 
 #[derive(serde::Deserialize)]
@@ -123,16 +172,17 @@ struct Channel {
 /// Starts one polling task per channel of a `{"subscribe": [...]}`
 /// message (replacing the previous subscription); an error names the
 /// first bad channel and starts nothing.
-fn subscribe(web: &Arc<Web>, queue: &Arc<Queue>, text: &str) -> Result<Vec<JoinHandle<()>>, String> {
-    let shape = r#"{"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 10}]}"#;
-    let s: Subscribe =
-        serde_json::from_str(text).map_err(|e| format!("malformed subscription: {e}; send {shape}"))?;
+fn subscribe(
+    web: &Arc<Web>,
+    queue: &Arc<Queue>,
+    channels: &[Channel],
+) -> Result<Vec<JoinHandle<()>>, String> {
     let text_of = |v: &Json_| match v {
         Json_::String(s) => s.clone(),
         other => other.to_string(),
     };
     let mut plan = Vec::new();
-    for c in &s.subscribe {
+    for c in channels {
         let node = seen_node(web, &text_of(&c.node)).map_err(|e| e.message)?;
         let (index, sub) = values::object(&web.dict, &text_of(&c.index), Some(&format!("{:X}", c.sub)))
             .map_err(|e| e.message)?;
@@ -150,19 +200,41 @@ fn subscribe(web: &Arc<Web>, queue: &Arc<Queue>, text: &str) -> Result<Vec<JoinH
 
 async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master::DataType, Duration)) {
     let (node, index, sub, dt, period) = p;
+    // Mapped in a TPDO: a sample per frame of it; by SDO only while the
+    // node does not send its TPDOs (not operational).
+    let (mut pdo, at, bits) = match tpdo_of(&web, node, index, sub).await {
+        Some((rx, at, bits)) => (Some(rx), at, bits),
+        None => (None, 0, 0),
+    };
     let sdo = web.master.sdo(node);
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut failing = false;
     loop {
-        tick.tick().await;
+        tokio::select! {
+            f = next_pdo(&mut pdo) => {
+                match f {
+                    Ok(f) => {
+                        if let Some(v) = decode::entry_bytes(f.data(), at, bits).and_then(|b| Value::decode(dt, &b).ok()) {
+                            queue.push(&sample(&web, node, index, sub, &v, "pdo"));
+                        }
+                    }
+                    Err(broadcast::error::RecvError::Lagged(n)) => {
+                        queue.dropped.fetch_add(n, Ordering::Relaxed);
+                    }
+                    Err(broadcast::error::RecvError::Closed) => pdo = None,
+                }
+                continue;
+            }
+            _ = tick.tick() => {}
+        }
+        if pdo.is_some() && web.master.node_state(node) == Some(RemoteState::Operational) {
+            continue;
+        }
         match sdo.upload(index, sub).await.map(|raw| Value::decode(dt, &raw)) {
             Ok(Ok(v)) => {
                 failing = false;
-                queue.push(
-                    &json!({"type": "sample", "t": web.t(), "node": node, "index": format!("{index:04X}"),
-                    "sub": sub, "value": values::to_json(&v)}),
-                );
+                queue.push(&sample(&web, node, index, sub, &v, "sdo"));
             }
             // Said once per run of failures, not at every period.
             r if !failing => {
@@ -180,6 +252,38 @@ async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master
             _ => {}
         }
     }
+}
+
+/// The next frame of the TPDO, never without one.
+async fn next_pdo(rx: &mut Option<broadcast::Receiver<Frame>>) -> Result<Frame, broadcast::error::RecvError> {
+    match rx {
+        Some(rx) => rx.recv().await,
+        None => std::future::pending().await,
+    }
+}
+
+fn sample(web: &Web, node: u8, index: u16, sub: u8, v: &Value, source: &str) -> Json_ {
+    json!({"type": "sample", "t": web.t(), "node": node, "index": format!("{index:04X}"), "sub": sub,
+        "value": values::to_json(v), "source": source})
+}
+
+/// When `index:sub` is mapped in a valid TPDO of `node` (as the master
+/// reads the mapping now): the frames of that TPDO from now on, and the
+/// entry's bit offset and length in them. Decoded in the client's task,
+/// not in the master's frame path.
+async fn tpdo_of(
+    web: &Web,
+    node: u8,
+    index: u16,
+    sub: u8,
+) -> Option<(broadcast::Receiver<Frame>, usize, usize)> {
+    for num in 1..=512u16 {
+        let Ok(rec) = web.master.read_pdo(node, PdoDir::Tx, num).await else { break };
+        if let Some((at, bits)) = decode::mapped_at(&rec.mapping, index, sub).filter(|_| rec.valid()) {
+            return Some((web.master.subscribe_pdo(rec.can_id()), at, bits));
+        }
+    }
+    None
 }
 
 /// NMT state changes, EMCYs and the server's motion events.
