@@ -42,7 +42,7 @@ const FUNCTIONS: &[(&str, &[RangeInclusive<u32>])] = &[
 /// format) or in the standard identifiers of `functions`; both empty:
 /// every frame.
 #[derive(Debug, Default, PartialEq)]
-pub struct FrameFilter {
+pub struct FrameSelection {
     ids: Vec<RangeInclusive<u32>>,
     functions: Vec<RangeInclusive<u32>>,
 }
@@ -56,14 +56,14 @@ struct Request {
     functions: Vec<String>,
 }
 
-impl FrameFilter {
+impl FrameSelection {
     /// The filter of a `frames` value: `{"ids": ["0x180-0x1FF", "080"],
     /// "functions": ["sync", "emcy"]}`.
-    pub fn parse(v: &Json_) -> Result<FrameFilter, String> {
+    pub fn parse(v: &Json_) -> Result<FrameSelection, String> {
         let shape = r#"{"frames": {"ids": ["0x180-0x1FF", "080"], "functions": ["sync", "tpdo"]}}"#;
         let r: Request = serde_json::from_value(v.clone())
             .map_err(|e| format!("malformed frame filter: {e}; send {shape} ({{}} for every frame)"))?;
-        let mut f = FrameFilter::default();
+        let mut f = FrameSelection::default();
         for s in &r.ids {
             f.ids.push(crate::dump::id_range(s).map_err(|e| format!("{e:#}"))?);
         }
@@ -104,7 +104,7 @@ pub fn frame_json(t: f64, f: &Frame) -> Json_ {
 
 /// Puts every received frame that passes `filter` on `queue`; frames the
 /// task could not keep up with count as dropped.
-pub async fn forward(web: Arc<Web>, queue: Arc<Queue>, filter: FrameFilter) {
+pub async fn forward(web: Arc<Web>, queue: Arc<Queue>, filter: FrameSelection) {
     let mut rx = web.master.subscribe_frames();
     loop {
         match rx.recv().await {
@@ -124,27 +124,28 @@ mod tests {
 
     #[test]
     fn ids_and_functions_select_frames() {
-        let f = FrameFilter::parse(&json!({"ids": ["0x180-0x1FF", "080"], "functions": ["emcy"]})).unwrap();
+        let f =
+            FrameSelection::parse(&json!({"ids": ["0x180-0x1FF", "080"], "functions": ["emcy"]})).unwrap();
         for (id, pass) in
             [(0x181, true), (0x1FF, true), (0x080, true), (0x081, true), (0x200, false), (0x581, false)]
         {
             assert_eq!(f.passes(&Frame::new(id, &[1, 2])), pass, "{id:03X}");
         }
-        let all = FrameFilter::parse(&json!({})).unwrap();
+        let all = FrameSelection::parse(&json!({})).unwrap();
         assert!(all.passes(&Frame::new(0x7FF, &[])));
-        let hb = FrameFilter::parse(&json!({"functions": ["Heartbeat"]})).unwrap();
+        let hb = FrameSelection::parse(&json!({"functions": ["Heartbeat"]})).unwrap();
         assert!(hb.passes(&Frame::new(0x701, &[5])) && !hb.passes(&Frame::new(0x700, &[5])));
     }
 
     #[test]
     fn a_bad_filter_names_its_fault() {
-        let e = FrameFilter::parse(&json!({"ids": ["0x200-0x100"]})).unwrap_err();
+        let e = FrameSelection::parse(&json!({"ids": ["0x200-0x100"]})).unwrap_err();
         assert!(e.contains("200 is above 100"), "{e}");
-        let e = FrameFilter::parse(&json!({"ids": ["zz"]})).unwrap_err();
+        let e = FrameSelection::parse(&json!({"ids": ["zz"]})).unwrap_err();
         assert!(e.contains("CAN-IDs are hex"), "{e}");
-        let e = FrameFilter::parse(&json!({"functions": ["pdo9"]})).unwrap_err();
+        let e = FrameSelection::parse(&json!({"functions": ["pdo9"]})).unwrap_err();
         assert!(e.contains("not a CANopen function") && e.contains("tpdo1"), "{e}");
-        let e = FrameFilter::parse(&json!({"id": ["181"]})).unwrap_err();
+        let e = FrameSelection::parse(&json!({"id": ["181"]})).unwrap_err();
         assert!(e.contains("malformed frame filter"), "{e}");
     }
 

@@ -22,7 +22,7 @@ use tokio::task::JoinHandle;
 
 use super::Web;
 use super::api::{nmt_name, seen_node};
-use super::frames::{self, FrameFilter};
+use super::frames::{self, FrameSelection};
 use super::values;
 use crate::decode;
 
@@ -150,7 +150,7 @@ fn request(
     }
     let filter = match &r.frames {
         Some(Json_::Null) => Some(None),
-        Some(v) => Some(Some(FrameFilter::parse(v)?)),
+        Some(v) => Some(Some(FrameSelection::parse(v)?)),
         None => None,
     };
     let channels = r.subscribe.as_deref().map(|c| subscribe(web, queue, c)).transpose()?;
