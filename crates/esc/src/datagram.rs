@@ -36,6 +36,9 @@ use crate::registers::REGISTER_SPACE;
 use crate::sm::Side;
 use drivebus_base::Instant;
 
+mod index;
+pub use index::FrameIndex;
+
 impl Esc {
     /// Processes an Ethernet frame in place, as if it arrived on port 0 at
     /// `now` and left again through port 0. Non-EtherCAT frames are left
@@ -91,6 +94,7 @@ impl Esc {
             }
             self.execute(&mut payload[pos..pos + total], &h);
             report.datagrams += 1;
+            report.touched = true;
             pos += total;
             if !h.more {
                 break;
@@ -110,7 +114,7 @@ impl Esc {
         self.mem[0x030C] = self.mem[0x030C].saturating_add(1);
     }
 
-    fn execute(&mut self, d: &mut [u8], h: &DatagramHeader) {
+    pub(crate) fn execute(&mut self, d: &mut [u8], h: &DatagramHeader) {
         let irq = u16::from_le_bytes([self.mem[0x0210], self.mem[0x0211]])
             & u16::from_le_bytes([self.mem[0x0200], self.mem[0x0201]]);
         if irq != 0 {

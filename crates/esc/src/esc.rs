@@ -102,6 +102,9 @@ pub struct FrameReport {
     /// Not an EtherCAT DL PDU frame (other EtherType or header type):
     /// passed on untouched.
     pub ignored: bool,
+    /// Some datagram was executed against this ESC (its firmware may have
+    /// something to do); false when every datagram was for others.
+    pub touched: bool,
 }
 
 /// Process-data and PDI watchdogs (ESC data sheet Section I "Watchdogs").

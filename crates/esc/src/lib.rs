@@ -55,6 +55,7 @@ pub mod sii;
 pub mod slave;
 mod sm;
 
+pub use datagram::FrameIndex;
 pub use dc::ClockConfig;
 pub use eeprom::SiiTiming;
 pub use esc::{Esc, EscConfig, FrameReport, FrameTiming, MAX_JITTER_NS, SmInfo};

@@ -24,6 +24,7 @@
 //! line ([`LineFault`]: a broken link, lost or corrupted frames, a skewed
 //! working counter) act on every frame until cleared.
 
+use crate::datagram::FrameIndex;
 use crate::esc::{Esc, FrameReport, FrameTiming};
 use crate::frame;
 use alloc::boxed::Box;
@@ -108,6 +109,9 @@ pub struct SegmentReport {
     pub returns_at: Instant,
     /// The first slave's report (all slaves see the same frame layout).
     pub frame: FrameReport,
+    /// The earliest deadline of the devices the frame touched (polled after
+    /// it); the others' deadlines are unchanged by the frame.
+    pub next_deadline: Option<Instant>,
     /// The master never gets the frame back: it was lost on the way
     /// ([`LineFault::Lose`]) or arrives with a bad FCS that the master's
     /// NIC discards ([`LineFault::Corrupt`]). Transports do not deliver it.
@@ -125,6 +129,10 @@ pub struct Segment<D> {
     rng: XorShift64,
     cfg: SegmentConfig,
     scratch: Vec<FrameTiming>,
+    /// Which reached slaves a frame's datagrams touched (their firmware runs).
+    touched: Vec<bool>,
+    /// The frame's datagrams, parsed once for every slave.
+    index: FrameIndex,
     /// Working counters before a skewed slave ran.
     wkcs: Vec<(usize, u16)>,
 }
@@ -140,6 +148,8 @@ impl<D: SegmentDevice> Segment<D> {
             rng: XorShift64::new(0),
             cfg,
             scratch: Vec::new(),
+            touched: Vec::new(),
+            index: FrameIndex::default(),
             wkcs: Vec::new(),
         }
     }
@@ -388,6 +398,10 @@ impl<D: SegmentDevice> Segment<D> {
         report.returns_at = back + link;
         report.reached = reached;
         let corrupt_at = if self.faults.is_empty() { None } else { self.corrupt(reached) };
+        // Faults of the line need every slave to walk the frame itself.
+        let indexed = self.faults.is_empty() && self.index.build(&frame[off..]);
+        self.touched.clear();
+        self.touched.resize(reached, true);
         for i in 0..reached {
             if let Some(at) = corrupt_at.filter(|at| i >= *at) {
                 // A bad FCS: nothing executed, the error counted.
@@ -404,7 +418,13 @@ impl<D: SegmentDevice> Segment<D> {
                 fault::working_counters(&frame[off..], &mut self.wkcs);
             }
             let timing = self.scratch[i];
-            let r = self.devices[i].esc_mut().process_ethercat(&mut frame[off..], &timing);
+            let esc = self.devices[i].esc_mut();
+            let r = if indexed {
+                esc.process_indexed(&mut frame[off..], &timing, &mut self.index)
+            } else {
+                esc.process_ethercat(&mut frame[off..], &timing)
+            };
+            self.touched[i] = r.touched;
             if let Some(skew) = skew {
                 fault::skew_counters(&mut frame[off..], &self.wkcs, skew);
             }
@@ -416,10 +436,14 @@ impl<D: SegmentDevice> Segment<D> {
         if !report.frame.ignored {
             frame::mark_reply_source(frame);
         }
-        for i in 0..reached {
+        // Firmware runs where the frame did something; the others' state
+        // did not change, and their deadlines stand (a deadline is a promise).
+        let mut next = None;
+        for i in (0..reached).filter(|&i| self.touched[i]) {
             let at = self.scratch[i].at;
-            self.devices[i].poll(at);
+            next = earliest(next, self.devices[i].poll(at));
         }
+        report.next_deadline = next;
         report
     }
 

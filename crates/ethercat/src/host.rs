@@ -55,20 +55,21 @@ struct Inner {
 }
 
 impl Inner {
-    /// Polls the devices at every deadline up to `now`, then at `now`.
+    /// Polls the devices at every deadline up to `now`. Nothing else: a
+    /// device's deadline is a promise, polling earlier does nothing.
     fn catch_up(&mut self, now: Instant) {
         let mut guard = 0u32;
         while let Some(d) = self.next.filter(|d| *d <= now) {
             self.stats.deadline_polls += 1;
             let n = self.segment.poll(d);
             guard += 1;
+            self.next = n;
             // A deadline that does not move is a broken device; do not spin.
             if n.is_some_and(|n| n <= d) || guard > 1_000_000 {
+                self.next = self.segment.poll(now);
                 break;
             }
-            self.next = n;
         }
-        self.next = self.segment.poll(now);
     }
 }
 
@@ -91,7 +92,7 @@ impl Host {
     pub fn new(segment: Segment<BoxDevice>, clock: Clock) -> Host {
         let turnaround = if clock.is_simulated() { Duration::from_micros(5) } else { Duration::ZERO };
         let mut inner = Inner { segment, next: None, capture: None, turnaround, stats: HostStats::default() };
-        inner.catch_up(clock.now());
+        inner.next = inner.segment.poll(clock.now());
         Host { inner: Arc::new(Mutex::new(inner)), clock }
     }
 
@@ -158,10 +159,9 @@ impl Host {
         if self.clock.is_simulated() {
             self.clock.advance_to(r.returns_at + g.turnaround);
         }
-        // Devices ran at their own arrival instants inside the segment; this
-        // only refreshes the deadline (never moves a device back in time).
-        let after = self.clock.now();
-        g.next = earliest(g.next, g.segment.poll(after));
+        // Devices the frame touched ran at their own arrival instants inside
+        // the segment; the others' deadlines stand.
+        g.next = earliest(g.next, r.next_deadline);
         r
     }
 

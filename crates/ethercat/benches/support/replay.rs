@@ -57,12 +57,16 @@ impl Future for RecordingLink<'_> {
     }
 }
 
-/// A line of `n` iPOS in OP, every drive enabled, and ethercrab's frames
-/// of one cycle.
-pub fn line_in_op(n: usize, storage: &'static Storage) -> (Host, Vec<Vec<u8>>) {
-    let clock = Clock::simulated(Instant::from_millis(1));
-    let line = (0..n).fold(DriveLine::new(), |l, _| l.drive(Profile::Ipos));
-    let host = line.host(clock.clone()).expect("line");
+/// The frames ethercrab sent while recording.
+pub type Recorded = Arc<Mutex<Vec<Vec<u8>>>>;
+
+/// ethercrab's main device on `host`'s line, its frames going straight
+/// through the host on a thread of their own, and what it sends copied into
+/// the returned list while the returned flag is set.
+pub fn recording_main_device(
+    host: &Host,
+    storage: &'static Storage,
+) -> (MainDevice<'static>, Arc<AtomicBool>, Recorded) {
     let (tx, rx, pdu_loop) = storage.try_split().expect("split once");
     let recording = Arc::new(AtomicBool::new(false));
     let frames = Arc::new(Mutex::new(Vec::new()));
@@ -83,6 +87,16 @@ pub fn line_in_op(n: usize, storage: &'static Storage) -> (Host, Vec<Vec<u8>>) {
         },
         MainDeviceConfig { dc_static_sync_iterations: 1_000, ..MainDeviceConfig::default() },
     );
+    (md, recording, frames)
+}
+
+/// A line of `n` iPOS in OP, every drive enabled, and ethercrab's frames
+/// of one cycle.
+pub fn line_in_op(n: usize, storage: &'static Storage) -> (Host, Vec<Vec<u8>>) {
+    let clock = Clock::simulated(Instant::from_millis(1));
+    let line = (0..n).fold(DriveLine::new(), |l, _| l.drive(Profile::Ipos));
+    let host = line.host(clock.clone()).expect("line");
+    let (md, recording, frames) = recording_main_device(&host, storage);
     // ethercrab wants a `Copy` clock function.
     let c: &'static Clock = Box::leak(Box::new(clock.clone()));
     let h = host.clone();
@@ -102,6 +116,22 @@ pub fn line_in_op(n: usize, storage: &'static Storage) -> (Host, Vec<Vec<u8>>) {
     let frames = frames.lock().unwrap().clone();
     assert!(!frames.is_empty());
     (host, frames)
+}
+
+/// A frame's datagrams as (command, data length) (the `io_line` example prints them).
+#[allow(dead_code)] // not every includer prints frames
+pub fn datagrams(frame: &[u8]) -> Vec<(u8, usize)> {
+    let (mut off, mut out) = (16, Vec::new());
+    while off + 12 <= frame.len() {
+        let word = u16::from_le_bytes([frame[off + 6], frame[off + 7]]);
+        let len = usize::from(word & 0x7FF);
+        out.push((frame[off], len));
+        if word & 0x8000 == 0 {
+            break;
+        }
+        off += 12 + len;
+    }
+    out
 }
 
 /// The working counters of a frame's LRW datagrams.
