@@ -7,7 +7,31 @@ PROFILES: List[str]
 """The personalities a drive spec may name (``"kc1"``, ``"akd"``, ...)."""
 
 class DriveState:
-    """The state of one hosted drive when it was read (``bus.drives``)."""
+    """One hosted drive (``bus.drives``, ``sim.drives``, ``server.drives``): its state when it was read, and methods that change the drive now.
+
+    The methods are the run-time changes of ``drivebus control``, the same
+    calls as the host's own (``bus.fault(node, ...)``). A drive object keeps
+    its bus, server or simulation alive. They raise ``ValueError`` with the
+    control interface's message, ``OSError`` when the drive is powered off
+    or its bus is closed.
+    """
+
+    def refresh(self) -> "DriveState":
+        """The drive's state read now (a new object)."""
+    def set_input(
+        self, input: str, value: float, line: Optional[int] = None, duration: Optional[float] = None
+    ) -> None:
+        """Sets machine input ``input`` (``"digital"`` with ``line`` 1..16, ``"analog"`` in volts, ``"master_velocity"``, ...) now, for ``duration`` seconds if given."""
+    def fault(self, kind: str, switch: Optional[str] = None, duration: Optional[float] = None) -> None:
+        """Starts machine fault ``kind`` (``"encoder"``, ``"over_current"``, ``"trip"`` with ``switch``, ...) now."""
+    def clear_fault(self) -> None:
+        """Ends every machine fault that is on (a latched drive fault stays until the master's fault reset)."""
+    def bus_off(self) -> None:
+        """The drive's CAN controller goes bus-off."""
+    def bus_on(self) -> None:
+        """The drive is back on the bus."""
+    def power(self, on: bool) -> None:
+        """Cuts (``False``) or restores (``True``) the drive's power; off it leaves ``drives``."""
 
     @property
     def profile(self) -> str:
@@ -54,7 +78,7 @@ class VirtualBus:
         """True once ``close()`` was called."""
     @property
     def drives(self) -> List[DriveState]:
-        """The hosted drives' state, read now, in the order they were given; ``OSError`` once closed."""
+        """The hosted drives, read now, in the order they were given (each with its run-time changes as methods); ``OSError`` once closed."""
     def send(
         self,
         arbitration_id: int,
@@ -131,7 +155,7 @@ class Simulation:
         """Simulated time in seconds since the start."""
     @property
     def drives(self) -> List[DriveState]:
-        """The drives' state now, in the order they were given."""
+        """The drives, read now, in the order they were given (each with its run-time changes as methods)."""
     def advance(self, seconds: float) -> None:
         """Runs the bus and the drives for ``seconds`` of simulated time (0 to a year)."""
     def send(

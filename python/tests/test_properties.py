@@ -180,6 +180,29 @@ def test_run_time_changes(node, what, value, line, duration, on):
 
 
 @settings(max_examples=150, deadline=None)
+@given(what=anything, value=anything, line=anything, duration=anything, on=anything)
+def test_drive_object_calls(what, value, line, duration, on):
+    _SIM.power(5, True)
+    (drive,) = _SIM.drives
+    for call in (
+        lambda: drive.set_input(what, value, line, duration),
+        lambda: drive.fault(what, line, duration),
+        drive.clear_fault,
+        drive.bus_off,
+        drive.bus_on,
+        lambda: drive.power(on),
+        drive.refresh,
+    ):
+        try:
+            call()
+        except OK_ERRORS + (OSError,):
+            pass
+    _SIM.power(5, True)
+    _SIM.fault(5, "clear")
+    _SIM.advance(0.001)
+
+
+@settings(max_examples=150, deadline=None)
 @given(node=anything, direction=anything, number=anything, entries=anything, mode=anything)
 def test_pdo_and_lss_calls(node, direction, number, entries, mode):
     m = _SIM.master()
