@@ -474,7 +474,9 @@ class EthercatSimulation:
     (the same calls give the same ``log()`` and ``capture()``). Raises
     ``ValueError`` with the CLI's message for a profile without an
     EtherCAT face. Master errors raise ``DrivebusError``, drive errors
-    (fault, timeout) ``DriveError``, with the CLI's messages.
+    (fault, timeout) ``DriveError``, with the CLI's messages. Each line
+    leaves a parked thread and about 18 kB of frame buffers behind for the
+    life of the process.
     """
 
     def __init__(self, drives: Sequence[str] = ..., capture: bool = True) -> None: ...
