@@ -7,7 +7,31 @@ PROFILES: List[str]
 """The personalities a drive spec may name (``"kc1"``, ``"akd"``, ...)."""
 
 class DriveState:
-    """The state of one hosted drive when it was read (``bus.drives``)."""
+    """One hosted drive (``bus.drives``, ``sim.drives``, ``server.drives``): its state when it was read, and methods that change the drive now.
+
+    The methods are the run-time changes of ``drivebus control``, the same
+    calls as the host's own (``bus.fault(node, ...)``). A drive object keeps
+    its bus, server or simulation alive. They raise ``ValueError`` with the
+    control interface's message, ``OSError`` when the drive is powered off
+    or its bus is closed.
+    """
+
+    def refresh(self) -> "DriveState":
+        """The drive's state read now (a new object)."""
+    def set_input(
+        self, input: str, value: float, line: Optional[int] = None, duration: Optional[float] = None
+    ) -> None:
+        """Sets machine input ``input`` (``"digital"`` with ``line`` 1..16, ``"analog"`` in volts, ``"master_velocity"``, ...) now, for ``duration`` seconds if given."""
+    def fault(self, kind: str, switch: Optional[str] = None, duration: Optional[float] = None) -> None:
+        """Starts machine fault ``kind`` (``"encoder"``, ``"over_current"``, ``"trip"`` with ``switch``, ...) now."""
+    def clear_fault(self) -> None:
+        """Ends every machine fault that is on (a latched drive fault stays until the master's fault reset)."""
+    def bus_off(self) -> None:
+        """The drive's CAN controller goes bus-off."""
+    def bus_on(self) -> None:
+        """The drive is back on the bus."""
+    def power(self, on: bool) -> None:
+        """Cuts (``False``) or restores (``True``) the drive's power; off it leaves ``drives``."""
 
     @property
     def profile(self) -> str:
@@ -54,7 +78,7 @@ class VirtualBus:
         """True once ``close()`` was called."""
     @property
     def drives(self) -> List[DriveState]:
-        """The hosted drives' state, read now, in the order they were given; ``OSError`` once closed."""
+        """The hosted drives, read now, in the order they were given (each with its run-time changes as methods); ``OSError`` once closed."""
     def send(
         self,
         arbitration_id: int,
@@ -131,7 +155,7 @@ class Simulation:
         """Simulated time in seconds since the start."""
     @property
     def drives(self) -> List[DriveState]:
-        """The drives' state now, in the order they were given."""
+        """The drives, read now, in the order they were given (each with its run-time changes as methods)."""
     def advance(self, seconds: float) -> None:
         """Runs the bus and the drives for ``seconds`` of simulated time (0 to a year)."""
     def send(
@@ -440,3 +464,58 @@ class EthercatServer:
         """Stops serving; returns when the socket is closed. ``OSError`` when serving had failed."""
     def __enter__(self) -> "EthercatServer": ...
     def __exit__(self, *args: object) -> bool: ...
+
+class EthercatSimulation:
+    """An EtherCAT line of drive twins with the ``drivebus`` master, in simulated time (``drivebus.ethercat.Simulation``).
+
+    The in-process line of ``drivebus demo --ethercat``: the drives
+    ``drivebus ethercat serve`` builds, on a simulated clock that moves
+    only when the master waits, so a run depends only on the calls made
+    (the same calls give the same ``log()`` and ``capture()``). Raises
+    ``ValueError`` with the CLI's message for a profile without an
+    EtherCAT face. Master errors raise ``DrivebusError``, drive errors
+    (fault, timeout) ``DriveError``, with the CLI's messages. Each line
+    leaves a parked thread and about 18 kB of frame buffers behind for the
+    life of the process.
+    """
+
+    def __init__(self, drives: Sequence[str] = ..., capture: bool = True) -> None: ...
+    @property
+    def drives(self) -> List[str]:
+        """The line's slaves in order (``["ipos"]``)."""
+    @property
+    def now(self) -> float:
+        """Simulated time in seconds."""
+    @property
+    def dc(self) -> bool:
+        """True while the line is in OP with distributed clocks (SYNC0)."""
+    def scan(self) -> List[Dict[str, Any]]:
+        """Scans the line (SII, 1018h over CoE) and leaves it in PRE-OP: per slave ``position``, ``name``, ``vendor_id``, ``product_code``, ``revision``, ``serial``, ``coe_identity_matches``, ``dc``."""
+    def start(self, position: int = 1, cycle: float = 0.001, dc: bool = True) -> None:
+        """Brings the line to OP with the drive at ``position`` under control, process data every ``cycle`` seconds (DC SYNC0 when ``dc``); scans first if needed."""
+    def cycle(self, n: int = 1) -> Tuple[int, int, Optional[int]]:
+        """Runs ``n`` process-data cycles; returns the last ``(statusword, position, following)``."""
+    def enable(self, timeout: float = 2.0) -> None:
+        """Enables the drive (Operation enabled) over the process data."""
+    def disable(self, timeout: float = 2.0) -> None:
+        """Disables the drive (Switch on disabled)."""
+    def home(self, method: int = 35, timeout: float = 10.0) -> int:
+        """Homes with ``method`` (6098h); returns the position at homing attained."""
+    def move_to(
+        self, target: int, velocity: Optional[int] = None, relative: bool = False, timeout: float = 20.0
+    ) -> int:
+        """A profile-position move to ``target`` at ``velocity`` (6081h) if given; returns the position at target reached."""
+    def csp(self, targets: Sequence[int]) -> int:
+        """Cyclic synchronous position, one target per cycle; returns the cycles run."""
+    def sdo_read(self, index: int, sub: int) -> int:
+        """Reads ``index``:``sub`` of the drive under control over CoE, as a signed integer."""
+    def sdo_write(self, index: int, sub: int, data: bytes) -> None:
+        """Writes little-endian ``data`` to ``index``:``sub`` of the drive under control over CoE."""
+    def stop(self) -> None:
+        """Leaves OP for SAFE-OP; ``scan()`` or ``start()`` begin again."""
+    def counters(self) -> Tuple[int, int, int]:
+        """``(cycles, bad_wkc, lost)`` of the cyclic exchange."""
+    def log(self) -> List[Tuple[float, int, int, Optional[int]]]:
+        """The process data of every cycle of ``cycle``/``home``/``move_to``/``csp``: ``(seconds, statusword, position, following)``."""
+    def capture(self) -> Optional[bytes]:
+        """Every frame so far as pcapng bytes (simulated timestamps); ``None`` with ``capture=False``."""

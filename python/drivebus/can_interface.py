@@ -46,7 +46,7 @@ class DrivebusBus(can.BusABC):
 
     @property
     def drives(self) -> List[DriveState]:
-        """The hosted drives' state (NMT, CiA 402 state, statusword, mode, position), read now."""
+        """The hosted drives, read now: each one's state (NMT, CiA 402 state, statusword, mode, position) and its run-time changes as methods (``drives[0].fault("encoder")``, ``.set_input(...)``, ``.power(False)``, ...)."""
         return self._bus.drives
 
     def input(

@@ -16,6 +16,19 @@ of its own (the pytest fixture ``drivebus_ethercat`` runs it inside a
 network namespace): it prints ``drivebus.ethercat: ready on IFACE (line
 DRIVE...)`` once the socket is open and serves until its standard input
 closes.
+
+``Simulation(drives=["ipos"])`` is the in-process line of ``drivebus demo
+--ethercat`` with the same master (ethercrab), in simulated time: scan,
+OP with DC SYNC0, enable, homing, profile-position moves and a CSP stream
+from Python, the process data of every cycle in ``log()`` and every frame
+in ``capture()`` (pcapng). It runs as fast as the CPU allows and the same
+calls give the same log and capture, byte for byte::
+
+    line = drivebus.ethercat.Simulation(drives=["ipos"])
+    line.start()          # scan, PRE-OP -> OP, DC SYNC0 at 1 ms
+    line.enable()
+    line.home(35)
+    line.move_to(4000, velocity=200_000)
 """
 
 import argparse
@@ -23,8 +36,9 @@ import sys
 from typing import List, Optional, Sequence, Union
 
 from ._drivebus import EthercatServer
+from ._drivebus import EthercatSimulation as Simulation
 
-__all__ = ["EthercatServer", "serve", "main"]
+__all__ = ["EthercatServer", "Simulation", "serve", "main"]
 
 
 def serve(iface: str, drives: Union[str, Sequence[str]] = ("ipos",)) -> EthercatServer:

@@ -16,7 +16,7 @@ use tokio::sync::watch;
 
 use crate::control::{self, Action};
 use crate::runtime;
-use crate::state::DriveState;
+use crate::state::{DriveState, Owner};
 
 /// A received frame: identifier, extended, remote, DLC, data.
 pub(crate) type Received = (u32, bool, bool, u8, Vec<u8>);
@@ -277,11 +277,13 @@ impl VirtualBus {
     /// The hosted drives' state, read now, in the order they were given.
     /// Raises `OSError` once the bus is closed.
     #[getter]
-    fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
+    pub(crate) fn drives(slf: &Bound<'_, Self>) -> PyResult<Vec<DriveState>> {
         // Stopping a drive's task takes effect at its next await: a read
         // right after `close` could still be answered.
-        self.check_open()?;
-        self.drives.states(py)
+        let bus = slf.get();
+        bus.check_open()?;
+        let states = bus.drives.states(slf.py())?;
+        Ok(states.into_iter().map(|s| s.owned_by(Owner::Bus(slf.clone().unbind()))).collect())
     }
 
     /// Sets machine input `input` of drive `node` to `value`, as `drivebus
@@ -301,8 +303,7 @@ impl VirtualBus {
         line: Option<u8>,
         duration: Option<f64>,
     ) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, control::input(input, line, value, duration)?)
+        self.act(py, node, control::input(input, line, value, duration)?)
     }
 
     /// Starts machine fault `kind` of drive `node` (`"encoder"`,
@@ -320,21 +321,18 @@ impl VirtualBus {
         switch: Option<&str>,
         duration: Option<f64>,
     ) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, control::fault(kind, switch, duration)?)
+        self.act(py, node, control::fault(kind, switch, duration)?)
     }
 
     /// Drive `node`'s CAN controller goes bus-off: it hears nothing and what
     /// it sends is lost (`drivebus control bus off NODE`).
     fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, Action::BusOff(true))
+        self.act(py, node, Action::BusOff(true))
     }
 
     /// Drive `node` is back on the bus (`drivebus control bus on NODE`).
     fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, Action::BusOff(false))
+        self.act(py, node, Action::BusOff(false))
     }
 
     /// Cuts (`on=False`) or restores drive `node`'s power, as `drivebus
@@ -342,8 +340,7 @@ impl VirtualBus {
     /// on it boots again (a boot-up message) with its parameters at their
     /// power-on values.
     fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, Action::Power(on))
+        self.act(py, node, Action::Power(on))
     }
 
     /// Stops the hosted drives (they fall silent, like a power cut) and
@@ -361,6 +358,13 @@ impl VirtualBus {
 }
 
 impl VirtualBus {
+    /// Carries out `action` on drive `node` (the methods above and a
+    /// drive's own, `DriveState.fault`, ...).
+    pub(crate) fn act(&self, py: Python<'_>, node: u8, action: Action) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, action)
+    }
+
     fn check_open(&self) -> PyResult<()> {
         if *self.closed.borrow() { Err(PyOSError::new_err(closed_message())) } else { Ok(()) }
     }

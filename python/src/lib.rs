@@ -13,7 +13,10 @@
 //! the process (`drivebus.serve()`), for code that must use TCP.
 //!
 //! `EthercatServer` ([`ethercat`]) serves an EtherCAT slave line on a
-//! network interface (`drivebus.ethercat.serve()`).
+//! network interface (`drivebus.ethercat.serve()`);
+//! `EthercatSimulation` ([`ecat_sim`]) the in-process line of `drivebus
+//! demo --ethercat` with its master, in simulated time
+//! (`drivebus.ethercat.Simulation`).
 //!
 //! `Simulation` ([`sim`]) hosts the same drives on the virtual bus in
 //! simulated time instead (`drivebus_bus::Bus`): deterministic. Its
@@ -31,6 +34,7 @@ use pyo3::prelude::*;
 
 mod bus;
 mod control;
+mod ecat_sim;
 mod ethercat;
 mod lss;
 mod master;
@@ -66,6 +70,7 @@ fn _drivebus(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<pdo::Pdos>()?;
     m.add_class::<lss::Lss>()?;
     m.add_class::<ethercat::EthercatServer>()?;
+    m.add_class::<ecat_sim::EthercatSimulation>()?;
     master::add_exceptions(m)?;
     m.add("PROFILES", drivebus_personality::Profile::all().iter().map(|p| p.name()).collect::<Vec<_>>())?;
     Ok(())

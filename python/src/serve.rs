@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use crate::bus::HostedDrives;
 use crate::control::{self, Action};
 use crate::runtime;
-use crate::state::DriveState;
+use crate::state::{DriveState, Owner};
 
 /// A socketcand server hosting drive twins, running until `close()` (or
 /// the end of its `with` block).
@@ -89,9 +89,11 @@ impl Server {
     /// The hosted drives' state, read now, in the order they were given.
     /// Raises `OSError` once closed.
     #[getter]
-    fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
-        self.check_open()?;
-        self.drives.states(py)
+    pub(crate) fn drives(slf: &Bound<'_, Self>) -> PyResult<Vec<DriveState>> {
+        let server = slf.get();
+        server.check_open()?;
+        let states = server.drives.states(slf.py())?;
+        Ok(states.into_iter().map(|s| s.owned_by(Owner::Server(slf.clone().unbind()))).collect())
     }
 
     /// Sets a machine input of drive `node` now, as `drivebus control
@@ -106,8 +108,7 @@ impl Server {
         line: Option<u8>,
         duration: Option<f64>,
     ) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, control::input(input, line, value, duration)?)
+        self.act(py, node, control::input(input, line, value, duration)?)
     }
 
     /// Starts (or with `"clear"` ends) a machine fault of drive `node`, as
@@ -121,26 +122,22 @@ impl Server {
         switch: Option<&str>,
         duration: Option<f64>,
     ) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, control::fault(kind, switch, duration)?)
+        self.act(py, node, control::fault(kind, switch, duration)?)
     }
 
     /// Drive `node`'s CAN controller goes bus-off (`drivebus control bus off`).
     fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, Action::BusOff(true))
+        self.act(py, node, Action::BusOff(true))
     }
 
     /// Drive `node` is back on the bus (`drivebus control bus on`).
     fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, Action::BusOff(false))
+        self.act(py, node, Action::BusOff(false))
     }
 
     /// Cuts or restores drive `node`'s power (`drivebus control power`).
     fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
-        self.check_open()?;
-        self.drives.apply(py, node, Action::Power(on))
+        self.act(py, node, Action::Power(on))
     }
 
     /// Stops the drives and the server; the port is closed when it returns
@@ -172,6 +169,13 @@ impl Server {
 }
 
 impl Server {
+    /// Carries out `action` on drive `node` (the methods above and a
+    /// drive's own, `DriveState.fault`, ...).
+    pub(crate) fn act(&self, py: Python<'_>, node: u8, action: Action) -> PyResult<()> {
+        self.check_open()?;
+        self.drives.apply(py, node, action)
+    }
+
     fn check_open(&self) -> PyResult<()> {
         if self.closed() { Err(PyOSError::new_err("the socketcand server is closed")) } else { Ok(()) }
     }

@@ -26,7 +26,7 @@ use pyo3::types::{PyBytes, PyDict};
 use crate::bus::{Received, frame, received};
 use crate::control::{self, Action};
 use crate::master::Master;
-use crate::state::DriveState;
+use crate::state::{DriveState, Owner};
 
 /// One frame of the log: simulated time in seconds, then as `recv`.
 type Logged = (f64, u32, bool, bool, u8, Vec<u8>);
@@ -301,8 +301,9 @@ impl Simulation {
 
     /// The drives' state now, in the order they were given.
     #[getter]
-    fn drives(&self, py: Python<'_>) -> PyResult<Vec<DriveState>> {
-        self.ask(py, Request::Drives)
+    pub(crate) fn drives(slf: &Bound<'_, Self>) -> PyResult<Vec<DriveState>> {
+        let states = slf.get().ask(slf.py(), Request::Drives)?;
+        Ok(states.into_iter().map(|s| s.owned_by(Owner::Sim(slf.clone().unbind()))).collect())
     }
 
     /// Sets machine input `input` of drive `node` to `value` now, as
@@ -320,8 +321,7 @@ impl Simulation {
         line: Option<u8>,
         duration: Option<f64>,
     ) -> PyResult<()> {
-        let action = control::input(input, line, value, duration)?;
-        self.link.run(py, move |s| s.apply(node, action))?
+        self.act(py, node, control::input(input, line, value, duration)?)
     }
 
     /// Starts machine fault `kind` of drive `node` now (`"clear"`: every
@@ -336,25 +336,24 @@ impl Simulation {
         switch: Option<&str>,
         duration: Option<f64>,
     ) -> PyResult<()> {
-        let action = control::fault(kind, switch, duration)?;
-        self.link.run(py, move |s| s.apply(node, action))?
+        self.act(py, node, control::fault(kind, switch, duration)?)
     }
 
     /// Drive `node`'s CAN controller goes bus-off now (`drivebus control bus off`).
     fn bus_off(&self, py: Python<'_>, node: u8) -> PyResult<()> {
-        self.link.run(py, move |s| s.apply(node, Action::BusOff(true)))?
+        self.act(py, node, Action::BusOff(true))
     }
 
     /// Drive `node` is back on the bus now (`drivebus control bus on`).
     fn bus_on(&self, py: Python<'_>, node: u8) -> PyResult<()> {
-        self.link.run(py, move |s| s.apply(node, Action::BusOff(false)))?
+        self.act(py, node, Action::BusOff(false))
     }
 
     /// Cuts (`on=False`) or restores drive `node`'s power now (`drivebus
     /// control power`): off it is silent and its state is gone (it leaves
     /// `drives`); on it boots again from its machine.
     fn power(&self, py: Python<'_>, node: u8, on: bool) -> PyResult<()> {
-        self.link.run(py, move |s| s.apply(node, Action::Power(on)))?
+        self.act(py, node, Action::Power(on))
     }
 
     /// The CANopen master on this bus (the `drivebus` tool's), whose calls
@@ -405,6 +404,12 @@ impl Simulation {
 }
 
 impl Simulation {
+    /// Carries out `action` on drive `node` now (the methods above and a
+    /// drive's own, `DriveState.fault`, ...).
+    pub(crate) fn act(&self, py: Python<'_>, node: u8, action: Action) -> PyResult<()> {
+        self.link.run(py, move |s| s.apply(node, action))?
+    }
+
     fn request(&self, r: Request) -> PyResult<()> {
         self.link.request(r)
     }

@@ -46,3 +46,17 @@ def test_pysoem_csp_example_reaches_op_and_follows_the_ramp():
     )
     assert r.returncode == 0, r.stdout + r.stderr
     assert "1 passed" in r.stdout, r.stdout
+
+
+def test_ethercat_simulation_example_homes_moves_and_streams():
+    r = subprocess.run(
+        [sys.executable, str(EXAMPLES / "ethercat_simulation.py")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "DC SYNC0: True" in r.stdout, r.stdout
+    moved = int(r.stdout.split("moved to", 1)[1].split()[0])
+    assert abs(moved - 4000) <= 10, r.stdout
+    assert "0 bad working counters" in r.stdout, r.stdout

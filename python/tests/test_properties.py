@@ -180,6 +180,29 @@ def test_run_time_changes(node, what, value, line, duration, on):
 
 
 @settings(max_examples=150, deadline=None)
+@given(what=anything, value=anything, line=anything, duration=anything, on=anything)
+def test_drive_object_calls(what, value, line, duration, on):
+    _SIM.power(5, True)
+    (drive,) = _SIM.drives
+    for call in (
+        lambda: drive.set_input(what, value, line, duration),
+        lambda: drive.fault(what, line, duration),
+        drive.clear_fault,
+        drive.bus_off,
+        drive.bus_on,
+        lambda: drive.power(on),
+        drive.refresh,
+    ):
+        try:
+            call()
+        except OK_ERRORS + (OSError,):
+            pass
+    _SIM.power(5, True)
+    _SIM.fault(5, "clear")
+    _SIM.advance(0.001)
+
+
+@settings(max_examples=150, deadline=None)
 @given(node=anything, direction=anything, number=anything, entries=anything, mode=anything)
 def test_pdo_and_lss_calls(node, direction, number, entries, mode):
     m = _SIM.master()
@@ -196,3 +219,58 @@ def test_pdo_and_lss_calls(node, direction, number, entries, mode):
         except OK_ERRORS + (drivebus.DrivebusError,):
             pass
     m.lss.switch_global("waiting")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(drives=st.one_of(st.lists(st.sampled_from(["ipos", "generic", "akd", "", "x"]), max_size=3), anything))
+def test_ethercat_simulation_construction(drives):
+    import drivebus.ethercat
+
+    try:
+        line = drivebus.ethercat.Simulation(drives=drives, capture=False)
+    except OK_ERRORS:
+        return
+    assert line.drives == list(drives)
+
+
+_LINE = None
+
+
+def _line():
+    global _LINE
+    if _LINE is None:
+        import drivebus.ethercat
+
+        _LINE = drivebus.ethercat.Simulation(drives=["ipos"], capture=False)
+        _LINE.start()
+    return _LINE
+
+
+def _capped(x, cap):
+    """`x` unless it is a valid count or time above `cap` (no hour-long run)."""
+    if isinstance(x, (int, float)) and x == x and 0 < x < 1e12:
+        return min(x, cap)
+    return x
+
+
+@settings(max_examples=100, deadline=None)
+@given(a=anything, b=anything, c=anything, d=anything)
+def test_ethercat_simulation_calls(a, b, c, d):
+    line = _line()
+    for call in (
+        lambda: line.cycle(_capped(a, 5)),
+        lambda: line.enable(timeout=_capped(a, 0.2)),
+        lambda: line.disable(timeout=_capped(b, 0.2)),
+        lambda: line.home(a, timeout=_capped(b, 0.2)),
+        lambda: line.move_to(a, velocity=b, relative=c, timeout=_capped(d, 0.05)),
+        lambda: line.csp(a[:5] if isinstance(a, list) else a),
+        lambda: line.sdo_read(a, b),
+        lambda: line.sdo_write(a, b, c),
+        lambda: line.start(a, _capped(b, 0.01), c),
+        lambda: line.scan(),
+    ):
+        try:
+            call()
+        except OK_ERRORS + (drivebus.DrivebusError,):
+            pass
+    assert line.now > 0

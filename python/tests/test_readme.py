@@ -67,3 +67,11 @@ def test_root_readme_simulation_example_runs(capsys):
     exec(compile(blocks[1], "README.md", "exec"), {})
     end, position, *_ = capsys.readouterr().out.split()
     assert end == "target_reached" and abs(int(position) - 2000) <= 10
+
+
+def test_python_readme_ethercat_simulation_example_runs():
+    code = example("python/README.md", "### The EtherCAT line and its master in simulated time")
+    scope: dict = {}
+    exec(compile(code, "python/README.md", "exec"), scope)
+    assert abs(scope["position"] - 4499) <= 3 and scope["statusword"] & 0x6F == 0x27
+    assert scope["pcapng"][:4] == b"\x0a\x0d\x0d\x0a"  # a pcapng section header

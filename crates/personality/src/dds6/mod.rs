@@ -64,11 +64,57 @@ use drivebus_cia402::model::DriveParams;
 use drivebus_cia402::state_machine::State;
 use drivebus_node::Node;
 use drivebus_node::{NmtState, NodeEvent, Request};
-use drivebus_od::{ObjectDictionary, SdoAbort};
+use drivebus_od::{EntryRef, ObjectDictionary, SdoAbort, le_i64, le_u64};
+
+/// The objects the DDS6 reads and writes after every control period,
+/// resolved once per dictionary layout (`objects`: the object count they
+/// were resolved at).
+#[derive(Debug, Clone, Copy, Default)]
+struct Handles {
+    objects: usize,
+    statusword: Option<EntryRef>,
+    target_velocity: Option<EntryRef>,
+    target_torque: Option<EntryRef>,
+    velocity_window: Option<EntryRef>,
+    velocity_demand: Option<EntryRef>,
+    velocity_actual: Option<EntryRef>,
+    torque_actual: Option<EntryRef>,
+}
+
+impl Handles {
+    fn get(&mut self, od: &ObjectDictionary) -> Handles {
+        if self.objects != od.objects().len() {
+            let f = |i: u16| od.find(i, 0).ok();
+            *self = Handles {
+                objects: od.objects().len(),
+                statusword: f(0x6041),
+                target_velocity: f(0x60FF),
+                target_torque: f(0x6071),
+                velocity_window: f(0x606D),
+                velocity_demand: f(0x606B),
+                velocity_actual: f(0x606C),
+                torque_actual: f(0x6077),
+            };
+        }
+        *self
+    }
+}
+
+/// `get_i64` through a handle: the value sign-extended, `None` if absent.
+fn signed(od: &ObjectDictionary, r: Option<EntryRef>) -> Option<i64> {
+    r.map(|r| le_i64(od.bytes(r)))
+}
+
+/// `get_u32` through a handle.
+fn unsigned(od: &ObjectDictionary, r: Option<EntryRef>) -> Option<u32> {
+    r.map(|r| le_u64(od.bytes(r)) as u32)
+}
 
 /// The DDS6 quirks around the CiA 402 drive.
 #[derive(Debug, Clone, Default)]
 pub struct Dds6 {
+    /// The objects read and written every control period, resolved once.
+    handles: Handles,
     nmt_operational: bool,
     /// An NMT request refused while the motor was enabled (sub-code), to be
     /// raised at the next step.
@@ -206,11 +252,12 @@ impl Dds6 {
             .enable_at
             .is_some_and(|t| cx.now + drivebus_can::Duration::from_millis(POWER_STAGE_LEAD_MS) >= t);
         self.at_rest = cx.drive.demand_velocity().abs() < 1e-6;
-        self.target_velocity = od.get_i64(0x60FF, 0).unwrap_or(0) as i32;
-        self.torque_target = od.get_i64(0x6071, 0).unwrap_or(0);
+        let h = self.handles.get(od);
+        self.target_velocity = signed(od, h.target_velocity).unwrap_or(0) as i32;
+        self.torque_target = signed(od, h.target_torque).unwrap_or(0);
         // The DDS6 has no 6074h (§6.5): the drive's demand itself.
         self.torque_demand = cx.drive.demand_torque().round() as i64;
-        self.velocity_window = od.get_u32(0x606D, 0).unwrap_or(100) as u16;
+        self.velocity_window = unsigned(od, h.velocity_window).unwrap_or(100) as u16;
         let drive_sw = cx.drive.statusword();
         if cx.drive.mode() == 6 && drive_sw & 0x6F == 0x27 && !self.just_enabled {
             // Completed (bits 12 + 10) or restarted (bit 12 cleared).
@@ -218,7 +265,7 @@ impl Dds6 {
         }
         let sw = self.statusword(drive_sw, cx.drive.state_machine().state(), cx.drive.mode());
         self.last_sw = sw;
-        if let Ok(r) = od.find(0x6041, 0) {
+        if let Some(r) = h.statusword {
             od.set_le(r, &sw.to_le_bytes());
         }
     }
@@ -655,33 +702,34 @@ impl Behaviour for Dds6 {
         let state = cx.drive.state_machine().state();
         let enabled = matches!(state, State::OperationEnabled | State::QuickStopActive);
         let dt = cx.drive.control_period();
+        let h = self.handles.get(od);
         if enabled && cx.drive.mode() != 4 {
-            let demand = od.get_i64(0x606B, 0).unwrap_or(0) as f64;
+            let demand = signed(od, h.velocity_demand).unwrap_or(0) as f64;
             self.shown_velocity += (demand - self.shown_velocity) * dt / (VELOCITY_LAG_S + dt);
-            if let Ok(r) = od.find(0x606C, 0) {
+            if let Some(r) = h.velocity_actual {
                 od.set_le(r, &(self.shown_velocity.round() as i32).to_le_bytes());
             }
         } else {
-            self.shown_velocity = od.get_i64(0x606C, 0).unwrap_or(0) as f64;
+            self.shown_velocity = signed(od, h.velocity_actual).unwrap_or(0) as f64;
         }
         if enabled && cx.drive.mode() == 4 && self.feedback & 1 != 0 {
             // Closed loop the current loop follows the ramped demand: 6077h
             // shows the torque demand (§4.4.3 EX6: C8h after the 400 ms
             // ramp, F301h one step into the ramp down). The stepper model
             // itself has no torque loop.
-            if let Ok(a) = od.find(0x6077, 0) {
+            if let Some(a) = h.torque_actual {
                 let v = cx.drive.demand_torque().round().clamp(-32768.0, 32767.0) as i16;
                 od.set_le(a, &v.to_le_bytes());
             }
         }
         // §6.5.14: bit 10 in pv, |606Ch − 60FFh| within 606Dh (606Eh = 0).
-        let target = od.get_i64(0x60FF, 0).unwrap_or(0) as f64;
-        let window = f64::from(od.get_u32(0x606D, 0).unwrap_or(100));
+        let target = signed(od, h.target_velocity).unwrap_or(0) as f64;
+        let window = f64::from(unsigned(od, h.velocity_window).unwrap_or(100));
         self.velocity_reached = (self.shown_velocity.round() - target).abs() <= window;
         self.supervise_slippage(cx, od, enabled, dt);
         if enabled && cx.drive.mode() == 3 {
             // §6.5.3 pv bit 12 "speed is equal 0".
-            let v = od.get_i64(0x606C, 0).unwrap_or(0) as f64;
+            let v = signed(od, h.velocity_actual).unwrap_or(0) as f64;
             let thr = od.get_u32(0x606F, 0).unwrap_or(60) as u16;
             let t = od.get_u32(0x6070, 0).unwrap_or(0) as u16;
             self.speed_zero_bit = self.speed_zero.update(v, thr, t, dt);

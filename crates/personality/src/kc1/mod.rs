@@ -45,7 +45,7 @@ use drivebus_cia402::drive::{DriveConfig, Injection, ZeroRamp, op};
 use drivebus_cia402::interp::IpMode;
 use drivebus_cia402::state_machine::State;
 use drivebus_node::{Node, NodeConfig, NodeEvent, Request};
-use drivebus_od::{ObjectDictionary, SdoAbort, Value, le_u64};
+use drivebus_od::{EntryRef, ObjectDictionary, SdoAbort, Value, le_u64};
 use drivebus_pdo::PdoConfig;
 
 /// Largest 6099h homing speed the Kollmorgen drives take (example 9:
@@ -100,6 +100,30 @@ pub struct Kollmorgen {
     pls: pls::Pls,
     /// FB1.OFFSET in force in the drive's reference \[position units\].
     fb_offset: i64,
+    /// 6041h and 6061h, resolved once (patched after every step).
+    handles: Handles,
+}
+
+/// The statusword and mode display, resolved once per dictionary layout
+/// (`objects` is the object count they were resolved at).
+#[derive(Debug, Clone, Copy, Default)]
+struct Handles {
+    objects: usize,
+    statusword: Option<EntryRef>,
+    mode_display: Option<EntryRef>,
+}
+
+impl Handles {
+    fn get(&mut self, od: &ObjectDictionary) -> Handles {
+        if self.objects != od.objects().len() {
+            *self = Handles {
+                objects: od.objects().len(),
+                statusword: od.find(0x6041, 0).ok(),
+                mode_display: od.find(0x6061, 0).ok(),
+            };
+        }
+        *self
+    }
 }
 
 impl Kollmorgen {
@@ -126,6 +150,7 @@ impl Kollmorgen {
             foldback: tuning::Foldback::default(),
             pls: pls::Pls::default(),
             fb_offset: 0,
+            handles: Handles::default(),
         }
     }
 
@@ -410,28 +435,23 @@ impl Behaviour for Kollmorgen {
     }
 
     fn after_step(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
-        kollmorgen_statusword(od, self.dc_bus_before_switch_on);
+        let h = self.handles.get(od);
+        kollmorgen_statusword_at(od, h.statusword, self.dc_bus_before_switch_on);
         self.supervise(cx, od);
-        // ip: bit 10 is not shown (example 12 frames 53/55: 0237h, 1237h;
-        // CiA 402 would show 0637h while ip is not active).
-        if od.get_i64(0x6061, 0) == Some(7)
-            && let Ok(r) = od.find(0x6041, 0)
-        {
-            let b = od.bytes(r);
-            let sw = u16::from_le_bytes([b[0], b[1]]);
-            if sw & 0x0400 != 0 {
-                od.set_le(r, &(sw & !0x0400).to_le_bytes());
-            }
-        }
-        // hm: not started and in progress both read 0237h (example 8 frames
-        // 23/27, example 9); CiA 402 shows "not started" as 0637h. Bit 10
-        // comes with bit 12 (homing attained, 1637h) only.
-        if od.get_i64(0x6061, 0) == Some(6)
-            && let Ok(r) = od.find(0x6041, 0)
-        {
-            let b = od.bytes(r);
-            let sw = u16::from_le_bytes([b[0], b[1]]);
-            if sw & 0x3400 == 0x0400 {
+        let mode = h.mode_display.map(|r| od.word(r) as u8 as i8);
+        if let Some(r) = h.statusword {
+            let sw = od.word(r) as u16;
+            // ip: bit 10 is not shown (example 12 frames 53/55: 0237h, 1237h;
+            // CiA 402 would show 0637h while ip is not active).
+            // hm: not started and in progress both read 0237h (example 8
+            // frames 23/27, example 9); CiA 402 shows "not started" as
+            // 0637h. Bit 10 comes with bit 12 (homing attained, 1637h) only.
+            let clear = match mode {
+                Some(7) => sw & 0x0400 != 0,
+                Some(6) => sw & 0x3400 == 0x0400,
+                _ => false,
+            };
+            if clear {
                 od.set_le(r, &(sw & !0x0400).to_le_bytes());
             }
         }
@@ -500,7 +520,12 @@ impl Kollmorgen {
 /// *Switch on disabled* reads 0240h (bit 5 "quick stop" clear; CiA 402
 /// leaves it open): KC1 examples 3, 8, 9, AKD §3, §8.
 pub fn kollmorgen_statusword(od: &mut ObjectDictionary, dc_bus_before_switch_on: bool) {
-    if let Ok(r) = od.find(0x6041, 0) {
+    kollmorgen_statusword_at(od, od.find(0x6041, 0).ok(), dc_bus_before_switch_on);
+}
+
+/// [`kollmorgen_statusword`] through a resolved handle of 6041h.
+fn kollmorgen_statusword_at(od: &mut ObjectDictionary, r: Option<EntryRef>, dc_bus_before_switch_on: bool) {
+    if let Some(r) = r {
         let b = od.bytes(r);
         let sw = u16::from_le_bytes([b[0], b.get(1).copied().unwrap_or(0)]);
         let mut new = sw;
