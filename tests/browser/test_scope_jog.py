@@ -1,4 +1,4 @@
-"""The scope's pan and zoom in headless Chromium.
+"""The scope's pan and zoom and jog in headless Chromium.
 
 Against `serve --drive akd:1 --drive dds6:2` (the fixtures of test_page).
 """
@@ -9,7 +9,18 @@ from selenium.webdriver.common.action_chains import ActionChains
 from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
 from selenium.webdriver.common.by import By
 
-from test_page import browser, page_url, set_fields, subscribe_scope, wait_for  # noqa: F401 (fixtures)
+from selenium.webdriver.support.ui import Select
+
+from test_page import (  # noqa: F401 (fixtures)
+    browser,
+    click_action,
+    drive_position,
+    page_url,
+    set_fields,
+    subscribe_scope,
+    text,
+    wait_for,
+)
 
 
 def js(browser, expr):
@@ -61,3 +72,47 @@ def test_wheel_zooms_drag_pans_and_live_returns(browser, page_url):
     wait_for(browser, "live by the button", lambda b: view(b)["live"])
     set_fields(browser, (("scope-window", "10"),))
 
+
+def enabled_drive_1(browser, page_url):
+    browser.get(page_url)
+    wait_for(browser, "drive 1 selectable", lambda b: Select(b.find_element(By.ID, "drive-node")).options)
+    Select(browser.find_element(By.ID, "drive-node")).select_by_value("1")
+    click_action(browser, "enable")
+    wait_for(browser, "operation enabled", lambda b: "operation enabled" in text(b, "drive-state"))
+
+
+def settled_position(browser):
+    """The drive panel's position once two readings 0.4 s apart agree."""
+
+    def still(b):
+        p = drive_position(b)
+        time.sleep(0.4)
+        return p is not None and p == drive_position(b) and (p,)
+
+    return wait_for(browser, "the drive at rest", still)[0]
+
+
+def test_jog_runs_while_held_and_stops_on_release_and_on_leaving(browser, page_url):
+    enabled_drive_1(browser, page_url)
+    set_fields(browser, (("jog-speed", "20000"),))
+    p0 = settled_position(browser)
+    plus = browser.find_element(By.ID, "jog-plus")
+    browser.execute_script("arguments[0].scrollIntoView({block: 'center'})", plus)
+    ActionChains(browser).move_to_element(plus).click_and_hold().perform()
+    wait_for(browser, "jogging shown", lambda b: "jogging at 20000" in text(b, "jog-state"))
+    wait_for(browser, "the position rises while held", lambda b: (p := drive_position(b)) is not None and p > p0 + 5000)
+    ActionChains(browser).release().perform()
+    wait_for(browser, "the release reported", lambda b: "jog released" in text(b, "motion-out"))
+    p1 = settled_position(browser)
+    assert p1 > p0 + 5000
+    # Held, then the mouse leaves the button: stopped too.
+    minus = browser.find_element(By.ID, "jog-minus")
+    ActionChains(browser).move_to_element(minus).click_and_hold().perform()
+    wait_for(browser, "the position falls while held", lambda b: (p := drive_position(b)) is not None and p < p1 - 3000)
+    ActionChains(browser).move_to_element(browser.find_element(By.ID, "jog-speed")).perform()
+    wait_for(browser, "stopped on leaving the button", lambda b: text(b, "jog-state") == "")
+    p2 = settled_position(browser)
+    time.sleep(0.6)
+    assert drive_position(browser) == p2
+    ActionChains(browser).release().perform()
+    click_action(browser, "disable")

@@ -592,3 +592,71 @@ async fn pdo_mapped_objects_arrive_at_every_sync() {
     let per = span / (pdo.len() - 11) as f64;
     assert!((10.0..=40.0).contains(&per), "one 6064h sample every {per:.1} ms");
 }
+
+/// The drive's position 6064h and velocity 606Ch as `GET .../drive` gives them.
+async fn drive_pv(ui: &Ui, node: u8) -> (i64, i64) {
+    let (s, d) = get(ui, &format!("/api/nodes/{node}/drive")).await;
+    assert_eq!(s, 200, "{d}");
+    (d["position"].as_i64().expect("position"), d["velocity"].as_i64().expect("velocity"))
+}
+
+/// The next stream event named `name`.
+async fn next_event(ws: &mut Ws, name: &str) -> Value {
+    loop {
+        let msg = next_msg(ws).await;
+        if msg["type"] == "event" && msg["event"] == name {
+            return msg;
+        }
+    }
+}
+
+/// Jog: the drive runs while the page repeats the request; when the
+/// repeats stop (the page vanished), the server's watchdog stops the
+/// drive within its 500 ms and says so in a `jog` event. Released by
+/// the page (velocity 0), it stops at once. Not enabled or malformed:
+/// refused, nothing moves.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn jog_runs_while_refreshed_and_the_watchdog_stops_it() {
+    let ui = Ui::sims();
+    let mut ws = ws_connect(&ui, json!({"subscribe": []})).await;
+    let jog = |v: i64| json!({"velocity": v, "acceleration": 200000});
+    refused(&post(&ui, "/api/nodes/1/drive/jog", jog(20000)).await, 409, "not operation enabled");
+    refused(&post(&ui, "/api/nodes/1/drive/jog", json!({"speed": 1})).await, 400, "velocity");
+    refused(&post(&ui, "/api/nodes/9/drive/jog", jog(20000)).await, 404, "9");
+    assert_eq!(post(&ui, "/api/nodes/1/drive", json!({"action": "enable"})).await.0, 200);
+    let (p0, _) = drive_pv(&ui, 1).await;
+    // Held for 1 s: refreshed every 100 ms.
+    for _ in 0..10 {
+        let (s, v) = post(&ui, "/api/nodes/1/drive/jog", jog(20000)).await;
+        assert_eq!((s, v["jogging"].as_bool()), (200, Some(true)), "{v}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let (p1, v1) = drive_pv(&ui, 1).await;
+    assert!(p1 > p0 + 5000 && v1 > 10000, "jogging at 20000/s for 1 s: {p0} -> {p1}, velocity {v1}");
+    // The page vanishes: no more refreshes. The watchdog stops the jog.
+    let last = Instant::now();
+    let ev =
+        tokio::time::timeout(Duration::from_secs(5), next_event(&mut ws, "jog")).await.expect("no jog event");
+    let after = last.elapsed();
+    assert_eq!(ev["node"], 1, "{ev}");
+    assert_eq!(ev["result"]["end"], "watchdog", "{ev}");
+    assert!(
+        after >= Duration::from_millis(400) && after < Duration::from_millis(1500),
+        "stopped after {after:?}"
+    );
+    // Decelerating at 200000/s²: at rest within 0.1 s; give it 0.5 s.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let (p2, v2) = drive_pv(&ui, 1).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let (p3, _) = drive_pv(&ui, 1).await;
+    assert_eq!((v2, p3), (0, p2), "still moving after the watchdog");
+    // Released by the page: stopped at once, a `released` event.
+    assert_eq!(post(&ui, "/api/nodes/1/drive/jog", jog(-20000)).await.0, 200);
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    let (s, v) = post(&ui, "/api/nodes/1/drive/jog", jog(0)).await;
+    assert_eq!((s, v["jogging"].as_bool()), (200, Some(false)), "{v}");
+    let ev = next_event(&mut ws, "jog").await;
+    assert_eq!(ev["result"]["end"], "released", "{ev}");
+    let (p4, _) = drive_pv(&ui, 1).await;
+    assert!(p4 < p3, "jogged backwards: {p3} -> {p4}");
+}

@@ -12,6 +12,7 @@ mod api;
 mod drive;
 mod error;
 mod frames;
+mod jog;
 mod objects;
 mod stream;
 mod values;
@@ -52,6 +53,8 @@ pub struct Web {
     emcy: Mutex<VecDeque<serde_json::Value>>,
     /// Events the server itself makes (a motion's end), for the stream.
     events: broadcast::Sender<serde_json::Value>,
+    /// Jogs held on pages, with their watchdog.
+    jogs: jog::JogTable,
     /// Time zero of `t` in the API.
     start: std::time::Instant,
     /// Required on a non-loopback address.
@@ -147,6 +150,7 @@ pub async fn start(
         profiles,
         emcy: Mutex::new(VecDeque::new()),
         events,
+        jogs: jog::JogTable::default(),
         start: std::time::Instant::now(),
         token: token.clone(),
     });
@@ -172,6 +176,10 @@ fn router(web: Arc<Web>) -> Router {
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/scope.js")) }),
         )
         .route(
+            "/motion.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/motion.js")) }),
+        )
+        .route(
             "/style.css",
             get(|| async { page("text/css; charset=utf-8", include_str!("assets/style.css")) }),
         )
@@ -183,6 +191,7 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes/{n}/pdo", get(api::pdo))
         .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))
         .route("/api/nodes/{n}/drive/homing", get(drive::homing))
+        .route("/api/nodes/{n}/drive/jog", post(jog::jog))
         .route("/api/emcy", get(api::emcy))
         .route("/api/stream", get(stream::upgrade))
         .fallback(|| async { error::ApiError::not_found("no such page or endpoint: see docs/http-api.md") })
