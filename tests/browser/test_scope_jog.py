@@ -1,4 +1,4 @@
-"""The scope's pan and zoom and jog in headless Chromium.
+"""The scope's pan and zoom, jog and the CSP sine generator, in headless Chromium.
 
 Against `serve --drive akd:1 --drive dds6:2` (the fixtures of test_page).
 """
@@ -115,4 +115,23 @@ def test_jog_runs_while_held_and_stops_on_release_and_on_leaving(browser, page_u
     time.sleep(0.6)
     assert drive_position(browser) == p2
     ActionChains(browser).release().perform()
+    click_action(browser, "disable")
+
+
+def test_csp_sine_is_seen_in_the_scope(browser, page_url):
+    """From -5000 a sine of amplitude 5000 swings to +5000 and back: the scope's trace crosses 0 both ways."""
+    enabled_drive_1(browser, page_url)
+    subscribe_scope(browser, "1:6064", period="10", window="10")
+    set_fields(browser, (("move-target", "-5000"), ("move-velocity", "50000"), ("move-acceleration", "200000")))
+    browser.find_element(By.CSS_SELECTOR, '#move button[type="submit"]').click()
+    wait_for(browser, "at -5000", lambda b: "target_reached" in text(b, "motion-out") and abs((drive_position(b) or 0) + 5000) <= 20)
+    set_fields(browser, (("sine-amplitude", "5000"), ("sine-period", "1000"), ("sine-duration", "2000")))
+    t0 = js(browser, "(window.drivebus.samples()['1:6064:0'] || []).slice(-1)[0][0]")
+    browser.find_element(By.CSS_SELECTOR, '#sine button[type="submit"]').click()
+    wait_for(browser, "the sine's end reported", lambda b: "sine completed" in text(b, "motion-out"))
+    trace = [v for t, v in js(browser, "window.drivebus.samples()['1:6064:0']") if t >= t0]
+    ups = sum(1 for a, b in zip(trace, trace[1:]) if a < 0 <= b)
+    downs = sum(1 for a, b in zip(trace, trace[1:]) if a >= 0 > b)
+    assert ups >= 2 and downs >= 2, (ups, downs, min(trace), max(trace))
+    assert max(trace) > 4000 and min(trace) < -4000
     click_action(browser, "disable")

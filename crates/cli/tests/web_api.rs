@@ -660,3 +660,68 @@ async fn jog_runs_while_refreshed_and_the_watchdog_stops_it() {
     let (p4, _) = drive_pv(&ui, 1).await;
     assert!(p4 < p3, "jogged backwards: {p3} -> {p4}");
 }
+
+/// The CSP sine generator: streamed one target per SYNC, the position
+/// swings from where it was to 2·amplitude above and back (the scope's
+/// samples show both), the end is a `sine` event with the cycles; a
+/// stop ends a long one early (`stopped`, fewer cycles); bad requests
+/// are refused.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn csp_sine_streams_and_reports_its_end() {
+    let ui = Ui::sims();
+    let path = "/api/nodes/1/drive/sine";
+    let sine = json!({"amplitude": 5000, "period_ms": 600, "duration_ms": 1200});
+    refused(&post(&ui, path, sine.clone()).await, 409, "not operation enabled");
+    refused(&post(&ui, path, json!({"amplitude": 5000})).await, 400, "period_ms");
+    refused(
+        &post(&ui, path, json!({"amplitude": 5000, "period_ms": 5, "duration_ms": 100})).await,
+        400,
+        "period_ms",
+    );
+    refused(&post(&ui, path, json!({"stop": true})).await, 409, "no sine");
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/1017/0", json!({"value": 50})).await.0, 200);
+    assert_eq!(post(&ui, "/api/nodes/1/nmt", json!({"command": "start"})).await.0, 200);
+    assert_eq!(post(&ui, "/api/nodes/1/drive", json!({"action": "enable"})).await.0, 200);
+    let (p0, _) = drive_pv(&ui, 1).await;
+    let mut ws = ws_connect(&ui, json!({"subscribe": [{"node": 1, "index": "6064", "period_ms": 5}]})).await;
+    let (s, v) = post(&ui, path, sine).await;
+    assert_eq!((s, v["cycles"].as_u64()), (202, Some(600)), "{v}");
+    refused(
+        &post(&ui, path, json!({"amplitude": 1, "period_ms": 600, "duration_ms": 100})).await,
+        409,
+        "already",
+    );
+    let (mut lo, mut hi, mut back) = (i64::MAX, i64::MIN, false);
+    let end = loop {
+        let msg = next_msg(&mut ws).await;
+        match msg["type"].as_str() {
+            Some("sample") => {
+                let p = msg["value"].as_i64().unwrap();
+                (lo, hi) = (lo.min(p), hi.max(p));
+                // Back near the start after the top.
+                back |= hi > p0 + 9000 && p < p0 + 1000;
+            }
+            Some("event") if msg["event"] == "sine" => break msg,
+            _ => {}
+        }
+    };
+    assert_eq!(end["node"], 1, "{end}");
+    assert_eq!(
+        (end["result"]["end"].as_str(), end["result"]["cycles"].as_u64()),
+        (Some("completed"), Some(600)),
+        "{end}"
+    );
+    assert!(lo >= p0 - 500 && (hi - (p0 + 10000)).abs() < 1000 && back, "from {p0}: {lo}..{hi}, back {back}");
+    // A long one, stopped early.
+    let (s, v) = post(&ui, path, json!({"amplitude": 2000, "period_ms": 1000, "duration_ms": 60000})).await;
+    assert_eq!(s, 202, "{v}");
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    assert_eq!(post(&ui, path, json!({"stop": true})).await.0, 200);
+    let end =
+        tokio::time::timeout(Duration::from_secs(5), next_event(&mut ws, "sine")).await.expect("no end");
+    assert_eq!(end["result"]["end"], "stopped", "{end}");
+    let n = end["result"]["cycles"].as_u64().unwrap();
+    assert!(n > 0 && n < 30000, "{end}");
+    let (_, d) = get(&ui, "/api/nodes/1/drive").await;
+    assert_eq!(d["state"], "operation enabled", "{d}");
+}

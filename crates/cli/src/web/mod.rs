@@ -14,6 +14,7 @@ mod error;
 mod frames;
 mod jog;
 mod objects;
+mod sine;
 mod stream;
 mod values;
 
@@ -55,6 +56,8 @@ pub struct Web {
     events: broadcast::Sender<serde_json::Value>,
     /// Jogs held on pages, with their watchdog.
     jogs: jog::JogTable,
+    /// CSP sines running, and their SYNC.
+    sines: sine::SineTable,
     /// Time zero of `t` in the API.
     start: std::time::Instant,
     /// Required on a non-loopback address.
@@ -151,6 +154,7 @@ pub async fn start(
         emcy: Mutex::new(VecDeque::new()),
         events,
         jogs: jog::JogTable::default(),
+        sines: sine::SineTable::default(),
         start: std::time::Instant::now(),
         token: token.clone(),
     });
@@ -192,6 +196,7 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))
         .route("/api/nodes/{n}/drive/homing", get(drive::homing))
         .route("/api/nodes/{n}/drive/jog", post(jog::jog))
+        .route("/api/nodes/{n}/drive/sine", post(sine::sine))
         .route("/api/emcy", get(api::emcy))
         .route("/api/stream", get(stream::upgrade))
         .fallback(|| async { error::ApiError::not_found("no such page or endpoint: see docs/http-api.md") })

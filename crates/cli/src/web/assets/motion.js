@@ -1,4 +1,4 @@
-// drivebus page: jog in the drive panel
+// drivebus page: jog and the CSP sine generator of the drive panel
 // (loaded after app.js, whose $, api and show it uses).
 "use strict";
 
@@ -41,6 +41,19 @@ for (const [id, sign] of [["jog-plus", 1], ["jog-minus", -1]]) {
 window.addEventListener("blur", jogStop);
 document.addEventListener("visibilitychange", () => { if (document.hidden) jogStop(); });
 window.addEventListener("pagehide", jogStop);
+
+// The CSP sine: the server streams it and reports its end as an event.
+$("sine").onsubmit = async (ev) => {
+  ev.preventDefault();
+  const num = (id) => parseInt($(id).value, 10);
+  const body = { amplitude: num("sine-amplitude"), period_ms: num("sine-period"), duration_ms: num("sine-duration") };
+  try { show($("drive-out"), await api("POST", `/api/nodes/${$("drive-node").value}/drive/sine`, body)); }
+  catch (e) { show($("drive-out"), e.message, true); }
+};
+$("sine-stop").onclick = async () => {
+  try { show($("drive-out"), await api("POST", `/api/nodes/${$("drive-node").value}/drive/sine`, { stop: true })); }
+  catch (e) { show($("drive-out"), e.message, true); }
+};
 
 // A jog's or a sine's end, as the stream reports it.
 function motionEvent(msg) {
