@@ -53,16 +53,16 @@ const SHAPE: &str =
 pub async fn jog(State(web): State<Arc<Web>>, Path(n): Path<String>, b: Bytes) -> ApiResult<Json<Json_>> {
     let node = seen_node(&web, &n)?;
     let r: JogRequest = body(&b, SHAPE)?;
-    let d = super::drive::handle(&web, node).await?;
     let ex = |e| ApiError::drive(node, &e);
     if r.velocity == 0 {
         let was = web.jogs.running.lock().unwrap_or_else(|e| e.into_inner()).remove(&node);
         if was.is_some() {
-            end(&web, &d, node, "released", None).await;
+            end(&web, &super::drive::handle(&web, node).await?, node, "released", None).await;
         }
         return Ok(Json(json!({"node": node, "jogging": false})));
     }
-    // A refresh: only the deadline (and a changed speed).
+    // A refresh: only the deadline (and a changed speed); no bus traffic
+    // for the repeats of a held button.
     let refreshed = {
         let mut t = web.jogs.running.lock().unwrap_or_else(|e| e.into_inner());
         t.get_mut(&node).map(|j| {
@@ -72,8 +72,11 @@ pub async fn jog(State(web): State<Arc<Web>>, Path(n): Path<String>, b: Bytes) -
     };
     match refreshed {
         Some(old) if old == r.velocity => {}
-        Some(_) => d.write_raw(0x60FF, 0, &r.velocity.to_le_bytes()).await.map_err(ex)?,
-        None => start(web.clone(), d, node, &r).await?,
+        Some(_) => {
+            let d = super::drive::handle(&web, node).await?;
+            d.write_raw(0x60FF, 0, &r.velocity.to_le_bytes()).await.map_err(ex)?;
+        }
+        None => start(web.clone(), super::drive::handle(&web, node).await?, node, &r).await?,
     }
     Ok(Json(
         json!({"node": node, "jogging": true, "velocity": r.velocity, "watchdog_ms": WATCHDOG.as_millis() as u64}),
