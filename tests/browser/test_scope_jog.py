@@ -92,7 +92,7 @@ def settled_position(browser):
     return wait_for(browser, "the drive at rest", still)[0]
 
 
-def test_jog_runs_while_held_and_stops_on_release_and_on_leaving(browser, page_url):
+def test_jog_runs_while_held_and_stops_on_release_leaving_and_hiding(browser, page_url):
     enabled_drive_1(browser, page_url)
     set_fields(browser, (("jog-speed", "20000"),))
     p0 = settled_position(browser)
@@ -114,6 +114,15 @@ def test_jog_runs_while_held_and_stops_on_release_and_on_leaving(browser, page_u
     p2 = settled_position(browser)
     time.sleep(0.6)
     assert drive_position(browser) == p2
+    ActionChains(browser).release().perform()
+    # Held, then the page is hidden (its pagehide event): stopped too.
+    ActionChains(browser).move_to_element(plus).click_and_hold().perform()
+    wait_for(browser, "the position rises while held", lambda b: (p := drive_position(b)) is not None and p > p2 + 3000)
+    browser.execute_script("window.dispatchEvent(new Event('pagehide'))")
+    wait_for(browser, "stopped on hiding", lambda b: text(b, "jog-state") == "" and "jog released" in text(b, "motion-out"))
+    p3 = settled_position(browser)
+    time.sleep(0.6)
+    assert drive_position(browser) == p3
     ActionChains(browser).release().perform()
     click_action(browser, "disable")
 
