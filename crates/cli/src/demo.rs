@@ -105,6 +105,20 @@ fn secs(m: &Master, since: Instant) -> f64 {
     m.now().saturating_duration_since(since).as_nanos() as f64 / 1e9
 }
 
+/// The CSP sine: `cycles` targets one `cycle` apart, `base + amplitude ·
+/// (1 − cos 2πt/period)`: it starts at `base` at rest and swings to
+/// `base + 2·amplitude` (the demo's, and the page's generator).
+pub(crate) fn csp_sine(
+    base: f64,
+    amplitude: f64,
+    period: Duration,
+    cycle: Duration,
+    cycles: u64,
+) -> impl Iterator<Item = i32> {
+    let (w, dt) = (2.0 * PI / period.as_secs_f64().max(1e-6), cycle.as_secs_f64());
+    (0..cycles).map(move |k| (base + amplitude * (1.0 - (w * k as f64 * dt).cos())).round() as i32)
+}
+
 fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path>) -> anyhow::Result<Report> {
     let mut bus = virtual_bus();
     let specs = [DriveSpec { profile: Profile::Akd, node: 1 }, DriveSpec { profile: Profile::Dds6, node: 2 }];
@@ -186,11 +200,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool, machine: Option<&Path
     let c0 = sim.now();
     let s0 = t_plot(&trace);
     let i0 = trace.lock().unwrap_or_else(|e| e.into_inner()).samples.len();
-    let (amp, freq) = (45_000.0, 1.0);
-    let targets = (0..cycles).map(move |k| {
-        let t = k as f64 / 1000.0;
-        (base + amp * (1.0 - (2.0 * PI * freq * t).cos())).round() as i32
-    });
+    let targets = csp_sine(base, 45_000.0, Duration::from_secs(1), Duration::from_millis(1), cycles);
     let pb2 = pb.clone();
     let m2 = m.clone();
     r.csp_cycles = sim.block_on(async {

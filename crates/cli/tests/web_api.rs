@@ -592,3 +592,165 @@ async fn pdo_mapped_objects_arrive_at_every_sync() {
     let per = span / (pdo.len() - 11) as f64;
     assert!((10.0..=40.0).contains(&per), "one 6064h sample every {per:.1} ms");
 }
+
+/// The drive's position 6064h and velocity 606Ch as `GET .../drive` gives them.
+async fn drive_pv(ui: &Ui, node: u8) -> (i64, i64) {
+    let (s, d) = get(ui, &format!("/api/nodes/{node}/drive")).await;
+    assert_eq!(s, 200, "{d}");
+    (d["position"].as_i64().expect("position"), d["velocity"].as_i64().expect("velocity"))
+}
+
+/// The next stream event named `name`.
+async fn next_event(ws: &mut Ws, name: &str) -> Value {
+    loop {
+        let msg = next_msg(ws).await;
+        if msg["type"] == "event" && msg["event"] == name {
+            return msg;
+        }
+    }
+}
+
+/// Jog: the drive runs while the page repeats the request; when the
+/// repeats stop (the page vanished), the server's watchdog stops the
+/// drive within its 500 ms and says so in a `jog` event. Released by
+/// the page (velocity 0), it stops at once. Not enabled or malformed:
+/// refused, nothing moves.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn jog_runs_while_refreshed_and_the_watchdog_stops_it() {
+    let ui = Ui::sims();
+    let mut ws = ws_connect(&ui, json!({"subscribe": []})).await;
+    let jog = |v: i64| json!({"velocity": v, "acceleration": 200000});
+    refused(&post(&ui, "/api/nodes/1/drive/jog", jog(20000)).await, 409, "not operation enabled");
+    refused(&post(&ui, "/api/nodes/1/drive/jog", json!({"speed": 1})).await, 400, "velocity");
+    refused(&post(&ui, "/api/nodes/9/drive/jog", jog(20000)).await, 404, "9");
+    assert_eq!(post(&ui, "/api/nodes/1/drive", json!({"action": "enable"})).await.0, 200);
+    let (p0, _) = drive_pv(&ui, 1).await;
+    // Held for 1 s: refreshed every 100 ms.
+    for _ in 0..10 {
+        let (s, v) = post(&ui, "/api/nodes/1/drive/jog", jog(20000)).await;
+        assert_eq!((s, v["jogging"].as_bool()), (200, Some(true)), "{v}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let (p1, v1) = drive_pv(&ui, 1).await;
+    assert!(p1 > p0 + 5000 && v1 > 10000, "jogging at 20000/s for 1 s: {p0} -> {p1}, velocity {v1}");
+    // The page vanishes: no more refreshes. The watchdog stops the jog.
+    let last = Instant::now();
+    let ev =
+        tokio::time::timeout(Duration::from_secs(5), next_event(&mut ws, "jog")).await.expect("no jog event");
+    let after = last.elapsed();
+    assert_eq!(ev["node"], 1, "{ev}");
+    assert_eq!(ev["result"]["end"], "watchdog", "{ev}");
+    assert!(
+        after >= Duration::from_millis(400) && after < Duration::from_millis(1500),
+        "stopped after {after:?}"
+    );
+    // Decelerating at 200000/s²: at rest within 0.1 s; give it 0.5 s.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let (p2, v2) = drive_pv(&ui, 1).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let (p3, _) = drive_pv(&ui, 1).await;
+    assert_eq!((v2, p3), (0, p2), "still moving after the watchdog");
+    // Released by the page: stopped at once, a `released` event.
+    assert_eq!(post(&ui, "/api/nodes/1/drive/jog", jog(-20000)).await.0, 200);
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    let (s, v) = post(&ui, "/api/nodes/1/drive/jog", jog(0)).await;
+    assert_eq!((s, v["jogging"].as_bool()), (200, Some(false)), "{v}");
+    let ev = next_event(&mut ws, "jog").await;
+    assert_eq!(ev["result"]["end"], "released", "{ev}");
+    let (p4, _) = drive_pv(&ui, 1).await;
+    assert!(p4 < p3, "jogged backwards: {p3} -> {p4}");
+}
+
+/// The CSP sine generator: streamed one target per SYNC, the position
+/// swings from where it was to 2·amplitude above and back (the scope's
+/// samples show both), the end is a `sine` event with the cycles; a
+/// stop ends a long one early (`stopped`, fewer cycles); bad requests
+/// are refused.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn csp_sine_streams_and_reports_its_end() {
+    let ui = Ui::sims();
+    let path = "/api/nodes/1/drive/sine";
+    let sine = json!({"amplitude": 5000, "period_ms": 600, "duration_ms": 1200});
+    refused(&post(&ui, path, sine.clone()).await, 409, "not operation enabled");
+    refused(&post(&ui, path, json!({"amplitude": 5000})).await, 400, "period_ms");
+    refused(
+        &post(&ui, path, json!({"amplitude": 5000, "period_ms": 5, "duration_ms": 100})).await,
+        400,
+        "period_ms",
+    );
+    refused(&post(&ui, path, json!({"stop": true})).await, 409, "no sine");
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/1017/0", json!({"value": 50})).await.0, 200);
+    assert_eq!(post(&ui, "/api/nodes/1/nmt", json!({"command": "start"})).await.0, 200);
+    assert_eq!(post(&ui, "/api/nodes/1/drive", json!({"action": "enable"})).await.0, 200);
+    let (p0, _) = drive_pv(&ui, 1).await;
+    let mut ws = ws_connect(&ui, json!({"subscribe": [{"node": 1, "index": "6064", "period_ms": 5}]})).await;
+    let (s, v) = post(&ui, path, sine).await;
+    assert_eq!((s, v["cycles"].as_u64()), (202, Some(600)), "{v}");
+    refused(
+        &post(&ui, path, json!({"amplitude": 1, "period_ms": 600, "duration_ms": 100})).await,
+        409,
+        "already",
+    );
+    let (mut lo, mut hi, mut back) = (i64::MAX, i64::MIN, false);
+    let end = loop {
+        let msg = next_msg(&mut ws).await;
+        match msg["type"].as_str() {
+            Some("sample") => {
+                let p = msg["value"].as_i64().unwrap();
+                (lo, hi) = (lo.min(p), hi.max(p));
+                // Back near the start after the top.
+                back |= hi > p0 + 9000 && p < p0 + 1000;
+            }
+            Some("event") if msg["event"] == "sine" => break msg,
+            _ => {}
+        }
+    };
+    assert_eq!(end["node"], 1, "{end}");
+    assert_eq!(
+        (end["result"]["end"].as_str(), end["result"]["cycles"].as_u64()),
+        (Some("completed"), Some(600)),
+        "{end}"
+    );
+    assert!(lo >= p0 - 500 && (hi - (p0 + 10000)).abs() < 1000 && back, "from {p0}: {lo}..{hi}, back {back}");
+    // A long one, stopped early.
+    let (s, v) = post(&ui, path, json!({"amplitude": 2000, "period_ms": 1000, "duration_ms": 60000})).await;
+    assert_eq!(s, 202, "{v}");
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    assert_eq!(post(&ui, path, json!({"stop": true})).await.0, 200);
+    let end =
+        tokio::time::timeout(Duration::from_secs(5), next_event(&mut ws, "sine")).await.expect("no end");
+    assert_eq!(end["result"]["end"], "stopped", "{end}");
+    let n = end["result"]["cycles"].as_u64().unwrap();
+    assert!(n > 0 && n < 30000, "{end}");
+    let (_, d) = get(&ui, "/api/nodes/1/drive").await;
+    assert_eq!(d["state"], "operation enabled", "{d}");
+}
+
+/// A `ping` comes back as a `pong` through the client's queue with the
+/// server's time, and changes no subscription (no `subscribed`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_stream_answers_a_ping_with_a_pong() {
+    let ui = Ui::sims();
+    let mut ws = ws_connect(&ui, json!({"ping": 12.5})).await;
+    // The first `status` may come before.
+    let msg = loop {
+        let msg = next_msg(&mut ws).await;
+        assert_ne!(msg["type"], "subscribed", "{msg}");
+        if msg["type"] != "status" {
+            break msg;
+        }
+    };
+    assert_eq!((msg["type"].as_str(), msg["ping"].as_f64()), (Some("pong"), Some(12.5)), "{msg}");
+    assert!(msg["t"].as_f64().is_some_and(|t| t > 0.0), "{msg}");
+    ws.send(tokio_tungstenite::tungstenite::Message::Text(json!({"ping": "x"}).to_string().into()))
+        .await
+        .unwrap();
+    loop {
+        let msg = next_msg(&mut ws).await;
+        assert_ne!(msg["type"], "subscribed", "{msg}");
+        if msg["type"] == "pong" {
+            assert_eq!(msg["ping"], "x", "{msg}");
+            break;
+        }
+    }
+}

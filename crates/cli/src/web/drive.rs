@@ -18,7 +18,7 @@ use super::error::{ApiError, ApiResult};
 /// How long a move or homing started from the page may take.
 const MOTION_LIMIT: Duration = Duration::from_secs(120);
 
-async fn handle(web: &Web, node: u8) -> ApiResult<Drive> {
+pub(super) async fn handle(web: &Web, node: u8) -> ApiResult<Drive> {
     let d = web.master.drive(node).await.map_err(|e| ApiError::sdo(node, 0x1A00, 1, &e))?;
     Ok(d.with_timeout(Duration::from_secs(3)))
 }

@@ -12,7 +12,9 @@ mod api;
 mod drive;
 mod error;
 mod frames;
+mod jog;
 mod objects;
+mod sine;
 mod stream;
 mod values;
 
@@ -52,6 +54,10 @@ pub struct Web {
     emcy: Mutex<VecDeque<serde_json::Value>>,
     /// Events the server itself makes (a motion's end), for the stream.
     events: broadcast::Sender<serde_json::Value>,
+    /// Jogs held on pages, with their watchdog.
+    jogs: jog::JogTable,
+    /// CSP sines running, and their SYNC.
+    sines: sine::SineTable,
     /// Time zero of `t` in the API.
     start: std::time::Instant,
     /// Required on a non-loopback address.
@@ -147,6 +153,8 @@ pub async fn start(
         profiles,
         emcy: Mutex::new(VecDeque::new()),
         events,
+        jogs: jog::JogTable::default(),
+        sines: sine::SineTable::default(),
         start: std::time::Instant::now(),
         token: token.clone(),
     });
@@ -172,6 +180,10 @@ fn router(web: Arc<Web>) -> Router {
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/scope.js")) }),
         )
         .route(
+            "/motion.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/motion.js")) }),
+        )
+        .route(
             "/style.css",
             get(|| async { page("text/css; charset=utf-8", include_str!("assets/style.css")) }),
         )
@@ -183,6 +195,8 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes/{n}/pdo", get(api::pdo))
         .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))
         .route("/api/nodes/{n}/drive/homing", get(drive::homing))
+        .route("/api/nodes/{n}/drive/jog", post(jog::jog))
+        .route("/api/nodes/{n}/drive/sine", post(sine::sine))
         .route("/api/emcy", get(api::emcy))
         .route("/api/stream", get(stream::upgrade))
         .fallback(|| async { error::ApiError::not_found("no such page or endpoint: see docs/http-api.md") })

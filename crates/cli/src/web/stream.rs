@@ -82,6 +82,8 @@ async fn session(web: Arc<Web>, mut socket: WebSocket) {
         tokio::select! {
             m = socket.recv() => match m {
                 Some(Ok(Message::Text(t))) => match request(&web, &queue, t.as_str()) {
+                    // A ping alone: its pong is queued.
+                    Ok((None, None)) => {}
                     Ok((channels, filter)) => {
                         let mut answer = json!({"type": "subscribed"});
                         if let Some(tasks) = channels {
@@ -125,6 +127,9 @@ struct Request {
     /// Absent: unchanged; `null`: no frames; an object: the filter.
     #[serde(default, deserialize_with = "present")]
     frames: Option<Json_>,
+    /// Echoed at once through the client's queue as a `pong` with the
+    /// server's `t` (the stream's own latency and clock offset).
+    ping: Option<Json_>,
 }
 
 /// `Some` for any value given, `null` included.
@@ -145,6 +150,12 @@ fn request(
 ) -> Result<(Option<Vec<JoinHandle<()>>>, Option<Option<JoinHandle<()>>>), String> {
     let r: Request =
         serde_json::from_str(text).map_err(|e| format!("malformed subscription: {e}; send {SHAPE}"))?;
+    if let Some(p) = &r.ping {
+        queue.push(&json!({"type": "pong", "ping": p, "t": web.t()}));
+        if r.subscribe.is_none() && r.frames.is_none() {
+            return Ok((None, None));
+        }
+    }
     if r.subscribe.is_none() && r.frames.is_none() {
         return Err(format!("nothing asked: send {SHAPE}"));
     }

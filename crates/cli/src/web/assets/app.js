@@ -259,7 +259,8 @@ function connect() {
       // Its own line: a short motion (homing on the spot) may end before
       // the POST's answer is shown in drive-out.
       if (msg.event === "motion") show($("motion-out"), `node ${msg.node}: ${msg.result.end}${msg.result.position === undefined ? "" : " at " + msg.result.position}${msg.result.reason ? " (" + msg.result.reason + ")" : ""}`, msg.result.end === "error");
-      if (msg.event !== "motion") refreshNodes();
+      if (msg.event === "jog" || msg.event === "sine") motionEvent(msg); // motion.js
+      else if (msg.event !== "motion") refreshNodes();
     } else if (msg.type === "error") {
       show($("drive-out"), msg.error, true);
     }

@@ -4,6 +4,9 @@
 // server's). A trigger (level with an edge, or a
 // statusword bit) freezes a capture that starts at the triggering sample;
 // two cursors read Δt and the values; CSV and PNG export what is shown.
+// The wheel zooms the time axis around the mouse, a drag pans; the view
+// then stays where it is (recording goes on) until "live" or a
+// double-click returns to following the newest samples.
 "use strict";
 const colours = ["#4fc3f7", "#ffb74d", "#81c784", "#e57373", "#ba68c8", "#fff176", "#90a4ae", "#f06292"];
 // Samples kept per channel within two windows (older ones age out): 120 000
@@ -16,6 +19,9 @@ let pageDropped = 0;
 const trig = { state: "off", t: null, capture: null, last: null };
 // Cursors as fractions of the time axis.
 const cursors = { a: 0.25, b: 0.75, drag: null };
+// The time axis: live follows the newest samples (or the capture) over
+// one window; otherwise it stays at [tMin, tMin + w] ms.
+const view = { live: true, tMin: 0, w: 0, pan: null };
 
 function windowMs() { return (parseFloat($("scope-window").value) || 10) * 1000; }
 
@@ -28,9 +34,11 @@ function push(map, key, t, v) {
   s.push([t, v]);
   // Samples older than two windows age out (checked every 1024 samples,
   // so the trimming copies once per block, not per sample).
+  // A paused view keeps what it shows (bounded by MAX_SAMPLES below).
   if (map === channels && (s.length & 1023) === 0) {
+    const keep = view.live ? t - 2 * windowMs() : Math.min(t - 2 * windowMs(), view.tMin);
     let k = 0;
-    while (k < s.length && s[k][0] < t - 2 * windowMs()) k++;
+    while (k < s.length && s[k][0] < keep) k++;
     if (k) s.splice(0, k);
   }
   // More within them than the page keeps: dropped and counted.
@@ -106,8 +114,14 @@ function release() {
   showTrigger();
 }
 
-// What the canvas shows: the capture when there is one, else the newest window.
+// What the canvas shows: the view when paused; else the capture when
+// there is one, else the newest window.
 function shown() {
+  const data = trig.capture || channels;
+  if (!view.live) return { data, tMin: view.tMin, w: view.w };
+  return followed();
+}
+function followed() {
   const w = windowMs();
   if (trig.capture) return { data: trig.capture, tMin: trig.t, w };
   let tMax = 0;
@@ -180,6 +194,13 @@ function drawScope() {
     g.strokeStyle = col; g.beginPath(); g.moveTo(f * c.width, 0); g.lineTo(f * c.width, c.height); g.stroke();
   }
   g.setLineDash([]);
+  // The time axis: its ends in s and the span shown.
+  g.fillStyle = "#90a4ae"; g.font = "11px monospace";
+  g.fillText(`${(tMin / 1000).toFixed(3)} s`, 4, c.height - 2);
+  const end = `${((tMin + w) / 1000).toFixed(3)} s`;
+  g.fillText(end, c.width - 4 - g.measureText(end).width, c.height - 2);
+  const span = `${w >= 1000 ? (w / 1000).toPrecision(3) + " s" : w.toPrecision(3) + " ms"}${view.live ? "" : " (paused)"}`;
+  g.fillText(span, (c.width - g.measureText(span).width) / 2, c.height - 2);
   $("legend").innerHTML = legend.join("");
   const cur = $("cursors");
   cur.dataset.dt = (tb - ta).toFixed(3);
@@ -188,18 +209,63 @@ function drawScope() {
   requestAnimationFrame(drawScope);
 }
 
-// The nearer cursor follows a click or a drag on the canvas.
+// A drag on a cursor moves it; a drag elsewhere pans; a click without
+// a drag puts the nearer cursor there.
 function cursorAt(ev) {
   const r = $("scope").getBoundingClientRect();
   return Math.min(1, Math.max(0, (ev.clientX - r.left) / r.width));
 }
+// Leaves live follow at what is shown now.
+function pause() {
+  if (!view.live) return;
+  const { tMin, w } = followed();
+  Object.assign(view, { live: false, tMin, w });
+  showView();
+}
+function goLive() {
+  Object.assign(view, { live: true, pan: null });
+  showView();
+}
+function showView() {
+  const el = $("scope-live");
+  el.disabled = view.live;
+  el.textContent = view.live ? "live" : "back to live";
+}
+// Zooms by `factor` (< 1: in) keeping the time under fraction `f` in place.
+function zoom(f, factor) {
+  pause();
+  const at = view.tMin + f * view.w;
+  view.w = Math.min(Math.max(view.w * factor, 1), 3600e3); // 1 ms .. 1 h
+  view.tMin = at - f * view.w;
+}
 $("scope").onmousedown = (ev) => {
   const f = cursorAt(ev);
-  cursors.drag = Math.abs(f - cursors.a) <= Math.abs(f - cursors.b) ? "a" : "b";
-  cursors[cursors.drag] = f;
+  const px = $("scope").getBoundingClientRect().width;
+  const near = Math.abs(f - cursors.a) <= Math.abs(f - cursors.b) ? "a" : "b";
+  if (Math.abs(f - cursors[near]) * px <= 6) cursors.drag = near;
+  else view.pan = { f, moved: false, near };
 };
-$("scope").onmousemove = (ev) => { if (cursors.drag) cursors[cursors.drag] = cursorAt(ev); };
-window.addEventListener("mouseup", () => { cursors.drag = null; });
+$("scope").onmousemove = (ev) => {
+  const f = cursorAt(ev);
+  if (cursors.drag) cursors[cursors.drag] = f;
+  else if (view.pan && (view.pan.moved || Math.abs(f - view.pan.f) > 0.005)) {
+    pause();
+    view.tMin -= (f - view.pan.f) * view.w;
+    view.pan.f = f;
+    view.pan.moved = true;
+  }
+};
+window.addEventListener("mouseup", (ev) => {
+  if (view.pan && !view.pan.moved && ev.target === $("scope")) cursors[view.pan.near] = view.pan.f;
+  cursors.drag = null;
+  view.pan = null;
+});
+$("scope").addEventListener("wheel", (ev) => {
+  ev.preventDefault();
+  zoom(cursorAt(ev), ev.deltaY > 0 ? 1.25 : 0.8);
+}, { passive: false });
+$("scope").ondblclick = goLive;
+$("scope-live").onclick = goLive;
 
 // Channels of the scope as the stream wants them, and the trigger's source list.
 function scopeChannels() {
@@ -213,6 +279,7 @@ function scopeChannels() {
   channels = new Map();
   pageDropped = 0;
   release();
+  goLive();
   return list;
 }
 
@@ -226,8 +293,12 @@ window.drivebus = {
   samples: () => Object.fromEntries([...channels].map(([k, s]) => [k, s.slice()])),
   capture: () => (trig.capture ? Object.fromEntries([...trig.capture].map(([k, s]) => [k, s.slice()])) : null),
   trigger: () => ({ state: trig.state, t: trig.t }),
+  // The time axis shown: live or not, its start and span in ms.
+  view: () => { const { tMin, w } = shown(); return { live: view.live, tMin, w }; },
+  zoom,
   csv: scopeCsv,
   png: () => $("scope").toDataURL("image/png"),
 };
 showTrigger();
+showView();
 requestAnimationFrame(drawScope);
