@@ -1,4 +1,5 @@
-//! CAN frames, identifiers, caller-supplied time and the transmit sink.
+//! CAN frames, identifiers, the transmit sink and the device contract, with
+//! the base crate's caller-supplied time.
 //!
 //! This crate is the vocabulary every sans-IO layer of drivebus speaks: a
 //! protocol machine takes a [`Frame`] and an [`Instant`] and emits frames into
@@ -12,19 +13,15 @@ pub mod cob;
 mod device;
 pub mod fault;
 mod frame;
-mod identity;
 #[cfg(feature = "pcap")]
 pub mod pcap;
-mod time;
 pub mod timing;
 
 pub use device::{Device, LinkState};
 pub use fault::{FaultAction, FaultRule, Recurrence, XorShift64};
 pub use frame::{CanId, Frame, FrameError, MAX_DATA_LEN};
-pub use identity::Identity;
-pub use time::Instant;
-
-pub use core::time::Duration;
+// Time and identity are the base crate's (the EtherCAT side shares them).
+pub use drivebus_base::{Duration, Identity, Instant, earliest};
 
 /// Where a protocol machine puts the frames it wants sent.
 ///
@@ -47,15 +44,5 @@ impl<F: FnMut(Frame)> TxSink for F {
     #[inline]
     fn send(&mut self, frame: Frame) {
         self(frame)
-    }
-}
-
-/// Earliest of two optional deadlines (`None` means "no deadline").
-#[inline]
-pub fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
-    match (a, b) {
-        (Some(x), Some(y)) => Some(if x <= y { x } else { y }),
-        (x, None) => x,
-        (None, y) => y,
     }
 }

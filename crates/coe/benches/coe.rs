@@ -12,7 +12,7 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 use drivebus_coe::{AlState, MailboxConfig, MailboxServer, NoFiles};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectDictionary, Value};
 

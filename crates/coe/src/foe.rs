@@ -30,7 +30,7 @@
 use crate::AlState;
 use crate::coe::Out;
 use crate::mailbox::{MailboxErrorCode, MailboxType, Put};
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 
 /// FoE header in front of the data.
 pub const FOE_HEADER_LEN: usize = 6;

@@ -10,7 +10,7 @@ use crate::mailbox::{
     ResponseQueue, next_counter,
 };
 use alloc::vec::Vec;
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 
 /// Configuration of a [`MailboxServer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

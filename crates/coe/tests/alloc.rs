@@ -8,7 +8,7 @@ mod support;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 use drivebus_coe::{AlState, FileHandler, FoeError, FoeProgress, MailboxConfig, MailboxServer, NoFiles};
 use drivebus_od::{NoHooks, ObjectDictionary};
 use support::{mbx, pattern, test_od};

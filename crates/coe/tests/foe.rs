@@ -5,7 +5,7 @@
 
 mod support;
 
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 use drivebus_coe::{AlState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxConfig};
 use drivebus_od::NoHooks;
 use support::{Dev, Fail, Rig, body, mbx, pattern, soem, test_od};

@@ -3,7 +3,7 @@
 
 mod support;
 
-use drivebus_can::Duration;
+use drivebus_base::Duration;
 use drivebus_coe::mailbox::{MAX_MAILBOX_SIZE, MIN_MAILBOX_SIZE};
 use drivebus_coe::{AlState, MailboxConfig, MailboxServer, MailboxSizeError, NoFiles};
 use drivebus_od::NoHooks;

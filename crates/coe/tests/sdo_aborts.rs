@@ -4,7 +4,7 @@
 
 mod support;
 
-use drivebus_can::Duration;
+use drivebus_base::Duration;
 use drivebus_coe::coe::abort;
 use drivebus_coe::{MailboxConfig, NoFiles, ObjectAccess};
 use drivebus_od::{NoHooks, ObjectDictionary, SdoAbort};

@@ -22,7 +22,7 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, black_box, criterion_group, criterion_main};
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 use drivebus_esc::fmmu::Fmmu;
 use drivebus_esc::frame::{DatagramCommand, FrameBuilder, position_address, station_address};
 use drivebus_esc::segment::{Device, Segment, SegmentConfig};

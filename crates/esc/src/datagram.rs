@@ -34,7 +34,7 @@ use crate::fmmu::Fmmu;
 use crate::frame::{self, DATAGRAM_HEADER_LEN, DatagramCommand, DatagramHeader, ECAT_HEADER_LEN, TYPE_DLPDU};
 use crate::registers::REGISTER_SPACE;
 use crate::sm::Side;
-use drivebus_can::Instant;
+use drivebus_base::Instant;
 
 impl Esc {
     /// Processes an Ethernet frame in place, as if it arrived on port 0 at

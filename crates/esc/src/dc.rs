@@ -39,7 +39,7 @@
 //! with every n-th SYNC0 (n = SYNC1 cycle / SYNC0 cycle) shifted by the
 //! remainder. Each pulse sets 0x098E/0x098F (cleared when read).
 
-use drivebus_can::Instant;
+use drivebus_base::Instant;
 
 const PPB: i128 = 1_000_000_000;
 

@@ -24,7 +24,7 @@
 //! image and mark it dirty so the caller can persist it.
 
 use crate::sii::SiiImage;
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 
 /// Durations of EEPROM commands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

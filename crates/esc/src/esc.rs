@@ -12,7 +12,7 @@ use crate::sii::SiiImage;
 use crate::sm::{Side, SyncManager};
 use alloc::vec;
 use alloc::vec::Vec;
-use drivebus_can::{Duration, Instant, earliest};
+use drivebus_base::{Duration, Instant, earliest};
 
 /// Static properties of an ESC.
 #[derive(Debug, Clone)]
@@ -147,7 +147,7 @@ pub struct Esc {
     pub(crate) dc_last_sample: Option<Instant>,
     pub(crate) dc_mean: i64,
     /// Jitter of the time stamps (a fault): amplitude (ns) and generator.
-    pub(crate) jitter: Option<(u32, drivebus_can::fault::XorShift64)>,
+    pub(crate) jitter: Option<(u32, drivebus_base::XorShift64)>,
     pub(crate) wd: Watchdogs,
     pub(crate) events: EventQueue,
     pub(crate) now: Instant,
@@ -430,8 +430,7 @@ impl Esc {
     /// a value in ±`amplitude_ns` (at most [`MAX_JITTER_NS`]) drawn from a
     /// generator seeded with `seed`, so a run replays.
     pub fn set_clock_jitter(&mut self, jitter: Option<(u32, u64)>) {
-        self.jitter =
-            jitter.map(|(a, seed)| (a.min(MAX_JITTER_NS), drivebus_can::fault::XorShift64::new(seed)));
+        self.jitter = jitter.map(|(a, seed)| (a.min(MAX_JITTER_NS), drivebus_base::XorShift64::new(seed)));
     }
 
     /// A time `t` as the ESC stamps it: plus the jitter, if on.

@@ -6,7 +6,7 @@
 //! were folded into it. Storage is fixed: raising an event never
 //! allocates and never fails.
 
-use drivebus_can::Instant;
+use drivebus_base::Instant;
 
 /// Something the firmware should react to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

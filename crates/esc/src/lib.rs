@@ -19,7 +19,7 @@
 //!   datagram codec.
 //!
 //! ```
-//! use drivebus_can::Instant;
+//! use drivebus_base::Instant;
 //! use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, station_address};
 //! use drivebus_esc::{Esc, EscConfig};
 //!

@@ -28,8 +28,8 @@ use crate::esc::{Esc, FrameReport, FrameTiming};
 use crate::frame;
 use alloc::boxed::Box;
 use alloc::vec::Vec;
-use drivebus_can::fault::XorShift64;
-use drivebus_can::{Duration, Instant, earliest};
+use drivebus_base::XorShift64;
+use drivebus_base::{Duration, Instant, earliest};
 
 mod fault;
 pub use fault::LineFault;

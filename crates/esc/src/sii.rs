@@ -120,7 +120,7 @@ impl ConfigArea {
 
 /// Identity words 0x08–0x0F: the 1018h identity, one type with the
 /// CANopen node's and the LSS address.
-pub use drivebus_can::Identity;
+pub use drivebus_base::Identity;
 
 /// Mailbox offsets and sizes: SII words 0x14–0x17 (bootstrap) and
 /// 0x18–0x1B (standard), the ESI's `BootStrap` (receive start, size, send

@@ -30,7 +30,7 @@ mod segmented;
 use crate::access::ObjectAccess;
 use crate::mailbox::{MailboxErrorCode, ResponseQueue};
 use alloc::vec::Vec;
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 
 pub use complete::split_image;
 pub use info::list_type;

@@ -10,7 +10,7 @@
 use super::{CoeServer, Mux, Out, Transfer, complete};
 use crate::access::ObjectAccess;
 use crate::mailbox::{HEADER_LEN, MailboxType, Put};
-use drivebus_can::Instant;
+use drivebus_base::Instant;
 use drivebus_od::SdoAbort;
 use drivebus_sdo::wire::{
     CCS_DOWNLOAD_SEGMENT, CCS_INITIATE_DOWNLOAD, CCS_INITIATE_UPLOAD, CCS_UPLOAD_SEGMENT, CS_ABORT,

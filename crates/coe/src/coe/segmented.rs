@@ -11,7 +11,7 @@ use super::sdo_server::{COE_SDO_RESPONSE, SDO_LEN, abort, store};
 use super::{CoeServer, Mux, Out, Transfer};
 use crate::access::ObjectAccess;
 use crate::mailbox::{HEADER_LEN, MailboxType};
-use drivebus_can::Instant;
+use drivebus_base::Instant;
 use drivebus_od::SdoAbort;
 use drivebus_sdo::wire::{
     LAST_SEGMENT, SCS_DOWNLOAD_SEGMENT, SCS_UPLOAD_SEGMENT, TOGGLE, segment, segment_len,

@@ -16,7 +16,7 @@
 //! handler accepted is ended exactly once; after every timeout and a reset
 //! a fresh expedited upload gets the exact expected answer.
 
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 use drivebus_coe::{AlState, FileHandler, FoeEnd, FoeError, FoeProgress, MailboxConfig, MailboxServer};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectCode, ObjectDictionary, SubObject, Value};
 

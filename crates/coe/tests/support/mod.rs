@@ -8,7 +8,7 @@
 //! fragment parsing, BUSY handling), re-expressed here, not copied.
 #![allow(dead_code)]
 
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 use drivebus_coe::{AlState, FileHandler, MailboxConfig, MailboxServer, ObjectAccess};
 use drivebus_od::{Access, DataType, NoHooks, Object, ObjectCode, ObjectDictionary, SubObject, Value};
 

@@ -4,7 +4,7 @@
 
 use crate::frame::{DATAGRAM_HEADER_LEN, DatagramHeader, ECAT_HEADER_LEN, ecat_header};
 use alloc::vec::Vec;
-use drivebus_can::fault::Recurrence;
+use drivebus_base::Recurrence;
 
 /// A fault of the line, on until [`Segment::clear_faults`](super::Segment::clear_faults).
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -3,7 +3,7 @@ use crate::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, s
 use crate::tests::image;
 use crate::{ClockConfig, EscConfig};
 use alloc::vec::Vec;
-use drivebus_can::fault::Recurrence;
+use drivebus_base::Recurrence;
 
 fn line(n: usize) -> Segment<Esc> {
     let escs = (0..n)

@@ -2,7 +2,7 @@
 
 use super::esm::{AlState, AlStatusCode};
 use super::mailbox::MailboxOut;
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 
 /// Process image sizes of the current PDO mapping.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

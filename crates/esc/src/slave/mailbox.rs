@@ -19,7 +19,7 @@
 use crate::esc::Esc;
 use alloc::collections::VecDeque;
 use alloc::vec::Vec;
-use drivebus_can::{Duration, Instant};
+use drivebus_base::{Duration, Instant};
 
 /// Mailbox header length.
 pub const HEADER_LEN: usize = 6;

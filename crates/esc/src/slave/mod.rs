@@ -55,7 +55,7 @@ use crate::events::EscEvent;
 use crate::segment::Device;
 use crate::sii::{MailboxArea, sm_type};
 use alloc::vec::Vec;
-use drivebus_can::{Instant, earliest};
+use drivebus_base::{Instant, earliest};
 use mailbox::Mailbox;
 
 /// Where the sync managers are, from the SII.
@@ -589,7 +589,7 @@ impl<A: SlaveApp> Slave<A> {
         if self.state != AlState::Op || !self.is_dc() || self.cfg.sync_loss_cycles == 0 {
             return None;
         }
-        let cycle = drivebus_can::Duration::from_nanos(u64::from(self.sync.sync0_cycle));
+        let cycle = drivebus_base::Duration::from_nanos(u64::from(self.sync.sync0_cycle));
         self.last_sync0.map(|t| t + cycle * self.cfg.sync_loss_cycles)
     }
 

@@ -5,7 +5,7 @@ use crate::EscConfig;
 use crate::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, station_address};
 use crate::sii::{SiiImage, SiiSyncManager, fmmu_usage};
 use alloc::vec;
-use drivebus_can::Duration;
+use drivebus_base::Duration;
 
 /// Test application: 2 output bytes, 4 input bytes (outputs echoed plus a
 /// counter), echoes mailbox requests, can queue emergencies.

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::{EscEvent, SiiTiming};
-use drivebus_can::Duration;
+use drivebus_base::Duration;
 
 fn sii_read(e: &mut Esc, word: u16) -> Vec<u8> {
     // ethercrab: control + address + 2 pad bytes in one 6-byte FPWR.

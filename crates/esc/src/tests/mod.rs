@@ -4,7 +4,7 @@ use crate::frame::{DatagramCommand, FrameBuilder, datagrams, position_address, s
 use crate::sii::{SiiImage, SiiSyncManager, fmmu_usage, sm_type};
 use crate::{Esc, EscConfig};
 use alloc::vec::Vec;
-use drivebus_can::Instant;
+use drivebus_base::Instant;
 
 mod al;
 mod commands;
