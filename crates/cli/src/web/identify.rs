@@ -1,8 +1,10 @@
 //! The personality of a drive this process does not host (`ui --bus URL`,
 //! a real drive): picked from its identity 1018h when exactly one of ours
 //! has that vendor-ID and product code (and revision, to tell apart two
-//! that share them), so its EMCYs get the manual's texts and its EDS the
-//! names, as a hosted drive's do.
+//! that share them), so its EMCYs get the manual's texts, as a hosted
+//! drive's do. Its dictionary stays what `--eds` gives (a real drive's
+//! firmware may differ from our EDS). Vendor-ID 0 (none assigned, the
+//! generic personality's) identifies nothing.
 
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -31,7 +33,7 @@ pub enum IdentityMatch {
 pub fn personality_of(vendor_id: u32, product_code: u32, revision: Option<u32>) -> IdentityMatch {
     let same = |p: &&Profile| {
         let i = p.info();
-        i.vendor_id == Some(vendor_id) && i.product_code == Some(product_code)
+        vendor_id != 0 && i.vendor_id == Some(vendor_id) && i.product_code == Some(product_code)
     };
     let mut found: Vec<Profile> = Profile::all().iter().filter(same).copied().collect();
     if found.len() > 1
@@ -47,8 +49,8 @@ pub fn personality_of(vendor_id: u32, product_code: u32, revision: Option<u32>) 
 }
 
 /// Reads 1018h of `node` and, when it is one of ours, registers the
-/// personality: its EMCY texts with the master, its EDS unless the node
-/// has one, and the profile for the API's `detail`.
+/// personality: its EMCY texts with the master, and the profile for the
+/// API's `detail`.
 async fn identify(web: &Web, node: u8) {
     let sdo = web.master.sdo(node);
     let (Ok(vendor), Ok(product)) = (sdo.read::<u32>(0x1018, 1).await, sdo.read::<u32>(0x1018, 2).await)
@@ -64,11 +66,6 @@ async fn identify(web: &Web, node: u8) {
                 "web: identified by 1018h; the manual's EMCY texts apply"
             );
             web.master.add_emcy_texts(node, p.info().emcy.iter().map(|e| (e.code, e.text)));
-            if web.master.eds(node).is_none()
-                && let Ok(od) = drivebus_eds::to_od(&p.eds().eds, node)
-            {
-                web.master.set_eds(node, od);
-            }
             web.identified.lock().unwrap_or_else(|e| e.into_inner()).insert(node, p);
         }
         IdentityMatch::Several(ps) => {
@@ -114,6 +111,8 @@ mod tests {
         assert_eq!(personality_of(0x30C, 0x0062_4400, None), IdentityMatch::One(p("dds6")), "{dds6:?}");
         assert_eq!(personality_of(0x1A3, 28_002_021, Some(0x4130_3047)), IdentityMatch::One(p("ipos")));
         assert_eq!(personality_of(0x30C, 0x0062_4401, None), IdentityMatch::None);
+        // Vendor-ID 0 is nobody's: not the generic personality.
+        assert_eq!(personality_of(0, 0x402, Some(0x0001_0000)), IdentityMatch::None);
         // AKD and KC1 share vendor, product and revision: neither is picked.
         match personality_of(0x6A, 0x4D30_3036, Some(0x0014_0000)) {
             IdentityMatch::Several(ps) => {
