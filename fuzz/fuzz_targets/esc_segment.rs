@@ -7,7 +7,7 @@
 
 use drivebus_can::{Duration, Instant};
 use drivebus_esc::frame::{DatagramCommand, FrameBuilder, datagrams, station_address};
-use drivebus_esc::segment::{Device, Segment, SegmentConfig};
+use drivebus_esc::segment::{SegmentDevice, Segment, SegmentConfig};
 use drivebus_esc::sii::{MailboxArea, SiiImage, SiiSyncManager, protocols};
 use drivebus_esc::slave::{MailboxOut, ProcessDataSizes, Slave, SlaveApp, SlaveConfig};
 use drivebus_esc::{Esc, EscConfig};
@@ -42,7 +42,7 @@ fn echo() -> Slave<Echo> {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let devices: Vec<Box<dyn Device>> = vec![
+    let devices: Vec<Box<dyn SegmentDevice>> = vec![
         Box::new(dio::slave(&DioConfig::default())),
         Box::new(dio::slave(&DioConfig { channels: 16, ..DioConfig::default() })),
         Box::new(echo()),

@@ -6,39 +6,16 @@ use std::collections::HashMap;
 
 use drivebus_master::sdo_wire::{CS_ABORT, EXPEDITED, expedited_len, scs};
 use drivebus_master::{CanId, Frame};
-use drivebus_master::{DataType, PdoMapEntry, SdoAbort, Value};
+use drivebus_master::{DataType, MappedObject, PdoMapEntry, SdoAbort, Value, find_mapped, pdo_layout};
 
 use crate::dict::Dict;
 
 /// COB-ID → (label such as `TPDO1 node 5`, mapping).
 pub type PdoMaps = HashMap<u16, (String, Vec<PdoMapEntry>)>;
 
-/// The value of `bits` bits at bit `at` of `data` (little-endian), or
-/// `None` past the end.
-fn bits_at(data: &[u8], at: usize, bits: usize) -> Option<u64> {
-    if bits == 0 || bits > 64 || at + bits > data.len() * 8 {
-        return None;
-    }
-    let mut v = 0u64;
-    for i in 0..bits {
-        let bit = at + i;
-        if data[bit / 8] >> (bit % 8) & 1 == 1 {
-            v |= 1 << i;
-        }
-    }
-    Some(v)
-}
-
 /// Where `index:sub` sits in a PDO of `mapping`: (bit offset, bits).
 pub fn mapped_at(mapping: &[PdoMapEntry], index: u16, sub: u8) -> Option<(usize, usize)> {
-    let mut at = 0usize;
-    for m in mapping {
-        if m.index == index && m.sub == sub {
-            return Some((at, usize::from(m.bits)));
-        }
-        at += usize::from(m.bits);
-    }
-    None
+    find_mapped(mapping.iter().copied(), index, sub).map(|m| (m.bit_offset, usize::from(m.entry.bits)))
 }
 
 /// The little-endian bytes of the `bits` bits (whole bytes) at bit `at`
@@ -47,27 +24,26 @@ pub fn entry_bytes(data: &[u8], at: usize, bits: usize) -> Option<Vec<u8>> {
     if !bits.is_multiple_of(8) {
         return None;
     }
-    bits_at(data, at, bits).map(|raw| raw.to_le_bytes()[..bits / 8].to_vec())
+    let place = MappedObject { entry: PdoMapEntry::new(0, 0, u8::try_from(bits).ok()?), bit_offset: at };
+    place.read(data).map(|raw| raw.to_le_bytes()[..bits / 8].to_vec())
 }
 
 /// One PDO, value by value.
 fn pdo(f: &Frame, dict: &Dict, (label, mapping): &(String, Vec<PdoMapEntry>)) -> String {
     let mut parts = Vec::new();
-    let mut at = 0usize;
-    for m in mapping {
+    for place in pdo_layout(mapping.iter().copied()) {
+        let m = place.entry;
         let bits = usize::from(m.bits);
         let what = dict.name(m.index, m.sub).unwrap_or_else(|| format!("{:04X}h:{:02X}", m.index, m.sub));
         let what = what.rsplit(" / ").next().unwrap_or(&what).to_owned();
         // Dummy entries (index below 1000h) only take room.
         if m.index < 0x1000 {
-            at += bits;
             continue;
         }
-        let Some(raw) = bits_at(f.data(), at, bits) else {
+        let Some(raw) = place.read(f.data()) else {
             parts.push(format!("{what}: frame too short"));
             break;
         };
-        at += bits;
         let bytes = raw.to_le_bytes();
         let value = match dict.data_type(m.index, m.sub) {
             Some(dt) if bits.is_multiple_of(8) => match Value::decode(dt, &bytes[..bits / 8]) {
@@ -111,11 +87,10 @@ pub fn pdo_columns(dict: &Dict, (label, mapping): &(String, Vec<PdoMapEntry>)) -
 /// an entry past the end of a short frame.
 pub fn pdo_numbers(f: &Frame, dict: &Dict, mapping: &[PdoMapEntry]) -> Vec<Option<String>> {
     let mut out = Vec::new();
-    let mut at = 0usize;
-    for m in mapping {
+    for place in pdo_layout(mapping.iter().copied()) {
+        let m = place.entry;
         let bits = usize::from(m.bits);
-        let raw = bits_at(f.data(), at, bits);
-        at += bits;
+        let raw = place.read(f.data());
         if m.index < 0x1000 {
             continue;
         }

@@ -226,16 +226,13 @@ async fn mapped(
         if !rec.valid() {
             continue;
         }
-        let mut at = 0usize;
         let mut hits = Vec::new();
-        for e in &rec.mapping {
-            if let Some(k) = watches.iter().position(|w| w.index == e.index && w.sub == e.sub)
-                && at.is_multiple_of(8)
-                && e.bits.is_multiple_of(8)
+        for place in drivebus_master::pdo_layout(rec.mapping.iter().copied()) {
+            if let Some(k) = watches.iter().position(|w| place.is(w.index, w.sub))
+                && let Some((at, len)) = place.bytes()
             {
-                hits.push((k, at / 8, usize::from(e.bits) / 8));
+                hits.push((k, at, len));
             }
-            at += usize::from(e.bits);
         }
         if hits.is_empty() {
             continue;

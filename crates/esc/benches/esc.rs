@@ -25,7 +25,7 @@ use criterion::{Criterion, black_box, criterion_group, criterion_main};
 use drivebus_base::{Duration, Instant};
 use drivebus_esc::fmmu::Fmmu;
 use drivebus_esc::frame::{DatagramCommand, FrameBuilder, position_address, station_address};
-use drivebus_esc::segment::{Device, Segment, SegmentConfig};
+use drivebus_esc::segment::{Segment, SegmentConfig, SegmentDevice};
 use drivebus_esc::sii::{SiiImage, SiiSyncManager};
 use drivebus_esc::slave::{ProcessDataSizes, Slave, SlaveApp, SlaveConfig};
 use drivebus_esc::{Esc, EscConfig};
@@ -53,7 +53,7 @@ impl SlaveApp for Loopback {
 }
 
 /// Sends one frame with one datagram through `dev`.
-fn send<D: Device>(seg: &mut Segment<D>, cmd: DatagramCommand, addr: u32, data: &[u8]) {
+fn send<D: SegmentDevice>(seg: &mut Segment<D>, cmd: DatagramCommand, addr: u32, data: &[u8]) {
     let mut buf = [0u8; 256];
     let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
     b.push(cmd, 0, addr, data).unwrap();
@@ -63,7 +63,7 @@ fn send<D: Device>(seg: &mut Segment<D>, cmd: DatagramCommand, addr: u32, data: 
 
 /// Configures every slave as a master would: address, SM0 outputs / SM1
 /// inputs (2 bytes each, 3-buffer), FMMU0/1 at logical 4·i, DC, AL OP.
-fn configure<D: Device>(seg: &mut Segment<D>) {
+fn configure<D: SegmentDevice>(seg: &mut Segment<D>) {
     let n = seg.len();
     for i in 0..n as u16 {
         send(seg, DatagramCommand::Apwr, position_address(i, 0x0010), &(0x1000 + i).to_le_bytes());

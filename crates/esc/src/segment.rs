@@ -35,7 +35,7 @@ mod fault;
 pub use fault::LineFault;
 
 /// Something on the segment: an ESC, with or without firmware on its PDI.
-pub trait Device {
+pub trait SegmentDevice {
     /// The slave controller.
     fn esc(&self) -> &Esc;
     /// The slave controller, mutable.
@@ -57,7 +57,7 @@ pub trait Device {
     }
 }
 
-impl Device for Esc {
+impl SegmentDevice for Esc {
     fn esc(&self) -> &Esc {
         self
     }
@@ -66,7 +66,7 @@ impl Device for Esc {
     }
 }
 
-impl<D: Device + ?Sized> Device for Box<D> {
+impl<D: SegmentDevice + ?Sized> SegmentDevice for Box<D> {
     fn esc(&self) -> &Esc {
         (**self).esc()
     }
@@ -129,7 +129,7 @@ pub struct Segment<D> {
     wkcs: Vec<(usize, u16)>,
 }
 
-impl<D: Device> Segment<D> {
+impl<D: SegmentDevice> Segment<D> {
     /// An empty segment.
     pub fn new(cfg: SegmentConfig) -> Self {
         Segment {
@@ -283,7 +283,7 @@ impl<D: Device> Segment<D> {
         }
     }
 
-    /// Powers device `i` on again ([`Device::power_on`]: registers at
+    /// Powers device `i` on again ([`SegmentDevice::power_on`]: registers at
     /// their reset values, the EEPROM kept); its links come up.
     pub fn power_on(&mut self, i: usize) {
         if self.unpowered.get(i) == Some(&true) {

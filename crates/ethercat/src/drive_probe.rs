@@ -211,17 +211,10 @@ async fn remap<S: Deref<Target = ethercrab::SubDevice>>(
 
 /// Byte offsets of every occurrence of `(index, sub)` in a direction's image.
 pub fn offsets(pdos: &[PdoMapping], index: u16, sub: u8) -> Vec<usize> {
-    let mut bit = 0u32;
-    let mut out = Vec::new();
-    for (_, entries) in pdos {
-        for e in entries {
-            if (e >> 16) as u16 == index && (e >> 8) as u8 == sub && bit.is_multiple_of(8) {
-                out.push((bit / 8) as usize);
-            }
-            bit += e & 0xFF;
-        }
-    }
-    out
+    crate::master::image_layout(pdos)
+        .filter(|m| m.is(index, sub) && m.bit_offset.is_multiple_of(8))
+        .map(|m| m.bit_offset / 8)
+        .collect()
 }
 
 /// One drive's process data and csp state.

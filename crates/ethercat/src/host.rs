@@ -9,12 +9,12 @@
 use crate::capture::{Capture, Direction, LinkType};
 use crate::clock::Clock;
 use drivebus_can::{Duration, Instant, earliest};
-use drivebus_esc::segment::{Device, Segment, SegmentConfig, SegmentReport};
+use drivebus_esc::segment::{Segment, SegmentConfig, SegmentDevice, SegmentReport};
 use std::io::Write;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// A device on a hosted segment.
-pub type BoxDevice = Box<dyn Device + Send>;
+pub type BoxDevice = Box<dyn SegmentDevice + Send>;
 
 /// One slave of a host as it is now (what a status page shows).
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -9,7 +9,7 @@
 
 use drivebus_can::Instant;
 use drivebus_ethercat::described::{self, Member};
-use drivebus_ethercat::master::{Master, PduFrames};
+use drivebus_ethercat::master::{LineMaster, PduFrames};
 use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
 use std::time::Duration;
@@ -35,7 +35,7 @@ fn line() -> Host {
 fn real_devices_discovered_to_op_with_outputs_and_inputs() {
     static S: PduFrames = PduFrames::new();
     let host = line();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let (found, group) = m.scan_group().await.unwrap();
         let seen: Vec<(&str, [u32; 4])> = found.iter().map(|f| (f.name.as_str(), f.identity)).collect();
@@ -88,7 +88,7 @@ fn coe_image_without_esi_serves_its_pdos() {
     let akd = Member::Device(Box::new(described::load(&vector("akd.bin")).unwrap()));
     let host =
         Host::line(described::devices(&[akd], None).unwrap(), Clock::simulated(Instant::from_millis(1)));
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let (found, group) = m.scan_group().await.unwrap();
         assert_eq!(found[0].name, "AKD");

@@ -8,7 +8,7 @@ use drivebus_can::{Duration, Instant};
 use drivebus_ethercat::dio::{self, DioConfig};
 use drivebus_ethercat::drive::{DriveLine as Line, with_drive};
 use drivebus_ethercat::master::drive::CyclicDrive;
-use drivebus_ethercat::master::{AlState, Master, PduFrames};
+use drivebus_ethercat::master::{AlState, LineMaster, PduFrames};
 use drivebus_ethercat::{BoxDevice, Clock, Host, LineFault, link};
 use drivebus_personality::Profile;
 use drivebus_personality::machine::Change;
@@ -181,7 +181,7 @@ fn drives() -> Host {
 fn the_tool_master_counts_broken_and_lost_cycles_and_keeps_driving() {
     static S: PduFrames = PduFrames::new();
     let host = drives();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
@@ -225,7 +225,7 @@ fn the_tool_master_counts_broken_and_lost_cycles_and_keeps_driving() {
 fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
     static S: PduFrames = PduFrames::new();
     let host = drives();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();
@@ -257,7 +257,7 @@ fn a_machine_fault_of_an_ethercat_ipos_shows_in_its_statusword_and_resets() {
 fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_to_op() {
     static S: PduFrames = PduFrames::new();
     let host = drives();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
@@ -283,7 +283,7 @@ fn the_tool_master_finds_a_power_cycled_drive_in_init_and_brings_the_line_back_t
 fn a_drifting_clock_shows_in_its_system_time_difference_and_settles_when_cleared() {
     static S: PduFrames = PduFrames::new();
     let host = drives();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
@@ -317,7 +317,7 @@ fn a_drifting_clock_shows_in_its_system_time_difference_and_settles_when_cleared
 fn a_jittering_clock_shows_in_its_system_time_difference_and_ends_when_cleared() {
     static S: PduFrames = PduFrames::new();
     let host = drives();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
@@ -360,7 +360,7 @@ fn a_jittering_clock_shows_in_its_system_time_difference_and_ends_when_cleared()
 fn a_power_cycled_drive_comes_back_as_at_power_on_and_the_master_brings_it_to_op() {
     static S: PduFrames = PduFrames::new();
     let host = drives();
-    let m = Master::on_host(&S, host.clone()).unwrap();
+    let m = LineMaster::on_host(&S, host.clone()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), true, None).await.unwrap();

@@ -12,7 +12,9 @@ use drivebus_esi::CoeDetails;
 use drivebus_ethercat::drive::DriveLine as Line;
 use drivebus_ethercat::drive::DriveSlaveSpec;
 use drivebus_ethercat::master::drive::CyclicDrive;
-use drivebus_ethercat::master::{self, AlState, DescribedBy, Master, MasterError, PduFrames, coe_details};
+use drivebus_ethercat::master::{
+    self, AlState, DescribedBy, LineMaster, MasterError, PduFrames, coe_details,
+};
 use drivebus_ethercat::{BoxDevice, Clock, Host};
 use drivebus_personality::Profile;
 
@@ -27,7 +29,7 @@ fn line() -> Host {
 #[test]
 fn scan_coe_state_and_pdos() {
     static S: PduFrames = PduFrames::new();
-    let m = Master::on_host(&S, line()).unwrap();
+    let m = LineMaster::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         assert_eq!(m.count().await.unwrap(), 2);
         let s = m.al_status(1).await.unwrap();
@@ -76,7 +78,7 @@ fn scan_coe_state_and_pdos() {
 #[test]
 fn drive_enable_home_move_and_csp_with_dc() {
     static S: PduFrames = PduFrames::new();
-    let m = Master::on_host(&S, line()).unwrap();
+    let m = LineMaster::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();
@@ -111,7 +113,7 @@ fn drive_enable_home_move_and_csp_with_dc() {
 #[test]
 fn drive_in_free_run_on_the_generic_servo() {
     static S: PduFrames = PduFrames::new();
-    let m = Master::on_host(&S, line()).unwrap();
+    let m = LineMaster::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 2, Duration::from_millis(1), false, None).await.unwrap();
@@ -140,7 +142,7 @@ fn coe(sdo_info: bool, complete_access: bool) -> Option<CoeDetails> {
 #[test]
 fn whole_objects_by_sdo_information_and_complete_access() {
     static S: PduFrames = PduFrames::new();
-    let m = Master::on_host(&S, line()).unwrap();
+    let m = LineMaster::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let sd = m.slave(&g, 1).unwrap();
@@ -189,7 +191,7 @@ fn whole_objects_by_sdo_information_and_complete_access() {
 #[test]
 fn whole_objects_without_sdo_information_or_complete_access() {
     static S: PduFrames = PduFrames::new();
-    let m = Master::on_host(&S, ipos_offering(coe(false, false))).unwrap();
+    let m = LineMaster::on_host(&S, ipos_offering(coe(false, false))).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let sd = m.slave(&g, 1).unwrap();
@@ -208,7 +210,7 @@ fn whole_objects_without_sdo_information_or_complete_access() {
         assert_eq!(m.object_description(&sd, 1, 0x1C13).await.unwrap(), None);
     });
     static T: PduFrames = PduFrames::new();
-    let m = Master::on_host(&T, ipos_offering(coe(false, true))).unwrap();
+    let m = LineMaster::on_host(&T, ipos_offering(coe(false, true))).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let sd = m.slave(&g, 1).unwrap();
@@ -232,7 +234,7 @@ fn whole_objects_without_sdo_information_or_complete_access() {
 #[test]
 fn ipos_modes_set_before_enabling() {
     static S: PduFrames = PduFrames::new();
-    let m = Master::on_host(&S, line()).unwrap();
+    let m = LineMaster::on_host(&S, line()).unwrap();
     async_io::block_on(async {
         let g = m.init().await.unwrap();
         let mut d = CyclicDrive::start(&m, g, 1, Duration::from_millis(1), true, None).await.unwrap();

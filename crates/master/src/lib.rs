@@ -46,6 +46,8 @@ pub use drive::{
     Drive, DriveError, DriveFlags, DriveState, ModeNotShown, MotionEnd, MotionLimits, MotionProgress,
     MotionReport, MoveProfile, StopAction, StopReport, mode_name,
 };
+/// Where mapped objects sit in a PDO or process-data image: the PDO crate's one helper.
+pub use drivebus_pdo::{MappedObject, find_mapped, layout as pdo_layout, mapped_bits};
 pub use driver::sim::{SimBus, Stalled};
 pub use lss::{LssError, LssMaster, OnlySlave};
 pub use master::{Master, MasterConfig, MasterEvent, NodeStatus, PdoCallback, SyncTick, WaitError};

@@ -35,31 +35,8 @@ impl PdoDir {
     }
 }
 
-/// One mapped object.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PdoMapEntry {
-    /// Object index.
-    pub index: u16,
-    /// Sub-index.
-    pub sub: u8,
-    /// Length in bits.
-    pub bits: u8,
-}
-
-impl PdoMapEntry {
-    /// An entry.
-    pub fn new(index: u16, sub: u8, bits: u8) -> Self {
-        PdoMapEntry { index, sub, bits }
-    }
-    /// The 32-bit mapping value `iiiissll`.
-    pub fn raw(self) -> u32 {
-        (u32::from(self.index) << 16) | (u32::from(self.sub) << 8) | u32::from(self.bits)
-    }
-    /// From the 32-bit mapping value.
-    pub fn from_raw(v: u32) -> Self {
-        PdoMapEntry { index: (v >> 16) as u16, sub: (v >> 8) as u8, bits: v as u8 }
-    }
-}
+/// One mapped object; the PDO crate's, where the offsets are added up.
+pub use drivebus_pdo::PdoMapEntry;
 
 /// A PDO's communication and mapping records.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -51,6 +51,7 @@ mod cobid;
 mod config;
 mod events;
 mod image;
+mod layout;
 mod mapping;
 mod objects;
 mod service;
@@ -60,6 +61,7 @@ pub use cobid::{COB_EXTENDED, COB_ID_BITS, COB_INVALID, COB_NO_RTR, can_id, is_v
 pub use config::{DEFAULT_DUMMY_TYPES, Granularity, MAX_MAPPED_ENTRIES, MAX_PDOS, PdoConfig};
 pub use events::{EVENT_QUEUE_LEN, PdoEvent, PdoRx};
 pub use image::MappedPdo;
+pub use layout::{MappedObject, PdoMapEntry, find_mapped, layout, mapped_bits};
 pub use mapping::{PdoKind, map_entry, split_entry, validate_entry, validate_mapping};
 pub use objects::{
     PdoDefaults, SUB_COB_ID, SUB_EVENT_TIMER, SUB_INHIBIT_TIME, SUB_SYNC_START, SUB_TRANSMISSION_TYPE,

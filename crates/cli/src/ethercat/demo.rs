@@ -11,7 +11,7 @@ use anyhow::{Context, anyhow, bail};
 use drivebus_can::{Duration, Instant};
 use drivebus_ethercat::drive::DriveLine as Line;
 use drivebus_ethercat::master::drive::{CyclicDrive, Feedback};
-use drivebus_ethercat::master::{Master, PduFrames, SlaveInfo, block_on};
+use drivebus_ethercat::master::{LineMaster, PduFrames, SlaveInfo, block_on};
 use drivebus_ethercat::{Clock, Host};
 use drivebus_personality::Profile;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -149,7 +149,7 @@ fn simulate(show: bool, sine_seconds: f64, realtime: bool) -> anyhow::Result<Rep
     static STORAGE: PduFrames = PduFrames::new();
     let clock = if realtime { Clock::real() } else { Clock::simulated(Instant::from_millis(1)) };
     let host: Host = Line::new().drive(Profile::Ipos).host(clock.clone()).context("building the iPOS")?;
-    let m = Master::on_host(&STORAGE, host).context("starting the master")?;
+    let m = LineMaster::on_host(&STORAGE, host).context("starting the master")?;
     let pb = if show { ProgressBar::new_spinner() } else { ProgressBar::hidden() };
     pb.set_style(
         ProgressStyle::with_template("{spinner} {msg}").unwrap_or_else(|_| ProgressStyle::default_spinner()),

@@ -7,8 +7,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::anyhow;
 use drivebus_can::Duration;
 use drivebus_ethercat::master::codes::{State, mode};
-use drivebus_ethercat::master::drive::{CyclicDrive, DriveError, Feedback};
-use drivebus_ethercat::master::{self, Master};
+use drivebus_ethercat::master::drive::{CyclicDrive, CyclicDriveError, Feedback};
+use drivebus_ethercat::master::{self, LineMaster};
 
 use super::line::{master_err, with_master};
 use super::{EcatDriveAction, EcatDriveArgs};
@@ -20,15 +20,15 @@ use crate::output::outln;
 static STOP: AtomicBool = AtomicBool::new(false);
 
 /// A drive error with its `--json` code.
-fn drive_err(e: DriveError) -> anyhow::Error {
+fn drive_err(e: CyclicDriveError) -> anyhow::Error {
     match e {
-        DriveError::Master(m) => master_err(m),
+        CyclicDriveError::Master(m) => master_err(m),
         e => {
             let code = match &e {
-                DriveError::Timeout { .. } => "drive_timeout",
-                DriveError::Interrupted { .. } => "interrupted",
-                DriveError::Fault { .. } => "drive_fault",
-                DriveError::Homing { .. } => "homing_error",
+                CyclicDriveError::Timeout { .. } => "drive_timeout",
+                CyclicDriveError::Interrupted { .. } => "interrupted",
+                CyclicDriveError::Fault { .. } => "drive_fault",
+                CyclicDriveError::Homing { .. } => "homing_error",
                 _ => "drive_error",
             };
             coded(code, anyhow::Error::new(e))
@@ -114,9 +114,10 @@ pub async fn run(g: &Global, a: &EcatDriveArgs) -> anyhow::Result<()> {
     });
     let progress = !g.json && std::io::stderr().is_terminal();
     let dc = !a.free_run;
-    let r =
-        with_master(g, &line, async move |m: &Master| act(m, pos, cycle, dc, action, wait, progress).await)
-            .await;
+    let r = with_master(g, &line, async move |m: &LineMaster| {
+        act(m, pos, cycle, dc, action, wait, progress).await
+    })
+    .await;
     watcher.abort();
     let done = r?;
     report(g, pos, a.cycle_us, &done);
@@ -140,7 +141,7 @@ enum OpAction {
 }
 
 async fn act(
-    m: &Master,
+    m: &LineMaster,
     pos: usize,
     cycle: Duration,
     dc: bool,

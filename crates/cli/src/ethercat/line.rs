@@ -2,7 +2,7 @@
 //! `drivebus_ethercat::master`.
 
 use anyhow::{anyhow, bail};
-use drivebus_ethercat::master::{self, AlState, AlStatus, Master, MasterError, block_on};
+use drivebus_ethercat::master::{self, AlState, AlStatus, LineMaster, MasterError, block_on};
 use drivebus_master::Value;
 
 use super::{EcatLine, EcatPdoShow, EcatSdoWrite, EcatStateArgs};
@@ -30,12 +30,12 @@ pub fn master_err(e: MasterError) -> anyhow::Error {
 pub async fn with_master<T: Send + 'static>(
     g: &Global,
     line: &EcatLine,
-    f: impl AsyncFnOnce(&Master) -> anyhow::Result<T> + Send + 'static,
+    f: impl AsyncFnOnce(&LineMaster) -> anyhow::Result<T> + Send + 'static,
 ) -> anyhow::Result<T> {
     let iface = line.iface.clone();
     let timeout = std::time::Duration::from_millis(g.timeout_ms(1000));
     tokio::task::spawn_blocking(move || {
-        let m = Master::on_iface(&iface, timeout).map_err(master_err)?;
+        let m = LineMaster::on_iface(&iface, timeout).map_err(master_err)?;
         block_on(f(&m))
     })
     .await
@@ -63,7 +63,7 @@ fn status_text(s: &AlStatus) -> String {
 
 /// `drivebus ethercat scan`.
 pub async fn scan(g: &Global, line: &EcatLine) -> anyhow::Result<()> {
-    let found = with_master(g, line, async |m: &Master| m.scan().await.map_err(master_err)).await?;
+    let found = with_master(g, line, async |m: &LineMaster| m.scan().await.map_err(master_err)).await?;
     if g.json {
         let slaves: Vec<_> = found
             .iter()
@@ -151,7 +151,7 @@ pub async fn sdo_write(g: &Global, a: &EcatSdoWrite) -> anyhow::Result<()> {
         .map_err(|e| coded("usage", anyhow!("value `{value}` does not fit {}: {e}", dt.name())))?;
     let pos = a.slave;
     let data = bytes.clone();
-    with_master(g, &a.line, async move |m: &Master| {
+    with_master(g, &a.line, async move |m: &LineMaster| {
         m.check_position(pos).await.map_err(master_err)?;
         let group = m.init().await.map_err(master_err)?;
         let sd = m.slave(&group, pos).map_err(master_err)?;
@@ -185,7 +185,7 @@ pub async fn state(g: &Global, a: &EcatStateArgs) -> anyhow::Result<()> {
         },
     };
     let (only, direct) = (a.slave, a.direct);
-    let states = with_master(g, &a.line, async move |m: &Master| {
+    let states = with_master(g, &a.line, async move |m: &LineMaster| {
         let count = m.count().await.map_err(master_err)?;
         if count == 0 {
             return Err(master_err(MasterError::Empty(m.line_name().to_owned())));
@@ -233,7 +233,7 @@ pub async fn state(g: &Global, a: &EcatStateArgs) -> anyhow::Result<()> {
 
 /// PRE-OP, SAFE-OP or OP the way ethercrab brings a line up; a refusal is
 /// reported with the AL status code of the slave that refused.
-async fn bring_up(m: &Master, target: AlState, which: &[usize]) -> anyhow::Result<()> {
+async fn bring_up(m: &LineMaster, target: AlState, which: &[usize]) -> anyhow::Result<()> {
     let md = m.main_device();
     let result: Result<(), MasterError> = async {
         let group = m.init().await?;
@@ -261,7 +261,7 @@ async fn bring_up(m: &Master, target: AlState, which: &[usize]) -> anyhow::Resul
 /// `drivebus ethercat pdo show`.
 pub async fn pdo_show(g: &Global, a: &EcatPdoShow) -> anyhow::Result<()> {
     let pos = a.slave;
-    let (rx, tx) = with_master(g, &a.line, async move |m: &Master| {
+    let (rx, tx) = with_master(g, &a.line, async move |m: &LineMaster| {
         m.check_position(pos).await.map_err(master_err)?;
         let group = m.init().await.map_err(master_err)?;
         let sd = m.slave(&group, pos).map_err(master_err)?;
@@ -272,7 +272,7 @@ pub async fn pdo_show(g: &Global, a: &EcatPdoShow) -> anyhow::Result<()> {
     .await?;
     let dict = Dict::default();
     let name = |e: u32| dict.name((e >> 16) as u16, (e >> 8) as u8).unwrap_or_default();
-    let bytes = |m: &[master::PdoMapping]| m.iter().flat_map(|p| &p.1).map(|e| e & 0xFF).sum::<u32>() / 8;
+    let bytes = |m: &[master::PdoMapping]| master::image_layout(m).last().map_or(0, |e| e.end()) / 8;
     if g.json {
         let dir = |m: &[master::PdoMapping]| -> Vec<serde_json::Value> {
             m.iter()

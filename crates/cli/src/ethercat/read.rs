@@ -1,10 +1,10 @@
 //! `drivebus ethercat sdo read`: one entry, a VAR, or a whole ARRAY or
 //! RECORD named and typed by the slave's SDO Information and read by
 //! complete access where the slave offers them
-//! (`drivebus_ethercat::master::Master::read_object`); without SDO
+//! (`drivebus_ethercat::master::LineMaster::read_object`); without SDO
 //! Information, by the CiA 301/402 and ETG.1000.6 tables, else by size.
 
-use drivebus_ethercat::master::{self, DescribedBy, Entry, Master, ObjectDescription, ObjectRead};
+use drivebus_ethercat::master::{self, DescribedBy, Entry, LineMaster, ObjectDescription, ObjectRead};
 use drivebus_master::DataType;
 
 use super::EcatSdoRead;
@@ -88,7 +88,7 @@ pub async fn sdo_read(g: &Global, a: &EcatSdoRead) -> anyhow::Result<()> {
     // One upload: an entry asked for, or a VAR the tool knows.
     let single = sub.or((tables.entries.is_none() && dict.data_type(index, 0).is_some()).then_some(0));
     let pos = a.slave;
-    let read = with_master(g, &a.line, async move |m: &Master| {
+    let read = with_master(g, &a.line, async move |m: &LineMaster| {
         m.check_position(pos).await.map_err(master_err)?;
         let group = m.init().await.map_err(master_err)?;
         let sd = m.slave(&group, pos).map_err(master_err)?;

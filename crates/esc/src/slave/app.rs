@@ -197,7 +197,7 @@ pub trait SlaveApp {
         None
     }
 
-    /// Power comes back ([`Device::power_on`](crate::segment::Device::power_on)):
+    /// Power comes back ([`SegmentDevice::power_on`](crate::segment::SegmentDevice::power_on)):
     /// the firmware starts again from its power-on state (what it keeps
     /// is what non-volatile memory holds). Default: nothing to rebuild.
     fn power_on(&mut self) {}

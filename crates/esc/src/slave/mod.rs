@@ -52,7 +52,7 @@ pub use mailbox::{HEADER_LEN as MAILBOX_HEADER_LEN, MailboxOut, mailbox_error, m
 
 use crate::esc::Esc;
 use crate::events::EscEvent;
-use crate::segment::Device;
+use crate::segment::SegmentDevice;
 use crate::sii::{MailboxArea, sm_type};
 use alloc::vec::Vec;
 use drivebus_base::{Instant, earliest};
@@ -641,7 +641,7 @@ impl<A: SlaveApp> Slave<A> {
     }
 }
 
-impl<A: SlaveApp + 'static> Device for Slave<A> {
+impl<A: SlaveApp + 'static> SegmentDevice for Slave<A> {
     fn esc(&self) -> &Esc {
         &self.esc
     }

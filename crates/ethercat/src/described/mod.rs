@@ -235,19 +235,19 @@ fn process_data(d: &SlaveDescription) -> Result<(ProcessDataSizes, Option<u8>, O
 /// Entries of the PDOs assigned to `sm`, at their bit offsets, that the
 /// dictionary holds with a value of 1 to 64 bits.
 fn mirrors(od: &drivebus_od::ObjectDictionary, pdos: &[drivebus_esi::EsiPdo], sm: Option<u8>) -> Vec<Mirror> {
-    let mut off = 0usize;
+    let assigned = pdos.iter().filter(|p| sm.is_some() && p.sm == sm);
+    let entries =
+        assigned.flat_map(|p| &p.entries).map(|e| drivebus_pdo::PdoMapEntry::new(e.index, e.sub, e.bit_len));
     let mut out = Vec::new();
-    for p in pdos.iter().filter(|p| sm.is_some() && p.sm == sm) {
-        for e in &p.entries {
-            let bits = usize::from(e.bit_len);
-            if e.index != 0
-                && let Ok(entry) = od.find(e.index, e.sub)
-                && od.entry(entry).data_type.fixed_size().is_some()
-                && bits <= 64
-            {
-                out.push(Mirror { entry, bit_off: off, bits });
-            }
-            off += bits;
+    for place in drivebus_pdo::layout(entries) {
+        let e = place.entry;
+        let bits = usize::from(e.bits);
+        if e.index != 0
+            && let Ok(entry) = od.find(e.index, e.sub)
+            && od.entry(entry).data_type.fixed_size().is_some()
+            && bits <= 64
+        {
+            out.push(Mirror { entry, bit_off: place.bit_offset, bits });
         }
     }
     out

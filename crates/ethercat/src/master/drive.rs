@@ -9,7 +9,7 @@
 //! which was done.
 
 use super::{
-    AlState, Master, MasterError, PdoMapping, PreOpGroup, offset, pdo_assignment, sdo_read, sdo_write,
+    AlState, LineMaster, MasterError, PdoMapping, PreOpGroup, offset, pdo_assignment, sdo_read, sdo_write,
 };
 use super::{MAX_PDI, MAX_SUBDEVICES};
 use drivebus_can::Duration;
@@ -28,7 +28,7 @@ enum Group {
 
 /// Why a drive command did not do what it was asked.
 #[derive(Debug)]
-pub enum DriveError {
+pub enum CyclicDriveError {
     /// The line or a CoE transfer failed.
     Master(MasterError),
     /// The drive did not get there in time; what the master then did.
@@ -102,26 +102,28 @@ fn stopped(s: &Option<Stop>) -> String {
     s.map(|s| format!("; {s}")).unwrap_or_default()
 }
 
-impl fmt::Display for DriveError {
+impl fmt::Display for CyclicDriveError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            DriveError::Master(e) => write!(f, "{e}"),
-            DriveError::Timeout { what, after, stopped: s } => {
+            CyclicDriveError::Master(e) => write!(f, "{e}"),
+            CyclicDriveError::Timeout { what, after, stopped: s } => {
                 write!(f, "{what}: not done after {:.1} s{}", after.as_secs_f64(), stopped(s))
             }
-            DriveError::Interrupted { what, stopped: s } => write!(f, "{what}: interrupted{}", stopped(s)),
-            DriveError::Fault { what, statusword, error_code } => {
+            CyclicDriveError::Interrupted { what, stopped: s } => {
+                write!(f, "{what}: interrupted{}", stopped(s))
+            }
+            CyclicDriveError::Fault { what, statusword, error_code } => {
                 write!(f, "{what}: the drive is in fault (statusword {statusword:04X}h")?;
                 match error_code {
                     Some(c) => write!(f, ", 603Fh error code {c:04X}h)"),
                     None => f.write_str(")"),
                 }
             }
-            DriveError::Homing { statusword, stopped: s } => {
+            CyclicDriveError::Homing { statusword, stopped: s } => {
                 write!(f, "homing error (statusword {statusword:04X}h bit 13){}", stopped(s))
             }
-            DriveError::Mode { slave, not_shown } => write!(f, "slave {slave}: {not_shown}"),
-            DriveError::Lost { cycles } => write!(
+            CyclicDriveError::Mode { slave, not_shown } => write!(f, "slave {slave}: {not_shown}"),
+            CyclicDriveError::Lost { cycles } => write!(
                 f,
                 "the process data stopped coming back ({cycles} cycles with a wrong working counter): the line left OP"
             ),
@@ -129,11 +131,11 @@ impl fmt::Display for DriveError {
     }
 }
 
-impl std::error::Error for DriveError {}
+impl std::error::Error for CyclicDriveError {}
 
-impl From<MasterError> for DriveError {
+impl From<MasterError> for CyclicDriveError {
     fn from(e: MasterError) -> Self {
-        DriveError::Master(e)
+        CyclicDriveError::Master(e)
     }
 }
 
@@ -202,7 +204,7 @@ fn wr(b: &mut [u8], at: Option<usize>, v: &[u8]) {
 
 /// The line in OP with one drive under control.
 pub struct CyclicDrive<'m> {
-    m: &'m Master,
+    m: &'m LineMaster,
     group: Group,
     position: usize,
     layout: Layout,
@@ -249,13 +251,13 @@ impl<'m> CyclicDrive<'m> {
     /// free run) and exchanges a first cycle. The drive must map 6040h and
     /// 6041h (the iPOS default does).
     pub async fn start(
-        m: &'m Master,
+        m: &'m LineMaster,
         mut group: PreOpGroup,
         position: usize,
         cycle: Duration,
         dc: bool,
         stop: Option<&'m AtomicBool>,
-    ) -> Result<CyclicDrive<'m>, DriveError> {
+    ) -> Result<CyclicDrive<'m>, CyclicDriveError> {
         let md = m.main_device();
         let layout = {
             let sd = m.slave(&group, position)?;
@@ -285,7 +287,8 @@ impl<'m> CyclicDrive<'m> {
                 .await
                 .map_err(|e| MasterError::Ethercrab("setting the process-data watchdog".into(), e))?;
         }
-        let e = |what: &'static str| move |e| DriveError::Master(MasterError::Ethercrab(what.into(), e));
+        let e =
+            |what: &'static str| move |e| CyclicDriveError::Master(MasterError::Ethercrab(what.into(), e));
         let group = group.into_pre_op_pdi(md).await.map_err(e("mapping the process data"))?;
         let mut expected_wkc = 0u16;
         for sd in group.iter(md) {
@@ -329,7 +332,7 @@ impl<'m> CyclicDrive<'m> {
     /// PRE-OP with PDI -> OP, DC or free run; on error, whether OP (not
     /// SAFE-OP) was being requested.
     async fn to_op(
-        m: &Master,
+        m: &LineMaster,
         group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOpPdi>,
         dc: bool,
         cycle: Duration,
@@ -424,7 +427,7 @@ impl<'m> CyclicDrive<'m> {
 
     /// One process-data cycle: outputs, exchange, inputs, then the wait
     /// until the next cycle.
-    pub async fn cycle(&mut self) -> Result<Feedback, DriveError> {
+    pub async fn cycle(&mut self) -> Result<Feedback, CyclicDriveError> {
         let (cwo, to, mo) = (self.layout.controlword, self.layout.target, self.layout.mode);
         let (c, t, m) = (self.controlword, self.target, self.mode_out);
         self.with_io(|_, o| {
@@ -447,7 +450,7 @@ impl<'m> CyclicDrive<'m> {
                 self.lost += 1;
                 (0, self.cycle)
             }
-            Err(e) => return Err(DriveError::Master(MasterError::Ethercrab("process data".into(), e))),
+            Err(e) => return Err(CyclicDriveError::Master(MasterError::Ethercrab("process data".into(), e))),
         };
         self.cycles += 1;
         if wkc == self.expected_wkc {
@@ -457,7 +460,7 @@ impl<'m> CyclicDrive<'m> {
             self.bad_wkc += 1;
             self.bad_in_row += 1;
             if self.bad_in_row >= 100 {
-                return Err(DriveError::Lost { cycles: self.bad_in_row });
+                return Err(CyclicDriveError::Lost { cycles: self.bad_in_row });
             }
         }
         self.m.pace().sleep(wait).await;
@@ -469,7 +472,7 @@ impl<'m> CyclicDrive<'m> {
     }
 
     /// Reads an object of this drive over CoE (in OP too).
-    pub async fn read(&self, index: u16, sub: u8) -> Result<i64, DriveError> {
+    pub async fn read(&self, index: u16, sub: u8) -> Result<i64, CyclicDriveError> {
         let md = self.m.main_device();
         let data = match &self.group {
             Group::Dc(g) => {
@@ -489,7 +492,7 @@ impl<'m> CyclicDrive<'m> {
     }
 
     /// Writes an object of this drive over CoE.
-    pub async fn write(&self, index: u16, sub: u8, data: &[u8]) -> Result<(), DriveError> {
+    pub async fn write(&self, index: u16, sub: u8, data: &[u8]) -> Result<(), CyclicDriveError> {
         let md = self.m.main_device();
         match &self.group {
             Group::Dc(g) => {
@@ -512,7 +515,7 @@ impl<'m> CyclicDrive<'m> {
     /// over CoE). In Operation enabled, waits for 6061h to show it; before
     /// it a drive may take the mode only once enabled (iPOS §4.2.4), so
     /// [`enable`](Self::enable) waits for 6061h instead.
-    pub async fn set_mode(&mut self, m: i8) -> Result<(), DriveError> {
+    pub async fn set_mode(&mut self, m: i8) -> Result<(), CyclicDriveError> {
         if self.layout.mode.is_some() {
             self.mode_out = m;
         } else {
@@ -527,7 +530,7 @@ impl<'m> CyclicDrive<'m> {
 
     /// Waits up to 200 cycles for 6061h to show the mode
     /// [`set_mode`](Self::set_mode) wrote, unless it was seen already.
-    async fn confirm_mode(&mut self) -> Result<(), DriveError> {
+    async fn confirm_mode(&mut self) -> Result<(), CyclicDriveError> {
         let Some(m) = self.mode_pending else { return Ok(()) };
         let mut display = 0;
         for _ in 0..200 {
@@ -539,11 +542,11 @@ impl<'m> CyclicDrive<'m> {
             }
         }
         let not_shown = ModeNotShown { mode: m, display, statusword: self.fb.statusword };
-        Err(DriveError::Mode { slave: self.position, not_shown })
+        Err(CyclicDriveError::Mode { slave: self.position, not_shown })
     }
 
-    async fn fault(&self, what: &str) -> DriveError {
-        DriveError::Fault {
+    async fn fault(&self, what: &str) -> CyclicDriveError {
+        CyclicDriveError::Fault {
             what: what.to_owned(),
             statusword: self.fb.statusword,
             error_code: self.read(0x603F, 0).await.ok().map(|c| c as u16),
@@ -553,12 +556,12 @@ impl<'m> CyclicDrive<'m> {
     /// Brings the drive to operation enabled (a fault is reset first),
     /// holding the present position as the target; then waits for 6061h
     /// to show a mode [`set_mode`](Self::set_mode) wrote before.
-    pub async fn enable(&mut self, timeout: Duration) -> Result<(), DriveError> {
+    pub async fn enable(&mut self, timeout: Duration) -> Result<(), CyclicDriveError> {
         let limit = (timeout.as_nanos() / self.cycle.as_nanos().max(1)).max(1) as u64;
         let mut reset_tried = false;
         for k in 0..limit {
             if self.interrupted() {
-                return Err(DriveError::Interrupted { what: "enable".into(), stopped: None });
+                return Err(CyclicDriveError::Interrupted { what: "enable".into(), stopped: None });
             }
             let state = self.fb.state();
             self.target = self.fb.position;
@@ -577,7 +580,7 @@ impl<'m> CyclicDrive<'m> {
         if self.fb.state() == Some(State::Fault) && reset_tried {
             return Err(self.fault("enable (fault reset did not clear the fault)").await);
         }
-        Err(DriveError::Timeout {
+        Err(CyclicDriveError::Timeout {
             what: format!("enable (statusword {:04X}h)", self.fb.statusword),
             after: timeout,
             stopped: None,
@@ -585,7 +588,7 @@ impl<'m> CyclicDrive<'m> {
     }
 
     /// Disables the drive (CiA 402 "disable voltage": switch on disabled).
-    pub async fn disable(&mut self, timeout: Duration) -> Result<(), DriveError> {
+    pub async fn disable(&mut self, timeout: Duration) -> Result<(), CyclicDriveError> {
         let limit = (timeout.as_nanos() / self.cycle.as_nanos().max(1)).max(1) as u64;
         self.controlword = cw::DISABLE_VOLTAGE;
         for _ in 0..limit {
@@ -594,7 +597,7 @@ impl<'m> CyclicDrive<'m> {
                 return Ok(());
             }
         }
-        Err(DriveError::Timeout { what: "disable".into(), after: timeout, stopped: None })
+        Err(CyclicDriveError::Timeout { what: "disable".into(), after: timeout, stopped: None })
     }
 
     /// Halts a motion (bit 8), then quick-stops if it does not come to
@@ -636,7 +639,7 @@ impl<'m> CyclicDrive<'m> {
         method: i8,
         timeout: Duration,
         mut progress: impl FnMut(&Feedback),
-    ) -> Result<i32, DriveError> {
+    ) -> Result<i32, CyclicDriveError> {
         self.set_mode(mode::HM).await?;
         self.write(0x6098, 0, &[method as u8]).await?;
         self.enable(Duration::from_secs(2)).await?;
@@ -652,14 +655,17 @@ impl<'m> CyclicDrive<'m> {
             let s = self.fb.statusword;
             if self.interrupted() {
                 let stopped = Some(self.halt().await);
-                return Err(DriveError::Interrupted { what: format!("homing (method {method})"), stopped });
+                return Err(CyclicDriveError::Interrupted {
+                    what: format!("homing (method {method})"),
+                    stopped,
+                });
             }
             if self.fb.state() == Some(State::Fault) {
                 return Err(self.fault(&format!("homing (method {method})")).await);
             }
             if s & sw::MODE_13 != 0 {
                 let stopped = Some(self.halt().await);
-                return Err(DriveError::Homing { statusword: s, stopped });
+                return Err(CyclicDriveError::Homing { statusword: s, stopped });
             }
             // Homing attained and target reached, seen after the bits left
             // that state or (a homing done within a cycle) three cycles on.
@@ -671,7 +677,7 @@ impl<'m> CyclicDrive<'m> {
             }
         }
         let stopped = Some(self.halt().await);
-        Err(DriveError::Timeout { what: format!("homing (method {method})"), after: timeout, stopped })
+        Err(CyclicDriveError::Timeout { what: format!("homing (method {method})"), after: timeout, stopped })
     }
 
     /// A profile-position move to `target` (absolute, or relative), at
@@ -683,7 +689,7 @@ impl<'m> CyclicDrive<'m> {
         velocity: Option<u32>,
         timeout: Duration,
         mut progress: impl FnMut(&Feedback),
-    ) -> Result<i32, DriveError> {
+    ) -> Result<i32, CyclicDriveError> {
         if let Some(v) = velocity {
             self.write(0x6081, 0, &v.to_le_bytes()).await?;
         }
@@ -713,7 +719,7 @@ impl<'m> CyclicDrive<'m> {
             let s = self.fb.statusword;
             if self.interrupted() {
                 let stopped = Some(self.halt().await);
-                return Err(DriveError::Interrupted { what: format!("move to {goal}"), stopped });
+                return Err(CyclicDriveError::Interrupted { what: format!("move to {goal}"), stopped });
             }
             if self.fb.state() == Some(State::Fault) {
                 return Err(self.fault(&format!("move to {goal}")).await);
@@ -736,7 +742,7 @@ impl<'m> CyclicDrive<'m> {
             }
         }
         let stopped = Some(self.halt().await);
-        Err(DriveError::Timeout { what: format!("move to {goal}"), after: timeout, stopped })
+        Err(CyclicDriveError::Timeout { what: format!("move to {goal}"), after: timeout, stopped })
     }
 
     /// Cyclic synchronous position: one target per cycle from `targets`;
@@ -745,7 +751,7 @@ impl<'m> CyclicDrive<'m> {
         &mut self,
         targets: impl IntoIterator<Item = i32>,
         mut sample: impl FnMut(i32, &Feedback),
-    ) -> Result<u64, DriveError> {
+    ) -> Result<u64, CyclicDriveError> {
         self.target = self.fb.position;
         self.set_mode(mode::CSP).await?;
         self.enable(Duration::from_secs(2)).await?;
@@ -756,7 +762,7 @@ impl<'m> CyclicDrive<'m> {
                 // Hold where it is: no more set-points.
                 self.target = self.fb.position;
                 let stopped = Some(self.halt().await);
-                return Err(DriveError::Interrupted { what: "csp".into(), stopped });
+                return Err(CyclicDriveError::Interrupted { what: "csp".into(), stopped });
             }
             self.target = t;
             self.cycle().await?;
@@ -770,9 +776,9 @@ impl<'m> CyclicDrive<'m> {
     }
 
     /// Leaves OP for SAFE-OP (the drive reacts as its 6007h says).
-    pub async fn stop(self) -> Result<(), DriveError> {
+    pub async fn stop(self) -> Result<(), CyclicDriveError> {
         let md = self.m.main_device();
-        let e = |e| DriveError::Master(MasterError::Ethercrab("OP -> SAFE-OP".into(), e));
+        let e = |e| CyclicDriveError::Master(MasterError::Ethercrab("OP -> SAFE-OP".into(), e));
         match self.group {
             Group::Dc(g) => {
                 g.into_safe_op(md).await.map_err(e)?;

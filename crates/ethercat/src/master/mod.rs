@@ -3,7 +3,7 @@
 //! in-process [`link`](crate::link)), find the slaves, read their AL
 //! state, request a state, read and write CoE objects (whole arrays and
 //! records by the slave's SDO Information and complete access:
-//! [`Master::read_object`]), read the PDO assignment and mapping, and run a CiA 402 drive over the process data
+//! [`LineMaster::read_object`]), read the PDO assignment and mapping, and run a CiA 402 drive over the process data
 //! ([`drive`]). `drivebus ethercat scan|sdo|state|pdo|drive` and
 //! `drivebus demo --ethercat` are this module; nothing else in the tool
 //! talks to ethercrab.
@@ -48,7 +48,7 @@ pub type PduFrames = PduStorage<16, { PduStorage::element_size(1100) }>;
 /// A group of every slave on the line, in PRE-OP.
 pub type PreOpGroup = SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>;
 
-/// The storage of [`Master::on_iface`]: ethercrab splits a storage once,
+/// The storage of [`LineMaster::on_iface`]: ethercrab splits a storage once,
 /// so a process opens one interface master.
 static IFACE_STORAGE: PduFrames = PduStorage::new();
 
@@ -248,16 +248,19 @@ impl Pace {
 }
 
 /// A master on one line.
-pub struct Master {
+pub struct LineMaster {
     md: MainDevice<'static>,
     pace: Pace,
     now: &'static (dyn Fn() -> u64 + Sync),
     what: String,
 }
 
-impl fmt::Debug for Master {
+impl fmt::Debug for LineMaster {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("Master").field("line", &self.what).field("pace", &self.pace).finish_non_exhaustive()
+        f.debug_struct("LineMaster")
+            .field("line", &self.what)
+            .field("pace", &self.pace)
+            .finish_non_exhaustive()
     }
 }
 
@@ -275,10 +278,10 @@ fn config() -> MainDeviceConfig {
     MainDeviceConfig { dc_static_sync_iterations: 1_000, ..MainDeviceConfig::default() }
 }
 
-impl Master {
+impl LineMaster {
     /// A master on network interface `iface` (ethercrab's raw socket; root
     /// or CAP_NET_RAW). `pdu_timeout` is how long a frame may take to come back.
-    pub fn on_iface(iface: &str, pdu_timeout: std::time::Duration) -> Result<Master, MasterError> {
+    pub fn on_iface(iface: &str, pdu_timeout: std::time::Duration) -> Result<LineMaster, MasterError> {
         let (tx, rx, pdu_loop) = IFACE_STORAGE.try_split().map_err(|()| MasterError::InUse)?;
         let task =
             ethercrab::std::tx_rx_task(iface, tx, rx).map_err(|e| MasterError::Open(iface.into(), e))?;
@@ -287,13 +290,13 @@ impl Master {
             .spawn(move || async_io::block_on(task))
             .map_err(|e| MasterError::Open(iface.into(), e))?;
         let md = MainDevice::new(pdu_loop, timeouts(pdu_timeout), config());
-        Ok(Master { md, pace: Pace::Real, now: &ethercrab::std::ethercat_now, what: iface.to_owned() })
+        Ok(LineMaster { md, pace: Pace::Real, now: &ethercrab::std::ethercat_now, what: iface.to_owned() })
     }
 
     /// A master on an in-process `host` (the demo, tests), through
     /// [`link`](crate::link); `storage` must not have been split before.
     /// With a simulated clock the master's waits move the host's time.
-    pub fn on_host(storage: &'static PduFrames, host: Host) -> Result<Master, MasterError> {
+    pub fn on_host(storage: &'static PduFrames, host: Host) -> Result<LineMaster, MasterError> {
         let (tx, rx, pdu_loop) = storage.try_split().map_err(|()| MasterError::InUse)?;
         let h = host.clone();
         std::thread::Builder::new()
@@ -304,7 +307,7 @@ impl Master {
         let clock: &'static crate::Clock = Box::leak(Box::new(host.clock().clone()));
         let now: &'static (dyn Fn() -> u64 + Sync) = Box::leak(Box::new(move || clock.ethercat_ns()));
         let pace = if host.clock().is_simulated() { Pace::Simulated(host) } else { Pace::Real };
-        Ok(Master { md, pace, now, what: "the in-process link".into() })
+        Ok(LineMaster { md, pace, now, what: "the in-process link".into() })
     }
 
     /// ethercrab's main device.
@@ -422,7 +425,7 @@ impl Master {
         self.scan_group().await.map(|(found, _)| found)
     }
 
-    /// [`Master::scan`], keeping the line's group for what comes next.
+    /// [`LineMaster::scan`], keeping the line's group for what comes next.
     pub async fn scan_group(&self) -> Result<(Vec<SlaveInfo>, PreOpGroup), MasterError> {
         let n = self.count().await?;
         if n == 0 {
@@ -615,16 +618,12 @@ pub async fn pdo_assignment<S: Deref<Target = SubDevice>>(
 
 /// Byte offset of the first byte-aligned `(index, sub)` in a direction's image.
 pub fn offset(pdos: &[PdoMapping], index: u16, sub: u8) -> Option<usize> {
-    let mut bit = 0u32;
-    for (_, entries) in pdos {
-        for e in entries {
-            if (e >> 16) as u16 == index && (e >> 8) as u8 == sub && bit.is_multiple_of(8) {
-                return Some((bit / 8) as usize);
-            }
-            bit += e & 0xFF;
-        }
-    }
-    None
+    image_layout(pdos).find(|m| m.is(index, sub) && m.bit_offset.is_multiple_of(8)).map(|m| m.bit_offset / 8)
+}
+
+/// The assigned PDOs' entries with their places in the direction's image.
+pub fn image_layout(pdos: &[PdoMapping]) -> impl Iterator<Item = drivebus_pdo::MappedObject> + '_ {
+    drivebus_pdo::layout(pdos.iter().flat_map(|(_, entries)| entries.iter().copied()))
 }
 
 #[cfg(test)]

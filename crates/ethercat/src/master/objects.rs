@@ -15,7 +15,7 @@
 //! What the slave offers is what its SII says: General "CoE details"
 //! (ETG.2010): bit 1 SDO Information, bit 5 complete access.
 
-use super::{Master, MasterError, Raw, sdo_read};
+use super::{LineMaster, MasterError, Raw, sdo_read};
 use drivebus_can::Duration;
 pub use drivebus_coe::coe::info_codec::{EntryDescription, ObjectDescription};
 use drivebus_coe::coe::info_codec::{InfoRequest, InfoResponse};
@@ -91,7 +91,7 @@ enum Answer {
     MailboxError(u16),
 }
 
-impl Master {
+impl LineMaster {
     /// The SII General "CoE details" byte of a slave ([`coe_details`]): 0
     /// when its SII has no General category.
     pub async fn coe_details<S: Deref<Target = SubDevice>>(

@@ -220,15 +220,7 @@ struct Rpdo {
 
 /// Byte offset of `index`/`sub` in a byte-aligned mapping.
 fn offset_of(mapping: &[PdoMapEntry], index: u16, sub: u8) -> Option<(usize, usize)> {
-    let mut bit = 0usize;
-    for m in mapping {
-        if m.index == index && m.sub == sub {
-            return (bit.is_multiple_of(8) && m.bits.is_multiple_of(8))
-                .then_some((bit / 8, usize::from(m.bits) / 8));
-        }
-        bit += usize::from(m.bits);
-    }
-    None
+    drivebus_pdo::find_mapped(mapping.iter().copied(), index, sub)?.bytes()
 }
 
 type Latest = Arc<Mutex<HashMap<(u16, u8), Vec<u8>>>>;

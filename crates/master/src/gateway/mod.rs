@@ -314,11 +314,9 @@ impl Session {
                 Some(p) => {
                     let frame = *p.latest.lock().unwrap_or_else(|e| e.into_inner());
                     let data = frame.map(|f| f.data().to_vec()).unwrap_or_default();
-                    let mut at = 0usize;
                     let mut s = format!("{} pdo {}", self.net, p.bits.len());
-                    for &b in &p.bits {
-                        let v = bits_at(&data, at, usize::from(b)).unwrap_or(0);
-                        at += usize::from(b);
+                    for m in layout_of(&p.bits) {
+                        let v = m.read(&data).unwrap_or(0);
                         s.push_str(&format!(" 0x{v:x}"));
                     }
                     value(seq, &s)
@@ -329,16 +327,12 @@ impl Session {
                 Some(p) if p.bits.len() != values.len() => error(seq, code::SYNTAX),
                 Some(p) => {
                     let mut data = [0u8; 8];
-                    let mut at = 0usize;
-                    for (&b, &v) in p.bits.iter().zip(&values) {
-                        for i in 0..usize::from(b) {
-                            if v >> i & 1 == 1 && at + i < 64 {
-                                data[(at + i) / 8] |= 1 << ((at + i) % 8);
-                            }
-                        }
-                        at += usize::from(b);
+                    let mut len_bits = 0;
+                    for (m, &v) in layout_of(&p.bits).zip(&values) {
+                        m.write(&mut data, v);
+                        len_bits = m.end();
                     }
-                    let len = at.div_ceil(8);
+                    let len = len_bits.div_ceil(8);
                     match self.master.send_pdo(p.cob, &data[..len.min(8)]).await {
                         Ok(()) => ok(seq),
                         Err(_) => error(seq, code::INTERNAL_STATE),
@@ -549,11 +543,10 @@ fn version() -> (u32, u32) {
     (v.next().unwrap_or(0), v.next().unwrap_or(0))
 }
 
-fn bits_at(data: &[u8], at: usize, bits: usize) -> Option<u64> {
-    if bits == 0 || bits > 64 || at + bits > data.len() * 8 {
-        return None;
-    }
-    Some((0..bits).fold(0u64, |v, i| v | (u64::from(data[(at + i) / 8] >> ((at + i) % 8) & 1) << i)))
+/// A local PDO's values, placed by their lengths alone (the gateway's
+/// `set rpdo`/`set tpdo` give no objects).
+fn layout_of(bits: &[u8]) -> impl Iterator<Item = drivebus_pdo::MappedObject> + '_ {
+    drivebus_pdo::layout(bits.iter().map(|&b| drivebus_pdo::PdoMapEntry::new(0, 0, b)))
 }
 
 #[cfg(test)]
