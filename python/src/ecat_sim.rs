@@ -4,7 +4,7 @@
 //! The line is `Host::line` of the drives `described::devices` builds (as
 //! `drivebus ethercat serve` and `drivebus.ethercat.serve()`) on a
 //! simulated `Clock`; the master is `drivebus_ethercat::master` (ethercrab)
-//! on that host (`Master::on_host`), its waits moving the host's time, so
+//! on that host (`LineMaster::on_host`), its waits moving the host's time, so
 //! a run depends only on the calls made. The master and the drive under
 //! control (`CyclicDrive`, which borrows the master) live on a thread of
 //! their own; the Python object hands it jobs and waits with the GIL
@@ -20,7 +20,7 @@ use std::time::Duration;
 use drivebus_can::Instant;
 use drivebus_ethercat::described::{self, Member};
 use drivebus_ethercat::master::drive::{CyclicDrive, Feedback};
-use drivebus_ethercat::master::{Master, PduFrames, PreOpGroup, SlaveInfo, block_on};
+use drivebus_ethercat::master::{LineMaster, PduFrames, PreOpGroup, SlaveInfo, block_on};
 use drivebus_ethercat::{Clock, Host, drive};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -37,7 +37,7 @@ const MAX_SECONDS: f64 = 86_400.0;
 
 /// The master's side of the line, on its thread.
 struct Line<'m> {
-    m: &'m Master,
+    m: &'m LineMaster,
     clock: Clock,
     /// The line as `scan` left it (PRE-OP), until `start` takes it to OP.
     group: Option<PreOpGroup>,
@@ -101,7 +101,7 @@ pub struct EthercatSimulation {
     capture: Option<SharedCapture>,
 }
 
-fn drive_err(e: drivebus_ethercat::master::drive::DriveError) -> PyErr {
+fn drive_err(e: drivebus_ethercat::master::drive::CyclicDriveError) -> PyErr {
     DriveError::new_err(e.to_string())
 }
 
@@ -153,7 +153,7 @@ impl EthercatSimulation {
                 // ethercrab splits its frame storage once: one per line,
                 // kept for the process (16 frames of 1100 bytes).
                 let storage: &'static PduFrames = Box::leak(Box::new(PduFrames::new()));
-                let m = match Master::on_host(storage, host) {
+                let m = match LineMaster::on_host(storage, host) {
                     Ok(m) => m,
                     Err(e) => {
                         let _ = ready.send(Err(e.to_string()));

@@ -204,6 +204,14 @@ impl Control {
         Control::Ethercat(host)
     }
 
+    /// Whether `node` is a CAN node this server hosts (powered or not).
+    pub async fn serves(&self, node: u8) -> bool {
+        match self {
+            Control::Can { nodes, .. } => nodes.lock().await.contains_key(&node),
+            Control::Ethercat(_) => false,
+        }
+    }
+
     /// Stops every node (serve ends).
     pub async fn stop(&self) {
         let Control::Can { nodes, .. } = self else { return };
@@ -253,10 +261,12 @@ impl Control {
         let Control::Can { nodes, .. } = self else { bail!("not a CAN server") };
         let nodes = nodes.lock().await;
         let host = running(&nodes, node)?;
+        // The machine's refusal stays a `MachineError` (the HTTP API
+        // answers it 400, a powered-off node 409).
         host.change(change, duration)
             .await
             .ok_or_else(|| stopped(node))?
-            .map_err(|e| anyhow!("node {node}: {e}"))
+            .map_err(|e| anyhow::Error::new(e).context(format!("node {node}")))
     }
 
     async fn power(

@@ -91,7 +91,16 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     let web = match (&a.http, &web_master) {
         (Some(addr), Some(m)) => {
             let profiles = specs.iter().map(|s| (s.node, s.profile)).collect();
-            Some(crate::web::start(m.clone(), crate::dict::Dict::default(), profiles, addr).await?)
+            Some(
+                crate::web::start(
+                    m.clone(),
+                    crate::dict::Dict::default(),
+                    profiles,
+                    Some(control.clone()),
+                    addr,
+                )
+                .await?,
+            )
         }
         _ => None,
     };

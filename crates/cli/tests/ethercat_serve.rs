@@ -143,3 +143,84 @@ async fn http_gives_the_line_state() {
     let _ = child.kill();
     let _ = child.wait();
 }
+
+/// `--http` counts what each slave did: a broadcast read is one frame,
+/// one datagram and one working counter increment at every slave; the
+/// page for the line is served too (the line view: `data-bus="ethercat"`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn http_counts_datagrams_and_working_counters_and_serves_the_line_page() {
+    let veth = match Veth::create("dbwkc") {
+        Ok(v) => v,
+        Err(why) => {
+            println!("SKIPPED http_counts_datagrams_and_working_counters_and_serves_the_line_page: {why}");
+            return;
+        }
+    };
+    let (a, b) = (veth.a.clone(), veth.b.clone());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drivebus"))
+        .args([
+            "ethercat",
+            "serve",
+            "--iface",
+            &a,
+            "--drive",
+            "generic",
+            "--drive",
+            "generic",
+            "--http",
+            "127.0.0.1:0",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn drivebus");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let at = line.find("; page on http://").unwrap_or_else(|| panic!("no page URL in `{line}`"));
+    let base: String = line[at + 10..].chars().take_while(|c| *c != ';' && !c.is_whitespace()).collect();
+    let base = base.trim_end_matches('/').to_owned();
+    let get = |path: &'static str| {
+        let url = format!("{base}{path}");
+        async move { reqwest::get(&url).await.expect("GET").json::<serde_json::Value>().await.expect("JSON") }
+    };
+    let counters = |v: &serde_json::Value| -> Vec<(u64, u64, u64)> {
+        v["slaves"]
+            .as_array()
+            .unwrap_or_else(|| panic!("{v}"))
+            .iter()
+            .map(|s| {
+                (s["frames"].as_u64().unwrap(), s["datagrams"].as_u64().unwrap(), s["wkc"].as_u64().unwrap())
+            })
+            .collect()
+    };
+    let v0 = get("/api/ethercat").await;
+    let before = counters(&v0);
+    let sock = RawSocket::open(&b).expect("socket on the other end");
+    sock.send(&count_frame()).unwrap();
+    let t0 = Instant::now();
+    let v1 = loop {
+        let v = get("/api/ethercat").await;
+        // The slaves' counters, not the line's frames: an IPv6 packet on
+        // the veth counts there too.
+        if counters(&v) != before {
+            break v;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(10), "the frame was not counted");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    };
+    let delta: Vec<(u64, u64, u64)> =
+        counters(&v1).iter().zip(&before).map(|(a, b)| (a.0 - b.0, a.1 - b.1, a.2 - b.2)).collect();
+    // Only our frame: a master-less line has no other traffic.
+    assert_eq!(delta, [(1, 1, 1), (1, 1, 1)], "{v1}");
+    assert_eq!(
+        v1["line"]["datagrams"].as_u64().unwrap() - v0["line"]["datagrams"].as_u64().unwrap(),
+        1,
+        "{v1}"
+    );
+    let page = reqwest::get(format!("{base}/")).await.unwrap().text().await.unwrap();
+    assert!(page.contains("<body data-bus=\"ethercat\">") && page.contains("id=\"line\""), "{page}");
+    let js = reqwest::get(format!("{base}/line.js")).await.unwrap();
+    assert!(js.headers()["content-type"].to_str().unwrap().starts_with("text/javascript"));
+    let _ = child.kill();
+    let _ = child.wait();
+}

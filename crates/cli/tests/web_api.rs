@@ -754,3 +754,261 @@ async fn the_stream_answers_a_ping_with_a_pong() {
         }
     }
 }
+
+/// `PUT /api/nodes/{n}/pdo/{rx|tx}/{k}`: a TPDO mapped through the API
+/// reads back; refusals (the device's aborts and bad requests) are 4xx
+/// with the reason and leave the PDO as it was.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pdo_write_reads_back_and_refusals_change_nothing() {
+    let ui = Ui::sims();
+    let body = json!({"transmission_type": 1, "event_timer": 0,
+        "mapping": [{"index": "6064", "sub": 0, "bits": 32}, {"index": "statusword"}]});
+    let (s, v) = put(&ui, "/api/nodes/1/pdo/tx/2", body).await;
+    assert_eq!(s, 200, "{v}");
+    assert_eq!(v["pdo"]["transmission_type"], 1, "{v}");
+    let (_, p) = get(&ui, "/api/nodes/1/pdo").await;
+    let tpdo2 = p["tpdo"][1].clone();
+    assert_eq!(tpdo2["num"], 2, "{p}");
+    assert_eq!(tpdo2["valid"], true, "{p}");
+    let mapped: Vec<(String, u64)> = tpdo2["mapping"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| (m["index"].as_str().unwrap().to_owned(), m["bits"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(mapped, vec![("6064".to_owned(), 32), ("6041".to_owned(), 16)], "{p}");
+    // Refused by the device: not mappable (1018h:1), too long (3 × 32 bits).
+    let not_mappable = json!({"mapping": [{"index": "1018", "sub": 1, "bits": 32}]});
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/2", not_mappable).await, 422, "cannot be mapped");
+    let long = json!({"mapping": [{"index": "6064", "sub": 0, "bits": 32}, {"index": "606C", "sub": 0, "bits": 32},
+        {"index": "6041", "sub": 0, "bits": 16}]});
+    let r = put(&ui, "/api/nodes/1/pdo/tx/2", long).await;
+    refused(&r, 422, "exceed PDO length");
+    refused(&r, 422, "in force again");
+    // Refused before anything is sent.
+    let ok = json!({"mapping": [{"index": "6041", "sub": 0, "bits": 16}]});
+    refused(&put(&ui, "/api/nodes/9/pdo/tx/2", ok.clone()).await, 404, "not been seen");
+    refused(&put(&ui, "/api/nodes/0/pdo/tx/2", ok.clone()).await, 400, "1..127");
+    refused(&put(&ui, "/api/nodes/1/pdo/up/2", ok.clone()).await, 400, "direction");
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/0", ok.clone()).await, 400, "PDO number");
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/513", ok.clone()).await, 400, "PDO number");
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/300", ok.clone()).await, 404, "192Bh");
+    refused(
+        &send(&ui, reqwest::Method::PUT, "/api/nodes/1/pdo/tx/2", "{\"mapping\": [").await,
+        400,
+        "malformed JSON",
+    );
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/2", json!({"maping": []})).await, 400, "malformed JSON");
+    let bits = json!({"mapping": [{"index": "6041", "sub": 0, "bits": 65}]});
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/2", bits).await, 400, "1..64 bits");
+    let name = json!({"mapping": [{"index": "no such object"}]});
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/2", name).await, 400, "mapping index");
+    let cob = json!({"cob_id": "0x900", "mapping": []});
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/2", cob).await, 400, "11-bit");
+    let tt = json!({"transmission_type": 300, "mapping": []});
+    refused(&put(&ui, "/api/nodes/1/pdo/tx/2", tt).await, 400, "malformed JSON");
+    let (_, after) = get(&ui, "/api/nodes/1/pdo").await;
+    assert_eq!(after["tpdo"][1], tpdo2, "a refused write changed TPDO2");
+    assert_eq!(after["tpdo"][0], p["tpdo"][0], "a refused write changed TPDO1");
+}
+
+/// LSS for a configured node (the generic drive has LSS): inquire by
+/// node (its 1018h) or address, configure a node-ID that takes effect at
+/// NMT reset communication; a refused bit timing and bad requests change
+/// nothing.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn lss_inquire_and_configure_a_node_and_refusals() {
+    let ui = Ui::start(&["ui", "--sim", "generic:5", "--http", "127.0.0.1:0"]);
+    let (s, v) = post(&ui, "/api/lss/inquire", json!({"node": 5})).await;
+    assert_eq!(s, 200, "{v}");
+    assert_eq!((v["node_id"].as_u64(), v["configured"].as_bool()), (Some(5), Some(true)), "{v}");
+    let serial = get(&ui, "/api/nodes/5/sdo/1018/4").await.1["value"].clone();
+    assert_eq!(v["address"]["serial"], serial, "{v}");
+    let address = v["address"].clone();
+    let (s, by_address) = post(&ui, "/api/lss/inquire", json!({"address": address})).await;
+    assert_eq!((s, &by_address["node_id"]), (200, &json!(5)), "{by_address}");
+    // No unconfigured slave on this bus.
+    let (s, v) = post(&ui, "/api/lss/scan", json!({})).await;
+    assert_eq!((s, &v["found"]), (200, &json!(false)), "{v}");
+    // Refused: bad requests, nobody at an address, a bit timing the slave lacks.
+    refused(&post(&ui, "/api/lss/configure", json!({"node": 9, "node_id": 7})).await, 404, "not been seen");
+    refused(&post(&ui, "/api/lss/configure", json!({"node": 5, "node_id": 0})).await, 400, "1..127");
+    refused(&post(&ui, "/api/lss/configure", json!({"node": 5, "node_id": 128})).await, 400, "1..127");
+    refused(
+        &post(&ui, "/api/lss/configure", json!({"node": 5, "node_id": 300})).await,
+        400,
+        "malformed JSON",
+    );
+    refused(&post(&ui, "/api/lss/configure", json!({"node": 5, "nodeid": 7})).await, 400, "malformed JSON");
+    refused(
+        &send(&ui, reqwest::Method::POST, "/api/lss/configure", "{\"node\": ").await,
+        400,
+        "malformed JSON",
+    );
+    let both = json!({"node": 5, "address": address, "node_id": 7});
+    refused(&post(&ui, "/api/lss/configure", both).await, 400, "not both");
+    refused(&post(&ui, "/api/lss/inquire", json!({})).await, 400, "give the slave");
+    let nobody =
+        json!({"address": {"vendor_id": 1, "product_code": 2, "revision": 3, "serial": 4}, "node_id": 7});
+    refused(&post(&ui, "/api/lss/configure", nobody).await, 504, "no LSS answer");
+    let rate = json!({"node": 5, "node_id": 7, "bit_timing": 5});
+    refused(&post(&ui, "/api/lss/configure", rate).await, 422, "not supported");
+    // Node-ID 6, active at reset communication.
+    let (s, v) = post(&ui, "/api/lss/configure", json!({"node": 5, "node_id": 6, "bit_timing": 4})).await;
+    assert_eq!(s, 200, "{v}");
+    // The node boots as 6: the wait for node 5's boot-up ends in 504.
+    let _ = post(&ui, "/api/nodes/5/nmt", json!({"command": "reset-comm"})).await;
+    let v = wait_for(Duration::from_secs(30), || async {
+        let (s, v) = get(&ui, "/api/nodes/6/sdo/1018/4").await;
+        (s == 200).then_some(v)
+    })
+    .await;
+    assert_eq!(v["value"], serial, "{v}");
+    // Not 7: the refused configuration did not stay pending.
+    assert_eq!(get(&ui, "/api/nodes/7/sdo/1018/4").await.0, 404);
+}
+
+/// Two unconfigured LSS slaves: scan finds the lowest address and says
+/// there are more; "the only one" is refused (nothing changes); by
+/// address one gets node-ID 9, starts under it, and the scan finds the other.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn lss_scan_and_configure_unconfigured_slaves() {
+    let (server, addr) =
+        drivebus_transport::socketcand::SocketcandServer::bind("127.0.0.1:0", "can0").await.unwrap();
+    let unconfigured = |serial| {
+        let mut cfg = drivebus_node::NodeConfig::new(0xFF);
+        cfg.lss = true;
+        cfg.identity = drivebus_node::Identity { vendor_id: 0xABC, product_code: 0x77, revision: 3, serial };
+        drivebus_node::NodeDevice::new(drivebus_node::Node::new(cfg), drivebus_od::NoHooks)
+    };
+    let _hosts =
+        drivebus_transport::host::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub());
+    let bus = format!("socketcand://{addr}/can0");
+    let ui = Ui::start(&["ui", "--bus", &bus, "--http", "127.0.0.1:0"]);
+    let (s, v) = post(&ui, "/api/lss/scan", json!({})).await;
+    assert_eq!(s, 200, "{v}");
+    assert_eq!(
+        (&v["found"], &v["first"]["serial"], &v["more"]),
+        (&json!(true), &json!(0x10), &json!(true)),
+        "{v}"
+    );
+    refused(&post(&ui, "/api/lss/configure", json!({"node_id": 9})).await, 409, "nothing was changed");
+    let (_, again) = post(&ui, "/api/lss/scan", json!({})).await;
+    assert_eq!(again, v, "the refused configuration changed the slaves");
+    let (s, v) = post(&ui, "/api/lss/configure", json!({"node_id": 9, "address": v["first"]})).await;
+    assert_eq!(s, 200, "{v}");
+    let v = wait_for(Duration::from_secs(30), || async {
+        let (s, v) = get(&ui, "/api/nodes/9/sdo/1018/4?type=u32").await;
+        (s == 200).then_some(v)
+    })
+    .await;
+    assert_eq!(v["value"], 0x10, "{v}");
+    let (_, v) = post(&ui, "/api/lss/scan", json!({})).await;
+    assert_eq!((&v["first"]["serial"], &v["more"]), (&json!(0x20), &json!(false)), "{v}");
+    drop(server);
+}
+
+/// Machine inputs and faults of `serve`'s drives, through the control
+/// interface: a digital input and a tripped limit switch are seen in
+/// 60FDh read by SDO through the API; an encoder fault's EMCY is in the
+/// history and clears; bad requests change nothing.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn machine_inputs_and_faults_of_hosted_drives() {
+    let listen = format!("127.0.0.1:{}", common::free_port());
+    let ui = Ui::start(&["serve", "--listen", &listen, "--drive", "generic:5", "--http", "127.0.0.1:0"]);
+    let inputs = || async { get(&ui, "/api/nodes/5/sdo/60FD/0").await.1["value"].as_u64().expect("60FDh") };
+    let before = inputs().await;
+    assert_eq!(before & (1 << 18 | 1 << 1), 0, "{before:#x}");
+    // Refused, nothing changed.
+    let line3 = json!({"input": "digital", "line": 3, "value": 1});
+    refused(
+        &post(&ui, "/api/nodes/9/machine/input", line3.clone()).await,
+        404,
+        "not a drive this process hosts",
+    );
+    refused(&post(&ui, "/api/nodes/0/machine/input", line3.clone()).await, 400, "1..127");
+    refused(
+        &post(&ui, "/api/nodes/5/machine/input", json!({"input": "digitl", "line": 3, "value": 1})).await,
+        400,
+        "unknown variant",
+    );
+    refused(
+        &post(&ui, "/api/nodes/5/machine/input", json!({"input": "digital", "line": 17, "value": 1})).await,
+        400,
+        "1..=16",
+    );
+    refused(
+        &post(
+            &ui,
+            "/api/nodes/5/machine/input",
+            json!({"input": "digital", "line": 3, "value": 1, "duration": -1}),
+        )
+        .await,
+        400,
+        "duration",
+    );
+    refused(
+        &send(&ui, reqwest::Method::POST, "/api/nodes/5/machine/input", "{\"input\"").await,
+        400,
+        "malformed JSON",
+    );
+    refused(
+        &post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "encodr"})).await,
+        400,
+        "unknown variant",
+    );
+    refused(&post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "trip"})).await, 400, "fault");
+    assert_eq!(inputs().await, before);
+    // An input: generic shows line 3 in 60FDh bit 18.
+    let (s, v) = post(&ui, "/api/nodes/5/machine/input", line3).await;
+    assert_eq!(s, 200, "{v}");
+    wait_for(Duration::from_secs(10), || async { (inputs().await & 1 << 18 != 0).then_some(()) }).await;
+    // A limit switch trips: 60FDh bit 1 (positive limit switch).
+    let trip = json!({"kind": "trip", "switch": "positive_limit"});
+    assert_eq!(post(&ui, "/api/nodes/5/machine/fault", trip).await.0, 200);
+    wait_for(Duration::from_secs(10), || async { (inputs().await & 1 << 1 != 0).then_some(()) }).await;
+    assert_eq!(post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "clear"})).await.0, 200);
+    wait_for(Duration::from_secs(10), || async { (inputs().await & 1 << 1 == 0).then_some(()) }).await;
+    // A drive fault: the encoder's EMCY 7305h reaches the history.
+    assert_eq!(post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "encoder"})).await.0, 200);
+    wait_for(Duration::from_secs(10), || async {
+        let (_, e) = get(&ui, "/api/emcy").await;
+        e["emcy"].as_array().unwrap().iter().any(|e| e["node"] == 5 && e["code"] == "7305").then_some(())
+    })
+    .await;
+}
+
+/// `ui` hosts no machine: inputs are refused with the reason.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn machine_inputs_need_a_hosting_serve() {
+    let ui = Ui::start(&["ui", "--sim", "generic:5", "--http", "127.0.0.1:0"]);
+    let r = post(&ui, "/api/nodes/5/machine/input", json!({"input": "digital", "line": 3, "value": 1})).await;
+    refused(&r, 404, "drivebus serve --drive");
+}
+
+/// `ui --bus URL` on a bus whose drive it does not host (a `serve`
+/// process stands in for a real DDS6): the drive's 1018h picks its
+/// personality, so its EMCY comes with the manual's text and class.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_real_drive_identified_by_1018h_gets_the_manuals_emcy_texts() {
+    let listen = format!("127.0.0.1:{}", common::free_port());
+    let real = Ui::start(&["serve", "--listen", &listen, "--drive", "dds6:3", "--http", "127.0.0.1:0"]);
+    // Heartbeats, so the ui's master hears node 3.
+    assert_eq!(put(&real, "/api/nodes/3/sdo/1017/0", json!({"value": 100})).await.0, 200);
+    let bus = format!("socketcand://{listen}/can0");
+    let ui = Ui::start(&["ui", "--bus", &bus, "--http", "127.0.0.1:0"]);
+    wait_for(Duration::from_secs(30), || async {
+        let (_, v) = get(&ui, "/api/nodes").await;
+        v["nodes"].as_array()?.iter().any(|n| n["node"] == 3 && n["personality"] == "dds6").then_some(())
+    })
+    .await;
+    let (s, v) = post(&real, "/api/nodes/3/machine/fault", json!({"kind": "over_current"})).await;
+    assert_eq!(s, 200, "{v}");
+    let e = wait_for(Duration::from_secs(30), || async {
+        let (_, e) = get(&ui, "/api/emcy").await;
+        e["emcy"].as_array()?.iter().find(|e| e["node"] == 3 && e["code"] == "2310").cloned()
+    })
+    .await;
+    assert_eq!(e["text"], "Over-current detected, motor output side", "{e}");
+    assert_eq!(e["detail"], "class 6", "{e}");
+}

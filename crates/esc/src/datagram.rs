@@ -29,7 +29,7 @@
 //! counter (0x030C) counts the frame. Reserved command codes pass through
 //! untouched.
 
-use crate::esc::{Esc, FrameReport, FrameTiming};
+use crate::esc::{Esc, EscTraffic, FrameReport, FrameTiming};
 use crate::fmmu::Fmmu;
 use crate::frame::{self, DATAGRAM_HEADER_LEN, DatagramCommand, DatagramHeader, ECAT_HEADER_LEN, TYPE_DLPDU};
 use crate::registers::REGISTER_SPACE;
@@ -95,6 +95,7 @@ impl Esc {
             self.execute(&mut payload[pos..pos + total], &h);
             report.datagrams += 1;
             report.touched = true;
+            self.traffic.datagrams += 1;
             pos += total;
             if !h.more {
                 break;
@@ -108,6 +109,11 @@ impl Esc {
             self.reset();
         }
         report
+    }
+
+    /// Frames, datagrams and working counter increments since power-up.
+    pub fn traffic(&self) -> EscTraffic {
+        EscTraffic { frames: self.frame_no, ..self.traffic }
     }
 
     fn count_frame_error(&mut self) {
@@ -150,6 +156,7 @@ impl Esc {
             }
         };
         if add != 0 {
+            self.traffic.wkc += u64::from(add);
             let wkc = u16::from_le_bytes([wkc_bytes[0], wkc_bytes[1]]).wrapping_add(add);
             wkc_bytes.copy_from_slice(&wkc.to_le_bytes());
         }

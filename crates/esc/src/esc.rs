@@ -107,6 +107,19 @@ pub struct FrameReport {
     pub touched: bool,
 }
 
+/// What an ESC has processed since it was powered up (a status page's
+/// counters; [`Esc::traffic`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EscTraffic {
+    /// EtherCAT frames that reached it.
+    pub frames: u64,
+    /// Datagrams it executed (whether addressed to it or not).
+    pub datagrams: u64,
+    /// Working counter increments it made: datagrams that read or wrote
+    /// its memory (read-writes count 1 + 2, as in the frame).
+    pub wkc: u64,
+}
+
 /// Process-data and PDI watchdogs (ESC data sheet Section I "Watchdogs").
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Watchdogs {
@@ -148,6 +161,9 @@ pub struct Esc {
     pub(crate) links: [bool; 4],
     pub(crate) eeprom_loaded: bool,
     pub(crate) frame_no: u64,
+    /// Datagrams executed and working counter increments made, since power-up
+    /// (diagnostics of the host, not registers: a reset keeps them).
+    pub(crate) traffic: EscTraffic,
     pub(crate) reset_stage: (u8, u64),
     /// Scratch for read-write datagrams (allocated once, never on the frame path).
     pub(crate) scratch: Vec<u8>,
@@ -195,6 +211,7 @@ impl Esc {
             links: [true, false, false, false],
             eeprom_loaded: false,
             frame_no: 0,
+            traffic: EscTraffic::default(),
             reset_stage: (0, 0),
             scratch: vec![0; crate::frame::MAX_DATA_LEN + 1],
         };

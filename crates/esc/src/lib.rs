@@ -58,7 +58,7 @@ mod sm;
 pub use datagram::FrameIndex;
 pub use dc::ClockConfig;
 pub use eeprom::SiiTiming;
-pub use esc::{Esc, EscConfig, FrameReport, FrameTiming, MAX_JITTER_NS, SmInfo};
+pub use esc::{Esc, EscConfig, EscTraffic, FrameReport, FrameTiming, MAX_JITTER_NS, SmInfo};
 pub use events::EscEvent;
 pub use sm::{Side, SmMode};
 

@@ -31,6 +31,8 @@ pub struct SlaveState {
     pub al_status_code: u16,
     /// False while the slave is powered off (a fault of the line).
     pub powered: bool,
+    /// Frames, datagrams and working counter increments its ESC counted.
+    pub traffic: drivebus_esc::EscTraffic,
 }
 
 /// Counters of a host.
@@ -44,6 +46,9 @@ pub struct HostStats {
     pub deadline_polls: u64,
     /// Frames a fault of the line lost or corrupted (never returned).
     pub lost: u64,
+    /// Datagrams in the EtherCAT frames processed (as the first slave
+    /// walked them).
+    pub datagrams: u64,
 }
 
 struct Inner {
@@ -152,6 +157,7 @@ impl Host {
             g.stats.bad_frames += 1;
         }
         g.stats.lost += u64::from(r.lost);
+        g.stats.datagrams += u64::from(r.frame.datagrams);
         let unix = self.clock.unix_ns(r.returns_at);
         if let Some(c) = g.capture.as_mut().filter(|_| !r.lost) {
             let _ = c.write(frame, unix, Direction::Outbound);
@@ -221,6 +227,7 @@ impl Host {
                     al_status: esc.al_status(),
                     al_status_code: esc.peek_u16(drivebus_esc::registers::AL_STATUS_CODE),
                     powered: g.segment.is_powered(i),
+                    traffic: esc.traffic(),
                 }
             })
             .collect()
@@ -256,5 +263,40 @@ mod tests {
         assert_ne!(s[0].identity, s[1].identity);
         host.with_segment(|seg| seg.power_off(1));
         assert!(!host.slaves()[1].powered);
+    }
+
+    /// The counters a status page shows: frames and datagrams of the
+    /// line, and per slave the working counter increments its ESC made
+    /// (a broadcast read counts at each slave, an APRD at one).
+    #[test]
+    fn counters_of_the_line_and_each_slave() {
+        use drivebus_esc::frame::{
+            DatagramCommand, FrameBuilder, datagrams, position_address, station_address,
+        };
+        let members = vec![
+            Member::Drive(crate::drive::profile("generic").unwrap()),
+            Member::Drive(crate::drive::profile("generic").unwrap()),
+        ];
+        let host = Host::line(described::devices(&members, None).unwrap(), Clock::simulated(Instant::ZERO));
+        let before: Vec<_> = host.slaves().iter().map(|s| s.traffic).collect();
+        let mut buf = [0u8; 200];
+        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
+        b.push(DatagramCommand::Brd, 1, station_address(0, 0x0130), &[0, 0]).unwrap();
+        b.push(DatagramCommand::Aprd, 2, position_address(1, 0x0130), &[0, 0]).unwrap();
+        let n = b.finish();
+        host.process_frame(&mut buf[..n]);
+        let wkcs: Vec<u16> = datagrams(&buf[14..n]).map(|d| d.wkc).collect();
+        assert_eq!(wkcs, [2, 1]);
+        let st = host.stats();
+        assert_eq!((st.frames, st.datagrams, st.bad_frames), (1, 2, 0));
+        let after = host.slaves();
+        let delta: Vec<(u64, u64, u64)> = after
+            .iter()
+            .zip(&before)
+            .map(|(a, b)| {
+                (a.traffic.frames - b.frames, a.traffic.datagrams - b.datagrams, a.traffic.wkc - b.wkc)
+            })
+            .collect();
+        assert_eq!(delta, [(1, 2, 1), (1, 2, 2)]);
     }
 }

@@ -1,11 +1,11 @@
 //! `ethercat serve --http ADDR`: the line's state as its slaves hold it,
-//! `GET /api/ethercat` (docs/http-api.md). Read only: nothing here
-//! changes the line.
+//! `GET /api/ethercat` (docs/http-api.md), and the page (`crate::web`'s
+//! files) showing it as the line view. Read only: nothing here changes
+//! the line.
 
 use std::net::SocketAddr;
 
 use anyhow::Context;
-use axum::Router;
 use axum::extract::State;
 use axum::routing::get;
 use drivebus_ethercat::Host;
@@ -18,7 +18,9 @@ pub async fn start(host: Host, addr: &str) -> anyhow::Result<(tokio::task::JoinH
         .await
         .with_context(|| format!("cannot listen on --http {addr}: is the port free? (port 0 picks one)"))?;
     let local = listener.local_addr()?;
-    let app = Router::new().route("/api/ethercat", get(line)).with_state(host);
+    let app = crate::web::page_routes(crate::web::ServedBus::Ethercat)
+        .route("/api/ethercat", get(line))
+        .with_state(host);
     let task = tokio::spawn(async move {
         if let Err(e) = axum::serve(listener, app).await {
             tracing::error!(error = %e, "web server stopped");
@@ -43,10 +45,11 @@ fn line_json(host: &Host) -> serde_json::Value {
                     "revision": s.identity.revision, "serial": s.identity.serial},
                 "state": master::state_text(AlState::from_code(bits).ok_or(bits)),
                 "error": s.al_status & 0x10 != 0, "al_status_code": s.al_status_code,
-                "al_status_text": master::al_status_text(s.al_status_code), "powered": s.powered})
+                "al_status_text": master::al_status_text(s.al_status_code), "powered": s.powered,
+                "frames": s.traffic.frames, "datagrams": s.traffic.datagrams, "wkc": s.traffic.wkc})
         })
         .collect();
     let st = host.stats();
     serde_json::json!({"slaves": slaves,
-        "line": {"frames": st.frames, "bad_frames": st.bad_frames, "lost": st.lost}})
+        "line": {"frames": st.frames, "bad_frames": st.bad_frames, "lost": st.lost, "datagrams": st.datagrams}})
 }

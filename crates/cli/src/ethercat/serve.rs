@@ -55,9 +55,9 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
         let control =
             control_task.as_ref().map_or_else(String::new, |(_, addr)| format!("; control on {addr}"));
         let line = names(&members).join(" ");
-        let page = http
-            .as_ref()
-            .map_or_else(String::new, |(_, addr)| format!("; state on http://{addr}/api/ethercat"));
+        let page = http.as_ref().map_or_else(String::new, |(_, addr)| {
+            format!("; page on http://{addr}/; state on http://{addr}/api/ethercat")
+        });
         writeln!(out, "drivebus ethercat serve: ready on {} (line {line}){control}{page}", a.iface)?;
         out.flush()?;
     }

@@ -1,14 +1,13 @@
 //! REST over the CiA 309-1 services, in the spirit of CiA 309-5: nodes,
-//! SDO, NMT, PDO configuration, the EMCY history (docs/http-api.md).
+//! SDO, NMT, the EMCY history (docs/http-api.md).
 
-use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, Query, State};
-use drivebus_master::{DriveState, NmtCommand, PdoDir, RemoteState};
+use drivebus_master::{DriveState, NmtCommand, RemoteState};
 use serde::de::DeserializeOwned;
 use serde_json::{Value as Json_, json};
 
@@ -73,6 +72,7 @@ pub async fn nodes(State(web): State<Arc<Web>>) -> ApiResult<Json<Json_>> {
             drive = json!({"statusword": sw, "state": DriveState::from_statusword(sw).name()});
         }
         out.push(json!({"node": node, "device_type": device_type, "identity": identity,
+            "personality": web.profile(node).map(|p| p.name()),
             "nmt": status.state.map(nmt_name), "heartbeat_age_ms": age, "lost": status.lost, "drive": drive}));
     }
     Ok(Json(json!({ "nodes": out })))
@@ -219,32 +219,6 @@ pub async fn nmt(State(web): State<Arc<Web>>, Path(n): Path<String>, b: Bytes) -
         message: format!("NMT {} to node {node}: {e}; check the node is on the bus", c.command),
     })?;
     Ok(Json(json!({"node": node, "command": c.command, "sent": true})))
-}
-
-/// `GET /api/nodes/{n}/pdo`: communication and mapping of RPDO/TPDO 1..4
-/// (PDOs the node does not have are left out).
-pub async fn pdo(State(web): State<Arc<Web>>, Path(n): Path<String>) -> ApiResult<Json<Json_>> {
-    let node = seen_node(&web, &n)?;
-    let mut out = HashMap::new();
-    for (dir, key) in [(PdoDir::Rx, "rpdo"), (PdoDir::Tx, "tpdo")] {
-        let mut list = Vec::new();
-        for num in 1..=4u16 {
-            let Ok(r) = web.master.read_pdo(node, dir, num).await else { break };
-            let mapping: Vec<Json_> = r
-                .mapping
-                .iter()
-                .map(|m| {
-                    json!({"index": format!("{:04X}", m.index), "sub": m.sub, "bits": m.bits,
-                    "name": web.dict.name(m.index, m.sub)})
-                })
-                .collect();
-            list.push(json!({"num": num, "cob_id": format!("{:03X}", r.can_id()), "valid": r.valid(),
-                "transmission_type": r.transmission_type, "inhibit_time": r.inhibit_time,
-                "event_timer": r.event_timer, "mapping": mapping}));
-        }
-        out.insert(key, list);
-    }
-    Ok(Json(json!({"node": node, "rpdo": out["rpdo"], "tpdo": out["tpdo"]})))
 }
 
 /// `GET /api/emcy`: the EMCYs since start (the last 256), oldest first.

@@ -152,7 +152,7 @@ const CIA402_HOMING: [i8; 36] = {
 };
 
 /// `GET /api/nodes/{n}/drive/homing`: the homing methods the drive offers
-/// (60E3h), else those the hosted personality accepts (its manual), else
+/// (60E3h), else those the personality (hosted or identified) accepts (its manual), else
 /// the CiA 402 list; with 6098h, the method set now.
 pub async fn homing(State(web): State<Arc<Web>>, Path(n): Path<String>) -> ApiResult<Json<Json_>> {
     let node = seen_node(&web, &n)?;
@@ -160,7 +160,7 @@ pub async fn homing(State(web): State<Arc<Web>>, Path(n): Path<String>) -> ApiRe
     let offered = d.homing_methods().await;
     let (methods, source) = if !offered.is_empty() {
         (offered, "60E3h".to_owned())
-    } else if let Some(p) = web.profiles.get(&node) {
+    } else if let Some(p) = web.profile(node) {
         (p.info().homing_methods.to_vec(), format!("the {} manual", p.name()))
     } else {
         (CIA402_HOMING.to_vec(), "CiA 402".to_owned())

@@ -12,8 +12,12 @@ mod api;
 mod drive;
 mod error;
 mod frames;
+mod identify;
 mod jog;
+mod lss;
+mod machine;
 mod objects;
+mod pdo;
 mod sine;
 mod stream;
 mod values;
@@ -50,6 +54,9 @@ pub struct Web {
     /// The personality of each drive this process hosts (`serve --drive`,
     /// `ui --sim`): its homing methods and its manual's EMCY table.
     pub profiles: HashMap<u8, Profile>,
+    /// The personality of drives this process does not host, picked from
+    /// their 1018h (`identify`).
+    identified: Mutex<HashMap<u8, Profile>>,
     /// The last EMCYs, oldest first.
     emcy: Mutex<VecDeque<serde_json::Value>>,
     /// Events the server itself makes (a motion's end), for the stream.
@@ -62,12 +69,22 @@ pub struct Web {
     start: std::time::Instant,
     /// Required on a non-loopback address.
     token: Option<String>,
+    /// The machine inputs and faults of the drives `serve` hosts.
+    control: Option<Arc<crate::control::Control>>,
 }
 
 impl Web {
     /// Milliseconds since the server started (`t` of samples and events).
     pub fn t(&self) -> f64 {
         self.start.elapsed().as_secs_f64() * 1000.0
+    }
+
+    /// The personality of `node`: hosted, or recognized by its 1018h.
+    pub fn profile(&self, node: u8) -> Option<Profile> {
+        self.profiles
+            .get(&node)
+            .copied()
+            .or_else(|| self.identified.lock().unwrap_or_else(|e| e.into_inner()).get(&node).copied())
     }
 
     /// Sends a server event to the streams.
@@ -87,8 +104,7 @@ impl Web {
         text: Option<String>,
     ) -> serde_json::Value {
         let detail = self
-            .profiles
-            .get(&node)
+            .profile(node)
             .and_then(|p| p.info().emcy.iter().find(|e| e.code == code))
             .map(|e| e.detail)
             .filter(|d| !d.is_empty());
@@ -124,11 +140,13 @@ impl Drop for Server {
 }
 
 /// Binds `addr` and serves the page and the API for `master`; `profiles`
-/// are the drives this process hosts (their EMCY texts go to the master).
+/// are the drives this process hosts (their EMCY texts go to the master),
+/// `control` their machine inputs and faults (`serve`).
 pub async fn start(
     master: Master,
     dict: Dict,
     profiles: HashMap<u8, Profile>,
+    control: Option<Arc<crate::control::Control>>,
     addr: &str,
 ) -> anyhow::Result<Server> {
     let listener = tokio::net::TcpListener::bind(addr)
@@ -151,14 +169,17 @@ pub async fn start(
         master,
         dict,
         profiles,
+        identified: Mutex::new(HashMap::new()),
         emcy: Mutex::new(VecDeque::new()),
         events,
         jogs: jog::JogTable::default(),
         sines: sine::SineTable::default(),
         start: std::time::Instant::now(),
         token: token.clone(),
+        control,
     });
     tokio::spawn(keep_emcy(web.clone()));
+    tokio::spawn(identify::keep_identifying(web.clone()));
     let app = router(web);
     let task = tokio::spawn(async move {
         if let Err(e) = axum::serve(listener, app).await {
@@ -168,9 +189,29 @@ pub async fn start(
     Ok(Server { addr: local, token, task })
 }
 
-fn router(web: Arc<Web>) -> Router {
+/// The bus a page is served for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ServedBus {
+    /// CANopen nodes (`serve`, `ui`): the node overview, objects, drives, scope.
+    Can,
+    /// An EtherCAT line (`ethercat serve`): the line view (`line.js`).
+    Ethercat,
+}
+
+/// The page's files: `index.html` (for an EtherCAT line with `<body
+/// data-bus="ethercat">`, which the scripts read), the scripts and the style.
+pub fn page_routes<S: Clone + Send + Sync + 'static>(bus: ServedBus) -> Router<S> {
+    let index: &'static str = match bus {
+        ServedBus::Ethercat => {
+            static INDEX: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+                include_str!("assets/index.html").replacen("<body>", "<body data-bus=\"ethercat\">", 1)
+            });
+            INDEX.as_str()
+        }
+        ServedBus::Can => include_str!("assets/index.html"),
+    };
     Router::new()
-        .route("/", get(|| async { page("text/html; charset=utf-8", include_str!("assets/index.html")) }))
+        .route("/", get(move || async move { page("text/html; charset=utf-8", index) }))
         .route(
             "/app.js",
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/app.js")) }),
@@ -184,20 +225,38 @@ fn router(web: Arc<Web>) -> Router {
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/motion.js")) }),
         )
         .route(
+            "/pdo.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/pdo.js")) }),
+        )
+        .route(
+            "/line.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/line.js")) }),
+        )
+        .route(
             "/style.css",
             get(|| async { page("text/css; charset=utf-8", include_str!("assets/style.css")) }),
         )
+}
+
+fn router(web: Arc<Web>) -> Router {
+    page_routes(ServedBus::Can)
         .route("/api/nodes", get(api::nodes))
         .route("/api/nodes/{n}/sdo/{index}", get(api::sdo_get_object).put(api::sdo_put_object))
         .route("/api/nodes/{n}/sdo/{index}/{sub}", get(api::sdo_get).put(api::sdo_put))
         .route("/api/nodes/{n}/objects", get(objects::list))
         .route("/api/nodes/{n}/nmt", post(api::nmt))
-        .route("/api/nodes/{n}/pdo", get(api::pdo))
+        .route("/api/nodes/{n}/pdo", get(pdo::list))
+        .route("/api/nodes/{n}/pdo/{dir}/{k}", axum::routing::put(pdo::write))
         .route("/api/nodes/{n}/drive", get(drive::status).post(drive::action))
         .route("/api/nodes/{n}/drive/homing", get(drive::homing))
         .route("/api/nodes/{n}/drive/jog", post(jog::jog))
         .route("/api/nodes/{n}/drive/sine", post(sine::sine))
+        .route("/api/nodes/{n}/machine/input", post(machine::input))
+        .route("/api/nodes/{n}/machine/fault", post(machine::fault))
         .route("/api/emcy", get(api::emcy))
+        .route("/api/lss/scan", post(lss::scan))
+        .route("/api/lss/inquire", post(lss::inquire))
+        .route("/api/lss/configure", post(lss::configure))
         .route("/api/stream", get(stream::upgrade))
         .fallback(|| async { error::ApiError::not_found("no such page or endpoint: see docs/http-api.md") })
         .layer(axum::middleware::from_fn_with_state(web.clone(), auth))
@@ -276,7 +335,7 @@ pub async fn run_ui(g: &crate::args::Global, a: &crate::args::UiArgs) -> anyhow:
     let stop = crate::serve::Signals::install()?;
     let conn = crate::conn::Conn::open(g).await?;
     let dict = Dict { eds: crate::eds_cmd::load_global_eds(g)? };
-    let server = start(conn.master.clone(), dict, hosted_profiles(&g.sim)?, &a.http).await?;
+    let server = start(conn.master.clone(), dict, hosted_profiles(&g.sim)?, None, &a.http).await?;
     let nodes: Vec<String> = conn.master.seen_nodes().iter().map(u8::to_string).collect();
     let seen =
         if nodes.is_empty() { "none seen yet".to_owned() } else { format!("nodes {}", nodes.join(", ")) };

@@ -131,6 +131,8 @@ impl Esc {
             self.sii.start_of_frame(head);
         }
         let mut report = FrameReport { datagrams: index.datagrams.len() as u16, ..FrameReport::default() };
+        // Every datagram passes this ESC, executed for it or not.
+        self.traffic.datagrams += index.datagrams.len() as u64;
         let key = self.addressing();
         // From which datagram on every datagram is walked.
         let mut walk_from = index.datagrams.len();
@@ -267,6 +269,7 @@ mod tests {
                 prop_assert_eq!(&a[..len], &z[..len], "the frame after the line");
                 for i in 0..SLAVES {
                     prop_assert_eq!(memory(&full[i]), memory(&indexed[i]), "slave {}", i);
+                    prop_assert_eq!(full[i].traffic(), indexed[i].traffic(), "slave {}", i);
                 }
             }
         }

@@ -281,3 +281,19 @@ proptest! {
         e.poll(Instant::from_millis(2));
     }
 }
+
+/// The traffic counters: every frame and datagram, and the working
+/// counter increments exactly as the frames carry them.
+#[test]
+fn traffic_counts_frames_datagrams_and_working_counter() {
+    let mut e = addressed();
+    let before = e.traffic();
+    let (_, w1, _) = xfer(&mut e, DatagramCommand::Fprd, station_address(0x1001, 0x0000), &[0], 0);
+    let (_, w2, _) = xfer(&mut e, DatagramCommand::Fprw, station_address(0x1000, 0x0F80), &[7, 8], 0);
+    let (_, w3, _) = xfer(&mut e, DatagramCommand::Brd, station_address(0, 0x0000), &[0], 0);
+    assert_eq!((w1, w2, w3), (0, 3, 1));
+    let t = e.traffic();
+    assert_eq!(t.frames - before.frames, 3);
+    assert_eq!(t.datagrams - before.datagrams, 3);
+    assert_eq!(t.wkc - before.wkc, 4);
+}

@@ -273,8 +273,11 @@ function subscribe() {
 $("scope-form").onsubmit = (ev) => { ev.preventDefault(); subscribe(); };
 
 $("refresh").onclick = refreshNodes;
-refreshNodes().then(() => { refreshDrive(); refreshHoming(); });
-refreshEmcy();
-setInterval(refreshNodes, 3000);
-setInterval(refreshDrive, 250);
-connect();
+// An EtherCAT line's page shows the line view only (line.js).
+if (document.body.dataset.bus !== "ethercat") {
+  refreshNodes().then(() => { refreshDrive(); refreshHoming(); });
+  refreshEmcy();
+  setInterval(refreshNodes, 3000);
+  setInterval(refreshDrive, 250);
+  connect();
+}
