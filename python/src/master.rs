@@ -488,7 +488,7 @@ impl Drive {
     fn run<T, F>(
         &self,
         py: Python<'_>,
-        f: impl FnOnce(drivebus_master::Drive) -> F + Send + 'static,
+        f: impl FnOnce(drivebus_master::RemoteDrive) -> F + Send + 'static,
     ) -> PyResult<T>
     where
         T: Send + 'static,

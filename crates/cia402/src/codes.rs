@@ -203,7 +203,7 @@ impl ControlCommand {
 /// The master's next step on the way to Operation enabled, from the state
 /// the drive reports (CiA 402-2 §6.2.1, transitions 2, 3, 4, 12 and 15).
 /// The one enable sequence of every master: the CANopen master's
-/// `Drive::enable`, the EtherCAT master's and the cyclic probes.
+/// `RemoteDrive::enable`, the EtherCAT master's and the cyclic probes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum EnableStep {
     /// Operation enabled: nothing to do.

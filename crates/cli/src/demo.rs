@@ -1,6 +1,6 @@
 //! `drivebus demo`: the main job, run by the master library on the
 //! simulated bus (1 Mbit/s, simulated time) — the same master code as
-//! `drivebus --bus URL ...`: scan, PDO configuration, the CiA 402 `Drive`
+//! `drivebus --bus URL ...`: scan, PDO configuration, the CiA 402 `RemoteDrive`
 //! handle's enable, homing and profile-position move, and CSP streaming
 //! at a 1 kHz SYNC. An AKD at node 1 and a DDS6 at node 2. Every plotted
 //! value arrived in a TPDO.
@@ -12,8 +12,8 @@ use std::time::Duration;
 
 use anyhow::{Context, anyhow, bail};
 use drivebus_master::{
-    Drive, Frame, Instant, Master, MasterConfig, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, RemoteState,
-    ScanOptions, SimBus, drive::mode,
+    Frame, Instant, Master, MasterConfig, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, RemoteDrive,
+    RemoteState, ScanOptions, SimBus, drive::mode,
 };
 use drivebus_personality::Profile;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -271,7 +271,10 @@ type Callbacks = Vec<drivebus_master::PdoCallback>;
 /// following error (every SYNC; the demand is position + following error:
 /// the AKD has no 6062h, §7.1.5); the other TPDOs off (an
 /// event-driven default with a position in it would send every period).
-async fn configure(m: &Master, trace: Arc<Mutex<Trace>>) -> anyhow::Result<(Drive, Drive, Callbacks)> {
+async fn configure(
+    m: &Master,
+    trace: Arc<Mutex<Trace>>,
+) -> anyhow::Result<(RemoteDrive, RemoteDrive, Callbacks)> {
     let e = PdoMapEntry::new;
     for node in [1u8, 2] {
         let n = u16::from(node);
@@ -319,7 +322,7 @@ async fn configure(m: &Master, trace: Arc<Mutex<Trace>>) -> anyhow::Result<(Driv
         // 1 ms interpolation period for CSP (60C2h: 1 · 10^-3 s).
         m.sdo(node).write::<u8>(0x60C2, 1, 1).await?;
         m.sdo(node).write::<i8>(0x60C2, 2, -3).await?;
-        // A heartbeat tells the Drive handle the node is operational (RPDOs).
+        // A heartbeat tells the RemoteDrive handle the node is operational (RPDOs).
         m.sdo(node).write::<u16>(0x1017, 0, 100).await?;
     }
     let mut cbs = Callbacks::new();
@@ -384,7 +387,11 @@ async fn prepare_homing(m: &Master, node: u8) -> anyhow::Result<i8> {
 }
 
 /// Homes both nodes at once: (node, method, seconds) each, and when they started.
-async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(Vec<(u8, i8, f64)>, Instant)> {
+async fn home_both(
+    m: &Master,
+    d1: &RemoteDrive,
+    d2: &RemoteDrive,
+) -> anyhow::Result<(Vec<(u8, i8, f64)>, Instant)> {
     let k1 = prepare_homing(m, 1).await?;
     let k2 = prepare_homing(m, 2).await?;
     let h0 = m.now();
@@ -396,7 +403,7 @@ async fn home_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(Vec<(u
 }
 
 /// Moves both nodes at once: the seconds each took to reach its target.
-async fn move_both(m: &Master, d1: &Drive, d2: &Drive) -> anyhow::Result<(f64, f64)> {
+async fn move_both(m: &Master, d1: &RemoteDrive, d2: &RemoteDrive) -> anyhow::Result<(f64, f64)> {
     d1.set_mode(mode::PP).await?;
     d2.set_mode(mode::PP).await?;
     let profile =

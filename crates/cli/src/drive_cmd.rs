@@ -1,4 +1,4 @@
-//! `drivebus drive ...`: CiA 402 device control with the master's `Drive`
+//! `drivebus drive ...`: CiA 402 device control with the master's `RemoteDrive`
 //! handle (controlword/statusword by PDO where mapped and the node is
 //! operational, else by SDO). Motion a command starts is stopped (halt,
 //! else quick stop) when the command fails, times out or is interrupted,
@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use anyhow::{anyhow, bail};
 use drivebus_master::{
-    Drive, DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport,
-    MoveProfile, SdoError, StopAction, drive::cw, drive::human_secs, drive::mode, drive::sw as bit,
+    DriveError, DriveFlags, DriveState, MotionEnd, MotionLimits, MotionProgress, MotionReport, MoveProfile,
+    RemoteDrive, SdoError, StopAction, drive::cw, drive::human_secs, drive::mode, drive::sw as bit,
     mode_name,
 };
 use indicatif::{ProgressBar, ProgressStyle};
@@ -175,7 +175,7 @@ fn done(node: u8, code: &str, msg: String, sw: u16, fields: serde_json::Value) -
 /// Runs `motion`; on an error, a timeout or Ctrl-C stops the axis and
 /// explains where it is and what limits it.
 async fn guarded<T>(
-    d: &Drive,
+    d: &RemoteDrive,
     node: u8,
     timeout: Duration,
     what: &str,
@@ -350,7 +350,7 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
 
 /// Refuses a motion command unless the drive is in operation enabled.
 async fn require_enabled(
-    d: &Drive,
+    d: &RemoteDrive,
     node: u8,
     ex: impl Fn(DriveError) -> anyhow::Error,
 ) -> anyhow::Result<()> {
@@ -368,7 +368,7 @@ async fn require_enabled(
 }
 
 /// A signed integer object of 1, 2 or 4 bytes; `None` when it cannot be read.
-async fn read_int(d: &Drive, index: u16) -> Option<i64> {
+async fn read_int(d: &RemoteDrive, index: u16) -> Option<i64> {
     let v = d.read_raw(index, 0).await.ok()?;
     Some(match v.len() {
         1 => i64::from(v[0] as i8),
@@ -379,7 +379,11 @@ async fn read_int(d: &Drive, index: u16) -> Option<i64> {
 }
 
 /// `drive status`: state, mode, position, velocity, flags, inputs, error.
-async fn status(d: &Drive, node: u8, ex: impl Fn(DriveError) -> anyhow::Error) -> anyhow::Result<Printed> {
+async fn status(
+    d: &RemoteDrive,
+    node: u8,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<Printed> {
     let sw = d.statusword().await.map_err(&ex)?;
     let mode = read_int(d, 0x6061).await.map(|m| m as i8);
     let pos = read_int(d, 0x6064).await;
@@ -427,7 +431,7 @@ async fn status(d: &Drive, node: u8, ex: impl Fn(DriveError) -> anyhow::Error) -
 /// `drive move`: a profile position move, checked against the limits
 /// before anything is written.
 async fn move_axis(
-    d: &Drive,
+    d: &RemoteDrive,
     node: u8,
     timeout: Duration,
     a: &MoveArgs,

@@ -6,7 +6,7 @@
 //! SYNC producer, and runs SDO transfers (`drivebus_sdo::client`), LSS
 //! exchanges and fastscan (`drivebus_lss::FastScan`). A [`Master`] is the
 //! async API over it; every procedure (SDO, scan, LSS, PDO configuration,
-//! the CiA 402 [`Drive`] sequences) is written once against it and runs
+//! the CiA 402 [`RemoteDrive`] sequences) is written once against it and runs
 //! on either driver:
 //!
 //! - **tokio** ([`Master::new`]): one task on a
@@ -43,8 +43,8 @@ pub mod sdo;
 pub use crate::core::Stats;
 pub use dcf::DumpReport;
 pub use drive::{
-    Drive, DriveError, DriveFlags, DriveState, ModeNotShown, MotionEnd, MotionLimits, MotionProgress,
-    MotionReport, MoveProfile, StopAction, StopReport, mode_name,
+    DriveError, DriveFlags, DriveState, ModeNotShown, MotionEnd, MotionLimits, MotionProgress, MotionReport,
+    MoveProfile, RemoteDrive, StopAction, StopReport, mode_name,
 };
 /// Where mapped objects sit in a PDO or process-data image: the PDO crate's one helper.
 pub use drivebus_pdo::{MappedObject, find_mapped, layout as pdo_layout, mapped_bits};

@@ -1,4 +1,4 @@
-//! The `Drive` handle against the real virtual drive of `drivebus-cia402`
+//! The `RemoteDrive` handle against the real virtual drive of `drivebus-cia402`
 //! (`generic_drive`: CiA 402-3 pre-defined PDOs, servo model), hosted in
 //! real time.
 

@@ -1,4 +1,4 @@
-//! The CiA 402 `Drive` handle against a minimal stand-in drive: a state
+//! The CiA 402 `RemoteDrive` handle against a minimal stand-in drive: a state
 //! machine on 6040h/6041h with instant motion, an application that asks
 //! for TPDO 1 whenever the statusword changes, hosted in real time.
 
@@ -10,7 +10,7 @@ use std::time::Duration;
 use common::bounded;
 use drivebus_master::drive::mode;
 use drivebus_master::{
-    Drive, DriveError, DriveState, Master, MoveProfile, NmtCommand, PdoDir, PdoMapEntry, PdoRecord,
+    DriveError, DriveState, Master, MoveProfile, NmtCommand, PdoDir, PdoMapEntry, PdoRecord, RemoteDrive,
     RemoteState,
 };
 use drivebus_node::{AppContext, Application, Node, NodeConfig, NodeDevice};
@@ -211,7 +211,7 @@ async fn position(m: &Master, id: u8) -> i32 {
 async fn state_machine_walk_over_sdo() {
     bounded(async {
         let r = rig(3);
-        let d: Drive = r.m.drive(3).await.unwrap().with_timeout(Duration::from_millis(500));
+        let d: RemoteDrive = r.m.drive(3).await.unwrap().with_timeout(Duration::from_millis(500));
         assert!(!d.statusword_by_pdo());
         assert_eq!(d.state().await.unwrap(), DriveState::SwitchOnDisabled);
         d.enable().await.unwrap();

@@ -1,5 +1,5 @@
 //! `GET/POST /api/nodes/{n}/drive`: the CiA 402 drive panel over the
-//! master's `Drive` (its enable sequence, moves and homing; no second one).
+//! master's `RemoteDrive` (its enable sequence, moves and homing; no second one).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -8,7 +8,7 @@ use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
 use axum::http::StatusCode;
-use drivebus_master::{Drive, DriveState, MotionReport, drive::mode, mode_name};
+use drivebus_master::{DriveState, MotionReport, RemoteDrive, drive::mode, mode_name};
 use serde_json::{Value as Json_, json};
 
 use super::Web;
@@ -18,12 +18,12 @@ use super::error::{ApiError, ApiResult};
 /// How long a move or homing started from the page may take.
 const MOTION_LIMIT: Duration = Duration::from_secs(120);
 
-pub(super) async fn handle(web: &Web, node: u8) -> ApiResult<Drive> {
+pub(super) async fn handle(web: &Web, node: u8) -> ApiResult<RemoteDrive> {
     let d = web.master.drive(node).await.map_err(|e| ApiError::sdo(node, 0x1A00, 1, &e))?;
     Ok(d.with_timeout(Duration::from_secs(3)))
 }
 
-async fn state_json(d: &Drive, node: u8) -> ApiResult<Json_> {
+async fn state_json(d: &RemoteDrive, node: u8) -> ApiResult<Json_> {
     let sw = d.statusword().await.map_err(|e| ApiError::drive(node, &e))?;
     let mode = d.read_raw(0x6061, 0).await.ok().and_then(|v| v.first().map(|b| *b as i8));
     Ok(json!({"node": node, "statusword": sw, "state": DriveState::from_statusword(sw).name(),
@@ -85,7 +85,12 @@ pub async fn action(
     Ok((StatusCode::OK, Json(state_json(&d, node).await?)))
 }
 
-async fn start_motion(web: Arc<Web>, d: Drive, node: u8, a: Action) -> ApiResult<(StatusCode, Json<Json_>)> {
+async fn start_motion(
+    web: Arc<Web>,
+    d: RemoteDrive,
+    node: u8,
+    a: Action,
+) -> ApiResult<(StatusCode, Json<Json_>)> {
     let sw = d.statusword().await.map_err(|e| ApiError::drive(node, &e))?;
     let state = DriveState::from_statusword(sw);
     if state != DriveState::OperationEnabled {

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
-use drivebus_master::{Drive, DriveState, drive::mode};
+use drivebus_master::{DriveState, RemoteDrive, drive::mode};
 use serde_json::{Value as Json_, json};
 
 use super::Web;
@@ -83,7 +83,7 @@ pub async fn jog(State(web): State<Arc<Web>>, Path(n): Path<String>, b: Bytes) -
     ))
 }
 
-async fn start(web: Arc<Web>, d: Drive, node: u8, r: &JogRequest) -> ApiResult<()> {
+async fn start(web: Arc<Web>, d: RemoteDrive, node: u8, r: &JogRequest) -> ApiResult<()> {
     let ex = |e| ApiError::drive(node, &e);
     let state = DriveState::from_statusword(d.statusword().await.map_err(ex)?);
     if state != DriveState::OperationEnabled {
@@ -111,7 +111,7 @@ async fn start(web: Arc<Web>, d: Drive, node: u8, r: &JogRequest) -> ApiResult<(
 
 /// Stops jog `id` when it is not refreshed within [`WATCHDOG`]; ends
 /// when it was released or replaced.
-async fn watchdog(web: Arc<Web>, d: Drive, node: u8, id: u64) {
+async fn watchdog(web: Arc<Web>, d: RemoteDrive, node: u8, id: u64) {
     loop {
         tokio::time::sleep(CHECK).await;
         let late = {
@@ -137,7 +137,7 @@ async fn watchdog(web: Arc<Web>, d: Drive, node: u8, id: u64) {
 }
 
 /// Velocity 0 (the drive decelerates with 6084h), then a `jog` event.
-async fn end(web: &Web, d: &Drive, node: u8, how: &str, reason: Option<String>) {
+async fn end(web: &Web, d: &RemoteDrive, node: u8, how: &str, reason: Option<String>) {
     let reason = match d.write_raw(0x60FF, 0, &0i32.to_le_bytes()).await {
         Ok(()) => reason,
         // Still stopped, by quick stop.

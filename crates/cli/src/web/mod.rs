@@ -1,6 +1,6 @@
 //! The browser page and its HTTP API (issue 19): `drivebus ui --http ADDR`
 //! and `drivebus serve --http ADDR`. Everything goes through one
-//! [`Master`] (SDO, NMT, PDO configuration, the CiA 402 `Drive`); the page
+//! [`Master`] (SDO, NMT, PDO configuration, the CiA 402 `RemoteDrive`); the page
 //! is plain HTML, JS and CSS inside the binary. The API is in
 //! `docs/http-api.md`.
 //!

@@ -1,6 +1,6 @@
 //! `POST /api/nodes/{n}/drive/sine`: the CSP sine generator of the drive
 //! panel. The demo's sine ([`crate::demo::csp_sine`]) streamed one target
-//! per SYNC by the master's `Drive::stream_csp`; this master produces the
+//! per SYNC by the master's `RemoteDrive::stream_csp`; this master produces the
 //! SYNC while a sine runs (and writes the interpolation period 60C2h to
 //! match). Its end is a `sine` event on the stream.
 
@@ -13,7 +13,7 @@ use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
 use axum::http::StatusCode;
-use drivebus_master::{Drive, DriveState, drive::mode};
+use drivebus_master::{DriveState, RemoteDrive, drive::mode};
 use serde_json::{Value as Json_, json};
 
 use super::Web;
@@ -127,7 +127,13 @@ pub async fn sine(
     ))
 }
 
-async fn run(web: Arc<Web>, d: Drive, node: u8, plan: (f64, Duration, Duration, u64), stop: Arc<AtomicBool>) {
+async fn run(
+    web: Arc<Web>,
+    d: RemoteDrive,
+    node: u8,
+    plan: (f64, Duration, Duration, u64),
+    stop: Arc<AtomicBool>,
+) {
     let (amplitude, period, cycle, cycles) = plan;
     let r = async {
         // Interpolation period 60C2h = cycle ms · 10^-3 s (where the drive has it).

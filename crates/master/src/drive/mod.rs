@@ -120,7 +120,7 @@ impl fmt::Display for DriveState {
     }
 }
 
-/// Profile parameters for [`Drive::move_to`].
+/// Profile parameters for [`RemoteDrive::move_to`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MoveProfile {
     /// 6081h profile velocity.
@@ -191,7 +191,7 @@ impl From<SdoError> for DriveError {
     }
 }
 
-/// Where a drive is while a command waits for it (see [`Drive::on_progress`]).
+/// Where a drive is while a command waits for it (see [`RemoteDrive::on_progress`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MotionProgress {
     /// What the command waits for.
@@ -226,7 +226,7 @@ fn offset_of(mapping: &[PdoMapEntry], index: u16, sub: u8) -> Option<(usize, usi
 type Latest = Arc<Mutex<HashMap<(u16, u8), Vec<u8>>>>;
 
 /// A CiA 402 drive on the bus; from [`Master::drive`].
-pub struct Drive {
+pub struct RemoteDrive {
     master: Master,
     node: u8,
     sdo: SdoHandle,
@@ -244,7 +244,7 @@ pub struct Drive {
     mode_pending: Mutex<Option<i8>>,
 }
 
-impl Drop for Drive {
+impl Drop for RemoteDrive {
     fn drop(&mut self) {
         for id in &self.sinks {
             self.master.remove_pdo_sink(*id);
@@ -252,9 +252,9 @@ impl Drop for Drive {
     }
 }
 
-impl fmt::Debug for Drive {
+impl fmt::Debug for RemoteDrive {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("Drive")
+        f.debug_struct("RemoteDrive")
             .field("node", &self.node)
             .field("tpdo_objects", &self.tpdo_objects)
             .field("rpdos", &self.rpdos.iter().map(|r| (r.cob, r.mapping.clone())).collect::<Vec<_>>())
@@ -265,7 +265,7 @@ impl fmt::Debug for Drive {
 impl Master {
     /// A CiA 402 drive handle for `node`: reads its PDO 1..4 configuration
     /// (PDOs that cannot be read are treated as absent).
-    pub async fn drive(&self, node: u8) -> Result<Drive, SdoError> {
+    pub async fn drive(&self, node: u8) -> Result<RemoteDrive, SdoError> {
         let sdo = self.sdo(node);
         let latest: Latest = Arc::default();
         let updated = Arc::new(Notify::new());
@@ -318,7 +318,7 @@ impl Master {
                 image: Mutex::new(image),
             });
         }
-        Ok(Drive {
+        Ok(RemoteDrive {
             master: self.clone(),
             node,
             sdo,
@@ -337,7 +337,7 @@ impl Master {
     }
 }
 
-impl Drive {
+impl RemoteDrive {
     /// Timeout for each awaited state change (default 2 s).
     pub fn with_timeout(mut self, t: Duration) -> Self {
         self.timeout = t;

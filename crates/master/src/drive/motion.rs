@@ -1,4 +1,4 @@
-//! Motion on a [`Drive`]: profile position moves, homing that waits for a
+//! Motion on a [`RemoteDrive`]: profile position moves, homing that waits for a
 //! fresh "homing attained", velocity and torque targets, SYNC-aligned
 //! streaming, stopping what was started (halt, else quick stop), and the
 //! objects that limit a motion (read from the drive, to explain a wait).
@@ -8,9 +8,9 @@ use std::time::Duration;
 use tokio::sync::broadcast;
 
 use super::outcome::pp_at_rest;
-use super::{Drive, DriveError, DriveState, MotionProgress, MotionReport, MoveProfile, cw, mode, sw};
+use super::{DriveError, DriveState, MotionProgress, MotionReport, MoveProfile, RemoteDrive, cw, mode, sw};
 
-/// How a motion was stopped by [`Drive::stop_motion`].
+/// How a motion was stopped by [`RemoteDrive::stop_motion`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StopAction {
     /// The drive was not in operation enabled: nothing to stop.
@@ -22,7 +22,7 @@ pub enum StopAction {
     QuickStopped,
 }
 
-/// What [`Drive::stop_motion`] did and where the axis is.
+/// What [`RemoteDrive::stop_motion`] did and where the axis is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StopReport {
     /// The action that took effect.
@@ -151,7 +151,7 @@ pub fn human_secs(s: f64) -> String {
     }
 }
 
-impl Drive {
+impl RemoteDrive {
     pub(super) async fn read_i32(&self, index: u16, sub: u8) -> Option<i32> {
         let v = self.read_raw(index, sub).await.ok()?;
         (v.len() >= 4).then(|| i32::from_le_bytes([v[0], v[1], v[2], v[3]]))
@@ -187,7 +187,7 @@ impl Drive {
     }
 
     /// A target starts a motion only in Operation enabled: then 6061h
-    /// must show the mode first; before it [`Drive::enable`] waits for it.
+    /// must show the mode first; before it [`RemoteDrive::enable`] waits for it.
     async fn confirm_mode_if_enabled(&self) -> Result<(), DriveError> {
         let pending = self.mode_pending.lock().unwrap_or_else(|e| e.into_inner()).is_some();
         if pending && self.state().await? == DriveState::OperationEnabled {
@@ -196,7 +196,7 @@ impl Drive {
         Ok(())
     }
 
-    /// Reports progress now (see [`Drive::on_progress`]), whatever the
+    /// Reports progress now (see [`RemoteDrive::on_progress`]), whatever the
     /// interval.
     pub(super) async fn report(&self, waiting_for: &'static str, statusword: u16) {
         let Some(cb) = &self.progress else { return };
@@ -246,19 +246,19 @@ impl Drive {
         self.controlword(base | cw::NEW_SET_POINT).await?;
         let sw = self
             .wait_sw("set-point acknowledge", true, |sw| {
-                sw & sw::MODE_12 != 0 || Drive::ended_abnormally(sw, false)
+                sw & sw::MODE_12 != 0 || RemoteDrive::ended_abnormally(sw, false)
             })
             .await?;
-        if Drive::ended_abnormally(sw, false) {
-            return Drive::settle(self.classify(sw, absolute, None, started).await);
+        if RemoteDrive::ended_abnormally(sw, false) {
+            return RemoteDrive::settle(self.classify(sw, absolute, None, started).await);
         }
         self.controlword(base).await?;
         let sw = self
             .wait_sw_for("target reached", true, timeout, |sw| {
-                pp_at_rest(sw) || Drive::ended_abnormally(sw, false)
+                pp_at_rest(sw) || RemoteDrive::ended_abnormally(sw, false)
             })
             .await?;
-        Drive::settle(self.classify(sw, absolute, None, started).await)
+        RemoteDrive::settle(self.classify(sw, absolute, None, started).await)
     }
 
     /// Target velocity 60FFh (profile velocity / CSV).
@@ -309,13 +309,13 @@ impl Drive {
                     // CiA 402-2 homing: bit 12 with bit 10 is "completed"; bit 12
                     // alone is "attained, target not reached" (still moving).
                     sw & sw::MODE_13 != 0
-                        || Drive::ended_abnormally(sw, true)
+                        || RemoteDrive::ended_abnormally(sw, true)
                         || (sw & sw::MODE_12 != 0
                             && sw & sw::TARGET_REACHED != 0
                             && (seen_low.load(Relaxed) || offset.is_some()))
                 })
                 .await?;
-            if sw & sw::MODE_13 != 0 || Drive::ended_abnormally(sw, true) || seen_low.load(Relaxed) {
+            if sw & sw::MODE_13 != 0 || RemoteDrive::ended_abnormally(sw, true) || seen_low.load(Relaxed) {
                 break sw;
             }
             // An instant method with bit 12 still set from before: done once
@@ -328,10 +328,10 @@ impl Drive {
             }
             self.master.sleep(self.poll).await;
         };
-        if !Drive::ended_abnormally(sw, true) {
+        if !RemoteDrive::ended_abnormally(sw, true) {
             self.controlword(cw::ENABLE_OPERATION).await?;
         }
-        Drive::settle(self.classify(sw, None, Some(method), started).await)
+        RemoteDrive::settle(self.classify(sw, None, Some(method), started).await)
     }
 
     /// Stops what a command started: halt (controlword bit 8, the drive

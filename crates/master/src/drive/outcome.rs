@@ -1,5 +1,5 @@
-//! How a motion ended: [`MotionReport`], what [`Drive::move_to`] and
-//! [`Drive::home`] return (as `Ok` at the target, inside
+//! How a motion ended: [`MotionReport`], what [`RemoteDrive::move_to`] and
+//! [`RemoteDrive::home`] return (as `Ok` at the target, inside
 //! [`DriveError::Stopped`] anywhere else), and [`DriveFlags`], the
 //! statusword bits and switch inputs that explain a stop.
 //!
@@ -12,7 +12,7 @@
 use std::fmt;
 use std::time::Duration;
 
-use super::{Drive, DriveError, DriveState, cw};
+use super::{DriveError, DriveState, RemoteDrive, cw};
 use drivebus_cia402::codes::sw;
 
 /// 60FDh bit 0: negative limit switch.
@@ -235,7 +235,7 @@ impl DriveFlags {
     }
 }
 
-impl Drive {
+impl RemoteDrive {
     /// 60FDh digital inputs.
     pub async fn digital_inputs(&self) -> Option<u32> {
         let v = self.read_raw(0x60FD, 0).await.ok()?;
