@@ -221,6 +221,9 @@ async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut failing = false;
+    // When the last TPDO sample was taken: while TPDOs come, SDO is not
+    // needed, and an SDO answer older than a TPDO sample is stale.
+    let mut last_pdo: Option<tokio::time::Instant> = None;
     loop {
         tokio::select! {
             f = next_pdo(&mut pdo) => {
@@ -228,6 +231,7 @@ async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master
                     Ok(f) => {
                         if let Some(v) = decode::entry_bytes(f.data(), at, bits).and_then(|b| Value::decode(dt, &b).ok()) {
                             queue.push(&sample(&web, node, index, sub, &v, "pdo"));
+                            last_pdo = Some(tokio::time::Instant::now());
                         }
                     }
                     Err(broadcast::error::RecvError::Lagged(n)) => {
@@ -239,10 +243,14 @@ async fn poll(web: Arc<Web>, queue: Arc<Queue>, p: (u8, u16, u8, drivebus_master
             }
             _ = tick.tick() => {}
         }
-        if pdo.is_some() && web.master.node_state(node) == Some(RemoteState::Operational) {
+        let pdo_recent = last_pdo.is_some_and(|t| t.elapsed() < period);
+        if pdo.is_some() && (pdo_recent || web.master.node_state(node) == Some(RemoteState::Operational)) {
             continue;
         }
+        let asked = tokio::time::Instant::now();
         match sdo.upload(index, sub).await.map(|raw| Value::decode(dt, &raw)) {
+            // A TPDO sample came while the upload was under way: it is newer.
+            Ok(Ok(_)) if last_pdo.is_some_and(|t| t >= asked) => failing = false,
             Ok(Ok(v)) => {
                 failing = false;
                 queue.push(&sample(&web, node, index, sub, &v, "sdo"));
