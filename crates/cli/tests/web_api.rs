@@ -1012,3 +1012,70 @@ async fn a_real_drive_identified_by_1018h_gets_the_manuals_emcy_texts() {
     assert_eq!(e["text"], "Over-current detected, motor output side", "{e}");
     assert_eq!(e["detail"], "class 6", "{e}");
 }
+
+/// The drive panel's switch inputs (60FDh) and limits (607Dh, 607Fh): a
+/// tripped limit switch lights its bit; an object the drive lacks (the
+/// AKD's 607Fh, the DDS6's 60FDh) is null, not an error.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn drive_status_reports_switch_inputs_and_limits() {
+    let listen = format!("127.0.0.1:{}", common::free_port());
+    let ui = Ui::start(&[
+        "serve",
+        "--listen",
+        &listen,
+        "--drive",
+        "generic:5",
+        "--drive",
+        "akd:6",
+        "--drive",
+        "dds6:7",
+        "--http",
+        "127.0.0.1:0",
+    ]);
+    let drive = || async {
+        let (s, d) = get(&ui, "/api/nodes/5/drive").await;
+        assert_eq!(s, 200, "{d}");
+        d
+    };
+    let d = drive().await;
+    let sdo = |path: &'static str| {
+        let ui = &ui;
+        async move { get(ui, path).await.1["value"].clone() }
+    };
+    assert_eq!(d["switches"]["positive_limit"], false, "{d}");
+    assert_eq!(d["switches"]["inputs"], sdo("/api/nodes/5/sdo/60FD/0").await, "{d}");
+    assert_eq!(d["limits"]["software_position_min"], sdo("/api/nodes/5/sdo/607D/1").await, "{d}");
+    assert_eq!(d["limits"]["software_position_max"], sdo("/api/nodes/5/sdo/607D/2").await, "{d}");
+    assert_eq!(d["limits"]["max_profile_velocity"], sdo("/api/nodes/5/sdo/607F/0").await, "{d}");
+    assert!(d["limits"]["max_profile_velocity"].is_u64(), "{d}");
+    // A digital input line shows in the manufacturer bits (60FDh bit 18 = 16 + 2).
+    let line3 = json!({"input": "digital", "line": 3, "value": 1});
+    assert_eq!(post(&ui, "/api/nodes/5/machine/input", line3).await.0, 200);
+    wait_for(Duration::from_secs(10), || async {
+        (drive().await["switches"]["manufacturer"].as_u64().unwrap() & 1 << 2 != 0).then_some(())
+    })
+    .await;
+    // The positive limit switch trips, then clears.
+    let trip = json!({"kind": "trip", "switch": "positive_limit"});
+    assert_eq!(post(&ui, "/api/nodes/5/machine/fault", trip).await.0, 200);
+    let d = wait_for(Duration::from_secs(10), || async {
+        let d = drive().await;
+        (d["switches"]["positive_limit"] == true).then_some(d)
+    })
+    .await;
+    assert_eq!(d["switches"]["negative_limit"], false, "{d}");
+    assert_eq!(d["switches"]["inputs"].as_u64().unwrap() & 0b10, 0b10, "{d}");
+    assert_eq!(post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "clear"})).await.0, 200);
+    wait_for(Duration::from_secs(10), || async {
+        (drive().await["switches"]["positive_limit"] == false).then_some(())
+    })
+    .await;
+    // Objects a drive lacks: null.
+    let (s, akd) = get(&ui, "/api/nodes/6/drive").await;
+    assert_eq!(s, 200, "{akd}");
+    assert!(akd["limits"]["max_profile_velocity"].is_null(), "{akd}");
+    assert!(akd["limits"]["software_position_max"].is_i64(), "{akd}");
+    let (s, dds6) = get(&ui, "/api/nodes/7/drive").await;
+    assert_eq!(s, 200, "{dds6}");
+    assert!(dds6["switches"].is_null(), "{dds6}");
+}

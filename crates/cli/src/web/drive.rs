@@ -29,10 +29,36 @@ async fn state_json(d: &RemoteDrive, node: u8) -> ApiResult<Json_> {
     Ok(json!({"node": node, "statusword": sw, "state": DriveState::from_statusword(sw).name(),
         "mode": mode, "mode_name": mode.map(mode_name), "position": d.position().await,
         "velocity": d.actual_velocity().await, "target_reached": sw & drivebus_master::drive::sw::TARGET_REACHED != 0,
-        "flags": drivebus_master::DriveFlags { statusword: sw, inputs: None, mode }.statusword_text()}))
+        "flags": drivebus_master::DriveFlags { statusword: sw, inputs: None, mode }.statusword_text(),
+        "switches": d.digital_inputs().await.map(switches_json), "limits": limits_json(d).await}))
 }
 
-/// `GET /api/nodes/{n}/drive`: state, mode, position, velocity.
+/// 60FDh as the panel shows it: the CiA 402-2 switch bits and the
+/// manufacturer-specific bits 16..31 raw.
+fn switches_json(inputs: u32) -> Json_ {
+    use drivebus_master::drive::{DI_HOME_SWITCH, DI_INTERLOCK, DI_NEGATIVE_LIMIT, DI_POSITIVE_LIMIT};
+    json!({"inputs": inputs, "negative_limit": inputs & DI_NEGATIVE_LIMIT != 0,
+        "positive_limit": inputs & DI_POSITIVE_LIMIT != 0, "home_switch": inputs & DI_HOME_SWITCH != 0,
+        "interlock": inputs & DI_INTERLOCK != 0, "manufacturer": inputs >> 16})
+}
+
+/// A 32-bit object, or `None` when the drive has none (or it is not 4 bytes).
+async fn read_u32(d: &RemoteDrive, index: u16, sub: u8) -> Option<u32> {
+    let v = d.read_raw(index, sub).await.ok()?;
+    Some(u32::from_le_bytes(v.get(..4)?.try_into().ok()?)).filter(|_| v.len() == 4)
+}
+
+/// Software position limits 607Dh:01/02 (INTEGER32) and max profile
+/// velocity 607Fh (UNSIGNED32); null where the drive has no such object.
+async fn limits_json(d: &RemoteDrive) -> Json_ {
+    let min = read_u32(d, 0x607D, 1).await.map(|v| v as i32);
+    let max = read_u32(d, 0x607D, 2).await.map(|v| v as i32);
+    json!({"software_position_min": min, "software_position_max": max,
+        "max_profile_velocity": read_u32(d, 0x607F, 0).await})
+}
+
+/// `GET /api/nodes/{n}/drive`: state, mode, position, velocity, the
+/// switch inputs (60FDh) and the limits (607Dh, 607Fh).
 pub async fn status(State(web): State<Arc<Web>>, Path(n): Path<String>) -> ApiResult<Json<Json_>> {
     let node = seen_node(&web, &n)?;
     let d = handle(&web, node).await?;

@@ -145,8 +145,20 @@ async function refreshDrive() {
     const d = await api("GET", `/api/nodes/${$("drive-node").value}/drive`);
     $("drive-state").textContent = `state: ${d.state} (statusword ${d.statusword.toString(16).toUpperCase().padStart(4, "0")}h), mode ${d.mode_name || "–"}, position ${d.position ?? "–"}, velocity ${d.velocity ?? "–"}`;
     markState(d.state);
+    showSwitches(d.switches, d.limits);
   } catch (e) { $("drive-state").textContent = e.message; markState("unknown"); }
   finally { driveBusy = false; }
+}
+// The switch inputs (60FDh) lit, the limits (607Dh, 607Fh); "–" for an object the drive lacks.
+function showSwitches(sw, lim) {
+  for (const k of ["negative_limit", "positive_limit", "home_switch", "interlock"]) {
+    const lamp = $("sw-" + k);
+    lamp.classList.toggle("on", !!(sw && sw[k]));
+    lamp.classList.toggle("absent", !sw);
+  }
+  $("sw-manufacturer").textContent = sw ? `manufacturer bits ${sw.manufacturer.toString(16).toUpperCase().padStart(4, "0")}h` : "60FDh: none";
+  const v = (x) => x ?? "–";
+  $("drive-limits").textContent = `limits: software position ${v(lim.software_position_min)} .. ${v(lim.software_position_max)} (607Dh), max profile velocity ${v(lim.max_profile_velocity)} (607Fh)`;
 }
 $("drive-node").onchange = () => { refreshDrive(); refreshHoming(); };
 

@@ -1,0 +1,83 @@
+"""The drive panel's switch inputs in headless Chromium.
+
+Against `serve --drive generic:5 --http`: the machine API trips the
+positive limit switch (60FDh bit 1) and the panel's lamp for it lights,
+then goes out when the fault is cleared; the limits line shows 607Dh.
+"""
+
+import json
+import os
+import re
+import subprocess
+import urllib.request
+
+import pytest
+from selenium import webdriver
+from selenium.webdriver.chrome.options import Options
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.by import By
+from selenium.webdriver.support.ui import Select, WebDriverWait
+
+BIN = os.environ["DRIVEBUS_BIN"]
+WAIT_S = 30
+
+
+@pytest.fixture(scope="module")
+def page_url():
+    proc = subprocess.Popen(
+        [BIN, "serve", "--listen", "127.0.0.1:0", "--drive", "generic:5", "--http", "127.0.0.1:0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
+    line = proc.stdout.readline()
+    m = re.search(r"page on (http://\S+/)", line)
+    assert m, f"serve printed no page URL: {line!r}"
+    yield m.group(1)
+    proc.terminate()
+    assert proc.wait(timeout=10) == 0
+
+
+@pytest.fixture(scope="module")
+def browser():
+    opts = Options()
+    opts.binary_location = "/usr/bin/chromium"
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1080"):
+        opts.add_argument(a)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=opts)
+    yield driver
+    driver.quit()
+
+
+def wait_for(browser, what, cond):
+    try:
+        return WebDriverWait(browser, WAIT_S, poll_frequency=0.1).until(lambda b: cond(b))
+    except Exception as e:
+        seen = {i: browser.find_element(By.ID, i).text for i in ("conn", "drive-state", "drive-switches", "drive-limits")}
+        raise AssertionError(f"{what}: not within {WAIT_S} s; the page shows {seen}") from e
+
+
+def post(url, path, body):
+    req = urllib.request.Request(
+        url.rstrip("/") + path, data=json.dumps(body).encode(), headers={"content-type": "application/json"}
+    )
+    with urllib.request.urlopen(req, timeout=30) as r:
+        assert r.status == 200
+
+
+def lit(browser, key):
+    return "on" in browser.find_element(By.ID, "sw-" + key).get_attribute("class").split()
+
+
+def test_a_tripped_limit_switch_lights_its_lamp(browser, page_url):
+    browser.get(page_url)
+    wait_for(browser, "drive 5 selectable", lambda b: Select(b.find_element(By.ID, "drive-node")).options)
+    Select(browser.find_element(By.ID, "drive-node")).select_by_value("5")
+    wait_for(browser, "the limits shown", lambda b: "607Dh" in b.find_element(By.ID, "drive-limits").text)
+    assert not lit(browser, "positive_limit")
+    assert "manufacturer bits" in browser.find_element(By.ID, "sw-manufacturer").text
+    post(page_url, "/api/nodes/5/machine/fault", {"kind": "trip", "switch": "positive_limit"})
+    wait_for(browser, "the positive limit lamp lit", lambda b: lit(b, "positive_limit"))
+    assert not lit(browser, "negative_limit")
+    post(page_url, "/api/nodes/5/machine/fault", {"kind": "clear"})
+    wait_for(browser, "the positive limit lamp out", lambda b: not lit(b, "positive_limit"))
