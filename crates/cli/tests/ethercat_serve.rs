@@ -224,3 +224,95 @@ async fn http_counts_datagrams_and_working_counters_and_serves_the_line_page() {
     let _ = child.kill();
     let _ = child.wait();
 }
+
+/// `--http`'s WebSocket `/api/stream`: the line's ESM first, then an
+/// `esm` event whenever a slave's AL state changes; a master (`drivebus
+/// ethercat state` in a network namespace) takes the line to PRE-OP, OP
+/// and back to INIT and every slave's events come in that order, each
+/// `from` the previous `to`.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn http_stream_sends_esm_events_in_order() {
+    use futures_util::StreamExt;
+    let mut l = match netns::VethPair::create("dbesm") {
+        Ok(v) => v,
+        Err(why) => {
+            println!("SKIPPED http_stream_sends_esm_events_in_order: {why}");
+            return;
+        }
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drivebus"))
+        .args(["ethercat", "serve", "--iface", &l.outer, "--drive", "generic", "--drive", "ipos"])
+        .args(["--http", "127.0.0.1:0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn drivebus");
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    l.serve = Some(child);
+    let at = line.find("; page on http://").unwrap_or_else(|| panic!("no page URL in `{line}`"));
+    let base: String = line[at + 17..].chars().take_while(|c| *c != ';' && !c.is_whitespace()).collect();
+    let (mut ws, _) =
+        tokio_tungstenite::connect_async(format!("ws://{}api/stream", base)).await.expect("WebSocket");
+    // The next message that is not a `status`.
+    let mut next = async move || loop {
+        let m = tokio::time::timeout(Duration::from_secs(30), ws.next())
+            .await
+            .expect("a message within 30 s")
+            .expect("stream open")
+            .expect("message");
+        let v: serde_json::Value = serde_json::from_str(m.to_text().unwrap()).unwrap();
+        if v["type"] != "status" {
+            return v;
+        }
+    };
+    let first = next().await;
+    assert_eq!(first["type"], "line", "{first}");
+    let states: Vec<&str> =
+        first["slaves"].as_array().unwrap().iter().map(|s| s["state"].as_str().unwrap()).collect();
+    assert_eq!(states, ["INIT", "INIT"], "{first}");
+    let (ns, inner) = (l.ns.clone(), l.inner.clone());
+    let master = move |state: &'static str| {
+        let (ns, inner) = (ns.clone(), inner.clone());
+        tokio::task::spawn_blocking(move || {
+            let out = Command::new("ip")
+                .args(["netns", "exec", &ns, env!("CARGO_BIN_EXE_drivebus"), "ethercat", "state", state])
+                .args(["--iface", &inner])
+                .stdin(Stdio::null())
+                .output()
+                .expect("run drivebus ethercat state");
+            assert!(out.status.success(), "state {state}: {}", String::from_utf8_lossy(&out.stderr));
+        })
+    };
+    // Every slave's states as the events give them, from INIT.
+    let mut seen: Vec<Vec<String>> = vec![vec!["INIT".into()]; 2];
+    let mut last_t = 0.0;
+    for want in ["PRE-OP", "OP", "INIT"] {
+        let cmd = master(match want {
+            "PRE-OP" => "preop",
+            "OP" => "op",
+            _ => "init",
+        });
+        // Until each slave's events have reached `want` since the command.
+        let mut reached = [false; 2];
+        while reached != [true, true] {
+            let e = next().await;
+            assert_eq!((e["type"].as_str(), e["event"].as_str()), (Some("event"), Some("esm")), "{e}");
+            let i = e["position"].as_u64().unwrap() as usize - 1;
+            assert_eq!(e["from"].as_str(), seen[i].last().map(String::as_str), "{e}: after {:?}", seen[i]);
+            let t = e["t"].as_f64().unwrap();
+            assert!(t >= last_t, "{e}: t before {last_t}");
+            last_t = t;
+            seen[i].push(e["state"].as_str().unwrap().to_owned());
+            reached[i] |= e["state"] == want;
+        }
+        cmd.await.unwrap();
+    }
+    println!("states seen per slave: {seen:?}");
+    // In order: PRE-OP, then OP, then INIT last.
+    for s in &seen {
+        let at = |st: &str| s.iter().position(|x| x == st).unwrap_or_else(|| panic!("no {st} in {s:?}"));
+        assert!(at("PRE-OP") < at("OP"), "{s:?}");
+        assert_eq!(s.last().map(String::as_str), Some("INIT"), "{s:?}");
+    }
+}

@@ -233,6 +233,18 @@ impl Host {
             .collect()
     }
 
+    /// Every slave's AL status (0x0130) and AL status code (0x0134), in
+    /// line order: what [`Host::slaves`] gives of the ESM, without
+    /// parsing the SII, for a watcher that polls often.
+    pub fn al_states(&self) -> Vec<(u16, u16)> {
+        let g = self.lock();
+        g.segment
+            .devices()
+            .iter()
+            .map(|d| (d.esc().al_status(), d.esc().peek_u16(drivebus_esc::registers::AL_STATUS_CODE)))
+            .collect()
+    }
+
     /// Counters.
     pub fn stats(&self) -> HostStats {
         self.lock().stats
@@ -261,6 +273,8 @@ mod tests {
             assert!(!x.name.is_empty() && x.identity.product_code != 0, "{x:?}");
         }
         assert_ne!(s[0].identity, s[1].identity);
+        let al: Vec<(u16, u16)> = s.iter().map(|x| (x.al_status, x.al_status_code)).collect();
+        assert_eq!(host.al_states(), al);
         host.with_segment(|seg| seg.power_off(1));
         assert!(!host.slaves()[1].powered);
     }

@@ -1,15 +1,40 @@
 //! `ethercat serve --http ADDR`: the line's state as its slaves hold it,
-//! `GET /api/ethercat` (docs/http-api.md), and the page (`crate::web`'s
-//! files) showing it as the line view. Read only: nothing here changes
-//! the line.
+//! `GET /api/ethercat` (docs/http-api.md), its ESM events on the
+//! WebSocket `GET /api/stream`, and the page (`crate::web`'s files)
+//! showing it as the line view. Read only: nothing here changes the line.
 
 use std::net::SocketAddr;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use axum::extract::State;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::response::Response;
 use axum::routing::get;
 use drivebus_ethercat::Host;
 use drivebus_ethercat::master::{self, AlState};
+use serde_json::json;
+
+use crate::web::Queue;
+
+/// How often a stream compares the slaves' AL status registers: a
+/// change shorter than this (a state passed on the way) is not seen.
+const ESM_POLL: Duration = Duration::from_millis(20);
+
+/// What the handlers share.
+#[derive(Clone)]
+struct Served {
+    host: Host,
+    /// Time zero of `t` in the stream.
+    start: Instant,
+}
+
+impl Served {
+    fn t(&self) -> f64 {
+        self.start.elapsed().as_secs_f64() * 1000.0
+    }
+}
 
 /// Binds `addr` and serves the state of `host`'s line until the task is
 /// aborted.
@@ -20,7 +45,8 @@ pub async fn start(host: Host, addr: &str) -> anyhow::Result<(tokio::task::JoinH
     let local = listener.local_addr()?;
     let app = crate::web::page_routes(crate::web::ServedBus::Ethercat)
         .route("/api/ethercat", get(line))
-        .with_state(host);
+        .route("/api/stream", get(upgrade))
+        .with_state(Served { host, start: Instant::now() });
     let task = tokio::spawn(async move {
         if let Err(e) = axum::serve(listener, app).await {
             tracing::error!(error = %e, "web server stopped");
@@ -29,8 +55,85 @@ pub async fn start(host: Host, addr: &str) -> anyhow::Result<(tokio::task::JoinH
     Ok((task, local))
 }
 
-async fn line(State(host): State<Host>) -> axum::Json<serde_json::Value> {
-    axum::Json(line_json(&host))
+async fn line(State(s): State<Served>) -> axum::Json<serde_json::Value> {
+    axum::Json(line_json(&s.host))
+}
+
+/// The ESM of one slave as the API gives it (`state`, `error`, the code
+/// and its text).
+fn esm_json(position: usize, (al_status, code): (u16, u16)) -> serde_json::Value {
+    let bits = (al_status & 0x0F) as u8;
+    json!({"position": position, "state": master::state_text(AlState::from_code(bits).ok_or(bits)),
+        "error": al_status & 0x10 != 0, "al_status_code": code, "al_status_text": master::al_status_text(code)})
+}
+
+/// `GET /api/stream`: upgrades to the line's event stream.
+async fn upgrade(State(s): State<Served>, ws: WebSocketUpgrade) -> Response {
+    ws.on_upgrade(move |socket| stream(s, socket))
+}
+
+/// Sends the line's ESM now (`line`), then an `esm` event per slave whose
+/// AL status or code changed, through the bounded queue of `crate::web`
+/// (a slow client loses the oldest, counted in `status`).
+async fn stream(s: Served, mut socket: WebSocket) {
+    let queue = Queue::new();
+    let watch = tokio::spawn(watch_esm(s.clone(), queue.clone()));
+    let _abort = AbortOnDrop(watch);
+    let mut status = tokio::time::interval(Duration::from_secs(1));
+    loop {
+        tokio::select! {
+            m = socket.recv() => match m {
+                Some(Ok(_)) => {}
+                Some(Err(_)) | None => return,
+            },
+            _ = queue.ready() => {
+                for m in queue.take() {
+                    if socket.send(Message::Text(m.into())).await.is_err() {
+                        return;
+                    }
+                }
+            }
+            _ = status.tick() => {
+                let st = json!({"type": "status", "t": s.t(),
+                    "dropped": queue.dropped.load(std::sync::atomic::Ordering::Relaxed)});
+                if socket.send(Message::Text(st.to_string().into())).await.is_err() {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+struct AbortOnDrop(tokio::task::JoinHandle<()>);
+
+impl Drop for AbortOnDrop {
+    fn drop(&mut self) {
+        self.0.abort();
+    }
+}
+
+/// Polls the AL status registers every [`ESM_POLL`] and queues the changes.
+async fn watch_esm(s: Served, queue: Arc<Queue>) {
+    let mut last = s.host.al_states();
+    let slaves: Vec<_> = last.iter().enumerate().map(|(i, &al)| esm_json(i + 1, al)).collect();
+    queue.push(&json!({"type": "line", "t": s.t(), "slaves": slaves}));
+    let mut tick = tokio::time::interval(ESM_POLL);
+    loop {
+        tick.tick().await;
+        let now = s.host.al_states();
+        for (i, (was, is)) in last.iter().zip(&now).enumerate() {
+            if was != is {
+                let mut e = esm_json(i + 1, *is);
+                let from = esm_json(i + 1, *was);
+                e["type"] = json!("event");
+                e["event"] = json!("esm");
+                e["t"] = json!(s.t());
+                e["from"] = from["state"].clone();
+                queue.push(&e);
+            }
+        }
+        last = now;
+    }
 }
 
 /// The answer of `GET /api/ethercat`.

@@ -38,6 +38,7 @@ use drivebus_personality::Profile;
 use tokio::sync::broadcast;
 
 use crate::dict::Dict;
+pub use stream::Queue;
 
 /// `--http`'s default address: loopback, port 8402 ("402").
 pub const DEFAULT_HTTP: &str = "127.0.0.1:8402";

@@ -40,6 +40,16 @@ pub struct Queue {
 }
 
 impl Queue {
+    /// An empty queue.
+    pub fn new() -> Arc<Queue> {
+        Arc::new(Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() })
+    }
+
+    /// Waits until a message is queued.
+    pub async fn ready(&self) {
+        self.ready.notified().await
+    }
+
     /// Queues `v`, dropping the oldest message when full.
     pub fn push(&self, v: &Json_) {
         let mut q = self.q.lock().unwrap_or_else(|e| e.into_inner());
@@ -52,7 +62,8 @@ impl Queue {
         self.ready.notify_one();
     }
 
-    fn take(&self) -> Vec<String> {
+    /// The queued messages, oldest first; empties the queue.
+    pub fn take(&self) -> Vec<String> {
         self.q.lock().unwrap_or_else(|e| e.into_inner()).drain(..).collect()
     }
 }
@@ -72,8 +83,7 @@ impl Drop for Tasks {
 }
 
 async fn session(web: Arc<Web>, mut socket: WebSocket) {
-    let queue =
-        Arc::new(Queue { q: Mutex::new(VecDeque::new()), dropped: AtomicU64::new(0), ready: Notify::new() });
+    let queue = Queue::new();
     let _events = Tasks(vec![tokio::spawn(events(web.clone(), queue.clone()))]);
     let mut polls = Tasks(Vec::new());
     let mut frames = Tasks(Vec::new());

@@ -1,7 +1,9 @@
 // EtherCAT line view (docs/http-api.md, "EtherCAT line state"): on a page
 // served by `ethercat serve --http` (<body data-bus="ethercat">) the
 // slaves in line order with their ESM state, AL status and counters,
-// refreshed twice a second. The CAN panels are hidden (style.css).
+// refreshed twice a second and at once on every ESM event of the
+// stream (/api/stream), the last events listed. The CAN panels are
+// hidden (style.css).
 "use strict";
 (() => {
   if (document.body.dataset.bus !== "ethercat") return;
@@ -35,6 +37,24 @@
       busy = false;
     }
   }
+  // ESM events: listed newest first (the last 50), and the table refreshed.
+  function listen() {
+    const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/api/stream${location.search}`);
+    ws.onmessage = (m) => {
+      const e = JSON.parse(m.data);
+      if (e.type !== "event" || e.event !== "esm") return;
+      const li = document.createElement("li");
+      Object.assign(li.dataset, { position: e.position, state: e.state, alStatusCode: e.al_status_code });
+      const code = e.al_status_code ? `, AL status code ${e.al_status_code.toString(16).toUpperCase().padStart(4, "0")}h ${e.al_status_text}` : "";
+      li.textContent = `${(e.t / 1000).toFixed(3)} s: slave ${e.position} ${e.from} → ${e.state}${e.error ? " (error)" : ""}${code}`;
+      const list = el("line-events");
+      list.prepend(li);
+      while (list.children.length > 50) list.lastChild.remove();
+      refresh();
+    };
+    ws.onclose = () => setTimeout(listen, 1000);
+  }
   refresh();
+  listen();
   setInterval(refresh, 500);
 })();
