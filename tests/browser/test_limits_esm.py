@@ -1,8 +1,13 @@
-"""The drive panel's switch inputs in headless Chromium.
+"""The drive panel's switch inputs and the EtherCAT line's ESM events in
+headless Chromium.
 
 Against `serve --drive generic:5 --http`: the machine API trips the
 positive limit switch (60FDh bit 1) and the panel's lamp for it lights,
 then goes out when the fault is cleared; the limits line shows 607Dh.
+
+Against `ethercat serve --http` on a veth pair (root: a network
+namespace holds the master's end): `drivebus ethercat state preop` moves
+the line and the line view lists the ESM events its stream sent.
 """
 
 import json
@@ -10,6 +15,7 @@ import os
 import re
 import subprocess
 import urllib.request
+import uuid
 
 import pytest
 from selenium import webdriver
@@ -81,3 +87,57 @@ def test_a_tripped_limit_switch_lights_its_lamp(browser, page_url):
     assert not lit(browser, "negative_limit")
     post(page_url, "/api/nodes/5/machine/fault", {"kind": "clear"})
     wait_for(browser, "the positive limit lamp out", lambda b: not lit(b, "positive_limit"))
+
+
+@pytest.fixture()
+def line_url():
+    if os.geteuid() != 0:
+        pytest.skip("needs root: a network namespace and a veth pair")
+    ns = "dbbr" + uuid.uuid4().hex[:6]
+    outer, inner = ns + "a", ns + "b"
+    steps = [
+        ["netns", "add", ns],
+        ["link", "add", outer, "type", "veth", "peer", "name", inner],
+        ["link", "set", inner, "netns", ns],
+        ["link", "set", outer, "up"],
+        ["netns", "exec", ns, "ip", "link", "set", inner, "up"],
+    ]
+    proc = None
+    try:
+        for s in steps:
+            r = subprocess.run(["ip", *s], capture_output=True, text=True)
+            if r.returncode != 0:
+                pytest.skip(f"ip {' '.join(s)}: {r.stderr.strip()}")
+        proc = subprocess.Popen(
+            [BIN, "ethercat", "serve", "--iface", outer, "--drive", "generic", "--drive", "ipos", "--http", "127.0.0.1:0"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+        )
+        line = proc.stdout.readline()
+        m = re.search(r"page on (http://[^;\s]+)", line)
+        assert m, f"ethercat serve printed no page URL: {line!r}"
+        yield m.group(1), ns, inner
+    finally:
+        if proc:
+            proc.kill()
+            proc.wait(timeout=10)
+        subprocess.run(["ip", "link", "del", outer], capture_output=True)
+        subprocess.run(["ip", "netns", "del", ns], capture_output=True)
+
+
+def test_the_line_view_lists_esm_events_from_the_stream(browser, line_url):
+    url, ns, inner = line_url
+    browser.get(url)
+    wait_for(browser, "two slaves in INIT", lambda b: len(b.find_elements(By.CSS_SELECTOR, '#line tbody tr[data-state="INIT"]')) == 2)
+    assert browser.find_elements(By.CSS_SELECTOR, "#line-events li") == []
+    r = subprocess.run(["ip", "netns", "exec", ns, BIN, "ethercat", "state", "preop", "--iface", inner], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    for pos in (1, 2):
+        li = wait_for(
+            browser,
+            f"slave {pos}'s PRE-OP event listed",
+            lambda b: b.find_elements(By.CSS_SELECTOR, f'#line-events li[data-position="{pos}"][data-state="PRE-OP"]'),
+        )
+        assert f"slave {pos} INIT → PRE-OP" in li[0].text
+    wait_for(browser, "the table in PRE-OP", lambda b: len(b.find_elements(By.CSS_SELECTOR, '#line tbody tr[data-state="PRE-OP"]')) == 2)
