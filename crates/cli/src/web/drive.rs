@@ -44,8 +44,8 @@ fn switches_json(inputs: u32) -> Json_ {
 
 /// A 32-bit object, or `None` when the drive has none (or it is not 4 bytes).
 async fn read_u32(d: &RemoteDrive, index: u16, sub: u8) -> Option<u32> {
-    let v = d.read_raw(index, sub).await.ok()?;
-    Some(u32::from_le_bytes(v.get(..4)?.try_into().ok()?)).filter(|_| v.len() == 4)
+    let v: [u8; 4] = d.read_raw(index, sub).await.ok()?.as_slice().try_into().ok()?;
+    Some(u32::from_le_bytes(v))
 }
 
 /// Software position limits 607Dh:01/02 (INTEGER32) and max profile
