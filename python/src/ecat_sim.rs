@@ -18,10 +18,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use drivebus_can::Instant;
-use drivebus_ethercat::described::{self, Member};
 use drivebus_ethercat::master::drive::{CyclicDrive, Feedback};
 use drivebus_ethercat::master::{LineMaster, PduFrames, PreOpGroup, SlaveInfo, block_on};
-use drivebus_ethercat::{Clock, Host, drive};
+use drivebus_ethercat::{Clock, Host};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -129,14 +128,7 @@ impl EthercatSimulation {
     #[new]
     #[pyo3(signature = (drives = vec!["ipos".to_owned()], capture = true))]
     fn new(drives: Vec<String>, capture: bool) -> PyResult<EthercatSimulation> {
-        if drives.is_empty() {
-            return Err(PyValueError::new_err("give at least one drive (drives=[\"ipos\"])"));
-        }
-        let members = drives
-            .iter()
-            .map(|p| drive::profile(p).map(Member::Drive).map_err(|e| PyValueError::new_err(e.to_string())))
-            .collect::<PyResult<Vec<_>>>()?;
-        let devices = described::devices(&members, None).map_err(PyValueError::new_err)?;
+        let (_, devices) = crate::ethercat::line_devices(&drives)?;
         // As `drivebus demo --ethercat`: simulated time from 1 ms.
         let clock = Clock::simulated(Instant::from_millis(1));
         let host = Host::line(devices, clock.clone());

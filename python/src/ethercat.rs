@@ -27,6 +27,21 @@ pub struct EthercatServer {
     thread: Mutex<Option<JoinHandle<std::io::Result<ServerStats>>>>,
 }
 
+/// The members and slaves of a line of `drives` (personalities with an EtherCAT face,
+/// in line order); `ValueError` with the CLI's message for a bad name or
+/// an empty list. The server and the simulation build their lines here.
+pub(crate) fn line_devices(drives: &[String]) -> PyResult<(Vec<Member>, Vec<drivebus_ethercat::BoxDevice>)> {
+    if drives.is_empty() {
+        return Err(PyValueError::new_err("give at least one drive (drives=[\"ipos\"])"));
+    }
+    let members = drives
+        .iter()
+        .map(|p| drive::profile(p).map(Member::Drive).map_err(|e| PyValueError::new_err(e.to_string())))
+        .collect::<PyResult<Vec<_>>>()?;
+    let devices = described::devices(&members, None).map_err(PyValueError::new_err)?;
+    Ok((members, devices))
+}
+
 #[pymethods]
 impl EthercatServer {
     /// Serves `drives` (personalities with an EtherCAT face: `"ipos"`,
@@ -37,14 +52,7 @@ impl EthercatServer {
     #[new]
     #[pyo3(signature = (iface, drives = Vec::new()))]
     fn new(iface: &str, drives: Vec<String>) -> PyResult<EthercatServer> {
-        if drives.is_empty() {
-            return Err(PyValueError::new_err("give at least one drive (drives=[\"ipos\"])"));
-        }
-        let members = drives
-            .iter()
-            .map(|p| drive::profile(p).map(Member::Drive).map_err(|e| PyValueError::new_err(e.to_string())))
-            .collect::<PyResult<Vec<_>>>()?;
-        let devices = described::devices(&members, None).map_err(PyValueError::new_err)?;
+        let (members, devices) = line_devices(&drives)?;
         let host = Host::line(devices, Clock::real());
         // Bound before it returns: a master's first frame is not lost.
         let sock = server::RawSocket::open(iface).map_err(|e| {
