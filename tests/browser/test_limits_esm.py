@@ -18,41 +18,17 @@ import urllib.request
 import uuid
 
 import pytest
-from selenium import webdriver
-from selenium.webdriver.chrome.options import Options
-from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support.ui import Select, WebDriverWait
 
-BIN = os.environ["DRIVEBUS_BIN"]
+from test_page import BIN, browser, serve_page  # noqa: F401 (browser is a fixture)
+
 WAIT_S = 30
 
 
 @pytest.fixture(scope="module")
 def page_url():
-    proc = subprocess.Popen(
-        [BIN, "serve", "--listen", "127.0.0.1:0", "--drive", "generic:5", "--http", "127.0.0.1:0"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-    )
-    line = proc.stdout.readline()
-    m = re.search(r"page on (http://\S+/)", line)
-    assert m, f"serve printed no page URL: {line!r}"
-    yield m.group(1)
-    proc.terminate()
-    assert proc.wait(timeout=10) == 0
-
-
-@pytest.fixture(scope="module")
-def browser():
-    opts = Options()
-    opts.binary_location = "/usr/bin/chromium"
-    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--window-size=1280,1080"):
-        opts.add_argument(a)
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=opts)
-    yield driver
-    driver.quit()
+    yield from serve_page("--drive", "generic:5")
 
 
 def wait_for(browser, what, cond):

@@ -22,10 +22,12 @@ BIN = os.environ["DRIVEBUS_BIN"]
 WAIT_S = 30
 
 
-@pytest.fixture(scope="module")
-def page_url():
+def serve_page(*args):
+    """`drivebus serve ARGS --http` on free ports: yields the page's URL,
+    then stops the server (it must exit cleanly). The browser tests'
+    page fixtures are this with their drives."""
     proc = subprocess.Popen(
-        [BIN, "serve", "--listen", "127.0.0.1:0", "--drive", "akd:1", "--drive", "dds6:2", "--http", "127.0.0.1:0"],
+        [BIN, "serve", "--listen", "127.0.0.1:0", *args, "--http", "127.0.0.1:0"],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -36,6 +38,11 @@ def page_url():
     yield m.group(1)
     proc.terminate()
     assert proc.wait(timeout=10) == 0
+
+
+@pytest.fixture(scope="module")
+def page_url():
+    yield from serve_page("--drive", "akd:1", "--drive", "dds6:2")
 
 
 @pytest.fixture(scope="module")

@@ -17,23 +17,12 @@ import pytest
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support.ui import Select
 
-from test_page import BIN, browser, shot, text, wait_for  # noqa: F401 (browser is a fixture)
+from test_page import BIN, browser, serve_page, shot, text, wait_for  # noqa: F401 (browser is a fixture)
 
 
 @pytest.fixture(scope="module")
 def serve_url():
-    proc = subprocess.Popen(
-        [BIN, "serve", "--listen", "127.0.0.1:0", "--drive", "akd:1", "--drive", "dds6:2", "--http", "127.0.0.1:0"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    line = proc.stdout.readline()
-    m = re.search(r"page on (http://\S+/)", line)
-    assert m, f"serve printed no page URL: {line!r}"
-    yield m.group(1)
-    proc.terminate()
-    assert proc.wait(timeout=10) == 0
+    yield from serve_page("--drive", "akd:1", "--drive", "dds6:2")
 
 
 def api_get(url, path):
