@@ -56,6 +56,8 @@ function lssLog(what, text, ok) {
 async function lssRun(what, path, body, done) {
   for (const b of document.querySelectorAll("#lss-panel button")) b.disabled = true;
   $("lss-out").dataset.state = "busy";
+  // A fastscan asks up to 133 questions, each waited for: it takes a while.
+  show($("lss-out"), `${what}: waiting for the LSS answers…`);
   try {
     const r = await lssPost(path, body);
     lssLog(what, done(r), true);
