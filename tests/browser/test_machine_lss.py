@@ -114,6 +114,14 @@ def test_a_tripped_limit_switch_clicked_lights_the_drive_panel_lamp(browser, dri
     click(browser, "#machine-clear")
     wait_for(browser, "the positive limit lamp out", lambda b: not lamp(b))
     assert not active(browser, "trip:positive_limit")
+    # With a duration the machine ends the trip itself, and the panel's record with it.
+    neg = lambda b: "on" in b.find_element(By.ID, "sw-negative_limit").get_attribute("class").split()  # noqa: E731
+    browser.find_element(By.ID, "mi-duration").send_keys("1.5")
+    click(browser, '#machine-switches button[data-fault="trip"][data-switch="negative_limit"]')
+    wait_for(browser, "the negative limit lamp lit", neg)
+    assert '"duration": 1.5' in text(browser, "machine-out")
+    assert active(browser, "trip:negative_limit")
+    wait_for(browser, "the negative limit lamp out after 1.5 s", lambda b: not neg(b) and not active(b, "trip:negative_limit"))
 
 
 def test_an_input_is_set_and_a_refusal_shows_its_reason(browser, drives_url):

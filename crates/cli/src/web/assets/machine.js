@@ -24,7 +24,7 @@ async function machinePost(kind, body, record) {
   $("machine-node").textContent = node || "–";
   if (!node) return show($("machine-out"), "no drive selected in the drive panel", true);
   const duration = parseFloat($("mi-duration").value);
-  if (!Number.isNaN(duration)) body.duration = duration;
+  if (!Number.isNaN(duration) && body.kind !== "clear") body.duration = duration;
   try {
     const r = await api("POST", `/api/nodes/${node}/machine/${kind}`, body);
     show($("machine-out"), r);
