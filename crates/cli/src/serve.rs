@@ -29,32 +29,8 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     // The device files are read and checked before anything starts.
     let devices = DeviceSpec::parse_all(&a.devices, &specs.iter().map(|s| s.node).collect::<Vec<_>>())?;
     let lss_slaves = a.lss_slaves.iter().map(|s| lss_slave(s)).collect::<anyhow::Result<Vec<_>>>()?;
-    if a.channel.is_empty() || a.channel.contains(char::is_whitespace) || a.channel.contains(['<', '>']) {
-        anyhow::bail!("bad --channel `{}`: a bus name without spaces or angle brackets", a.channel);
-    }
-    if let Some(b) = a.bitrate
-        && !(1_000..=1_000_000).contains(&b)
-    {
-        anyhow::bail!("bad --bitrate {b}: expected 1000..1000000 bit/s");
-    }
-    if let Some(dir) = &a.state_dir {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create --state-dir {}", dir.display()))?;
-    }
-    // The transport's message already names the URL and the cause.
-    let parsed = BusUrl::parse(&g.bus).map_err(|e| anyhow!("{e}"))?;
-    let outer = match parsed {
-        BusUrl::Virtual { .. } => None,
-        _ => Some(
-            tokio::time::timeout(
-                std::time::Duration::from_secs(10),
-                drivebus_transport::open_parsed(&g.bus, &parsed),
-            )
-            .await
-            .map_err(|_| anyhow!("cannot open `{}`: timed out after 10 s", g.bus))?
-            .map_err(|e| anyhow!("{e}"))?,
-        ),
-    };
+    check_options(a)?;
+    let outer = open_outer(g).await?;
     let hub = Hub::new(HubConfig { bitrate: a.bitrate, ..HubConfig::default() });
     crate::fault::install(&hub, &a.faults)?;
     let listen = match (&a.listen, &outer) {
@@ -107,17 +83,7 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
         }
         _ => None,
     };
-    let drive_list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
-    let list = match (specs.is_empty(), described.is_empty()) {
-        (_, true) => format!("drives {drive_list}"),
-        (true, false) => format!("devices {}", described.join(" ")),
-        (false, false) => format!("drives {drive_list}; devices {}", described.join(" ")),
-    };
-    let list = if a.lss_slaves.is_empty() {
-        list
-    } else {
-        format!("{list}; unconfigured LSS slaves {}", a.lss_slaves.join(" "))
-    };
+    let list = served_list(&specs, &described, &a.lss_slaves);
     let pace = a.bitrate.map_or_else(|| "unpaced".to_owned(), |b| format!("{b} bit/s"));
     // Handlers first: a SIGTERM right after the ready line must end in a
     // clean exit 0, not the default action (found by the interop suite).
@@ -162,6 +128,58 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
     }
     drop(server);
     Ok(())
+}
+
+/// The options checked before anything starts (`--channel`, `--bitrate`,
+/// `--state-dir` created).
+fn check_options(a: &ServeArgs) -> anyhow::Result<()> {
+    if a.channel.is_empty() || a.channel.contains(char::is_whitespace) || a.channel.contains(['<', '>']) {
+        anyhow::bail!("bad --channel `{}`: a bus name without spaces or angle brackets", a.channel);
+    }
+    if let Some(b) = a.bitrate
+        && !(1_000..=1_000_000).contains(&b)
+    {
+        anyhow::bail!("bad --bitrate {b}: expected 1000..1000000 bit/s");
+    }
+    if let Some(dir) = &a.state_dir {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create --state-dir {}", dir.display()))?;
+    }
+    Ok(())
+}
+
+/// The real bus of `--bus` the drives are bridged to, or `None` on the
+/// virtual bus.
+async fn open_outer(g: &Global) -> anyhow::Result<Option<drivebus_transport::CanBus>> {
+    // The transport's message already names the URL and the cause.
+    let parsed = BusUrl::parse(&g.bus).map_err(|e| anyhow!("{e}"))?;
+    Ok(match parsed {
+        BusUrl::Virtual { .. } => None,
+        _ => Some(
+            tokio::time::timeout(
+                std::time::Duration::from_secs(10),
+                drivebus_transport::open_parsed(&g.bus, &parsed),
+            )
+            .await
+            .map_err(|_| anyhow!("cannot open `{}`: timed out after 10 s", g.bus))?
+            .map_err(|e| anyhow!("{e}"))?,
+        ),
+    })
+}
+
+/// What the ready line says is served: drives, devices, LSS slaves.
+fn served_list(specs: &[DriveSpec], described: &[String], lss_slaves: &[String]) -> String {
+    let drive_list = specs.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(" ");
+    let list = match (specs.is_empty(), described.is_empty()) {
+        (_, true) => format!("drives {drive_list}"),
+        (true, false) => format!("devices {}", described.join(" ")),
+        (false, false) => format!("drives {drive_list}; devices {}", described.join(" ")),
+    };
+    if lss_slaves.is_empty() {
+        list
+    } else {
+        format!("{list}; unconfigured LSS slaves {}", lss_slaves.join(" "))
+    }
 }
 
 /// An unconfigured CiA 301 slave (node-ID FFh) with LSS, at the LSS
