@@ -6,7 +6,7 @@ use anyhow::{Context, anyhow, bail};
 use drivebus_master::{DataType, Protocol, SdoError, Value};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{Global, SdoCmd, StoreArgs};
+use crate::args::{Global, SdoCmd, SdoFile, SdoRead, SdoWrite, StoreArgs};
 use crate::conn::{Conn, need_node};
 use crate::error::{coded, sdo};
 use crate::output::outln;
@@ -15,113 +15,124 @@ use crate::output::outln;
 pub async fn run(g: &Global, c: &SdoCmd) -> anyhow::Result<()> {
     let node = need_node(g)?;
     match c {
-        SdoCmd::Read(a) => {
-            let dict = crate::dict::Dict { eds: crate::eds_cmd::load_global_eds(g)? };
-            let (index, sub) = dict.resolve(&a.object, a.sub.as_deref())?;
-            let forced = a.ty.as_deref().map(parse_type).transpose()?;
-            let conn = Conn::open_with(g, dict).await?;
-            let subs = match (sub, conn.dict.entries(index)) {
-                (Some(s), _) => vec![s],
-                (None, None) => vec![0],
-                // A whole record/array: sub 0 says how many entries exist.
-                (None, Some(all)) => {
-                    let n = read(&conn, node, index, 0).await?;
-                    let highest = n.first().copied().unwrap_or(0);
-                    all.into_iter().filter(|&s| s <= highest).collect()
-                }
-            };
-            let mut rows = Vec::new();
-            for s in subs {
-                let data = match read(&conn, node, index, s).await {
-                    // A record may skip sub-indices; an array entry beyond the
-                    // count is absent.
-                    Err(e) if !rows.is_empty() && is_missing(&e) => continue,
-                    r => r?,
-                };
-                let dt = forced.or_else(|| conn.dict.data_type(index, s));
-                rows.push((s, conn.dict.name(index, s), dt, data));
-            }
-            conn.close().await?;
-            print_values(g, node, index, &rows);
-            Ok(())
-        }
-        SdoCmd::Write(a) => {
-            let dict = crate::dict::Dict { eds: crate::eds_cmd::load_global_eds(g)? };
-            let (obj, sub, value) = match a.args.as_slice() {
-                [o, v] => (o, None, v),
-                [o, s, v] => (o, Some(s.as_str()), v),
-                _ => bail!("give OBJECT [SUB] VALUE"),
-            };
-            let (index, sub) = dict.resolve(obj, sub)?;
-            let sub = sub.unwrap_or(0);
-            let dt = match a.ty.as_deref() {
-                Some(t) => parse_type(t)?,
-                None => dict.data_type(index, sub).ok_or_else(|| {
-                    coded("usage", anyhow!("the data type of {index:04X}h:{sub:02X} is unknown: give --type (u8, u16, u32, i32, str, ...) or --eds FILE"))
-                })?,
-            };
-            let v =
-                Value::parse(dt, value).map_err(|e| coded("usage", anyhow!("bad value `{value}`: {e}")))?;
-            let bytes = v
-                .encode(dt)
-                .map_err(|e| coded("usage", anyhow!("value `{value}` does not fit {}: {e}", dt.name())))?;
-            let conn = Conn::open_with(g, dict).await?;
-            let r = conn.master.sdo(node).download(index, sub, &bytes).await;
-            let timeout = conn.timeout;
-            conn.close().await?;
-            r.map_err(sdo(node, index, sub, true, timeout))?;
-            crate::output::emit(
-                g.json,
-                serde_json::json!({"node": node, "index": index, "sub": sub, "type": dt.name(), "written": hex(&bytes)}),
-                || format!("node {node}: wrote {index:04X}h:{sub:02X} = {v} ({})", dt.name()),
-            );
-            Ok(())
-        }
-        SdoCmd::Upload(a) => {
-            let (index, sub, file) = file_args(g, &a.args)?;
-            let conn = Conn::open(g).await?;
-            let pb = bar(g, None);
-            let proto = if a.block { Protocol::Block } else { Protocol::Auto };
-            let p2 = pb.clone();
-            let h = conn.master.sdo(node).protocol(proto).on_progress(move |d, t| progress(&p2, d, t));
-            let data = h.upload(index, sub).await;
-            pb.finish_and_clear();
-            let timeout = conn.timeout;
-            conn.close().await?;
-            let data = data.map_err(sdo(node, index, sub, false, timeout))?;
-            std::fs::write(&file, &data).with_context(|| format!("cannot write {}", file.display()))?;
-            report_file(g, node, index, sub, data.len(), "read", &file);
-            Ok(())
-        }
-        SdoCmd::Download(a) => {
-            let (index, sub, file) = file_args(g, &a.args)?;
-            let data = std::fs::read(&file).with_context(|| format!("cannot read {}", file.display()))?;
-            if data.is_empty() {
-                bail!("{} is empty: nothing to download", file.display());
-            }
-            let len = data.len();
-            let conn = Conn::open(g).await?;
-            let pb = bar(g, Some(len as u64));
-            let proto = if a.block {
-                Protocol::Block
-            } else if len <= 4 {
-                Protocol::Expedited
-            } else {
-                Protocol::Segmented
-            };
-            let p2 = pb.clone();
-            let h = conn.master.sdo(node).protocol(proto).on_progress(move |d, t| progress(&p2, d, t));
-            let r = h.download(index, sub, &data).await;
-            pb.finish_and_clear();
-            let timeout = conn.timeout;
-            conn.close().await?;
-            r.map_err(sdo(node, index, sub, true, timeout))?;
-            report_file(g, node, index, sub, len, "wrote", &file);
-            Ok(())
-        }
+        SdoCmd::Read(a) => read_cmd(g, node, a).await,
+        SdoCmd::Write(a) => write_cmd(g, node, a).await,
+        SdoCmd::Upload(a) => upload_cmd(g, node, a).await,
+        SdoCmd::Download(a) => download_cmd(g, node, a).await,
         SdoCmd::Store(a) => store_restore(g, node, a, 0x1010, *b"save", "stored").await,
         SdoCmd::Restore(a) => store_restore(g, node, a, 0x1011, *b"load", "restored to defaults").await,
     }
+}
+
+/// `sdo read OBJECT [SUB]`: one entry, or every entry of a record or array.
+async fn read_cmd(g: &Global, node: u8, a: &SdoRead) -> anyhow::Result<()> {
+    let dict = crate::dict::Dict { eds: crate::eds_cmd::load_global_eds(g)? };
+    let (index, sub) = dict.resolve(&a.object, a.sub.as_deref())?;
+    let forced = a.ty.as_deref().map(parse_type).transpose()?;
+    let conn = Conn::open_with(g, dict).await?;
+    let subs = match (sub, conn.dict.entries(index)) {
+        (Some(s), _) => vec![s],
+        (None, None) => vec![0],
+        // A whole record/array: sub 0 says how many entries exist.
+        (None, Some(all)) => {
+            let n = read(&conn, node, index, 0).await?;
+            let highest = n.first().copied().unwrap_or(0);
+            all.into_iter().filter(|&s| s <= highest).collect()
+        }
+    };
+    let mut rows = Vec::new();
+    for s in subs {
+        let data = match read(&conn, node, index, s).await {
+            // A record may skip sub-indices; an array entry beyond the
+            // count is absent.
+            Err(e) if !rows.is_empty() && is_missing(&e) => continue,
+            r => r?,
+        };
+        let dt = forced.or_else(|| conn.dict.data_type(index, s));
+        rows.push((s, conn.dict.name(index, s), dt, data));
+    }
+    conn.close().await?;
+    print_values(g, node, index, &rows);
+    Ok(())
+}
+
+/// `sdo write OBJECT [SUB] VALUE`, typed by the dictionary or `--type`.
+async fn write_cmd(g: &Global, node: u8, a: &SdoWrite) -> anyhow::Result<()> {
+    let dict = crate::dict::Dict { eds: crate::eds_cmd::load_global_eds(g)? };
+    let (obj, sub, value) = match a.args.as_slice() {
+        [o, v] => (o, None, v),
+        [o, s, v] => (o, Some(s.as_str()), v),
+        _ => bail!("give OBJECT [SUB] VALUE"),
+    };
+    let (index, sub) = dict.resolve(obj, sub)?;
+    let sub = sub.unwrap_or(0);
+    let dt = match a.ty.as_deref() {
+        Some(t) => parse_type(t)?,
+        None => dict.data_type(index, sub).ok_or_else(|| {
+            coded("usage", anyhow!("the data type of {index:04X}h:{sub:02X} is unknown: give --type (u8, u16, u32, i32, str, ...) or --eds FILE"))
+        })?,
+    };
+    let v = Value::parse(dt, value).map_err(|e| coded("usage", anyhow!("bad value `{value}`: {e}")))?;
+    let bytes = v
+        .encode(dt)
+        .map_err(|e| coded("usage", anyhow!("value `{value}` does not fit {}: {e}", dt.name())))?;
+    let conn = Conn::open_with(g, dict).await?;
+    let r = conn.master.sdo(node).download(index, sub, &bytes).await;
+    let timeout = conn.timeout;
+    conn.close().await?;
+    r.map_err(sdo(node, index, sub, true, timeout))?;
+    crate::output::emit(
+        g.json,
+        serde_json::json!({"node": node, "index": index, "sub": sub, "type": dt.name(), "written": hex(&bytes)}),
+        || format!("node {node}: wrote {index:04X}h:{sub:02X} = {v} ({})", dt.name()),
+    );
+    Ok(())
+}
+
+/// `sdo upload OBJECT [SUB] FILE`.
+async fn upload_cmd(g: &Global, node: u8, a: &SdoFile) -> anyhow::Result<()> {
+    let (index, sub, file) = file_args(g, &a.args)?;
+    let conn = Conn::open(g).await?;
+    let pb = bar(g, None);
+    let proto = if a.block { Protocol::Block } else { Protocol::Auto };
+    let p2 = pb.clone();
+    let h = conn.master.sdo(node).protocol(proto).on_progress(move |d, t| progress(&p2, d, t));
+    let data = h.upload(index, sub).await;
+    pb.finish_and_clear();
+    let timeout = conn.timeout;
+    conn.close().await?;
+    let data = data.map_err(sdo(node, index, sub, false, timeout))?;
+    std::fs::write(&file, &data).with_context(|| format!("cannot write {}", file.display()))?;
+    report_file(g, node, index, sub, data.len(), "read", &file);
+    Ok(())
+}
+
+/// `sdo download OBJECT [SUB] FILE`.
+async fn download_cmd(g: &Global, node: u8, a: &SdoFile) -> anyhow::Result<()> {
+    let (index, sub, file) = file_args(g, &a.args)?;
+    let data = std::fs::read(&file).with_context(|| format!("cannot read {}", file.display()))?;
+    if data.is_empty() {
+        bail!("{} is empty: nothing to download", file.display());
+    }
+    let len = data.len();
+    let conn = Conn::open(g).await?;
+    let pb = bar(g, Some(len as u64));
+    let proto = if a.block {
+        Protocol::Block
+    } else if len <= 4 {
+        Protocol::Expedited
+    } else {
+        Protocol::Segmented
+    };
+    let p2 = pb.clone();
+    let h = conn.master.sdo(node).protocol(proto).on_progress(move |d, t| progress(&p2, d, t));
+    let r = h.download(index, sub, &data).await;
+    pb.finish_and_clear();
+    let timeout = conn.timeout;
+    conn.close().await?;
+    r.map_err(sdo(node, index, sub, true, timeout))?;
+    report_file(g, node, index, sub, len, "wrote", &file);
+    Ok(())
 }
 
 async fn read(conn: &Conn, node: u8, index: u16, sub: u8) -> anyhow::Result<Vec<u8>> {
