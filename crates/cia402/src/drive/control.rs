@@ -712,9 +712,14 @@ impl Drive {
         let vel_dem = self.units.frame_to_velocity(self.dem.vel);
         let rated_i = f64::from(self.extra.rated_current) / 1000.0;
         let i32s = |x: f64| {
-            if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
+            if x.is_finite() {
+                super::units::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32
+            } else {
+                0
+            }
         };
-        let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
+        let i16s =
+            |x: f64| if x.is_finite() { super::units::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
         // 6061h shows a manufacturer mode while its stand-in runs.
         let shown = self.mode_shown();
         // Objects the device lacks are not published (`withdraw_object`).

@@ -9,6 +9,7 @@ use crate::EmcyEntry;
 use crate::build::{Context, EmcyFrame};
 use drivebus_can::Instant;
 use drivebus_cia402::drive::op;
+use drivebus_cia402::drive::units::round;
 use drivebus_cia402::state_machine::State;
 use drivebus_node::Request;
 use drivebus_od::{EntryRef, ObjectDictionary};
@@ -137,7 +138,9 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
 
 /// Stores `v` (little-endian, the entry's size) behind a handle.
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: u32) {
-    if let Some(r) = r {
+    if let Some(r) = r
+        && !od.set_low(r, u64::from(v), 4)
+    {
         let n = od.bytes(r).len().min(4);
         od.set_raw(r, &v.to_le_bytes()[..n]);
     }
@@ -162,7 +165,7 @@ pub fn rated_ma(drive: &drivebus_cia402::drive::Drive, icont: u64) -> i64 {
     if icont > 0 {
         return icont.min(u64::from(u32::MAX)) as i64;
     }
-    ((drive.config().params.motor.rated_current * 1000.0).round() as i64).max(1)
+    (round(drive.config().params.motor.rated_current * 1000.0) as i64).max(1)
 }
 
 /// The Kollmorgen EMCY frame of `code` (§6.4.4.2: class bits, category 01h).
