@@ -192,6 +192,9 @@ pub struct Units {
     /// 128-bit conversions a call, and the control step converts often.
     vel_f: f64,
     acc_f: f64,
+    /// `pos` as 64-bit integers, `(0, 0)` if either does not fit: the
+    /// fast path of [`Units::inc_frac_to_pos`].
+    pos_i64: (i64, i64),
 }
 
 impl Default for Units {
@@ -231,6 +234,10 @@ impl Units {
             inc_per_pos: pos.to_f64(),
             vel_f: vel.to_f64(),
             acc_f: acc.to_f64(),
+            pos_i64: match (i64::try_from(pos.num), i64::try_from(pos.den)) {
+                (Ok(n), Ok(d)) => (n, d),
+                _ => (0, 0),
+            },
         })
     }
 
@@ -266,8 +273,8 @@ impl Units {
     pub fn inc_frac_to_pos(&self, inc: i64, frac: i128) -> i64 {
         // In 64 bits when everything fits (the usual case): the drive
         // converts its position several times a control period.
-        if let (Ok(num), Ok(den), Ok(fr)) =
-            (i64::try_from(self.pos.num), i64::try_from(self.pos.den), i64::try_from(frac))
+        let (num, den) = self.pos_i64;
+        if let Ok(fr) = i64::try_from(frac)
             && let Some(p) = inc.checked_mul(den).and_then(|x| x.checked_add(fr))
             && num > 0
             && p > i64::MIN + num
