@@ -195,6 +195,8 @@ pub struct Units {
     /// `pos` as 64-bit integers, `(0, 0)` if either does not fit: the
     /// fast path of [`Units::inc_frac_to_pos`].
     pos_i64: (i64, i64),
+    /// `pos.den` as a float.
+    den_f: f64,
 }
 
 impl Default for Units {
@@ -234,6 +236,7 @@ impl Units {
             inc_per_pos: pos.to_f64(),
             vel_f: vel.to_f64(),
             acc_f: acc.to_f64(),
+            den_f: pos.den as f64,
             pos_i64: match (i64::try_from(pos.num), i64::try_from(pos.den)) {
                 (Ok(n), Ok(d)) => (n, d),
                 _ => (0, 0),
@@ -298,7 +301,13 @@ impl Units {
     pub fn frac_to_inc_f(&self, frac: i128) -> f64 {
         // The usual reference has no fraction: no 128-bit conversions then
         // (the control step asks every period).
-        if frac == 0 { 0.0 } else { frac as f64 / self.pos.den as f64 }
+        if frac == 0 {
+            return 0.0;
+        }
+        // Through 64 bits when it fits (the same correctly rounded value):
+        // a 128-bit conversion is a library call.
+        let f = i64::try_from(frac).map_or_else(|_| frac as f64, |v| v as f64);
+        f / self.den_f
     }
 
     /// Position \[units\] → increments as a float (set-points, derivatives).
@@ -526,6 +535,18 @@ mod tests {
             ],
         ) {
             proptest::prop_assert_eq!(round(x).to_bits(), libm::round(x).to_bits(), "{}", x);
+        }
+
+        /// `frac_to_inc_f` converts through 64 bits to the same float.
+        #[test]
+        fn frac_to_inc_f_is_the_128_bit_quotient(
+            frac in proptest::prop_oneof![proptest::num::i128::ANY, proptest::num::i64::ANY.prop_map(i128::from)],
+            enc in 1u32..=u32::MAX, feed in 1u32..=u32::MAX,
+        ) {
+            let f = FactorGroup { feed: (feed, 1), ..FactorGroup::increments(enc) };
+            let u = Units::new(&f).unwrap();
+            let expect = if frac == 0 { 0.0 } else { frac as f64 / u.position_ratio().den as f64 };
+            proptest::prop_assert_eq!(u.frac_to_inc_f(frac).to_bits(), expect.to_bits());
         }
 
         /// The 64-bit path of `inc_frac_to_pos` gives the 128-bit result.

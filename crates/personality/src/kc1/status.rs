@@ -137,6 +137,7 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
 }
 
 /// Stores `v` (little-endian, the entry's size) behind a handle.
+#[inline]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: u32) {
     if let Some(r) = r
         && !od.set_low(r, u64::from(v), 4)
