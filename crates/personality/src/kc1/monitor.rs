@@ -68,7 +68,7 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
 }
 
 /// Stores `v` as an INTEGER32 cut to the entry's size (at most 4 bytes).
-#[inline]
+#[inline(always)]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: i64) {
     if let Some(r) = r
         && !od.set_low(r, u64::from(v as i32 as u32), 4)

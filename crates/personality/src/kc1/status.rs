@@ -8,8 +8,8 @@
 use crate::EmcyEntry;
 use crate::build::{Context, EmcyFrame};
 use drivebus_can::Instant;
-use drivebus_cia402::drive::op;
 use drivebus_cia402::drive::units::round;
+use drivebus_cia402::drive::{DriveView, op};
 use drivebus_cia402::state_machine::State;
 use drivebus_node::Request;
 use drivebus_od::{EntryRef, ObjectDictionary};
@@ -137,7 +137,7 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
 }
 
 /// Stores `v` (little-endian, the entry's size) behind a handle.
-#[inline]
+#[inline(always)]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: u32) {
     if let Some(r) = r
         && !od.set_low(r, u64::from(v), 4)
@@ -272,13 +272,14 @@ impl Status {
             && view.state == State::OperationEnabled
             && fe.abs() > f64::from(thresh);
         self.set(cx, od, Warning::FollowingError, over);
-        self.publish(cx, od);
+        self.publish(cx, od, view);
     }
 
     /// 1002h, 2002h, 2000h, 2001h, 2011h–2013h and statusword bit 7.
-    fn publish(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    /// `view`: the drive's, as [`Status::update`] took it (raising a
+    /// warning does not change it).
+    fn publish(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, view: DriveView) {
         let drive = &*cx.drive;
-        let view = drive.view();
         let mut sw = word(od, self.refs.statusword) as u16;
         if self.warnings[0].is_some() && sw & 0x80 == 0 {
             sw |= 0x80;

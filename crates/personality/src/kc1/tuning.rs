@@ -250,7 +250,7 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
     r.map_or(0, |r| od.word(r))
 }
 
-#[inline]
+#[inline(always)]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: u32) {
     if let Some(r) = r
         && !od.set_low(r, u64::from(v), 4)
