@@ -156,7 +156,7 @@ impl FactorGroup {
 #[inline]
 pub fn round(x: f64) -> f64 {
     const EXACT: f64 = 4_503_599_627_370_496.0; // 2^52
-    if !(x.abs() < EXACT) {
+    if x.is_nan() || x.abs() >= EXACT {
         return libm::round(x);
     }
     let t = x as i64;
