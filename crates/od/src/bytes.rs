@@ -88,6 +88,23 @@ impl ValueBytes {
         None
     }
 
+    /// Store the low `len` bytes of `w` into an inline value of at most
+    /// `max` bytes (the bytes past `len` stay zero); `Some(changed)`, or
+    /// `None` if not applicable.
+    #[inline(always)]
+    pub(crate) fn set_low(&mut self, w: u64, max: usize) -> Option<bool> {
+        if let ValueBytes::Inline { len, buf } = self
+            && usize::from(*len) <= max.min(8)
+        {
+            let bits = 8 * u32::from(*len);
+            let w = if bits >= 64 { w } else { w & ((1u64 << bits) - 1) };
+            let old = u64::from_le_bytes(*buf);
+            *buf = w.to_le_bytes();
+            return Some(old != w);
+        }
+        None
+    }
+
     /// Mutable view of the current content (length unchanged).
     #[inline]
     pub(crate) fn as_mut_slice(&mut self) -> &mut [u8] {

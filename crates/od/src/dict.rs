@@ -546,6 +546,22 @@ impl ObjectDictionary {
         }
     }
 
+    /// Stores the low bytes of `w`, as many as the entry holds, if it holds
+    /// at most `max` bytes inline: `set_raw(r, &w.to_le_bytes()[..len])`
+    /// as one masked compare and store (live values pushed every control
+    /// period). `false`, nothing stored, for a longer entry.
+    #[inline(always)]
+    pub fn set_low(&mut self, r: EntryRef, w: u64, max: usize) -> bool {
+        let s = &mut self.objects[r.obj as usize].subs[r.sub as usize];
+        match s.value.set_low(w, max) {
+            Some(changed) => {
+                self.generation = self.generation.wrapping_add(u64::from(changed & s.marked));
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The value of a fixed-size entry (≤ 8 bytes) as a zero-extended
     /// little-endian word, without a length dispatch (PDO packing).
     #[inline(always)]

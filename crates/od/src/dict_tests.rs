@@ -191,3 +191,31 @@ fn clone_from_is_clone() {
     assert!(d == b);
     assert_eq!(d.get(0x2000, 5).map(|s| s.bytes().to_vec()), Some(alloc::vec![9, 0]));
 }
+
+#[test]
+fn set_low_stores_what_set_raw_stores() {
+    let types = [
+        (DataType::Unsigned8, Value::U8(0)),
+        (DataType::Integer16, Value::I16(0)),
+        (DataType::Integer24, Value::Bytes(vec![0; 3])),
+        (DataType::Unsigned32, Value::U32(0)),
+        (DataType::Integer64, Value::I64(0)),
+    ];
+    for (t, v) in types {
+        for w in [0u64, 1, 0x80, 0xFFFF_FFFF, 0x1234_5678_9ABC_DEF0, u64::MAX] {
+            let (mut a, mut b) = (ObjectDictionary::new(), ObjectDictionary::new());
+            for od in [&mut a, &mut b] {
+                od.insert(Object::var(0x2000, "Live", t, Access::Ro, v.clone()));
+                let r = od.find(0x2000, 0).unwrap();
+                od.set_marked(r, true);
+            }
+            let r = a.find(0x2000, 0).unwrap();
+            let n = a.bytes(r).len();
+            a.set_raw(r, &w.to_le_bytes()[..n]);
+            assert!(b.set_low(r, w, 8), "{t:?}");
+            assert_eq!(a.bytes(r), b.bytes(r), "{t:?} {w:#X}");
+            assert_eq!(a.generation(), b.generation(), "{t:?} {w:#X}: a change counts once");
+            assert_eq!(b.set_low(r, w, 4), n <= 4, "{t:?}: longer than max, nothing stored");
+        }
+    }
+}

@@ -60,6 +60,11 @@ pub fn resize_expedited(od: &ObjectDictionary, node_id: u8, f: &Frame) -> Option
 /// short RPDO of this node.
 pub fn pad_short_rpdo(od: &ObjectDictionary, f: &Frame) -> Option<Frame> {
     let id = u32::from(f.std_id()?);
+    // A full frame or a remote request is never padded: no search of the
+    // RPDO parameters for it (this filter sees every received frame).
+    if f.data().len() >= 8 || f.is_rtr() {
+        return None;
+    }
     for n in 0..512u16 {
         let cob = od.get_u32(0x1400 + n, 1)?;
         if cob & 0x8000_0000 != 0 || cob & 0x7FF != id {

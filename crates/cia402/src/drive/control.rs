@@ -702,7 +702,12 @@ impl Drive {
             // An object was inserted after install: handles moved.
             self.refs = super::objects::Refs::resolve(od);
         }
-        let Some(r) = self.refs else { return };
+        if self.refs.is_none() {
+            return;
+        }
+        // 6061h shows a manufacturer mode while its stand-in runs.
+        let shown = self.mode_shown();
+        let Some(r) = &self.refs else { return };
         let sw = self.statusword_value();
         let inc = self.position_increments();
         let pos = self.units.inc_frac_to_pos(inc, self.inc_frac);
@@ -712,11 +717,14 @@ impl Drive {
         let vel_dem = self.units.frame_to_velocity(self.dem.vel);
         let rated_i = f64::from(self.extra.rated_current) / 1000.0;
         let i32s = |x: f64| {
-            if x.is_finite() { libm::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32 } else { 0 }
+            if x.is_finite() {
+                super::units::round(x).clamp(i32::MIN as f64, i32::MAX as f64) as i32
+            } else {
+                0
+            }
         };
-        let i16s = |x: f64| if x.is_finite() { libm::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
-        // 6061h shows a manufacturer mode while its stand-in runs.
-        let shown = self.mode_shown();
+        let i16s =
+            |x: f64| if x.is_finite() { super::units::round(x).clamp(-32768.0, 32767.0) as i16 } else { 0 };
         // Objects the device lacks are not published (`withdraw_object`).
         let put = |od: &mut ObjectDictionary, r: Option<drivebus_od::EntryRef>, b: &[u8]| {
             if let Some(r) = r {

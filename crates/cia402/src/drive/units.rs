@@ -148,6 +148,31 @@ impl FactorGroup {
     }
 }
 
+/// Rounds half away from zero, bit for bit `libm::round` (and `f64::round`):
+/// below 2^52 in magnitude by truncating to an integer (exact there), which
+/// is a few instructions where a target without SSE4.1 calls a library
+/// routine; the drive and the personalities round their live values every
+/// control period.
+#[inline]
+pub fn round(x: f64) -> f64 {
+    const EXACT: f64 = 4_503_599_627_370_496.0; // 2^52
+    if x.is_nan() || x.abs() >= EXACT {
+        return libm::round(x);
+    }
+    let t = x as i64;
+    let f = x - t as f64;
+    let r = if f >= 0.5 {
+        t + 1
+    } else if f <= -0.5 {
+        t - 1
+    } else {
+        t
+    };
+    // A zero keeps the sign of `x` (-0.3 rounds to -0.0); any other result
+    // has it already.
+    f64::from_bits((r as f64).to_bits() | (x.to_bits() & (1 << 63)))
+}
+
 /// Resolved conversions between user units, increments and motor radians.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Units {
@@ -167,6 +192,11 @@ pub struct Units {
     /// 128-bit conversions a call, and the control step converts often.
     vel_f: f64,
     acc_f: f64,
+    /// `pos` as 64-bit integers, `(0, 0)` if either does not fit: the
+    /// fast path of [`Units::inc_frac_to_pos`].
+    pos_i64: (i64, i64),
+    /// `pos.den` as a float.
+    den_f: f64,
 }
 
 impl Default for Units {
@@ -206,6 +236,11 @@ impl Units {
             inc_per_pos: pos.to_f64(),
             vel_f: vel.to_f64(),
             acc_f: acc.to_f64(),
+            den_f: pos.den as f64,
+            pos_i64: match (i64::try_from(pos.num), i64::try_from(pos.den)) {
+                (Ok(n), Ok(d)) => (n, d),
+                _ => (0, 0),
+            },
         })
     }
 
@@ -239,6 +274,23 @@ impl Units {
     /// [`Units::pos_to_inc_exact`]) → position \[units\], exact (rounded to
     /// the nearest unit).
     pub fn inc_frac_to_pos(&self, inc: i64, frac: i128) -> i64 {
+        // In 64 bits when everything fits (the usual case): the drive
+        // converts its position several times a control period.
+        let (num, den) = self.pos_i64;
+        if let Ok(fr) = i64::try_from(frac)
+            && let Some(p) = inc.checked_mul(den).and_then(|x| x.checked_add(fr))
+            && num > 0
+            && p > i64::MIN + num
+            && p < i64::MAX - num
+        {
+            let q = if p >= 0 { (p + num / 2) / num } else { -((-p + num / 2) / num) };
+            return q.saturating_mul(self.pos_sign_i);
+        }
+        self.inc_frac_to_pos_wide(inc, frac)
+    }
+
+    /// [`Units::inc_frac_to_pos`] in 128 bits.
+    fn inc_frac_to_pos_wide(&self, inc: i64, frac: i128) -> i64 {
         let (num, den) = (self.pos.num as i128, self.pos.den as i128);
         let p = i128::from(inc).saturating_mul(den).saturating_add(frac);
         let q = div_round(p, num);
@@ -249,7 +301,13 @@ impl Units {
     pub fn frac_to_inc_f(&self, frac: i128) -> f64 {
         // The usual reference has no fraction: no 128-bit conversions then
         // (the control step asks every period).
-        if frac == 0 { 0.0 } else { frac as f64 / self.pos.den as f64 }
+        if frac == 0 {
+            return 0.0;
+        }
+        // Through 64 bits when it fits (the same correctly rounded value):
+        // a 128-bit conversion is a library call.
+        let f = i64::try_from(frac).map_or_else(|_| frac as f64, |v| v as f64);
+        f / self.den_f
     }
 
     /// Position \[units\] → increments as a float (set-points, derivatives).
@@ -370,6 +428,38 @@ mod tests {
     use proptest::strategy::Strategy;
 
     #[test]
+    fn round_edges_are_libm_round() {
+        let edges = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            0.3,
+            -0.3,
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            9.3e18,
+            -9.3e18,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+        ];
+        for x in edges {
+            assert_eq!(round(x).to_bits(), libm::round(x).to_bits(), "{x}");
+        }
+        assert!(round(f64::NAN).is_nan());
+    }
+
+    #[test]
     fn milli_degree_ratio() {
         let f = FactorGroup { feed: (360_000, 1), ..FactorGroup::increments(1 << 20) };
         let u = Units::new(&f).unwrap();
@@ -432,6 +522,44 @@ mod tests {
             ],
         ) {
             proptest::prop_assert_eq!(div_round(p, num), div_round_wide(p, num));
+        }
+
+        /// `round` is `libm::round` bit for bit.
+        #[test]
+        fn round_is_libm_round(
+            x in proptest::prop_oneof![
+                proptest::num::f64::ANY,
+                -1e6f64..1e6,
+                (-2_000_000i64..2_000_000).prop_map(|k| k as f64 / 2.0),
+                (-2_000_000i64..2_000_000).prop_map(|k| k as f64 / 2.0 + 1e-9),
+            ],
+        ) {
+            proptest::prop_assert_eq!(round(x).to_bits(), libm::round(x).to_bits(), "{}", x);
+        }
+
+        /// `frac_to_inc_f` converts through 64 bits to the same float.
+        #[test]
+        fn frac_to_inc_f_is_the_128_bit_quotient(
+            frac in proptest::prop_oneof![proptest::num::i128::ANY, proptest::num::i64::ANY.prop_map(i128::from)],
+            enc in 1u32..=u32::MAX, feed in 1u32..=u32::MAX,
+        ) {
+            let f = FactorGroup { feed: (feed, 1), ..FactorGroup::increments(enc) };
+            let u = Units::new(&f).unwrap();
+            let expect = if frac == 0 { 0.0 } else { frac as f64 / u.position_ratio().den as f64 };
+            proptest::prop_assert_eq!(u.frac_to_inc_f(frac).to_bits(), expect.to_bits());
+        }
+
+        /// The 64-bit path of `inc_frac_to_pos` gives the 128-bit result.
+        #[test]
+        fn inc_frac_to_pos_matches_the_128_bit_formula(
+            inc in proptest::prop_oneof![proptest::num::i64::ANY, -1i64 << 40..1i64 << 40],
+            enc in 1u32..=u32::MAX, feed in 1u32..=u32::MAX, gear in 1u32..=u32::MAX, pol in 0u8..2,
+            frac_seed in proptest::num::u64::ANY,
+        ) {
+            let f = FactorGroup { feed: (feed, 1), gear: (gear, 3), polarity: pol << 7, ..FactorGroup::increments(enc) };
+            let u = Units::new(&f).unwrap();
+            let frac = i128::from(frac_seed) % u.position_ratio().den as i128;
+            proptest::prop_assert_eq!(u.inc_frac_to_pos(inc, frac), u.inc_frac_to_pos_wide(inc, frac));
         }
 
         /// A reference taken at `p` reads back `p` exactly, from any

@@ -179,8 +179,14 @@ impl DriveModel {
     /// included.
     pub fn digital_inputs(&self) -> u16 {
         let mut v = self.io.digital;
-        for (k, &to) in self.p.io.wiring.iter().enumerate() {
-            if to != 0 && self.io.outputs & (1 << k) != 0 {
+        // Only the lines set (usually none): the drive asks every period.
+        let mut set = self.io.outputs;
+        while set != 0 {
+            let k = set.trailing_zeros() as usize;
+            set &= set - 1;
+            if let Some(&to) = self.p.io.wiring.get(k)
+                && to != 0
+            {
                 v |= 1 << (to - 1);
             }
         }

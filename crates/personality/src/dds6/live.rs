@@ -13,6 +13,7 @@
 use super::brake::HoldingBrakeControl;
 use super::io;
 use drivebus_cia402::drive::Drive;
+use drivebus_cia402::drive::units::round;
 use drivebus_od::{EntryRef, ObjectDictionary};
 
 /// Handles of the published values (again when objects were inserted).
@@ -117,7 +118,7 @@ impl Live {
         } else {
             lo
         };
-        (f64::from(self.rated_current) * percent / 10_000.0).round().clamp(0.0, 32767.0) as i16
+        round(f64::from(self.rated_current) * percent / 10_000.0).clamp(0.0, 32767.0) as i16
     }
 
     /// Publishes 3210h:01, 3230h:01, 3250h/3251h:01, 3140h:03, 3312h:01
@@ -160,7 +161,7 @@ impl Live {
         }
         let current = self.current(drive, enabled, dt);
         // §6.4.13: the power bus in 0.1 V.
-        let volts = (drive.model().bus_voltage() * 10.0).round().clamp(0.0, 65535.0) as u16;
+        let volts = round(drive.model().bus_voltage() * 10.0).clamp(0.0, 65535.0) as u16;
         let put = |od: &mut ObjectDictionary, r: Option<EntryRef>, b: &[u8]| {
             if let Some(r) = r {
                 od.set_le(r, b);
@@ -172,8 +173,7 @@ impl Live {
         put(od, refs.current, &current.to_le_bytes());
         for (k, r) in refs.analog.into_iter().enumerate() {
             // §6.4.16/17: mV.
-            let mv =
-                (drive.model().analog_input(k as u8 + 1) * 1000.0).round().clamp(-32768.0, 32767.0) as i16;
+            let mv = round(drive.model().analog_input(k as u8 + 1) * 1000.0).clamp(-32768.0, 32767.0) as i16;
             put(od, r, &mv.to_le_bytes());
         }
         put(od, refs.brake, &[self.brake.status()]);

@@ -58,6 +58,7 @@ pub const EDS: &str = include_str!("../../eds/dds6.eds");
 use crate::Profile;
 use crate::build::{Behaviour, Context, EmcyFrame, FilterOutcome, Verdict};
 use drivebus_can::Frame;
+use drivebus_cia402::drive::units::round;
 use drivebus_cia402::drive::{DriveConfig, FactorGroup, Injection, TargetReached};
 use drivebus_cia402::interp::IpMode;
 use drivebus_cia402::model::DriveParams;
@@ -256,7 +257,7 @@ impl Dds6 {
         self.target_velocity = signed(od, h.target_velocity).unwrap_or(0) as i32;
         self.torque_target = signed(od, h.target_torque).unwrap_or(0);
         // The DDS6 has no 6074h (§6.5): the drive's demand itself.
-        self.torque_demand = cx.drive.demand_torque().round() as i64;
+        self.torque_demand = round(cx.drive.demand_torque()) as i64;
         self.velocity_window = unsigned(od, h.velocity_window).unwrap_or(100) as u16;
         let drive_sw = cx.drive.statusword();
         if cx.drive.mode() == 6 && drive_sw & 0x6F == 0x27 && !self.just_enabled {
@@ -707,7 +708,7 @@ impl Behaviour for Dds6 {
             let demand = signed(od, h.velocity_demand).unwrap_or(0) as f64;
             self.shown_velocity += (demand - self.shown_velocity) * dt / (VELOCITY_LAG_S + dt);
             if let Some(r) = h.velocity_actual {
-                od.set_le(r, &(self.shown_velocity.round() as i32).to_le_bytes());
+                od.set_le(r, &(round(self.shown_velocity) as i32).to_le_bytes());
             }
         } else {
             self.shown_velocity = signed(od, h.velocity_actual).unwrap_or(0) as f64;
@@ -718,14 +719,14 @@ impl Behaviour for Dds6 {
             // ramp, F301h one step into the ramp down). The stepper model
             // itself has no torque loop.
             if let Some(a) = h.torque_actual {
-                let v = cx.drive.demand_torque().round().clamp(-32768.0, 32767.0) as i16;
+                let v = round(cx.drive.demand_torque()).clamp(-32768.0, 32767.0) as i16;
                 od.set_le(a, &v.to_le_bytes());
             }
         }
         // §6.5.14: bit 10 in pv, |606Ch − 60FFh| within 606Dh (606Eh = 0).
         let target = signed(od, h.target_velocity).unwrap_or(0) as f64;
         let window = f64::from(unsigned(od, h.velocity_window).unwrap_or(100));
-        self.velocity_reached = (self.shown_velocity.round() - target).abs() <= window;
+        self.velocity_reached = (round(self.shown_velocity) - target).abs() <= window;
         self.supervise_slippage(cx, od, enabled, dt);
         if enabled && cx.drive.mode() == 3 {
             // §6.5.3 pv bit 12 "speed is equal 0".

@@ -68,7 +68,7 @@ impl Latch {
         if self.refs.objects != od.objects().len() {
             self.refs = Self::resolve(od);
         }
-        let r = self.refs.clone();
+        let r = &self.refs;
         fn w(od: &ObjectDictionary, x: Option<EntryRef>) -> u64 {
             x.map_or(0, |x| od.word(x))
         }

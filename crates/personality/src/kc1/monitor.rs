@@ -15,6 +15,7 @@
 use super::status::{Status, Warning};
 use crate::build::Context;
 use drivebus_cia402::drive::Injection;
+use drivebus_cia402::drive::units::round;
 use drivebus_cia402::state_machine::State;
 use drivebus_od::{EntryRef, ObjectDictionary};
 
@@ -66,8 +67,12 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
     r.map_or(0, |r| od.word(r))
 }
 
+/// Stores `v` as an INTEGER32 cut to the entry's size (at most 4 bytes).
+#[inline(always)]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: i64) {
-    if let Some(r) = r {
+    if let Some(r) = r
+        && !od.set_low(r, u64::from(v as i32 as u32), 4)
+    {
         let n = od.bytes(r).len().min(4);
         od.set_raw(r, &(v as i32).to_le_bytes()[..n]);
     }
@@ -114,13 +119,13 @@ impl Monitor {
         if self.refs.objects != od.objects().len() {
             self.refs = Self::resolve(od);
         }
-        let r = self.refs.clone();
+        let r = &self.refs;
         let drive = &*cx.drive;
         let model = drive.model();
         let velocity = i64::from(word(od, r.velocity) as u32 as i32);
         let temp = model.temperature();
         let bus_mv = model.bus_voltage() * 1000.0;
-        put(od, r.pl_err, (drive.demand_position() - drive.position() as f64).round() as i64);
+        put(od, r.pl_err, round(drive.demand_position() - drive.position() as f64) as i64);
         put(od, r.vl_fb, velocity);
         // VL.FBFILTER 3407h:1 (rpm × 1000): the speed through a 10 Hz
         // first-order low-pass.
@@ -130,9 +135,9 @@ impl Monitor {
         let rpm = model.velocity_measured() * 30.0 / core::f64::consts::PI;
         let k = -(-2.0 * core::f64::consts::PI * 10.0 * dt.min(1.0)).exp_m1();
         self.fb_filter.0 += (rpm - self.fb_filter.0) * k;
-        put(od, r.fb_filter, (self.fb_filter.0 * 1000.0).round().clamp(-2e9, 2e9) as i64);
-        put(od, r.vbus, model.bus_voltage().round() as i64);
-        put(od, r.temp, temp.round() as i64);
+        put(od, r.fb_filter, round(self.fb_filter.0 * 1000.0).clamp(-2e9, 2e9) as i64);
+        put(od, r.vbus, round(model.bus_voltage()) as i64);
+        put(od, r.temp, round(temp) as i64);
         put(od, r.il_fb, i64::from(word(od, r.current) as u32 as i32));
         let per_rev = i64::from(drive.config().params.encoder.counts_per_rev).max(1);
         put(od, r.mechpos, drive.position_increments().rem_euclid(per_rev));
@@ -146,12 +151,12 @@ impl Monitor {
             let k = -(-2.0 * core::f64::consts::PI * f64::from(cutoff) * dt.min(1.0)).exp_m1();
             self.ain + (raw - self.ain) * k
         };
-        let mv = (self.ain * 1000.0).round().clamp(-32768.0, 32767.0) as i64;
+        let mv = round(self.ain * 1000.0).clamp(-32768.0, 32767.0) as i64;
         for a in r.ain {
             put(od, a, mv);
         }
         // AOUT.VALUE (mV): the analog output the machine sees.
-        put(od, r.aout, (model.analog_output() * 1000.0).round().clamp(-32768.0, 32767.0) as i64);
+        put(od, r.aout, round(model.analog_output() * 1000.0).clamp(-32768.0, 32767.0) as i64);
         // DRV.HANDWHEEL: the secondary feedback, the machine's master
         // encoder (counts); AKD 60E4h:1 its position in user units, as
         // 6064h through the factors 60E8h/60EDh (gear) and 60E9h/60EEh
@@ -163,11 +168,11 @@ impl Monitor {
             let w = |k: usize| (word(od, r.factors[k]) as u32).max(1) as f64;
             let res = if word(od, r.factors[4]) == 0 { per_rev as f64 } else { w(4) };
             let pos = master as f64 / res * w(1) / w(0) * w(2) / w(3);
-            put(od, r.additional, pos.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i64);
+            put(od, r.additional, round(pos).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i64);
         }
-        put(od, r.ambient, model.params().motor.ambient_temperature.round() as i64);
+        put(od, r.ambient, round(model.params().motor.ambient_temperature) as i64);
         // REGEN.POWER (W): what the braking resistor dissipates.
-        put(od, r.regen, model.regen_power().round().clamp(0.0, 2e9) as i64);
+        put(od, r.regen, round(model.regen_power()).clamp(0.0, 2e9) as i64);
         let state = drive.state_machine().state();
         let faulted = matches!(state, State::Fault | State::FaultReactionActive);
         let over = word(od, r.overspeed) as u32 as i32;

@@ -8,7 +8,8 @@
 use crate::EmcyEntry;
 use crate::build::{Context, EmcyFrame};
 use drivebus_can::Instant;
-use drivebus_cia402::drive::op;
+use drivebus_cia402::drive::units::round;
+use drivebus_cia402::drive::{DriveView, op};
 use drivebus_cia402::state_machine::State;
 use drivebus_node::Request;
 use drivebus_od::{EntryRef, ObjectDictionary};
@@ -136,8 +137,11 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
 }
 
 /// Stores `v` (little-endian, the entry's size) behind a handle.
+#[inline(always)]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: u32) {
-    if let Some(r) = r {
+    if let Some(r) = r
+        && !od.set_low(r, u64::from(v), 4)
+    {
         let n = od.bytes(r).len().min(4);
         od.set_raw(r, &v.to_le_bytes()[..n]);
     }
@@ -162,7 +166,7 @@ pub fn rated_ma(drive: &drivebus_cia402::drive::Drive, icont: u64) -> i64 {
     if icont > 0 {
         return icont.min(u64::from(u32::MAX)) as i64;
     }
-    ((drive.config().params.motor.rated_current * 1000.0).round() as i64).max(1)
+    (round(drive.config().params.motor.rated_current * 1000.0) as i64).max(1)
 }
 
 /// The Kollmorgen EMCY frame of `code` (§6.4.4.2: class bits, category 01h).
@@ -268,13 +272,14 @@ impl Status {
             && view.state == State::OperationEnabled
             && fe.abs() > f64::from(thresh);
         self.set(cx, od, Warning::FollowingError, over);
-        self.publish(cx, od);
+        self.publish(cx, od, view);
     }
 
     /// 1002h, 2002h, 2000h, 2001h, 2011h–2013h and statusword bit 7.
-    fn publish(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary) {
+    /// `view`: the drive's, as [`Status::update`] took it (raising a
+    /// warning does not change it).
+    fn publish(&mut self, cx: &mut Context<'_>, od: &mut ObjectDictionary, view: DriveView) {
         let drive = &*cx.drive;
-        let view = drive.view();
         let mut sw = word(od, self.refs.statusword) as u16;
         if self.warnings[0].is_some() && sw & 0x80 == 0 {
             sw |= 0x80;

@@ -43,6 +43,7 @@ use super::status::{Status, Warning};
 use crate::build::Context;
 use core::f64::consts::PI;
 use drivebus_cia402::drive::Injection;
+use drivebus_cia402::drive::units::round;
 use drivebus_cia402::model::{DriveParams, FoldbackParams};
 use drivebus_cia402::state_machine::State;
 use drivebus_od::{DataType, EntryRef, ObjectDictionary, SdoAbort, le_u64};
@@ -249,8 +250,11 @@ fn word(od: &ObjectDictionary, r: Option<EntryRef>) -> u64 {
     r.map_or(0, |r| od.word(r))
 }
 
+#[inline(always)]
 fn put(od: &mut ObjectDictionary, r: Option<EntryRef>, v: u32) {
-    if let Some(r) = r {
+    if let Some(r) = r
+        && !od.set_low(r, u64::from(v), 4)
+    {
         let n = od.bytes(r).len().min(4);
         od.set_raw(r, &v.to_le_bytes()[..n]);
     }
@@ -278,15 +282,15 @@ impl Foldback {
         let Some(ifold) = model.foldback_current() else { return };
         let continuous = cx.drive.config().params.motor.rated_current;
         let i2t = model.foldback_i2t().unwrap_or(0.0);
-        let load = (i2t / (continuous * continuous) * 100.0).round().clamp(0.0, 1e9) as u32;
-        let ma = (ifold * 1000.0).round() as u32;
+        let load = round(i2t / (continuous * continuous) * 100.0).clamp(0.0, 1e9) as u32;
+        let ma = round(ifold * 1000.0) as u32;
         put(od, self.ifold, ma);
         put(od, self.mifold, ma);
         put(od, self.mi2t, load);
         let rated = cx.drive.config().params.motor.rated_current;
         let (ip, in_) = model.current_limits();
         for (r, i) in self.torque_limits.into_iter().zip([ip, in_]) {
-            put(od, r, (i / rated * 1000.0).round().clamp(0.0, 65535.0) as u32);
+            put(od, r, round(i / rated * 1000.0).clamp(0.0, 65535.0) as u32);
         }
         let warn_ma = word(od, self.warn) as u32 as i32;
         let warn_pct = word(od, self.mi2t_warn) as u32;
