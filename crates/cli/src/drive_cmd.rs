@@ -15,7 +15,7 @@ use drivebus_master::{
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::args::{DriveCmd, Global, MoveArgs};
+use crate::args::{DriveCmd, Global, HomeArgs, MoveArgs};
 use crate::conn::{Conn, need_node};
 use crate::error::{coded, coded_with};
 
@@ -274,22 +274,7 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
                 serde_json::json!({}),
             )
         }
-        DriveCmd::Stop => {
-            let s = d.stop_motion(Duration::from_secs(5)).await.map_err(ex)?;
-            let (code, what) = match s.action {
-                StopAction::NotMoving => ("not_moving", "not in operation enabled: nothing to stop"),
-                StopAction::Halted => ("halted", "halted"),
-                StopAction::QuickStopped => ("quick_stopped", "halt did not stop the axis: quick stop"),
-            };
-            let pos = s.position.map_or_else(String::new, |p| format!(" at position {p}"));
-            done(
-                node,
-                code,
-                format!("{what}{pos}"),
-                s.statusword,
-                serde_json::json!({"position": s.position}),
-            )
-        }
+        DriveCmd::Stop => stop(&d, node, ex).await?,
         DriveCmd::Reset => {
             let reset = d.fault_reset().await.map_err(ex)?;
             let sw = d.statusword().await.map_err(ex)?;
@@ -301,51 +286,95 @@ async fn run_on(g: &Global, conn: &Conn, node: u8, c: &DriveCmd) -> anyhow::Resu
             done(node, code, msg.into(), sw, serde_json::json!({}))
         }
         DriveCmd::Move(a) => move_axis(&d, node, timeout, a, &pb, ex).await?,
-        DriveCmd::Velocity(a) => {
-            require_enabled(&d, node, &ex).await?;
-            let r = guarded(&d, node, timeout, "setting the velocity", None, false, async {
-                d.set_mode(mode::PV).await?;
-                d.velocity(a.value).await?;
-                d.controlword(cw::ENABLE_OPERATION).await
-            })
-            .await;
-            r?;
-            let sw = d.statusword().await.map_err(ex)?;
-            done(
-                node,
-                "target_velocity",
-                format!("target velocity {}", a.value),
-                sw,
-                serde_json::json!({"velocity": a.value}),
-            )
-        }
-        DriveCmd::Torque(a) => {
-            let t = i16::try_from(a.value)
-                .map_err(|_| coded("usage", anyhow!("torque {} is outside -32768..32767", a.value)))?;
-            require_enabled(&d, node, &ex).await?;
-            guarded(&d, node, timeout, "setting the torque", None, false, async {
-                d.set_mode(mode::TQ).await?;
-                d.torque(t).await?;
-                d.controlword(cw::ENABLE_OPERATION).await
-            })
-            .await?;
-            let sw = d.statusword().await.map_err(ex)?;
-            done(node, "target_torque", format!("target torque {t} ‰"), sw, serde_json::json!({"torque": t}))
-        }
-        DriveCmd::Home(a) => {
-            require_enabled(&d, node, &ex).await?;
-            let method = match a.method {
-                Some(m) => m,
-                None => d.read_raw(0x6098, 0).await.map_err(ex)?.first().map_or(0, |b| *b as i8),
-            };
-            let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
-            let r = guarded(&d, node, timeout, "homing", None, true, d.home(method, wait)).await;
-            pb.finish_and_clear();
-            reached(node, &r?)
-        }
+        DriveCmd::Velocity(a) => velocity(&d, node, timeout, a.value, ex).await?,
+        DriveCmd::Torque(a) => torque(&d, node, timeout, a.value, ex).await?,
+        DriveCmd::Home(a) => home(&d, node, timeout, a, &pb, ex).await?,
     };
     pb.finish_and_clear();
     Ok(report)
+}
+
+/// `drive stop`: halt, then quick stop if the axis goes on.
+async fn stop(
+    d: &RemoteDrive,
+    node: u8,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<Printed> {
+    let s = d.stop_motion(Duration::from_secs(5)).await.map_err(ex)?;
+    let (code, what) = match s.action {
+        StopAction::NotMoving => ("not_moving", "not in operation enabled: nothing to stop"),
+        StopAction::Halted => ("halted", "halted"),
+        StopAction::QuickStopped => ("quick_stopped", "halt did not stop the axis: quick stop"),
+    };
+    let pos = s.position.map_or_else(String::new, |p| format!(" at position {p}"));
+    Ok(done(node, code, format!("{what}{pos}"), s.statusword, serde_json::json!({"position": s.position})))
+}
+
+/// `drive velocity V`: profile velocity mode at V.
+async fn velocity(
+    d: &RemoteDrive,
+    node: u8,
+    timeout: Duration,
+    value: i32,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<Printed> {
+    require_enabled(d, node, &ex).await?;
+    let r = guarded(d, node, timeout, "setting the velocity", None, false, async {
+        d.set_mode(mode::PV).await?;
+        d.velocity(value).await?;
+        d.controlword(cw::ENABLE_OPERATION).await
+    })
+    .await;
+    r?;
+    let sw = d.statusword().await.map_err(ex)?;
+    Ok(done(
+        node,
+        "target_velocity",
+        format!("target velocity {}", value),
+        sw,
+        serde_json::json!({"velocity": value}),
+    ))
+}
+
+/// `drive torque T` (per mille of the rated torque): profile torque mode.
+async fn torque(
+    d: &RemoteDrive,
+    node: u8,
+    timeout: Duration,
+    value: i32,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<Printed> {
+    let t = i16::try_from(value)
+        .map_err(|_| coded("usage", anyhow!("torque {} is outside -32768..32767", value)))?;
+    require_enabled(d, node, &ex).await?;
+    guarded(d, node, timeout, "setting the torque", None, false, async {
+        d.set_mode(mode::TQ).await?;
+        d.torque(t).await?;
+        d.controlword(cw::ENABLE_OPERATION).await
+    })
+    .await?;
+    let sw = d.statusword().await.map_err(ex)?;
+    Ok(done(node, "target_torque", format!("target torque {t} ‰"), sw, serde_json::json!({"torque": t})))
+}
+
+/// `drive home [--method M]`: the drive's 6098h unless given.
+async fn home(
+    d: &RemoteDrive,
+    node: u8,
+    timeout: Duration,
+    a: &HomeArgs,
+    pb: &ProgressBar,
+    ex: impl Fn(DriveError) -> anyhow::Error,
+) -> anyhow::Result<Printed> {
+    require_enabled(d, node, &ex).await?;
+    let method = match a.method {
+        Some(m) => m,
+        None => d.read_raw(0x6098, 0).await.map_err(ex)?.first().map_or(0, |b| *b as i8),
+    };
+    let wait = crate::error::seconds("--wait", a.wait)?.max(Duration::from_millis(10));
+    let r = guarded(d, node, timeout, "homing", None, true, d.home(method, wait)).await;
+    pb.finish_and_clear();
+    Ok(reached(node, &r?))
 }
 
 /// Refuses a motion command unless the drive is in operation enabled.
