@@ -8,19 +8,19 @@
 //! address every request needs the token printed at start (`?token=` or
 //! the `X-Drivebus-Token` header), else 401.
 
-mod api;
+pub(crate) mod api;
 mod drive;
-mod error;
+pub(crate) mod error;
 mod frames;
 mod identify;
 mod jog;
 mod lss;
 mod machine;
-mod objects;
+pub(crate) mod objects;
 mod pdo;
 mod sine;
 mod stream;
-mod values;
+pub(crate) mod values;
 
 use std::collections::{HashMap, VecDeque};
 use std::net::SocketAddr;
