@@ -36,6 +36,8 @@ pub struct Served {
     pub start: Instant,
     /// The slaves' dictionaries as taken once.
     pub slots: Slots,
+    /// Required on an address other than loopback (the API writes).
+    pub token: Option<Arc<str>>,
 }
 
 impl Served {
@@ -45,13 +47,25 @@ impl Served {
     }
 }
 
-/// Binds `addr` and serves the state of `host`'s line until the task is
-/// aborted.
-pub async fn start(host: Host, addr: &str) -> anyhow::Result<(tokio::task::JoinHandle<()>, SocketAddr)> {
+/// A running server: its task (the caller aborts it), where it listens
+/// and the token every request needs on an address other than loopback.
+pub struct Started {
+    /// The server task.
+    pub task: tokio::task::JoinHandle<()>,
+    /// Where it listens.
+    pub addr: SocketAddr,
+    /// `?token=` for every request, when required.
+    pub token: Option<Arc<str>>,
+}
+
+/// Binds `addr` and serves `host`'s line until the task is aborted.
+pub async fn start(host: Host, addr: &str) -> anyhow::Result<Started> {
     let listener = tokio::net::TcpListener::bind(addr)
         .await
         .with_context(|| format!("cannot listen on --http {addr}: is the port free? (port 0 picks one)"))?;
     let local = listener.local_addr()?;
+    let token: Option<Arc<str>> = (!local.ip().is_loopback()).then(|| crate::web::new_token().into());
+    let served = Served { host, start: Instant::now(), slots: Slots::default(), token: token.clone() };
     let app = crate::web::page_routes(crate::web::ServedBus::Ethercat)
         .route("/api/ethercat", get(line))
         .route("/api/stream", get(upgrade))
@@ -62,13 +76,23 @@ pub async fn start(host: Host, addr: &str) -> anyhow::Result<(tokio::task::JoinH
         .route("/api/nodes/{n}/sdo/{index}/{sub}", get(http_objects::sdo_get).put(http_objects::sdo_put))
         .route("/api/nodes/{n}/objects", get(http_objects::list))
         .fallback(|| async { ApiError::not_found("no such page or endpoint: see docs/http-api.md") })
-        .with_state(Served { host, start: Instant::now(), slots: Slots::default() });
+        .layer(axum::middleware::from_fn_with_state(served.clone(), auth))
+        .with_state(served);
     let task = tokio::spawn(async move {
         if let Err(e) = axum::serve(listener, app).await {
             tracing::error!(error = %e, "web server stopped");
         }
     });
-    Ok((task, local))
+    Ok(Started { task, addr: local, token })
+}
+
+/// 401 without the token, when one is required.
+async fn auth(
+    State(s): State<Served>,
+    req: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
+    crate::web::check_token(s.token.as_deref(), req, next).await
 }
 
 async fn line(State(s): State<Served>) -> axum::Json<serde_json::Value> {

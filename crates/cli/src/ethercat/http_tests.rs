@@ -39,7 +39,8 @@ async fn put(base: &str, path: &str, body: Value) -> (u16, Value) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn objects_by_position() {
     let host = line();
-    let (task, addr) = super::http::start(host.clone(), "127.0.0.1:0").await.unwrap();
+    let super::http::Started { task, addr, .. } =
+        super::http::start(host.clone(), "127.0.0.1:0").await.unwrap();
     let base = format!("http://{addr}");
     let (st, v) = get(&base, "/api/nodes/1/sdo/6041/0").await;
     assert_eq!(st, 200, "{v}");
@@ -98,7 +99,8 @@ async fn objects_by_position() {
 async fn stream_samples_6064_at_every_cycle() {
     static S: PduFrames = PduFrames::new();
     let host = line();
-    let (task, addr) = super::http::start(host.clone(), "127.0.0.1:0").await.unwrap();
+    let super::http::Started { task, addr, .. } =
+        super::http::start(host.clone(), "127.0.0.1:0").await.unwrap();
     let (mut ws, _) =
         tokio_tungstenite::connect_async(format!("ws://{addr}/api/stream")).await.expect("WebSocket");
     let sub = json!({"subscribe": [{"node": 1, "index": "6064", "period_ms": 5000}]});
@@ -155,4 +157,31 @@ async fn stream_samples_6064_at_every_cycle() {
     let t: Vec<f64> = pdo.iter().map(|v| v["t"].as_f64().unwrap()).collect();
     assert!(t.windows(2).all(|w| w[0] <= w[1]), "in order: {t:?}");
     task.abort();
+}
+
+/// Beyond loopback the API writes only with the token: without it 401 and
+/// nothing written, with it (`?token=` or the header) as on loopback.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn beyond_loopback_the_token_is_required() {
+    let host = line();
+    let s = super::http::start(host.clone(), "0.0.0.0:0").await.unwrap();
+    let token = s.token.clone().expect("a token beyond loopback");
+    let base = format!("http://127.0.0.1:{}", s.addr.port());
+    let (st, v) = put(&base, "/api/nodes/2/sdo/6060/0", json!({"value": 3})).await;
+    assert_eq!(st, 401, "{v}");
+    let (st, _) = get(&base, "/api/ethercat").await;
+    assert_eq!(st, 401);
+    let mode = drivebus_ethercat::objects::read(&host, 2, 0x6060, 0).unwrap();
+    assert_ne!(mode, [3]);
+    let (st, v) = put(&base, &format!("/api/nodes/2/sdo/6060/0?token={token}"), json!({"value": 3})).await;
+    assert_eq!(st, 200, "{v}");
+    assert_eq!(drivebus_ethercat::objects::read(&host, 2, 0x6060, 0).unwrap(), [3]);
+    let r = reqwest::Client::new()
+        .get(format!("{base}/api/ethercat"))
+        .header("X-Drivebus-Token", &*token)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status().as_u16(), 200);
+    s.task.abort();
 }
