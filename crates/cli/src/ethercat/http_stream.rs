@@ -58,11 +58,15 @@ struct Plan {
     mapped: bool,
 }
 
-/// What the frame observer leaves: `(channel, t, bytes)`, and per
-/// channel when its last process-data sample came.
+/// A sample as the frame path leaves it: channel, `t`, the value's
+/// bytes (a PDO entry has at most 64 bits) and how many.
+type RawSample = (usize, f64, [u8; 8], u8);
+
+/// What the frame observer leaves, and per channel when its last
+/// process-data sample came.
 #[derive(Default)]
 struct Raw {
-    samples: Mutex<VecDeque<(usize, f64, [u8; 8], u8)>>,
+    samples: Mutex<VecDeque<RawSample>>,
     last_pdo: Mutex<Vec<Option<Instant>>>,
     ready: Notify,
 }
