@@ -143,6 +143,90 @@ fn csv_layout(pdos: &PdoMaps, dict: &crate::dict::Dict) -> (Vec<String>, HashMap
     (header, at)
 }
 
+/// The pcapng writer of `--pcap FILE` (`-`: stdout), if asked for.
+fn open_capture(
+    g: &Global,
+    a: &DumpArgs,
+    to_stdout: bool,
+) -> anyhow::Result<Option<Capture<Box<dyn Write + Send>>>> {
+    Ok(match &a.pcap {
+        None => None,
+        Some(p) => {
+            let w: Box<dyn Write + Send> = if to_stdout {
+                Box::new(std::io::stdout())
+            } else {
+                Box::new(std::io::BufWriter::new(
+                    std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
+                ))
+            };
+            let iface = match drivebus_transport::BusUrl::parse(&g.bus) {
+                Ok(drivebus_transport::BusUrl::Socketcand { channel, .. }) => channel,
+                Ok(drivebus_transport::BusUrl::SocketCan { interface }) => interface,
+                _ => "can0".to_owned(),
+            };
+            Some(Capture::new(w, &iface, LinkType::SocketCan).context("writing the pcapng header")?)
+        }
+    })
+}
+
+/// The PDO mappings `--pdo` decodes with: the EDS's for `--node` when one
+/// is given, else read from the node (or from every node a scan finds).
+async fn pdo_maps(g: &Global, conn: &Conn) -> PdoMaps {
+    if let (Some(eds), Some(node)) = (&conn.dict.eds, g.node) {
+        eds_maps(eds, node)
+    } else {
+        let nodes: Vec<u8> = match g.node {
+            Some(n) => vec![n],
+            None => {
+                let opts = drivebus_master::ScanOptions { identity: false, ..Default::default() };
+                conn.master.scan_with(opts).await.iter().map(|n| n.node).collect()
+            }
+        };
+        read_maps(conn, &nodes).await
+    }
+}
+
+/// One output line of a frame: candump -l, a CSV row of a PDO, JSON, or
+/// the decoded trace line.
+#[allow(clippy::too_many_arguments)]
+fn format_line(
+    a: &DumpArgs,
+    json: bool,
+    f: &Frame,
+    t: f64,
+    unix: std::time::Duration,
+    mode: TimestampMode,
+    pdo: Option<(u16, &(String, Vec<PdoMapEntry>))>,
+    (header, columns): &(Vec<String>, HashMap<u16, usize>),
+    dict: &crate::dict::Dict,
+    pdos: &PdoMaps,
+) -> String {
+    if a.candump {
+        let us = unix.as_micros() as u64;
+        let mut s = format!("({}.{:06}) can0 ", us / 1_000_000, us % 1_000_000);
+        let _ = candump::write_frame(&mut s, f);
+        s
+    } else if let (true, Some((id, (label, mapping)))) = (a.csv, pdo) {
+        let mut row = vec![String::new(); header.len()];
+        row[0] = format!("{t:.6}");
+        row[1] = format!("{id:03X}");
+        row[2] = label.clone();
+        for (k, v) in pdo_numbers(f, dict, mapping).into_iter().enumerate() {
+            row[columns[&id] + k] = v.unwrap_or_default();
+        }
+        crate::csv::line(&row)
+    } else if json {
+        serde_json::json!({"t": t, "id": f.id().raw(), "extended": f.id().is_extended(), "rtr": f.is_rtr(),
+            "data": crate::sdo_cmd::hex(f.data()), "decoded": decode(f, dict, pdos)})
+        .to_string()
+    } else {
+        let mut raw = String::new();
+        let _ = candump::write_frame(&mut raw, f);
+        let t = if mode == TimestampMode::Absolute { format!("{t:>17.6}") } else { format!("{t:>10.6}") };
+        format!("{t}  {raw:<24} {}", decode(f, dict, pdos))
+    }
+}
+
 /// Runs the trace until `--count`, `--seconds`, SIGINT/SIGTERM or the bus closes.
 pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
     let ranges = a.ids.iter().map(|s| id_range(s)).collect::<anyhow::Result<Vec<_>>>()?;
@@ -160,24 +244,7 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
             anyhow!("--pcap - writes the capture to stdout: no --candump, --csv or --json with it")
         ));
     }
-    let mut capture = match &a.pcap {
-        None => None,
-        Some(p) => {
-            let w: Box<dyn Write + Send> = if to_stdout {
-                Box::new(std::io::stdout())
-            } else {
-                Box::new(std::io::BufWriter::new(
-                    std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-                ))
-            };
-            let iface = match drivebus_transport::BusUrl::parse(&g.bus) {
-                Ok(drivebus_transport::BusUrl::Socketcand { channel, .. }) => channel,
-                Ok(drivebus_transport::BusUrl::SocketCan { interface }) => interface,
-                _ => "can0".to_owned(),
-            };
-            Some(Capture::new(w, &iface, LinkType::SocketCan).context("writing the pcapng header")?)
-        }
-    };
+    let mut capture = open_capture(g, a, to_stdout)?;
     let mut stamps = Stamps {
         mode: a.timestamp.unwrap_or(if a.candump { TimestampMode::Absolute } else { TimestampMode::Zero }),
         first: None,
@@ -189,21 +256,9 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
             "dump: this transport (socketcand) carries no remote (RTR) frames: node-guarding requests and other RTR frames on the bus are not shown"
         );
     }
-    let pdos = if !a.pdo {
-        PdoMaps::new()
-    } else if let (Some(eds), Some(node)) = (&conn.dict.eds, g.node) {
-        eds_maps(eds, node)
-    } else {
-        let nodes: Vec<u8> = match g.node {
-            Some(n) => vec![n],
-            None => {
-                let opts = drivebus_master::ScanOptions { identity: false, ..Default::default() };
-                conn.master.scan_with(opts).await.iter().map(|n| n.node).collect()
-            }
-        };
-        read_maps(&conn, &nodes).await
-    };
-    let (header, columns) = csv_layout(&pdos, &conn.dict);
+    let pdos = if a.pdo { pdo_maps(g, &conn).await } else { PdoMaps::new() };
+    let layout = csv_layout(&pdos, &conn.dict);
+    let (header, _) = &layout;
     if a.csv {
         if pdos.is_empty() {
             bail!(coded(
@@ -211,7 +266,7 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
                 anyhow!("--csv: no valid PDO mapping found to make columns of (are the nodes there?)")
             ));
         }
-        outln!("{}", crate::csv::line(&header));
+        outln!("{}", crate::csv::line(header));
     }
     // From here on: not the answers to the mapping reads above.
     let mut frames = conn.master.subscribe_frames();
@@ -268,34 +323,7 @@ pub async fn run(g: &Global, a: &DumpArgs) -> anyhow::Result<()> {
                 continue;
             }
         }
-        let line = if a.candump {
-            let us = unix.as_micros() as u64;
-            let mut s = format!("({}.{:06}) can0 ", us / 1_000_000, us % 1_000_000);
-            let _ = candump::write_frame(&mut s, &f);
-            s
-        } else if let (true, Some((id, (label, mapping)))) = (a.csv, pdo) {
-            let mut row = vec![String::new(); header.len()];
-            row[0] = format!("{t:.6}");
-            row[1] = format!("{id:03X}");
-            row[2] = label.clone();
-            for (k, v) in pdo_numbers(&f, &conn.dict, mapping).into_iter().enumerate() {
-                row[columns[&id] + k] = v.unwrap_or_default();
-            }
-            crate::csv::line(&row)
-        } else if g.json {
-            serde_json::json!({"t": t, "id": f.id().raw(), "extended": f.id().is_extended(), "rtr": f.is_rtr(),
-                "data": crate::sdo_cmd::hex(f.data()), "decoded": decode(&f, &conn.dict, &pdos)})
-            .to_string()
-        } else {
-            let mut raw = String::new();
-            let _ = candump::write_frame(&mut raw, &f);
-            let t = if stamps.mode == TimestampMode::Absolute {
-                format!("{t:>17.6}")
-            } else {
-                format!("{t:>10.6}")
-            };
-            format!("{t}  {raw:<24} {}", decode(&f, &conn.dict, &pdos))
-        };
+        let line = format_line(a, g.json, &f, t, unix, stamps.mode, pdo, &layout, &conn.dict, &pdos);
         // A closed pipe (`| head`) ends the trace quietly.
         if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
             break;

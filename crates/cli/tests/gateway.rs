@@ -192,3 +192,44 @@ fn the_real_cocomm_if_available() {
     let out = run(&["4 read 0x2FFF 0 u8"]);
     assert!(!out.status.success(), "an SDO abort is a failure for cocomm");
 }
+
+/// `lss_allnodes TIMEOUT FIRST STORE`, as cocomm sends it: every
+/// unconfigured slave gets the next node-ID and answers SDO under it.
+#[test]
+fn lss_allnodes_numbers_every_unconfigured_slave() {
+    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    let (server, addr) =
+        rt.block_on(drivebus_transport::socketcand::SocketcandServer::bind("127.0.0.1:0", "can0")).unwrap();
+    let unconfigured = |serial| {
+        let mut cfg = drivebus_node::NodeConfig::new(0xFF);
+        cfg.lss = true;
+        cfg.identity = drivebus_node::Identity { vendor_id: 0xABC, product_code: 0x77, revision: 3, serial };
+        drivebus_node::NodeDevice::new(drivebus_node::Node::new(cfg), drivebus_od::NoHooks)
+    };
+    let _hosts = rt.block_on(async {
+        drivebus_transport::host::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub())
+    });
+    let gw = gateway(&format!("socketcand://{addr}/can0"), None);
+    let mut s = TcpStream::connect(("127.0.0.1", gw.port)).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+    // 25 ms per fastscan step: about 130 steps per slave found.
+    let got = ask(&mut s, "[1] lss_allnodes 25 20 0");
+    let slave = |serial: u32| format!("0x00000ABC 0x00000077 0x00000003 0x{serial:08X}");
+    let assigned: Vec<&str> = got.lines().filter(|l| l.starts_with("# Node-ID")).collect();
+    assert_eq!(assigned.len(), 2, "{got:?}");
+    assert!(assigned.iter().any(|l| l.starts_with("# Node-ID 20 assigned to: ")), "{got:?}");
+    assert!(assigned.iter().any(|l| l.starts_with("# Node-ID 21 assigned to: ")), "{got:?}");
+    assert!(assigned.iter().any(|l| l.ends_with(&slave(0x10))), "{got:?}");
+    assert!(assigned.iter().any(|l| l.ends_with(&slave(0x20))), "{got:?}");
+    assert!(got.ends_with("# Found 2 nodes, search finished.\n[1] OK\r\n"), "{got:?}");
+    // Each answers under the node-ID the gateway printed for its serial.
+    for l in assigned {
+        let node = &l["# Node-ID ".len()..l.find(" assigned").unwrap()];
+        let serial = l.rsplit(' ').next().unwrap();
+        let answer = ask(&mut s, &format!("[2] {node} read 0x1018 4 x32"));
+        assert_eq!(answer, format!("[2] {serial}\r\n"), "node {node}");
+    }
+    // Nobody is left unconfigured.
+    assert_eq!(ask(&mut s, "[3] lss_allnodes 25 30 0"), "# Found 0 nodes, search finished.\n[3] OK\r\n");
+    drop(server);
+}

@@ -201,25 +201,7 @@ pub fn parse(text: &str) -> Result<ParsedEds, EdsError> {
         None => r.warn(0, "[DeviceInfo] missing".into()),
     }
     if let Some(s) = ini.section("DummyUsage") {
-        for e in &s.entries {
-            let index = e
-                .key
-                .split_at_checked(5)
-                .filter(|(p, t)| p.eq_ignore_ascii_case("dummy") && t.len() == 4)
-                .filter(|(_, t)| t.chars().all(|c| c.is_ascii_hexdigit()))
-                .and_then(|(_, t)| u16::from_str_radix(t, 16).ok());
-            match (index, parse_int(e.value)) {
-                (Some(i), Some(v)) => {
-                    eds.dummy_usage.insert(i, v != 0);
-                }
-                (Some(_), None) => {
-                    r.err(e.line, format!("[DummyUsage] {}={:?} is not a valid number", e.key, e.value))
-                }
-                (None, _) => {
-                    r.warn(e.line, format!("[DummyUsage] key {:?} is not DummyXXXX; ignored", e.key))
-                }
-            }
-        }
+        eds.dummy_usage = dummy_usage(&mut r, s);
     }
     if let Some(s) = ini.section("Comments") {
         let n: usize = r.num(s, "Lines").unwrap_or(0);
@@ -228,33 +210,7 @@ pub fn parse(text: &str) -> Result<ParsedEds, EdsError> {
     eds.mandatory = r.list(&ini, "MandatoryObjects");
     eds.optional = r.list(&ini, "OptionalObjects");
     eds.manufacturer = r.list(&ini, "ManufacturerObjects");
-    let comm = ini.section("DeviceComissioning").or_else(|| {
-        let s = ini.section("DeviceCommissioning");
-        if let Some(s) = s {
-            r.warn(
-                s.line,
-                "[DeviceCommissioning] spelled with two m; CiA 306 writes DeviceComissioning".into(),
-            );
-        }
-        s
-    });
-    if let Some(s) = comm {
-        eds.commissioning = Some(Commissioning {
-            node_id: r.num(s, "NodeID").unwrap_or(0),
-            node_name: Reader::text(s, "NodeName"),
-            baudrate: r.num(s, "Baudrate").unwrap_or(0),
-            net_number: r.num(s, "NetNumber").unwrap_or(0),
-            network_name: Reader::text(s, "NetworkName"),
-            canopen_manager: r.flag(s, "CANopenManager"),
-            lss_serial_number: r.num(s, "LSS_SerialNumber"),
-            other: s
-                .entries
-                .iter()
-                .filter(|e| !COMMISSIONING_KEYS.contains(&e.key.to_ascii_lowercase().as_str()))
-                .map(|e| (e.key.to_string(), e.value.to_string()))
-                .collect(),
-        });
-    }
+    eds.commissioning = commissioning(&mut r, &ini);
 
     // Objects first, then their sub-objects and compact name/value lists.
     let known = [
@@ -283,11 +239,86 @@ pub fn parse(text: &str) -> Result<ParsedEds, EdsError> {
             ));
         }
     }
+    sub_sections(&mut r, &ini, &mut eds.objects);
+    for o in eds.objects.values_mut() {
+        finish_object(&mut r, o);
+    }
+    for &i in eds.mandatory.iter().chain(&eds.optional).chain(&eds.manufacturer) {
+        if !eds.objects.contains_key(&i) {
+            r.err(0, format!("object {i:04X} is listed but has no section"));
+        }
+    }
+    if r.errors.is_empty() {
+        Ok(ParsedEds { eds, warnings: r.warnings })
+    } else {
+        // In file order; the consequences found at the end (no line: an
+        // object listed without its section) after the causes with lines.
+        r.errors.sort_by_key(|d| (d.line == 0, d.line));
+        Err(EdsError { errors: r.errors })
+    }
+}
+
+/// `[DummyUsage]`: which dummy data types (`DummyXXXX=1`) the device can map.
+fn dummy_usage(r: &mut Reader, s: &Section) -> BTreeMap<u16, bool> {
+    let mut out = BTreeMap::new();
+    for e in &s.entries {
+        let index = e
+            .key
+            .split_at_checked(5)
+            .filter(|(p, t)| p.eq_ignore_ascii_case("dummy") && t.len() == 4)
+            .filter(|(_, t)| t.chars().all(|c| c.is_ascii_hexdigit()))
+            .and_then(|(_, t)| u16::from_str_radix(t, 16).ok());
+        match (index, parse_int(e.value)) {
+            (Some(i), Some(v)) => {
+                out.insert(i, v != 0);
+            }
+            (Some(_), None) => {
+                r.err(e.line, format!("[DummyUsage] {}={:?} is not a valid number", e.key, e.value))
+            }
+            (None, _) => r.warn(e.line, format!("[DummyUsage] key {:?} is not DummyXXXX; ignored", e.key)),
+        }
+    }
+    out
+}
+
+/// `[DeviceComissioning]` (a DCF's; CiA 306's spelling, the two-m one
+/// accepted with a warning).
+fn commissioning(r: &mut Reader, ini: &Ini) -> Option<Commissioning> {
+    let comm = ini.section("DeviceComissioning").or_else(|| {
+        let s = ini.section("DeviceCommissioning");
+        if let Some(s) = s {
+            r.warn(
+                s.line,
+                "[DeviceCommissioning] spelled with two m; CiA 306 writes DeviceComissioning".into(),
+            );
+        }
+        s
+    });
+    comm.map(|s| Commissioning {
+        node_id: r.num(s, "NodeID").unwrap_or(0),
+        node_name: Reader::text(s, "NodeName"),
+        baudrate: r.num(s, "Baudrate").unwrap_or(0),
+        net_number: r.num(s, "NetNumber").unwrap_or(0),
+        network_name: Reader::text(s, "NetworkName"),
+        canopen_manager: r.flag(s, "CANopenManager"),
+        lss_serial_number: r.num(s, "LSS_SerialNumber"),
+        other: s
+            .entries
+            .iter()
+            .filter(|e| !COMMISSIONING_KEYS.contains(&e.key.to_ascii_lowercase().as_str()))
+            .map(|e| (e.key.to_string(), e.value.to_string()))
+            .collect(),
+    })
+}
+
+/// The sections that add to an object: `[XXXXsubN]` and the compact
+/// `[XXXXName]`/`[XXXXValue]` lists.
+fn sub_sections(r: &mut Reader, ini: &Ini, objects: &mut BTreeMap<u16, EdsObject>) {
     for sec in &ini.sections {
         match classify(sec.name) {
             Kind::Sub(index, sub) => {
                 let Some(v) = r.var(sec, "") else { continue };
-                match eds.objects.get_mut(&index) {
+                match objects.get_mut(&index) {
                     Some(o) if o.compact_sub_obj.is_some() => r.warn(
                         sec.line,
                         format!("[{}] ignored: object {index:04X} uses CompactSubObj", sec.name),
@@ -316,7 +347,7 @@ pub fn parse(text: &str) -> Result<ParsedEds, EdsError> {
                 if map.len() != n {
                     r.warn(sec.line, format!("[{}] NrOfEntries={n} but {} entries", sec.name, map.len()));
                 }
-                match eds.objects.get_mut(&index) {
+                match objects.get_mut(&index) {
                     Some(o) if names => o.compact_names = map,
                     Some(o) => o.compact_values = map,
                     None => r.err(sec.line, format!("[{}] has no object section [{index:04X}]", sec.name)),
@@ -324,22 +355,6 @@ pub fn parse(text: &str) -> Result<ParsedEds, EdsError> {
             }
             _ => {}
         }
-    }
-    for o in eds.objects.values_mut() {
-        finish_object(&mut r, o);
-    }
-    for &i in eds.mandatory.iter().chain(&eds.optional).chain(&eds.manufacturer) {
-        if !eds.objects.contains_key(&i) {
-            r.err(0, format!("object {i:04X} is listed but has no section"));
-        }
-    }
-    if r.errors.is_empty() {
-        Ok(ParsedEds { eds, warnings: r.warnings })
-    } else {
-        // In file order; the consequences found at the end (no line: an
-        // object listed without its section) after the causes with lines.
-        r.errors.sort_by_key(|d| (d.line == 0, d.line));
-        Err(EdsError { errors: r.errors })
     }
 }
 

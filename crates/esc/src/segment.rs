@@ -360,6 +360,18 @@ impl<D: SegmentDevice> Segment<D> {
     /// the master sends it), then lets every reached device's firmware run.
     /// Non-EtherCAT frames come back untouched.
     pub fn process_frame(&mut self, frame: &mut [u8], now: Instant) -> SegmentReport {
+        let mut report = self.pass_frame(frame, now);
+        report.next_deadline = self.run_touched();
+        report
+    }
+
+    /// The frame's pass through the ESCs alone, as [`Segment::process_frame`]
+    /// without the firmware: the reply is complete when this returns, so a
+    /// transport sends it and then calls [`Segment::run_touched`] (as a real
+    /// slave's firmware reacts to a frame after its ESC forwarded it). The
+    /// report's `next_deadline` is `None` until then.
+    pub fn pass_frame(&mut self, frame: &mut [u8], now: Instant) -> SegmentReport {
+        self.touched.clear();
         let mut report = SegmentReport { returns_at: now, ..SegmentReport::default() };
         let Some(off) = frame::ethercat_offset(frame) else {
             report.frame.ignored = true;
@@ -436,15 +448,21 @@ impl<D: SegmentDevice> Segment<D> {
         if !report.frame.ignored {
             frame::mark_reply_source(frame);
         }
-        // Firmware runs where the frame did something; the others' state
-        // did not change, and their deadlines stand (a deadline is a promise).
+        report
+    }
+
+    /// Runs the firmware of the devices the last [`Segment::pass_frame`]
+    /// touched, each at the instant the frame reached it; returns their
+    /// earliest deadline. The others' state did not change, and their
+    /// deadlines stand (a deadline is a promise). A second call does nothing.
+    pub fn run_touched(&mut self) -> Option<Instant> {
         let mut next = None;
-        for i in (0..reached).filter(|&i| self.touched[i]) {
+        for i in (0..self.touched.len()).filter(|&i| self.touched[i]) {
             let at = self.scratch[i].at;
             next = earliest(next, self.devices[i].poll(at));
         }
-        report.next_deadline = next;
-        report
+        self.touched.clear();
+        next
     }
 
     /// Runs every device's firmware at `now`; returns the earliest deadline.

@@ -15,6 +15,9 @@
 //!   the SM1 (mailbox in) status, as SOEM and TwinCAT poll mailboxes.
 //! * `ipos64/drives_only`: the clock moved by 1 ms, no frame: the drives'
 //!   own share of a cycle.
+//! * `ipos{1,16,64}/to_reply`: the same cycle, timing only each frame's way
+//!   to its reply (what a master waits for: `Host::process_frame_then`
+//!   calls back before the drives' firmware reacts to the frame).
 //! * `ipos{1,64}/fprd`, `/lrw`: one datagram through the line at a fixed
 //!   instant (FPRD of the last slave's AL status; LRW of the whole image).
 //!
@@ -35,6 +38,7 @@ use ethercrab::PduStorage;
 use replay::{Storage, cycle, line_in_op, mailbox_polls};
 
 static STORAGE_1: Storage = PduStorage::new();
+static STORAGE_16: Storage = PduStorage::new();
 static STORAGE_64: Storage = PduStorage::new();
 
 fn one_datagram(cmd: DatagramCommand, addr: u32, len: usize) -> Vec<u8> {
@@ -53,6 +57,7 @@ fn bench_line(c: &mut Criterion, n: usize, storage: &'static Storage) {
     assert_eq!(cycle(&host, &frames, &mut buf), 3 * n as u16, "replayed LRW working counter");
     let mut g = c.benchmark_group(format!("ipos{n}"));
     g.bench_function("cycle", |b| b.iter(|| black_box(cycle(&host, &frames, &mut buf))));
+    g.bench_function("to_reply", |b| b.iter_custom(|iters| cycles_to_reply(&host, &frames, &mut buf, iters)));
     if n > 1 {
         let mut with_polls = frames.clone();
         with_polls.push(mailbox_polls(n));
@@ -79,8 +84,36 @@ fn bench_line(c: &mut Criterion, n: usize, storage: &'static Storage) {
     assert_eq!(cycle(&host, &frames, &mut buf), 3 * n as u16, "LRW working counter after the runs");
 }
 
+/// `iters` cycles as [`cycle`] runs them; the time from each frame's
+/// arrival to its reply, summed.
+fn cycles_to_reply(
+    host: &drivebus_ethercat::Host,
+    frames: &[Vec<u8>],
+    buf: &mut [u8],
+    iters: u64,
+) -> std::time::Duration {
+    let mut total = std::time::Duration::ZERO;
+    for _ in 0..iters {
+        let start = host.clock().now();
+        for f in frames {
+            let fb = &mut buf[..f.len()];
+            fb.copy_from_slice(f);
+            let arrival = std::time::Instant::now();
+            let mut replied = arrival;
+            host.process_frame_then(fb, |reply, _| {
+                black_box(reply);
+                replied = std::time::Instant::now();
+            });
+            total += replied - arrival;
+        }
+        host.advance((start + Duration::from_millis(1)).saturating_duration_since(host.clock().now()));
+    }
+    total
+}
+
 fn benches(c: &mut Criterion) {
     bench_line(c, 1, &STORAGE_1);
+    bench_line(c, 16, &STORAGE_16);
     bench_line(c, 64, &STORAGE_64);
 }
 

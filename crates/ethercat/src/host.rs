@@ -18,8 +18,8 @@ pub type BoxDevice = Box<dyn SegmentDevice + Send>;
 
 /// Called after every frame a host processed, under its lock, with the
 /// segment (a local tool sampling what the frame's process data did,
-/// `crate::objects::Watch`). It runs before the reply goes back: it must
-/// be short.
+/// `crate::objects::Watch`). It runs after the reply went back and the
+/// slaves' firmware reacted, before the next frame: it must be short.
 pub type FrameObserver = Box<dyn FnMut(&mut Segment<BoxDevice>) + Send>;
 
 /// Names an observer of [`Host::observe_frames`] to remove it.
@@ -161,6 +161,15 @@ impl Host {
     /// the reply is back at the master; a transport sends nothing back
     /// when [`SegmentReport::lost`] says a fault of the line took it.
     pub fn process_frame(&self, frame: &mut [u8]) -> SegmentReport {
+        self.process_frame_then(frame, |_, _| ())
+    }
+
+    /// As [`Host::process_frame`], calling `reply(frame, lost)` as soon as
+    /// the ESCs have passed the frame and before the slaves' firmware
+    /// reacts to it: a transport sends the reply from there, so the
+    /// firmware's work is not in the master's round trip (a real slave's
+    /// ESC forwards the frame while its firmware is still asleep).
+    pub fn process_frame_then(&self, frame: &mut [u8], reply: impl FnOnce(&[u8], bool)) -> SegmentReport {
         let mut g = self.lock();
         let now = self.clock.now();
         g.catch_up(now);
@@ -168,14 +177,16 @@ impl Host {
         if let Some(c) = g.capture.as_mut() {
             let _ = c.write(frame, unix, Direction::Inbound);
         }
-        let mut r = g.segment.process_frame(frame, now);
+        let mut r = g.segment.pass_frame(frame, now);
+        // No slave reached (the first one has no power): the master's port
+        // has no link, so nothing comes back.
+        r.lost |= r.reached == 0 && !r.frame.ignored;
+        reply(frame, r.lost);
+        r.next_deadline = g.segment.run_touched();
         let Inner { observers, segment, .. } = &mut *g;
         for (_, o) in observers.iter_mut() {
             o(segment);
         }
-        // No slave reached (the first one has no power): the master's port
-        // has no link, so nothing comes back.
-        r.lost |= r.reached == 0 && !r.frame.ignored;
         g.stats.frames += 1;
         if r.frame.ignored || r.frame.malformed {
             g.stats.bad_frames += 1;
@@ -375,5 +386,59 @@ mod tests {
             })
             .collect();
         assert_eq!(delta, [(1, 2, 1), (1, 2, 2)]);
+    }
+
+    /// A device that counts its firmware runs.
+    struct Counted(BoxDevice, Arc<std::sync::atomic::AtomicUsize>);
+
+    impl SegmentDevice for Counted {
+        fn esc(&self) -> &drivebus_esc::Esc {
+            self.0.esc()
+        }
+        fn esc_mut(&mut self) -> &mut drivebus_esc::Esc {
+            self.0.esc_mut()
+        }
+        fn poll(&mut self, now: Instant) -> Option<Instant> {
+            self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.0.poll(now)
+        }
+    }
+
+    /// The server sends the reply before the slaves' firmware reacts to
+    /// the frame (it is not in the master's round trip), and the firmware
+    /// of a slave the frame touched still runs before the call returns.
+    #[test]
+    fn the_reply_leaves_before_the_firmware_runs() {
+        use drivebus_esc::frame::{DatagramCommand, FrameBuilder, station_address};
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let runs = Arc::new(AtomicUsize::new(0));
+        let members = vec![Member::Drive(crate::drive::profile("generic").unwrap())];
+        let devices: Vec<BoxDevice> = described::devices(&members, None)
+            .unwrap()
+            .into_iter()
+            .map(|d| Box::new(Counted(d, runs.clone())) as BoxDevice)
+            .collect();
+        let host = Host::line(devices, Clock::simulated(Instant::ZERO));
+        let mut buf = [0u8; 100];
+        let mut b = FrameBuilder::new(&mut buf, [0x10; 6]);
+        b.push(DatagramCommand::Brd, 1, station_address(0, 0x0130), &[0, 0]).unwrap();
+        let n = b.finish();
+        let before = runs.load(Ordering::Relaxed);
+        let mut at_reply = None;
+        let r = host.process_frame_then(&mut buf[..n], |reply, lost| {
+            assert!(!lost && reply.len() == n);
+            at_reply = Some(runs.load(Ordering::Relaxed));
+        });
+        assert_eq!(at_reply, Some(before), "no firmware ran before the reply");
+        assert_eq!(
+            runs.load(Ordering::Relaxed),
+            before + 1,
+            "the touched slave's firmware ran once after it"
+        );
+        assert!(!r.lost && r.reached == 1);
+        // The old order (firmware first) is still what `process_frame` gives
+        // the callers that need no early reply: it runs the firmware too.
+        host.process_frame(&mut buf[..n]);
+        assert_eq!(runs.load(Ordering::Relaxed), before + 2);
     }
 }

@@ -168,11 +168,15 @@ pub fn serve_socket(sock: &RawSocket, host: &Host, stop: &AtomicBool) -> io::Res
             continue;
         }
         stats.frames += 1;
-        if host.process_frame(&mut buf[..n]).lost {
-            stats.lost += 1;
-            continue;
-        }
-        sock.send(&buf[..n])?;
+        // The reply leaves before the slaves' firmware reacts to the frame.
+        let mut sent = Ok(());
+        let r = host.process_frame_then(&mut buf[..n], |reply, lost| {
+            if !lost {
+                sent = sock.send(reply);
+            }
+        });
+        stats.lost += u64::from(r.lost);
+        sent?;
     }
     Ok(stats)
 }

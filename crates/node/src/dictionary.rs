@@ -54,51 +54,77 @@ pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
         drivebus_nmt::install_error_behaviour(&mut od, cfg.error_classes);
     }
     if cfg.store_restore {
-        for (index, name) in [(0x1010, "Store parameters"), (0x1011, "Restore default parameters")] {
-            let mut o = Object::array(index, name, DataType::Unsigned32, Access::Rw, 4, Value::U32(1));
-            for (sub, n) in [
-                (1, "all parameters"),
-                (2, "communication parameters"),
-                (3, "application parameters"),
-                (4, "manufacturer parameters"),
-            ] {
-                // Reads give the capability (bit 0: on command), writes take a signature.
-                o = o.with_sub(
-                    SubObject::new(
-                        sub,
-                        alloc::format!("{name}: {n}"),
-                        DataType::Unsigned32,
-                        Access::Rw,
-                        Value::U32(1),
-                    )
-                    .hooked()
-                    .persist(drivebus_od::PersistGroup::Volatile),
-                );
-            }
-            od.insert(o);
-        }
+        install_store_restore(&mut od);
     }
     if cfg.time {
         TimeService::install(&mut od);
     }
     #[cfg(feature = "std")]
     if cfg.eds_object {
-        // CiA 301 §7.5.2.21: the device description, read like any DOMAIN.
-        od.insert(
-            Object::with_code(0x1021, drivebus_od::ObjectCode::Domain, "Store EDS").with_sub(
-                SubObject::new(
-                    0,
-                    "Store EDS",
-                    DataType::Domain,
-                    Access::Ro,
-                    Value::Bytes(alloc::vec::Vec::new()),
-                )
-                .hooked(),
-            ),
-        );
-        od.insert(Object::var(0x1022, "Storage format", DataType::Unsigned8, Access::Ro, Value::U8(0)));
+        install_eds_objects(&mut od);
     }
-    let ident = cfg.identity;
+    install_identity(&mut od, &cfg.identity);
+    if cfg.emcy_consumers > 0 {
+        EmcyConsumer::install(&mut od, cfg.emcy_consumers);
+    }
+    drivebus_sdo::server::install_server_params(&mut od, id, 1 + cfg.extra_sdo_servers);
+    if !cfg.sdo_server_param {
+        od.remove(drivebus_sdo::server::FIRST_PARAM_INDEX);
+    }
+    let mut pdo = cfg.pdo;
+    pdo.node_id = id;
+    drivebus_pdo::install(&mut od, &pdo);
+    od
+}
+
+/// 1010h and 1011h: store and restore on command, for every area.
+fn install_store_restore(od: &mut ObjectDictionary) {
+    for (index, name) in [(0x1010, "Store parameters"), (0x1011, "Restore default parameters")] {
+        let mut o = Object::array(index, name, DataType::Unsigned32, Access::Rw, 4, Value::U32(1));
+        for (sub, n) in [
+            (1, "all parameters"),
+            (2, "communication parameters"),
+            (3, "application parameters"),
+            (4, "manufacturer parameters"),
+        ] {
+            // Reads give the capability (bit 0: on command), writes take a signature.
+            o = o.with_sub(
+                SubObject::new(
+                    sub,
+                    alloc::format!("{name}: {n}"),
+                    DataType::Unsigned32,
+                    Access::Rw,
+                    Value::U32(1),
+                )
+                .hooked()
+                .persist(drivebus_od::PersistGroup::Volatile),
+            );
+        }
+        od.insert(o);
+    }
+}
+
+/// 1021h and 1022h: the device description, read like any DOMAIN
+/// (CiA 301 §7.5.2.21).
+#[cfg(feature = "std")]
+fn install_eds_objects(od: &mut ObjectDictionary) {
+    od.insert(
+        Object::with_code(0x1021, drivebus_od::ObjectCode::Domain, "Store EDS").with_sub(
+            SubObject::new(
+                0,
+                "Store EDS",
+                DataType::Domain,
+                Access::Ro,
+                Value::Bytes(alloc::vec::Vec::new()),
+            )
+            .hooked(),
+        ),
+    );
+    od.insert(Object::var(0x1022, "Storage format", DataType::Unsigned8, Access::Ro, Value::U8(0)));
+}
+
+/// 1018h from the node's identity.
+fn install_identity(od: &mut ObjectDictionary, ident: &drivebus_can::Identity) {
     od.insert(
         Object::record(0x1018, "Identity object")
             .with_sub(SubObject::new(
@@ -130,17 +156,6 @@ pub fn build_dictionary(cfg: &NodeConfig, node_id: u8) -> ObjectDictionary {
                 Value::U32(ident.serial),
             )),
     );
-    if cfg.emcy_consumers > 0 {
-        EmcyConsumer::install(&mut od, cfg.emcy_consumers);
-    }
-    drivebus_sdo::server::install_server_params(&mut od, id, 1 + cfg.extra_sdo_servers);
-    if !cfg.sdo_server_param {
-        od.remove(drivebus_sdo::server::FIRST_PARAM_INDEX);
-    }
-    let mut pdo = cfg.pdo;
-    pdo.node_id = id;
-    drivebus_pdo::install(&mut od, &pdo);
-    od
 }
 
 /// Bring a dictionary from elsewhere (an EDS) up to what the services

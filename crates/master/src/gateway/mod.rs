@@ -231,43 +231,9 @@ impl Session {
     async fn execute(&mut self, seq: u32, r: ServiceRequest) -> String {
         match r {
             ServiceRequest::Empty => "\r\n".to_owned(),
-            ServiceRequest::Read { node, index, sub, ty } => {
-                let node = match self.target(node) {
-                    Ok(n) if n > 0 => n,
-                    Ok(_) => return error(seq, code::UNSUPPORTED_NODE),
-                    Err(c) => return error(seq, c),
-                };
-                let proto = if self.block { Protocol::Block } else { Protocol::Auto };
-                let sdo =
-                    self.master.sdo(node).timeout(self.sdo_timeout).retries(self.retries).protocol(proto);
-                match sdo.upload(index, sub).await {
-                    Ok(d) => match show(ty, &d) {
-                        Some(v) => value(seq, &v),
-                        // The data do not fit the type asked for (CiA 301 0607 0010h).
-                        None => sdo_error(
-                            seq,
-                            &SdoError::Abort { code: crate::SdoAbort::TYPE_MISMATCH, text: None },
-                        ),
-                    },
-                    Err(e) => sdo_error(seq, &e),
-                }
-            }
-            ServiceRequest::Write { node, index, sub, ty, value: v } => {
-                let node = match self.target(node) {
-                    Ok(n) if n > 0 => n,
-                    Ok(_) => return error(seq, code::UNSUPPORTED_NODE),
-                    Err(c) => return error(seq, c),
-                };
-                let Some(data) = encode(ty, &v).filter(|d| !d.is_empty()) else {
-                    return error(seq, code::SYNTAX);
-                };
-                let proto = if self.block && data.len() > 4 { Protocol::Block } else { Protocol::Auto };
-                let sdo =
-                    self.master.sdo(node).timeout(self.sdo_timeout).retries(self.retries).protocol(proto);
-                match sdo.download(index, sub, &data).await {
-                    Ok(()) => ok(seq),
-                    Err(e) => sdo_error(seq, &e),
-                }
+            ServiceRequest::Read { node, index, sub, ty } => self.sdo_read(seq, node, index, sub, ty).await,
+            ServiceRequest::Write { node, index, sub, ty, value } => {
+                self.sdo_write(seq, node, index, sub, ty, &value).await
             }
             ServiceRequest::Nmt { node, cs } => match self.target(node) {
                 Ok(n) => match self.master.send(Frame::new(0x000, &[cs, n])).await {
@@ -309,37 +275,99 @@ impl Session {
                 Some(_) => error(seq, code::SYNTAX),
             },
             ServiceRequest::Lss { cmd, args } => self.lss(seq, &cmd, &args).await,
-            ServiceRequest::PdoRead(num) => match self.rpdo.get(&num) {
-                None => error(seq, code::INTERNAL_STATE),
-                Some(p) => {
-                    let frame = *p.latest.lock().unwrap_or_else(|e| e.into_inner());
-                    let data = frame.map(|f| f.data().to_vec()).unwrap_or_default();
-                    let mut s = format!("{} pdo {}", self.net, p.bits.len());
-                    for m in layout_of(&p.bits) {
-                        let v = m.read(&data).unwrap_or(0);
-                        s.push_str(&format!(" 0x{v:x}"));
-                    }
-                    value(seq, &s)
-                }
-            },
-            ServiceRequest::PdoWrite { num, values } => match self.tpdo.get(&num) {
-                None => error(seq, code::INTERNAL_STATE),
-                Some(p) if p.bits.len() != values.len() => error(seq, code::SYNTAX),
-                Some(p) => {
-                    let mut data = [0u8; 8];
-                    let mut len_bits = 0;
-                    for (m, &v) in layout_of(&p.bits).zip(&values) {
-                        m.write(&mut data, v);
-                        len_bits = m.end();
-                    }
-                    let len = len_bits.div_ceil(8);
-                    match self.master.send_pdo(p.cob, &data[..len.min(8)]).await {
-                        Ok(()) => ok(seq),
-                        Err(_) => error(seq, code::INTERNAL_STATE),
-                    }
-                }
-            },
+            ServiceRequest::PdoRead(num) => self.pdo_read(seq, num),
+            ServiceRequest::PdoWrite { num, values } => self.pdo_write(seq, num, &values).await,
             ServiceRequest::SetPdo { tx, ext, args } => self.set_pdo(seq, tx, ext, &args),
+        }
+    }
+
+    /// `[net] [node] r[ead] INDEX SUB TYPE`: an SDO upload shown as TYPE.
+    async fn sdo_read(
+        &mut self,
+        seq: u32,
+        node: Option<u8>,
+        index: u16,
+        sub: u8,
+        ty: Option<GwType>,
+    ) -> String {
+        let node = match self.target(node) {
+            Ok(n) if n > 0 => n,
+            Ok(_) => return error(seq, code::UNSUPPORTED_NODE),
+            Err(c) => return error(seq, c),
+        };
+        let proto = if self.block { Protocol::Block } else { Protocol::Auto };
+        let sdo = self.master.sdo(node).timeout(self.sdo_timeout).retries(self.retries).protocol(proto);
+        match sdo.upload(index, sub).await {
+            Ok(d) => match show(ty, &d) {
+                Some(v) => value(seq, &v),
+                // The data do not fit the type asked for (CiA 301 0607 0010h).
+                None => sdo_error(seq, &SdoError::Abort { code: crate::SdoAbort::TYPE_MISMATCH, text: None }),
+            },
+            Err(e) => sdo_error(seq, &e),
+        }
+    }
+
+    /// `[net] [node] w[rite] INDEX SUB TYPE VALUE`: an SDO download.
+    async fn sdo_write(
+        &mut self,
+        seq: u32,
+        node: Option<u8>,
+        index: u16,
+        sub: u8,
+        ty: GwType,
+        v: &[String],
+    ) -> String {
+        let node = match self.target(node) {
+            Ok(n) if n > 0 => n,
+            Ok(_) => return error(seq, code::UNSUPPORTED_NODE),
+            Err(c) => return error(seq, c),
+        };
+        let Some(data) = encode(ty, v).filter(|d| !d.is_empty()) else {
+            return error(seq, code::SYNTAX);
+        };
+        let proto = if self.block && data.len() > 4 { Protocol::Block } else { Protocol::Auto };
+        let sdo = self.master.sdo(node).timeout(self.sdo_timeout).retries(self.retries).protocol(proto);
+        match sdo.download(index, sub, &data).await {
+            Ok(()) => ok(seq),
+            Err(e) => sdo_error(seq, &e),
+        }
+    }
+
+    /// `read pdo N`: the values of the last RPDO N received, per mapped entry.
+    fn pdo_read(&self, seq: u32, num: u16) -> String {
+        match self.rpdo.get(&num) {
+            None => error(seq, code::INTERNAL_STATE),
+            Some(p) => {
+                let frame = *p.latest.lock().unwrap_or_else(|e| e.into_inner());
+                let data = frame.map(|f| f.data().to_vec()).unwrap_or_default();
+                let mut s = format!("{} pdo {}", self.net, p.bits.len());
+                for m in layout_of(&p.bits) {
+                    let v = m.read(&data).unwrap_or(0);
+                    s.push_str(&format!(" 0x{v:x}"));
+                }
+                value(seq, &s)
+            }
+        }
+    }
+
+    /// `write pdo N VALUES...`: sends TPDO N with VALUES packed by its mapping.
+    async fn pdo_write(&self, seq: u32, num: u16, values: &[u64]) -> String {
+        match self.tpdo.get(&num) {
+            None => error(seq, code::INTERNAL_STATE),
+            Some(p) if p.bits.len() != values.len() => error(seq, code::SYNTAX),
+            Some(p) => {
+                let mut data = [0u8; 8];
+                let mut len_bits = 0;
+                for (m, &v) in layout_of(&p.bits).zip(values) {
+                    m.write(&mut data, v);
+                    len_bits = m.end();
+                }
+                let len = len_bits.div_ceil(8);
+                match self.master.send_pdo(p.cob, &data[..len.min(8)]).await {
+                    Ok(()) => ok(seq),
+                    Err(_) => error(seq, code::INTERNAL_STATE),
+                }
+            }
         }
     }
 
@@ -395,9 +423,6 @@ impl Session {
     async fn lss(&mut self, seq: u32, cmd: &str, a: &[String]) -> String {
         let arg = |i: usize| a.get(i).and_then(|s| c_number(s));
         let lss = self.master.lss().timeout(self.sdo_timeout.min(Duration::from_millis(500)));
-        let addr_text = |x: &Identity| {
-            format!("0x{:08X} 0x{:08X} 0x{:08X} 0x{:08X}", x.vendor_id, x.product_code, x.revision, x.serial)
-        };
         match (cmd, a.len()) {
             ("lss_switch_glob", 1) => {
                 let mode = match arg(0) {
@@ -480,51 +505,7 @@ impl Session {
                 }
             }
             ("lss_allnodes", n) if n == 0 || n == 1 || n == 3 || n == 11 => {
-                let ms = arg(0).filter(|&v| v > 0).unwrap_or(100).min(0xFFFF);
-                let (mut id, store) = if n >= 3 {
-                    match (arg(1), arg(2)) {
-                        (Some(s @ 1..=127), Some(st @ 0..=1)) => (s as u8, st == 1),
-                        _ => return error(seq, code::SYNTAX),
-                    }
-                } else {
-                    (2, true)
-                };
-                let known: Vec<(LssField, u32)> = if n == 11 {
-                    let fields = [LssField::Vendor, LssField::Product, LssField::Revision, LssField::Serial];
-                    let mut k = Vec::new();
-                    for (i, f) in fields.into_iter().enumerate() {
-                        match (arg(3 + 2 * i), arg(4 + 2 * i).and_then(|v| u32::try_from(v).ok())) {
-                            (Some(2), Some(v)) => k.push((f, v)),
-                            (Some(0 | 1), Some(_)) => {}
-                            _ => return error(seq, code::SYNTAX),
-                        }
-                    }
-                    k
-                } else {
-                    Vec::new()
-                };
-                let lss = lss.timeout(Duration::from_millis(ms));
-                let mut out = String::new();
-                let mut found = 0;
-                loop {
-                    let scan = known
-                        .iter()
-                        .fold(FastScan::new(Duration::from_millis(ms)), |s, (f, v)| s.with_known(*f, *v));
-                    match lss.assign_node_id_with(scan, id, store).await {
-                        Ok(Some(x)) => {
-                            found += 1;
-                            out.push_str(&format!("# Node-ID {id} assigned to: {}\n", addr_text(&x)));
-                        }
-                        Ok(None) => break,
-                        Err(e) => return out + &lss_error(seq, e, code::LSS_NODE_ID),
-                    }
-                    if id == 127 {
-                        out.push_str("# Not all nodes scanned!\n");
-                        return out + &ok(seq);
-                    }
-                    id += 1;
-                }
-                out + &format!("# Found {found} nodes, search finished.\n") + &ok(seq)
+                Self::lss_allnodes(seq, lss, n, a).await
             }
             _ => error(
                 seq,
@@ -536,6 +517,60 @@ impl Session {
             ),
         }
     }
+    /// `lss_allnodes [TIMEOUT [NODE STORE [VEND_MASK VEND ... SER_MASK SER]]]`:
+    /// fastscan and give node-IDs from NODE up until no slave answers.
+    async fn lss_allnodes(seq: u32, lss: crate::lss::LssMaster, n: usize, a: &[String]) -> String {
+        let arg = |i: usize| a.get(i).and_then(|s| c_number(s));
+        let ms = arg(0).filter(|&v| v > 0).unwrap_or(100).min(0xFFFF);
+        let (mut id, store) = if n >= 3 {
+            match (arg(1), arg(2)) {
+                (Some(s @ 1..=127), Some(st @ 0..=1)) => (s as u8, st == 1),
+                _ => return error(seq, code::SYNTAX),
+            }
+        } else {
+            (2, true)
+        };
+        let known: Vec<(LssField, u32)> = if n == 11 {
+            let fields = [LssField::Vendor, LssField::Product, LssField::Revision, LssField::Serial];
+            let mut k = Vec::new();
+            for (i, f) in fields.into_iter().enumerate() {
+                match (arg(3 + 2 * i), arg(4 + 2 * i).and_then(|v| u32::try_from(v).ok())) {
+                    (Some(2), Some(v)) => k.push((f, v)),
+                    (Some(0 | 1), Some(_)) => {}
+                    _ => return error(seq, code::SYNTAX),
+                }
+            }
+            k
+        } else {
+            Vec::new()
+        };
+        let lss = lss.timeout(Duration::from_millis(ms));
+        let mut out = String::new();
+        let mut found = 0;
+        loop {
+            let scan =
+                known.iter().fold(FastScan::new(Duration::from_millis(ms)), |s, (f, v)| s.with_known(*f, *v));
+            match lss.assign_node_id_with(scan, id, store).await {
+                Ok(Some(x)) => {
+                    found += 1;
+                    out.push_str(&format!("# Node-ID {id} assigned to: {}\n", addr_text(&x)));
+                }
+                Ok(None) => break,
+                Err(e) => return out + &lss_error(seq, e, code::LSS_NODE_ID),
+            }
+            if id == 127 {
+                out.push_str("# Not all nodes scanned!\n");
+                return out + &ok(seq);
+            }
+            id += 1;
+        }
+        out + &format!("# Found {found} nodes, search finished.\n") + &ok(seq)
+    }
+}
+
+/// An LSS address as the gateway prints it: four 32-bit hex numbers.
+fn addr_text(x: &Identity) -> String {
+    format!("0x{:08X} 0x{:08X} 0x{:08X} 0x{:08X}", x.vendor_id, x.product_code, x.revision, x.serial)
 }
 
 fn version() -> (u32, u32) {
