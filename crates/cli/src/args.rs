@@ -245,6 +245,10 @@ pub struct ServeArgs {
     /// picks a free one; beyond loopback every request needs the token printed at start).
     #[arg(long, value_name = "HOST:PORT")]
     pub http: Option<String>,
+    /// An unconfigured CiA 301 slave (node-ID FFh, LSS CiA 305) with this LSS address
+    /// (repeatable; numbers decimal or 0x hex): `drivebus lss` or the page gives it a node-ID.
+    #[arg(long = "lss-slave", value_name = "VENDOR:PRODUCT:REVISION:SERIAL")]
+    pub lss_slaves: Vec<String>,
 }
 
 const DEMO_EXAMPLES: &str = "\

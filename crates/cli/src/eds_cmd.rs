@@ -7,7 +7,7 @@ use drivebus_eds::{Eds, EdsVar, Severity};
 use drivebus_master::{DataType, Protocol, SdoAbort, SdoError};
 use drivebus_personality::Profile;
 
-use crate::args::{EdsCmd, Global};
+use crate::args::{DcfArgs, EdsCmd, EdsExport, EdsFileArg, Global};
 use crate::conn::{Conn, need_node};
 use crate::output::{out, outln};
 
@@ -161,50 +161,7 @@ fn deliver(g: &Global, out_path: Option<&Path>, text: &str) -> anyhow::Result<()
 /// Runs an `eds` subcommand; returns the exit status (check: 1 on errors).
 pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
     match c {
-        EdsCmd::Check(a) => {
-            let text = std::fs::read(&a.file)
-                .with_context(|| format!("cannot read EDS file {}", a.file.display()))?;
-            let text = String::from_utf8_lossy(&text);
-            let (findings, parse_errors) = match drivebus_eds::parse(&text) {
-                Ok(p) => {
-                    let mut f: Vec<(Severity, usize, String)> =
-                        p.warnings.iter().map(|d| (Severity::Warning, d.line, d.message.clone())).collect();
-                    f.extend(drivebus_eds::check(&p.eds).into_iter().map(|x| {
-                        let what = match (x.index, x.sub) {
-                            (Some(i), Some(s)) => format!("{i:04X}sub{s:X}: {}", x.message),
-                            (Some(i), None) => format!("{i:04X}: {}", x.message),
-                            _ => x.message,
-                        };
-                        (x.severity, x.line, what)
-                    }));
-                    (f, false)
-                }
-                Err(e) => {
-                    (e.errors.iter().map(|d| (Severity::Error, d.line, d.message.clone())).collect(), true)
-                }
-            };
-            let errors = findings.iter().filter(|f| f.0 == Severity::Error).count();
-            let warnings = findings.len() - errors;
-            if g.json {
-                let items: Vec<_> = findings
-                    .iter()
-                    .map(|(s, l, m)| {
-                        serde_json::json!({"severity": if *s == Severity::Error {"error"} else {"warning"}, "line": l, "message": m})
-                    })
-                    .collect();
-                outln!(
-                    "{}",
-                    serde_json::json!({"file": a.file.display().to_string(), "errors": errors, "warnings": warnings, "parsed": !parse_errors, "findings": items})
-                );
-            } else {
-                for (s, l, m) in &findings {
-                    let sev = if *s == Severity::Error { "error" } else { "warning" };
-                    outln!("{}:{l}: {sev}: {m}", a.file.display());
-                }
-                outln!("{}: {errors} error(s), {warnings} warning(s)", a.file.display());
-            }
-            Ok(if errors > 0 { 1 } else { 0 })
-        }
+        EdsCmd::Check(a) => check(g, a),
         EdsCmd::Show(a) => {
             let eds = match (&a.profile, a.file.as_deref().or(g.eds.as_deref())) {
                 (Some(p), _) => profile(p)?.parse_eds().eds,
@@ -214,80 +171,126 @@ pub async fn run(g: &Global, c: &EdsCmd) -> anyhow::Result<i32> {
             show(g, &eds);
             Ok(0)
         }
-        EdsCmd::Export(a) => {
-            let text = if let Some(p) = &a.profile {
-                profile(p)?.eds_text().to_owned()
-            } else if let Some(node) = g.node {
-                let conn = Conn::open(g).await?;
-                let sdo = conn.master.sdo(node);
-                let r = match sdo.clone().protocol(Protocol::Block).upload(0x1021, 0).await {
-                    // A server without block transfer refuses the command
-                    // specifier (CiA 301 §7.2.4.3.17 0504 0001h): read it
-                    // segmented instead.
-                    Err(SdoError::Abort { code, .. }) if code == SdoAbort::INVALID_COMMAND => {
-                        sdo.upload(0x1021, 0).await
-                    }
-                    r => r,
+        EdsCmd::Export(a) => export(g, a).await,
+        EdsCmd::Dcf(a) => dcf(g, a).await,
+    }
+}
+
+/// `eds check FILE`: findings with severity and line; 1 on errors.
+fn check(g: &Global, a: &EdsFileArg) -> anyhow::Result<i32> {
+    let text =
+        std::fs::read(&a.file).with_context(|| format!("cannot read EDS file {}", a.file.display()))?;
+    let text = String::from_utf8_lossy(&text);
+    let (findings, parse_errors) = match drivebus_eds::parse(&text) {
+        Ok(p) => {
+            let mut f: Vec<(Severity, usize, String)> =
+                p.warnings.iter().map(|d| (Severity::Warning, d.line, d.message.clone())).collect();
+            f.extend(drivebus_eds::check(&p.eds).into_iter().map(|x| {
+                let what = match (x.index, x.sub) {
+                    (Some(i), Some(s)) => format!("{i:04X}sub{s:X}: {}", x.message),
+                    (Some(i), None) => format!("{i:04X}: {}", x.message),
+                    _ => x.message,
                 };
-                let timeout = conn.timeout;
-                conn.close().await?;
-                let data = r
-                    .map_err(crate::error::sdo(node, 0x1021, 0, false, timeout))
-                    .with_context(|| format!("node {node} gives no EDS through 1021h (store EDS)"))?;
-                String::from_utf8_lossy(&data).into_owned()
-            } else if let Some(f) = &g.eds {
-                drivebus_eds::write(&load_eds(f)?)
-            } else {
-                bail!("nothing to export: give --profile NAME, --node N (reads 1021h) or --eds FILE");
-            };
-            // The file's own name, not the one it had elsewhere (1021h
-            // says drivebus.eds whatever the file is called).
-            let text = match a.out.as_deref().and_then(Path::file_name) {
-                Some(name) => with_file_name(&text, &name.to_string_lossy()),
-                None => text,
-            };
-            deliver(g, a.out.as_deref(), &text)?;
-            Ok(0)
+                (x.severity, x.line, what)
+            }));
+            (f, false)
         }
-        EdsCmd::Dcf(a) => {
-            let node = need_node(g)?;
-            let conn = Conn::open(g).await?;
-            let r = match &conn.dict.eds {
-                Some(eds) => conn.master.dump_dcf(node, eds.clone()).await,
-                None => conn.master.dump_standard_dcf(node).await,
-            };
-            let timeout = conn.timeout;
-            conn.close().await?;
-            let (mut dcf, report) = r.map_err(|e| crate::error::sdo(node, 0, 0, false, timeout)(e))?;
-            let name = a
-                .out
-                .as_deref()
-                .and_then(Path::file_name)
-                .map_or_else(|| format!("node{node}.dcf"), |n| n.to_string_lossy().into_owned());
-            stamp_file_info(&mut dcf, &name, node);
-            let text = drivebus_eds::write(&dcf);
-            deliver(g, a.out.as_deref(), &text)?;
-            if !g.json {
-                let source = if g.eds.is_some() {
-                    "the EDS"
-                } else {
-                    "the CiA 301/402 standard objects (manufacturer objects need --eds)"
-                };
-                eprintln!(
-                    "node {node}: {} values read from {source}, {} refused",
-                    report.read,
-                    report.refused.len()
-                );
-                for (index, sub, len) in &report.mismatched {
-                    eprintln!(
-                        "node {node}: {index:04X}h:{sub:02X} answered {len} bytes, not its data type's size: \
-                         value left out (the node's object differs; give its EDS with --eds)"
-                    );
-                }
+        Err(e) => (e.errors.iter().map(|d| (Severity::Error, d.line, d.message.clone())).collect(), true),
+    };
+    let errors = findings.iter().filter(|f| f.0 == Severity::Error).count();
+    let warnings = findings.len() - errors;
+    if g.json {
+        let items: Vec<_> = findings
+            .iter()
+            .map(|(s, l, m)| {
+                serde_json::json!({"severity": if *s == Severity::Error {"error"} else {"warning"}, "line": l, "message": m})
+            })
+            .collect();
+        outln!(
+            "{}",
+            serde_json::json!({"file": a.file.display().to_string(), "errors": errors, "warnings": warnings, "parsed": !parse_errors, "findings": items})
+        );
+    } else {
+        for (s, l, m) in &findings {
+            let sev = if *s == Severity::Error { "error" } else { "warning" };
+            outln!("{}:{l}: {sev}: {m}", a.file.display());
+        }
+        outln!("{}: {errors} error(s), {warnings} warning(s)", a.file.display());
+    }
+    Ok(if errors > 0 { 1 } else { 0 })
+}
+
+/// `eds export`: a personality's EDS, a node's 1021h, or `--eds` rewritten.
+async fn export(g: &Global, a: &EdsExport) -> anyhow::Result<i32> {
+    let text = if let Some(p) = &a.profile {
+        profile(p)?.eds_text().to_owned()
+    } else if let Some(node) = g.node {
+        let conn = Conn::open(g).await?;
+        let sdo = conn.master.sdo(node);
+        let r = match sdo.clone().protocol(Protocol::Block).upload(0x1021, 0).await {
+            // A server without block transfer refuses the command
+            // specifier (CiA 301 §7.2.4.3.17 0504 0001h): read it
+            // segmented instead.
+            Err(SdoError::Abort { code, .. }) if code == SdoAbort::INVALID_COMMAND => {
+                sdo.upload(0x1021, 0).await
             }
-            Ok(0)
+            r => r,
+        };
+        let timeout = conn.timeout;
+        conn.close().await?;
+        let data = r
+            .map_err(crate::error::sdo(node, 0x1021, 0, false, timeout))
+            .with_context(|| format!("node {node} gives no EDS through 1021h (store EDS)"))?;
+        String::from_utf8_lossy(&data).into_owned()
+    } else if let Some(f) = &g.eds {
+        drivebus_eds::write(&load_eds(f)?)
+    } else {
+        bail!("nothing to export: give --profile NAME, --node N (reads 1021h) or --eds FILE");
+    };
+    // The file's own name, not the one it had elsewhere (1021h
+    // says drivebus.eds whatever the file is called).
+    let text = match a.out.as_deref().and_then(Path::file_name) {
+        Some(name) => with_file_name(&text, &name.to_string_lossy()),
+        None => text,
+    };
+    deliver(g, a.out.as_deref(), &text)?;
+    Ok(0)
+}
+
+/// `eds dcf`: a live node's values as a DCF.
+async fn dcf(g: &Global, a: &DcfArgs) -> anyhow::Result<i32> {
+    let node = need_node(g)?;
+    let conn = Conn::open(g).await?;
+    let r = match &conn.dict.eds {
+        Some(eds) => conn.master.dump_dcf(node, eds.clone()).await,
+        None => conn.master.dump_standard_dcf(node).await,
+    };
+    let timeout = conn.timeout;
+    conn.close().await?;
+    let (mut dcf, report) = r.map_err(|e| crate::error::sdo(node, 0, 0, false, timeout)(e))?;
+    let name = a
+        .out
+        .as_deref()
+        .and_then(Path::file_name)
+        .map_or_else(|| format!("node{node}.dcf"), |n| n.to_string_lossy().into_owned());
+    stamp_file_info(&mut dcf, &name, node);
+    let text = drivebus_eds::write(&dcf);
+    deliver(g, a.out.as_deref(), &text)?;
+    if !g.json {
+        let source = if g.eds.is_some() {
+            "the EDS"
+        } else {
+            "the CiA 301/402 standard objects (manufacturer objects need --eds)"
+        };
+        eprintln!("node {node}: {} values read from {source}, {} refused", report.read, report.refused.len());
+        for (index, sub, len) in &report.mismatched {
+            eprintln!(
+                "node {node}: {index:04X}h:{sub:02X} answered {len} bytes, not its data type's size: \
+                 value left out (the node's object differs; give its EDS with --eds)"
+            );
         }
     }
+    Ok(0)
 }
 
 fn show(g: &Global, eds: &Eds) {

@@ -79,6 +79,64 @@ fn format_value(w: Watch, dt: Option<DataType>, data: &[u8]) -> String {
     }
 }
 
+/// A watched object's column title: its entry name, else `INDEXh:SUB`.
+fn label(conn: &Conn, w: &Watch) -> String {
+    let n = conn.dict.name(w.index, w.sub).unwrap_or_else(|| format!("{:04X}h:{:02X}", w.index, w.sub));
+    n.rsplit(" / ").next().unwrap_or(&n).to_owned()
+}
+
+/// What an event changes in its node's row.
+enum Change {
+    State(String),
+    Emcy(String),
+    Nothing,
+}
+
+/// The node an event is about and what it changes in its row; a bus
+/// error ends the monitor (its reason).
+fn row_change(e: MasterEvent) -> Result<(u8, Change), String> {
+    Ok(match e {
+        MasterEvent::Bootup { node } => (node, Change::State("boot-up".to_owned())),
+        MasterEvent::Heartbeat { node, state } => (node, Change::State(state_name(state).to_owned())),
+        MasterEvent::HeartbeatLost { node } => (node, Change::State("lost (no heartbeat)".to_owned())),
+        MasterEvent::Emcy { node, code, register, text, .. } => {
+            let text = text.as_deref().unwrap_or("manufacturer specific");
+            (node, Change::Emcy(format!("{code:04X}h {text} (register {register:02X}h)")))
+        }
+        MasterEvent::BusError { reason } => return Err(reason),
+        MasterEvent::HeartbeatRecovered { node } => (node, Change::Nothing),
+    })
+}
+
+/// Reads `node`'s watched objects into its row: the TPDO copy while the
+/// node sends it (`from_pdo`: the watches in its TPDOs), by SDO otherwise
+/// (pre-operational, or nothing received yet).
+async fn sample(
+    conn: &Conn,
+    node: u8,
+    row: &mut Row,
+    watches: &[Watch],
+    from_pdo: Option<&Vec<usize>>,
+    latest: &Latest,
+) {
+    let m = &conn.master;
+    let operational = m.node_state(node) == Some(RemoteState::Operational);
+    for (k, w) in watches.iter().enumerate() {
+        let cached = (operational && from_pdo.is_some_and(|v| v.contains(&k)))
+            .then(|| latest.lock().unwrap_or_else(|e| e.into_inner()).get(&(node, k)).cloned())
+            .flatten();
+        let data = match cached {
+            Some(d) => Some(d),
+            None => m.sdo(node).upload(w.index, w.sub).await.ok(),
+        };
+        if let Some(d) = data {
+            let dt = conn.dict.data_type(w.index, w.sub);
+            row.values.insert(k, format_value(*w, dt, &d));
+            row.numbers.insert(k, plain_value(dt, &d));
+        }
+    }
+}
+
 /// Runs until `--seconds`, Ctrl-C or the bus closes.
 pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
     let conn = Conn::open(g).await?;
@@ -87,14 +145,7 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
         .iter()
         .map(|w| Ok(conn.dict.resolve(w, None).map(|(index, sub)| Watch { index, sub: sub.unwrap_or(0) })?))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let labels: Vec<String> = watches
-        .iter()
-        .map(|w| {
-            let n =
-                conn.dict.name(w.index, w.sub).unwrap_or_else(|| format!("{:04X}h:{:02X}", w.index, w.sub));
-            n.rsplit(" / ").next().unwrap_or(&n).to_owned()
-        })
-        .collect();
+    let labels: Vec<String> = watches.iter().map(|w| label(&conn, w)).collect();
     let m = &conn.master;
     let mut events = m.subscribe_events();
     let mut rows: BTreeMap<u8, Row> = BTreeMap::new();
@@ -136,16 +187,9 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
         tokio::select! {
             e = events.recv() => match e {
                 Ok(e) => {
-                    let (node, change) = match e {
-                        MasterEvent::Bootup { node } => (node, Some(("state", "boot-up".to_owned()))),
-                        MasterEvent::Heartbeat { node, state } => (node, Some(("state", state_name(state).to_owned()))),
-                        MasterEvent::HeartbeatLost { node } => (node, Some(("state", "lost (no heartbeat)".to_owned()))),
-                        MasterEvent::Emcy { node, code, register, text, .. } => (
-                            node,
-                            Some(("emcy", format!("{code:04X}h {} (register {register:02X}h)", text.as_deref().unwrap_or("manufacturer specific")))),
-                        ),
-                        MasterEvent::BusError { reason } => return Err(conn.lost(&reason)),
-                        MasterEvent::HeartbeatRecovered { node } => (node, None),
+                    let (node, change) = match row_change(e) {
+                        Ok(c) => c,
+                        Err(reason) => return Err(conn.lost(&reason)),
                     };
                     if !wanted(node) {
                         continue;
@@ -158,9 +202,9 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
                     }
                     let row = rows.entry(node).or_default();
                     match change {
-                        Some(("state", s)) => row.state = Some(s),
-                        Some((_, e)) => row.emcy = Some(e),
-                        None => {}
+                        Change::State(s) => row.state = Some(s),
+                        Change::Emcy(e) => row.emcy = Some(e),
+                        Change::Nothing => {}
                     }
                 }
                 Err(broadcast::error::RecvError::Lagged(_)) => {}
@@ -168,24 +212,7 @@ pub async fn run(g: &Global, a: &MonitorArgs) -> anyhow::Result<()> {
             },
             _ = tick.tick() => {
                 for (&node, row) in rows.iter_mut() {
-                    for (k, w) in watches.iter().enumerate() {
-                        let from_pdo = by_pdo.get(&node).is_some_and(|v| v.contains(&k));
-                        // The TPDO copy while the node sends it; by SDO otherwise
-                        // (pre-operational, or nothing received yet).
-                        let operational = m.node_state(node) == Some(RemoteState::Operational);
-                        let cached = (from_pdo && operational)
-                            .then(|| latest.lock().unwrap_or_else(|e| e.into_inner()).get(&(node, k)).cloned())
-                            .flatten();
-                        let data = match cached {
-                            Some(d) => Some(d),
-                            None => m.sdo(node).upload(w.index, w.sub).await.ok(),
-                        };
-                        if let Some(d) = data {
-                            let dt = conn.dict.data_type(w.index, w.sub);
-                            row.values.insert(k, format_value(*w, dt, &d));
-                            row.numbers.insert(k, plain_value(dt, &d));
-                        }
-                    }
+                    sample(&conn, node, row, &watches, by_pdo.get(&node), &latest).await;
                 }
                 if tty {
                     draw(&rows, &labels);

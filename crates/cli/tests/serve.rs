@@ -179,3 +179,30 @@ fn bad_fault_rules_fail_with_a_clear_message() {
         .failure()
         .stderr(predicate::str::contains("bad --fault `drop:banana`"));
 }
+
+/// `--lss-slave`: an unconfigured slave that `drivebus lss` finds and
+/// gives a node-ID, which it then answers SDO under.
+#[test]
+fn an_lss_slave_is_found_and_configured() {
+    let srv = Serve::start(&["--drive", "generic:5", "--lss-slave", "0xABC:0x77:3:0x10"], None);
+    assert!(srv.line.contains("unconfigured LSS slaves 0xABC:0x77:3:0x10"), "{}", srv.line);
+    let db = |args: &[&str]| {
+        Command::new(common::bin())
+            .arg("--bus")
+            .arg(srv.url())
+            .args(args)
+            .env_remove("DRIVEBUS_BUS")
+            .timeout(Duration::from_secs(60))
+            .assert()
+    };
+    db(&["lss", "scan"]).success().stdout(predicate::str::contains("serial 0x00000010"));
+    db(&["lss", "set-node-id", "9"]).success().stdout(predicate::str::contains("only unconfigured slave"));
+    std::thread::sleep(Duration::from_millis(100));
+    db(&["--node", "9", "sdo", "read", "1018:04"]).success().stdout(predicate::str::contains("= 16"));
+    Command::new(common::bin())
+        .args(["serve", "--listen", "127.0.0.1:0", "--drive", "generic:5", "--lss-slave", "1:2:3"])
+        .timeout(Duration::from_secs(20))
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("bad --lss-slave `1:2:3`"));
+}

@@ -19,13 +19,59 @@ use drivebus_od::DataType;
 /// The description an SII image gives. Fails, naming the category entry,
 /// on a sync manager type other than mailbox or process data.
 pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
-    let string = |i: u8| match i {
+    let string = |i: u8| sii_string(c, i);
+    let g = c.general.unwrap_or_default();
+    let sync_managers = sync_managers(c)?;
+    let b = c.bootstrap_mailbox;
+    Ok(SlaveDescription {
+        vendor_id: c.identity.vendor_id,
+        vendor_name: String::new(),
+        product_code: c.identity.product_code,
+        revision: c.identity.revision,
+        serial: c.identity.serial,
+        type_name: string(g.order_idx),
+        name: string(g.name_idx),
+        group_type: string(g.group_idx),
+        group_name: string(g.group_idx),
+        url: None,
+        physics: physics(g.physical_ports),
+        mailbox_timeouts: None,
+        profile: EsiProfile { number: if g.ds402_channels > 0 { 402 } else { 0 }, add_info: 0 },
+        objects: Vec::new(),
+        fmmus: c
+            .fmmus
+            .iter()
+            .filter_map(|f| match *f {
+                fmmu_usage::OUTPUTS => Some(FmmuUsage::Outputs),
+                fmmu_usage::INPUTS => Some(FmmuUsage::Inputs),
+                fmmu_usage::SM_STATUS => Some(FmmuUsage::MBoxState),
+                _ => None,
+            })
+            .collect(),
+        rx_pdos: pdos(c, &c.rx_pdos, sync_managers.len()),
+        tx_pdos: pdos(c, &c.tx_pdos, sync_managers.len()),
+        sync_managers,
+        mailbox: mailbox(c),
+        dc: dc_modes(c),
+        eeprom: Eeprom {
+            byte_size: u32::from(c.size_kbit) * 128,
+            config: c.config,
+            bootstrap: (b.rx_size > 0).then_some(b),
+        },
+    })
+}
+
+/// String `i` of the Strings category (1-based; 0 and a missing one are empty).
+fn sii_string(c: &SiiContent, i: u8) -> String {
+    match i {
         0 => String::new(),
         i => c.strings.get(usize::from(i) - 1).cloned().unwrap_or_default(),
-    };
-    let g = c.general.unwrap_or_default();
-    let sync_managers = c
-        .sync_managers
+    }
+}
+
+/// The SyncManager category.
+fn sync_managers(c: &SiiContent) -> Result<Vec<SyncManager>, ReadError> {
+    c.sync_managers
         .iter()
         .enumerate()
         .map(|(n, s)| {
@@ -49,33 +95,41 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
                 enable: s.enable & 0x01 != 0,
             })
         })
-        .collect::<Result<Vec<_>, _>>()?;
-    let pdos = |list: &[SiiPdo]| -> Vec<EsiPdo> {
-        list.iter()
-            .map(|p| EsiPdo {
-                index: p.index,
-                name: string(p.name_idx),
-                sm: (usize::from(p.sync_manager) < sync_managers.len()).then_some(p.sync_manager),
-                fixed: p.flags & crate::sii::pdo_flags::FIXED != 0,
-                mandatory: p.flags & crate::sii::pdo_flags::MANDATORY != 0,
-                entries: p
-                    .entries
-                    .iter()
-                    .map(|e| PdoEntry {
-                        index: e.index,
-                        sub: e.sub_index,
-                        bit_len: e.bit_len,
-                        name: string(e.name_idx),
-                        data_type: DataType::from_index(u16::from(e.data_type)),
-                    })
-                    .collect(),
-            })
-            .collect()
-    };
+        .collect()
+}
+
+/// The RxPDO or TxPDO category; a PDO's sync manager only if the image has it.
+fn pdos(c: &SiiContent, list: &[SiiPdo], sync_managers: usize) -> Vec<EsiPdo> {
+    list.iter()
+        .map(|p| EsiPdo {
+            index: p.index,
+            name: sii_string(c, p.name_idx),
+            sm: (usize::from(p.sync_manager) < sync_managers).then_some(p.sync_manager),
+            fixed: p.flags & crate::sii::pdo_flags::FIXED != 0,
+            mandatory: p.flags & crate::sii::pdo_flags::MANDATORY != 0,
+            entries: p
+                .entries
+                .iter()
+                .map(|e| PdoEntry {
+                    index: e.index,
+                    sub: e.sub_index,
+                    bit_len: e.bit_len,
+                    name: sii_string(c, e.name_idx),
+                    data_type: DataType::from_index(u16::from(e.data_type)),
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The mailbox when the image gives both its sizes, with the protocols
+/// and the General category's CoE details.
+fn mailbox(c: &SiiContent) -> Option<Mailbox> {
+    let g = c.general.unwrap_or_default();
     let m = c.mailbox;
     let coe = c.mailbox_protocols & protocols::COE != 0;
     let d = g.coe_details;
-    let mailbox = (m.rx_size > 0 && m.tx_size > 0).then_some(Mailbox {
+    (m.rx_size > 0 && m.tx_size > 0).then_some(Mailbox {
         data_link_layer: g.flags & 0x04 != 0,
         coe: coe.then_some(CoeDetails {
             sdo_info: d & 0x02 != 0,
@@ -86,71 +140,42 @@ pub fn describe_sii(c: &SiiContent) -> Result<SlaveDescription, ReadError> {
         }),
         foe: c.mailbox_protocols & protocols::FOE != 0,
         eoe: c.mailbox_protocols & protocols::EOE != 0,
-    });
-    let b = c.bootstrap_mailbox;
-    Ok(SlaveDescription {
-        vendor_id: c.identity.vendor_id,
-        vendor_name: String::new(),
-        product_code: c.identity.product_code,
-        revision: c.identity.revision,
-        serial: c.identity.serial,
-        type_name: string(g.order_idx),
-        name: string(g.name_idx),
-        group_type: string(g.group_idx),
-        group_name: string(g.group_idx),
-        url: None,
-        physics: (0..4)
-            .map(|i| match (g.physical_ports >> (4 * i)) & 0x0F {
-                1 => 'Y',
-                3 => 'K',
-                4 => 'H',
-                _ => ' ',
-            })
-            .collect::<String>()
-            .trim_end()
-            .to_string(),
-        mailbox_timeouts: None,
-        profile: EsiProfile { number: if g.ds402_channels > 0 { 402 } else { 0 }, add_info: 0 },
-        objects: Vec::new(),
-        fmmus: c
-            .fmmus
-            .iter()
-            .filter_map(|f| match *f {
-                fmmu_usage::OUTPUTS => Some(FmmuUsage::Outputs),
-                fmmu_usage::INPUTS => Some(FmmuUsage::Inputs),
-                fmmu_usage::SM_STATUS => Some(FmmuUsage::MBoxState),
-                _ => None,
-            })
-            .collect(),
-        rx_pdos: pdos(&c.rx_pdos),
-        tx_pdos: pdos(&c.tx_pdos),
-        sync_managers,
-        mailbox,
-        dc: c
-            .dc
-            .iter()
-            .map(|s| DcOpMode {
-                name: string(s.name_idx),
-                desc: string(s.desc_idx),
-                assign_activate: s.assign_activate,
-                sync0: (s.assign_activate & 0x0200 != 0).then_some(SyncSignal {
-                    cycle_ns: s.cycle_time0,
-                    factor: s.sync0_cycle_factor,
-                    shift_ns: s.shift_time0,
-                }),
-                sync1: (s.assign_activate & 0x0400 != 0).then_some(SyncSignal {
-                    cycle_ns: 0,
-                    factor: s.sync1_cycle_factor,
-                    shift_ns: s.shift_time1,
-                }),
-            })
-            .collect(),
-        eeprom: Eeprom {
-            byte_size: u32::from(c.size_kbit) * 128,
-            config: c.config,
-            bootstrap: (b.rx_size > 0).then_some(b),
-        },
     })
+}
+
+/// The General category's port nibbles as ESI `Physics` letters.
+fn physics(ports: u16) -> String {
+    (0..4)
+        .map(|i| match (ports >> (4 * i)) & 0x0F {
+            1 => 'Y',
+            3 => 'K',
+            4 => 'H',
+            _ => ' ',
+        })
+        .collect::<String>()
+        .trim_end()
+        .to_string()
+}
+
+/// The DC category's operation modes.
+fn dc_modes(c: &SiiContent) -> Vec<DcOpMode> {
+    c.dc.iter()
+        .map(|s| DcOpMode {
+            name: sii_string(c, s.name_idx),
+            desc: sii_string(c, s.desc_idx),
+            assign_activate: s.assign_activate,
+            sync0: (s.assign_activate & 0x0200 != 0).then_some(SyncSignal {
+                cycle_ns: s.cycle_time0,
+                factor: s.sync0_cycle_factor,
+                shift_ns: s.shift_time0,
+            }),
+            sync1: (s.assign_activate & 0x0400 != 0).then_some(SyncSignal {
+                cycle_ns: 0,
+                factor: s.sync1_cycle_factor,
+                shift_ns: s.shift_time1,
+            }),
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -186,6 +186,40 @@ fn device(v: &mut V, d: &Element, at: &str, groups: &[&str]) {
         }
         Some(_) => {}
     }
+    let kinds = sync_managers(v, d, at);
+    process_data(v, d, at, &kinds);
+    if let Some(dc) = d.child("Dc") {
+        for (i, m) in dc.all("OpMode").enumerate() {
+            let mat = format!("{at}/Dc/OpMode[{i}]");
+            if m.child("Name").is_none() {
+                v.err(&mat, "Name missing");
+            }
+            v.number(m, "AssignActivate", &mat);
+        }
+    }
+    match d.child("Eeprom") {
+        Some(e) => {
+            let eat = format!("{at}/Eeprom");
+            if let Some(n) = v.number(e, "ByteSize", &eat)
+                && (n < 128 || n.count_ones() != 1)
+            {
+                v.warn(&eat, format!("ByteSize {n} is not a power of two of at least 128"));
+            }
+            match e.child_text("ConfigData").map(parse_hex_bytes) {
+                Some(Some(b)) if b.len() <= 14 => {}
+                Some(_) => v.err(&eat, "ConfigData must be at most 14 hex bytes (SII words 0–6)"),
+                None => v.warn(&eat, "ConfigData missing: the ESC starts with an unconfigured PDI"),
+            }
+        }
+        None => v.warn(at, "Eeprom missing: a tool cannot program the SII from this file"),
+    }
+    if let Some(dict) = d.child("Profile").and_then(|p| p.child("Dictionary")) {
+        dictionary(v, dict, &format!("{at}/Profile/Dictionary"));
+    }
+}
+
+/// The sync managers (their kinds, in order) and the mailbox's.
+fn sync_managers(v: &mut V, d: &Element, at: &str) -> Vec<String> {
     let mut kinds = Vec::new();
     for (i, s) in d.all("Sm").enumerate() {
         let sat = format!("{at}/Sm[{i}]");
@@ -213,6 +247,11 @@ fn device(v: &mut V, d: &Element, at: &str, groups: &[&str]) {
             );
         }
     }
+    kinds
+}
+
+/// The PDOs: their Fmmu, sync manager and entries.
+fn process_data(v: &mut V, d: &Element, at: &str, kinds: &[String]) {
     let fmmus: Vec<&str> = d.all("Fmmu").map(|f| f.text.trim()).collect();
     for (tag, want, fmmu) in [("RxPdo", "Outputs", "Outputs"), ("TxPdo", "Inputs", "Inputs")] {
         let pdos: Vec<&Element> = d.all(tag).collect();
@@ -244,34 +283,6 @@ fn device(v: &mut V, d: &Element, at: &str, groups: &[&str]) {
                 }
             }
         }
-    }
-    if let Some(dc) = d.child("Dc") {
-        for (i, m) in dc.all("OpMode").enumerate() {
-            let mat = format!("{at}/Dc/OpMode[{i}]");
-            if m.child("Name").is_none() {
-                v.err(&mat, "Name missing");
-            }
-            v.number(m, "AssignActivate", &mat);
-        }
-    }
-    match d.child("Eeprom") {
-        Some(e) => {
-            let eat = format!("{at}/Eeprom");
-            if let Some(n) = v.number(e, "ByteSize", &eat)
-                && (n < 128 || n.count_ones() != 1)
-            {
-                v.warn(&eat, format!("ByteSize {n} is not a power of two of at least 128"));
-            }
-            match e.child_text("ConfigData").map(parse_hex_bytes) {
-                Some(Some(b)) if b.len() <= 14 => {}
-                Some(_) => v.err(&eat, "ConfigData must be at most 14 hex bytes (SII words 0–6)"),
-                None => v.warn(&eat, "ConfigData missing: the ESC starts with an unconfigured PDI"),
-            }
-        }
-        None => v.warn(at, "Eeprom missing: a tool cannot program the SII from this file"),
-    }
-    if let Some(dict) = d.child("Profile").and_then(|p| p.child("Dictionary")) {
-        dictionary(v, dict, &format!("{at}/Profile/Dictionary"));
     }
 }
 

@@ -230,6 +230,14 @@ pub fn page_routes<S: Clone + Send + Sync + 'static>(bus: ServedBus) -> Router<S
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/pdo.js")) }),
         )
         .route(
+            "/lss.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/lss.js")) }),
+        )
+        .route(
+            "/machine.js",
+            get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/machine.js")) }),
+        )
+        .route(
             "/line.js",
             get(|| async { page("text/javascript; charset=utf-8", include_str!("assets/line.js")) }),
         )
