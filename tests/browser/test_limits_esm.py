@@ -117,3 +117,56 @@ def test_the_line_view_lists_esm_events_from_the_stream(browser, line_url):
         )
         assert f"slave {pos} INIT → PRE-OP" in li[0].text
     wait_for(browser, "the table in PRE-OP", lambda b: len(b.find_elements(By.CSS_SELECTOR, '#line tbody tr[data-state="PRE-OP"]')) == 2)
+
+
+def test_the_ethercat_page_reads_an_object_in_the_object_form(browser, line_url):
+    """The object form and the dictionary browser on the EtherCAT page:
+    the slaves by position, 6041h of the iPOS (position 2) read straight
+    from its dictionary, 6064h found in the browser with its type."""
+    url, _, _ = line_url
+    browser.get(url)
+    wait_for(browser, "slave 2 selectable", lambda b: [o for o in Select(b.find_element(By.ID, "sdo-node")).options if o.get_attribute("value") == "2"])
+    Select(browser.find_element(By.ID, "sdo-node")).select_by_value("2")
+    browser.find_element(By.ID, "sdo-index").clear()
+    browser.find_element(By.ID, "sdo-index").send_keys("6041")
+    browser.find_element(By.ID, "sdo-read").click()
+    out = wait_for(browser, "6041h read", lambda b: '"value"' in b.find_element(By.ID, "sdo-out").text and b.find_element(By.ID, "sdo-out"))
+    answer = json.loads(out.text)
+    assert (answer["node"], answer["index"], answer["type"]) == (2, "6041", "UNSIGNED16"), answer
+    assert isinstance(answer["value"], int)
+    assert browser.find_element(By.ID, "sdo-value").get_attribute("value") == str(answer["value"])
+    browser.find_element(By.ID, "od-q").send_keys("6064")
+    browser.find_element(By.CSS_SELECTOR, "#od-search button").click()
+    row = wait_for(browser, "6064h in the dictionary browser", lambda b: b.find_elements(By.CSS_SELECTOR, '#od tbody tr[data-index="6064"]'))
+    assert "INTEGER32" in row[0].text
+
+
+def test_the_scope_plots_6064h_while_a_master_runs_the_line(browser, line_url):
+    """The scope on the EtherCAT page: 6064h of the iPOS (position 2)
+    subscribed, `drivebus ethercat drive csp-sine` runs it from the
+    namespace; the samples come from the process data and move."""
+    url, ns, inner = line_url
+    browser.get(url)
+    wait_for(browser, "the line shown", lambda b: len(b.find_elements(By.CSS_SELECTOR, "#line tbody tr")) == 2)
+    channels = browser.find_element(By.ID, "scope-channels")
+    channels.clear()
+    channels.send_keys("2:6064")
+    browser.find_element(By.CSS_SELECTOR, "#scope-form button[type=submit]").click()
+    master = subprocess.Popen(
+        ["ip", "netns", "exec", ns, BIN, "ethercat", "drive", "--iface", inner, "--slave", "2",
+         "csp-sine", "--amplitude", "2000", "--frequency", "2", "--seconds", "3"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        samples = lambda b: b.execute_script("return window.drivebus.samples()['2:6064:0'] || []")
+        try:
+            got = wait_for(browser, "6064h moving in the scope", lambda b: (s := samples(b)) and len({v for _, v in s}) > 20 and s)
+        except AssertionError as e:
+            master.kill()
+            raise AssertionError(f"{e}; samples {samples(browser)[-5:]}; master: {master.communicate()[1]}") from e
+        assert all(isinstance(v, (int, float)) for _, v in got)
+    finally:
+        _, err = master.communicate(timeout=60)
+    assert master.returncode == 0, err

@@ -16,6 +16,16 @@ use std::sync::{Arc, Mutex, MutexGuard};
 /// A device on a hosted segment.
 pub type BoxDevice = Box<dyn SegmentDevice + Send>;
 
+/// Called after every frame a host processed, under its lock, with the
+/// segment (a local tool sampling what the frame's process data did,
+/// `crate::objects::Watch`). It runs after the reply went back and the
+/// slaves' firmware reacted, before the next frame: it must be short.
+pub type FrameObserver = Box<dyn FnMut(&mut Segment<BoxDevice>) + Send>;
+
+/// Names an observer of [`Host::observe_frames`] to remove it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObserverId(u64);
+
 /// One slave of a host as it is now (what a status page shows).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SlaveState {
@@ -57,6 +67,8 @@ struct Inner {
     capture: Option<Capture<Box<dyn Write + Send>>>,
     turnaround: Duration,
     stats: HostStats,
+    observers: Vec<(ObserverId, FrameObserver)>,
+    next_observer: u64,
 }
 
 impl Inner {
@@ -96,7 +108,15 @@ impl Host {
     /// Hosts `segment` on `clock`.
     pub fn new(segment: Segment<BoxDevice>, clock: Clock) -> Host {
         let turnaround = if clock.is_simulated() { Duration::from_micros(5) } else { Duration::ZERO };
-        let mut inner = Inner { segment, next: None, capture: None, turnaround, stats: HostStats::default() };
+        let mut inner = Inner {
+            segment,
+            next: None,
+            capture: None,
+            turnaround,
+            stats: HostStats::default(),
+            observers: Vec::new(),
+            next_observer: 0,
+        };
         inner.next = inner.segment.poll(clock.now());
         Host { inner: Arc::new(Mutex::new(inner)), clock }
     }
@@ -163,6 +183,10 @@ impl Host {
         r.lost |= r.reached == 0 && !r.frame.ignored;
         reply(frame, r.lost);
         r.next_deadline = g.segment.run_touched();
+        let Inner { observers, segment, .. } = &mut *g;
+        for (_, o) in observers.iter_mut() {
+            o(segment);
+        }
         g.stats.frames += 1;
         if r.frame.ignored || r.frame.malformed {
             g.stats.bad_frames += 1;
@@ -212,6 +236,21 @@ impl Host {
         let now = self.clock.now();
         g.next = g.segment.poll(now);
         r
+    }
+
+    /// Calls `f` after every frame processed from now on, until
+    /// [`Host::stop_observing`].
+    pub fn observe_frames(&self, f: impl FnMut(&mut Segment<BoxDevice>) + Send + 'static) -> ObserverId {
+        let mut g = self.lock();
+        let id = ObserverId(g.next_observer);
+        g.next_observer += 1;
+        g.observers.push((id, Box::new(f)));
+        id
+    }
+
+    /// Removes an observer (nothing if it is gone already).
+    pub fn stop_observing(&self, id: ObserverId) {
+        self.lock().observers.retain(|(i, _)| *i != id);
     }
 
     /// Every slave's identity and ESM state, in line order.
@@ -288,6 +327,30 @@ mod tests {
         assert_eq!(host.al_states(), al);
         host.with_segment(|seg| seg.power_off(1));
         assert!(!host.slaves()[1].powered);
+    }
+
+    /// An observer sees every frame after the segment processed it, until
+    /// it is removed.
+    #[test]
+    fn observers_see_every_frame_until_removed() {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        let members = vec![Member::Drive(crate::drive::profile("generic").unwrap())];
+        let host = Host::line(described::devices(&members, None).unwrap(), Clock::simulated(Instant::ZERO));
+        let seen = Arc::new(AtomicU64::new(0));
+        let id = {
+            let seen = seen.clone();
+            host.observe_frames(move |seg| {
+                assert_eq!(seg.devices().len(), 1);
+                seen.fetch_add(1, Ordering::Relaxed);
+            })
+        };
+        let mut frame = [0u8; 60];
+        host.process_frame(&mut frame);
+        host.process_frame(&mut frame);
+        assert_eq!(seen.load(Ordering::Relaxed), 2);
+        host.stop_observing(id);
+        host.process_frame(&mut frame);
+        assert_eq!(seen.load(Ordering::Relaxed), 2);
     }
 
     /// The counters a status page shows: frames and datagrams of the

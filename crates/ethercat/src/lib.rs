@@ -11,6 +11,8 @@
 //! * [`master`]: an ethercrab master for tools (scan, AL state, CoE,
 //!   PDO mapping, a CiA 402 drive over process data), what `drivebus
 //!   ethercat scan|sdo|state|pdo|drive` and `drivebus demo --ethercat` run.
+//! * [`objects`]: a hosted slave's objects for a local tool (read, write,
+//!   sampled per process-data cycle), through its CoE server's path.
 //! * [`dio`]: a digital I/O test slave (no mailbox, SII-described PDOs).
 //! * [`described`]: slaves made from a real device's SII EEPROM image or
 //!   ESI file (`drivebus ethercat serve --device FILE`).
@@ -30,6 +32,7 @@ pub mod host;
 pub mod link;
 #[cfg(feature = "ethercrab")]
 pub mod master;
+pub mod objects;
 #[cfg(feature = "ethercrab")]
 pub mod probe;
 #[cfg(target_os = "linux")]
@@ -38,4 +41,4 @@ pub mod server;
 pub use clock::Clock;
 pub use drivebus_esc::MAX_JITTER_NS;
 pub use drivebus_esc::segment::LineFault;
-pub use host::{BoxDevice, Host, HostStats, SlaveState};
+pub use host::{BoxDevice, FrameObserver, Host, HostStats, ObserverId, SlaveState};

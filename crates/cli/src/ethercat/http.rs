@@ -1,7 +1,9 @@
 //! `ethercat serve --http ADDR`: the line's state as its slaves hold it,
-//! `GET /api/ethercat` (docs/http-api.md), its ESM events on the
-//! WebSocket `GET /api/stream`, and the page (`crate::web`'s files)
-//! showing it as the line view. Read only: nothing here changes the line.
+//! `GET /api/ethercat` (docs/http-api.md), its ESM events and object
+//! samples on the WebSocket `GET /api/stream` (`http_stream.rs`), the
+//! slaves' objects under the CAN side's URLs (`http_objects.rs`: the only
+//! writes), and the page (`crate::web`'s files) showing the line view,
+//! the object form, the dictionary browser and the scope.
 
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -16,7 +18,10 @@ use drivebus_ethercat::Host;
 use drivebus_ethercat::master::{self, AlState};
 use serde_json::json;
 
+use super::http_objects::{self, Slots};
+use super::http_stream::{self, Subscription};
 use crate::web::Queue;
+use crate::web::error::ApiError;
 
 /// How often a stream compares the slaves' AL status registers: a
 /// change shorter than this (a state passed on the way) is not seen.
@@ -24,35 +29,70 @@ const ESM_POLL: Duration = Duration::from_millis(20);
 
 /// What the handlers share.
 #[derive(Clone)]
-struct Served {
-    host: Host,
+pub struct Served {
+    /// The line.
+    pub host: Host,
     /// Time zero of `t` in the stream.
-    start: Instant,
+    pub start: Instant,
+    /// The slaves' dictionaries as taken once.
+    pub slots: Slots,
+    /// Required on an address other than loopback (the API writes).
+    pub token: Option<Arc<str>>,
 }
 
 impl Served {
-    fn t(&self) -> f64 {
+    /// Milliseconds since the server started.
+    pub fn t(&self) -> f64 {
         self.start.elapsed().as_secs_f64() * 1000.0
     }
 }
 
-/// Binds `addr` and serves the state of `host`'s line until the task is
-/// aborted.
-pub async fn start(host: Host, addr: &str) -> anyhow::Result<(tokio::task::JoinHandle<()>, SocketAddr)> {
+/// A running server: its task (the caller aborts it), where it listens
+/// and the token every request needs on an address other than loopback.
+pub struct Started {
+    /// The server task.
+    pub task: tokio::task::JoinHandle<()>,
+    /// Where it listens.
+    pub addr: SocketAddr,
+    /// `?token=` for every request, when required.
+    pub token: Option<Arc<str>>,
+}
+
+/// Binds `addr` and serves `host`'s line until the task is aborted.
+pub async fn start(host: Host, addr: &str) -> anyhow::Result<Started> {
     let listener = tokio::net::TcpListener::bind(addr)
         .await
         .with_context(|| format!("cannot listen on --http {addr}: is the port free? (port 0 picks one)"))?;
     let local = listener.local_addr()?;
+    let token: Option<Arc<str>> = (!local.ip().is_loopback()).then(|| crate::web::new_token().into());
+    let served = Served { host, start: Instant::now(), slots: Slots::default(), token: token.clone() };
     let app = crate::web::page_routes(crate::web::ServedBus::Ethercat)
         .route("/api/ethercat", get(line))
         .route("/api/stream", get(upgrade))
-        .with_state(Served { host, start: Instant::now() });
+        .route(
+            "/api/nodes/{n}/sdo/{index}",
+            get(http_objects::sdo_get_object).put(http_objects::sdo_put_object),
+        )
+        .route("/api/nodes/{n}/sdo/{index}/{sub}", get(http_objects::sdo_get).put(http_objects::sdo_put))
+        .route("/api/nodes/{n}/objects", get(http_objects::list))
+        .fallback(|| async { ApiError::not_found("no such page or endpoint: see docs/http-api.md") })
+        .layer(axum::middleware::from_fn_with_state(served.clone(), auth))
+        .with_state(served);
     let task = tokio::spawn(async move {
         if let Err(e) = axum::serve(listener, app).await {
             tracing::error!(error = %e, "web server stopped");
         }
     });
-    Ok((task, local))
+    Ok(Started { task, addr: local, token })
+}
+
+/// 401 without the token, when one is required.
+async fn auth(
+    State(s): State<Served>,
+    req: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
+    crate::web::check_token(s.token.as_deref(), req, next).await
 }
 
 async fn line(State(s): State<Served>) -> axum::Json<serde_json::Value> {
@@ -73,16 +113,28 @@ async fn upgrade(State(s): State<Served>, ws: WebSocketUpgrade) -> Response {
 }
 
 /// Sends the line's ESM now (`line`), then an `esm` event per slave whose
-/// AL status or code changed, through the bounded queue of `crate::web`
-/// (a slow client loses the oldest, counted in `status`).
+/// AL status or code changed, and the samples of the objects the client
+/// subscribes, through the bounded queue of `crate::web` (a slow client
+/// loses the oldest, counted in `status`).
 async fn stream(s: Served, mut socket: WebSocket) {
     let queue = Queue::new();
     let watch = tokio::spawn(watch_esm(s.clone(), queue.clone()));
     let _abort = AbortOnDrop(watch);
+    let mut subscription: Option<Subscription> = None;
     let mut status = tokio::time::interval(Duration::from_secs(1));
     loop {
         tokio::select! {
             m = socket.recv() => match m {
+                Some(Ok(Message::Text(t))) => match http_stream::message(&s, &queue, t.as_str()) {
+                    Ok(Some(sub)) => {
+                        // The old one ends before the new one's answer.
+                        drop(subscription.take());
+                        queue.push(&json!({"type": "subscribed", "channels": sub.channels}));
+                        subscription = Some(sub);
+                    }
+                    Ok(None) => {}
+                    Err(e) => queue.push(&json!({"type": "error", "error": e})),
+                },
                 Some(Ok(_)) => {}
                 Some(Err(_)) | None => return,
             },
@@ -95,7 +147,8 @@ async fn stream(s: Served, mut socket: WebSocket) {
             }
             _ = status.tick() => {
                 let st = json!({"type": "status", "t": s.t(),
-                    "dropped": queue.dropped.load(std::sync::atomic::Ordering::Relaxed)});
+                    "dropped": queue.dropped.load(std::sync::atomic::Ordering::Relaxed),
+                    "channels": subscription.as_ref().map_or(0, |c| c.channels)});
                 if socket.send(Message::Text(st.to_string().into())).await.is_err() {
                     return;
                 }

@@ -10,6 +10,10 @@ pub mod control;
 pub mod demo;
 mod drive;
 mod http;
+mod http_objects;
+mod http_stream;
+#[cfg(test)]
+mod http_tests;
 mod line;
 mod read;
 mod serve;

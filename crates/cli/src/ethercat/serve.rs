@@ -55,15 +55,16 @@ pub async fn run(a: &EcatServeArgs) -> anyhow::Result<()> {
         let control =
             control_task.as_ref().map_or_else(String::new, |(_, addr)| format!("; control on {addr}"));
         let line = names(&members).join(" ");
-        let page = http.as_ref().map_or_else(String::new, |(_, addr)| {
-            format!("; page on http://{addr}/; state on http://{addr}/api/ethercat")
+        let page = http.as_ref().map_or_else(String::new, |h| {
+            let (addr, q) = (h.addr, h.token.as_ref().map_or_else(String::new, |t| format!("?token={t}")));
+            format!("; page on http://{addr}/{q}; state on http://{addr}/api/ethercat{q}")
         });
         writeln!(out, "drivebus ethercat serve: ready on {} (line {line}){control}{page}", a.iface)?;
         out.flush()?;
     }
     signals.wait().await?;
-    if let Some((task, _)) = http {
-        task.abort();
+    if let Some(h) = http {
+        h.task.abort();
     }
     if let Some((task, addr)) = control_task {
         task.abort();

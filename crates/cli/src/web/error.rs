@@ -42,20 +42,7 @@ impl ApiError {
             return ApiError::sdo(node, index, sub, cause);
         }
         match e.abort_code() {
-            Some(code) => {
-                let text = code.description().unwrap_or("manufacturer-specific abort");
-                let status = match code {
-                    SdoAbort::NO_OBJECT | SdoAbort::NO_SUB_INDEX => StatusCode::NOT_FOUND,
-                    _ => StatusCode::UNPROCESSABLE_ENTITY,
-                };
-                ApiError {
-                    status,
-                    message: format!(
-                        "{text} (SDO abort {:08X}h) at {at}: check the index, sub-index, access and value range in the device's EDS",
-                        code.0
-                    ),
-                }
-            }
+            Some(code) => ApiError::abort(code, &at),
             None => match e {
                 SdoError::Timeout => ApiError {
                     status: StatusCode::GATEWAY_TIMEOUT,
@@ -71,6 +58,23 @@ impl ApiError {
                     message: format!("{e} at {at}: check the bus connection"),
                 },
             },
+        }
+    }
+
+    /// A device's SDO abort `at` an object: 404 for an absent object or
+    /// sub-index, 422 for any other refusal, with the CiA 301 text.
+    pub fn abort(code: SdoAbort, at: &str) -> ApiError {
+        let text = code.description().unwrap_or("manufacturer-specific abort");
+        let status = match code {
+            SdoAbort::NO_OBJECT | SdoAbort::NO_SUB_INDEX => StatusCode::NOT_FOUND,
+            _ => StatusCode::UNPROCESSABLE_ENTITY,
+        };
+        ApiError {
+            status,
+            message: format!(
+                "{text} (SDO abort {:08X}h) at {at}: check the index, sub-index, access and value range in the device's EDS",
+                code.0
+            ),
         }
     }
 

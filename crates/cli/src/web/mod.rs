@@ -8,19 +8,19 @@
 //! address every request needs the token printed at start (`?token=` or
 //! the `X-Drivebus-Token` header), else 401.
 
-mod api;
+pub(crate) mod api;
 mod drive;
-mod error;
+pub(crate) mod error;
 mod frames;
 mod identify;
 mod jog;
 mod lss;
 mod machine;
-mod objects;
+pub(crate) mod objects;
 mod pdo;
 mod sine;
 mod stream;
-mod values;
+pub(crate) mod values;
 
 use std::collections::{HashMap, VecDeque};
 use std::net::SocketAddr;
@@ -278,10 +278,17 @@ fn page(content_type: &'static str, body: &'static str) -> Response {
 
 /// 401 without the token, when one is required.
 async fn auth(State(web): State<Arc<Web>>, req: Request, next: Next) -> Response {
-    let Some(want) = &web.token else { return next.run(req).await };
+    check_token(web.token.as_deref(), req, next).await
+}
+
+/// Runs `req` when no token is required or it carries `want` (`?token=`
+/// or the `X-Drivebus-Token` header); else 401. The one check of both
+/// servers (`ui`/`serve --http`, `ethercat serve --http`).
+pub async fn check_token(want: Option<&str>, req: Request, next: Next) -> Response {
+    let Some(want) = want else { return next.run(req).await };
     let header = req.headers().get("x-drivebus-token").and_then(|v| v.to_str().ok());
     let query = req.uri().query().unwrap_or("").split('&').find_map(|kv| kv.strip_prefix("token="));
-    if header == Some(want.as_str()) || query == Some(want.as_str()) {
+    if header == Some(want) || query == Some(want) {
         return next.run(req).await;
     }
     error::ApiError {
@@ -292,7 +299,7 @@ async fn auth(State(web): State<Arc<Web>>, req: Request, next: Next) -> Response
 }
 
 /// 128 random bits in hex (from the OS, else from the hasher's seed).
-fn new_token() -> String {
+pub fn new_token() -> String {
     use std::io::Read;
     let mut b = [0u8; 16];
     let from_os = std::fs::File::open("/dev/urandom").and_then(|mut f| f.read_exact(&mut b)).is_ok();

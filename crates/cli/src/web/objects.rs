@@ -48,7 +48,14 @@ pub async fn list(
             "no EDS for node {node}: `drivebus ui --eds FILE` gives one (hosted drives have theirs)"
         ))
     })?;
-    let q = s.q.unwrap_or_default().trim().to_lowercase();
+    Ok(Json(json!({"node": node, "objects": entries(&od, s.q.as_deref().unwrap_or_default())})))
+}
+
+/// The entries of `od` whose object or entry name contains `q` (any
+/// case) or whose index starts with it, one per sub-index, at most
+/// [`MAX_ENTRIES`]: names, types, access, limits and defaults.
+pub fn entries(od: &ObjectDictionary, q: &str) -> Vec<Json_> {
+    let q = q.trim().to_lowercase();
     let hex_q = q.trim_start_matches("0x").trim_end_matches('h').to_uppercase();
     let mut out = Vec::new();
     for o in od.objects() {
@@ -59,7 +66,7 @@ pub async fn list(
                 continue;
             }
             if out.len() == MAX_ENTRIES {
-                break;
+                return out;
             }
             out.push(json!({"index": index, "sub": e.sub, "object": o.name, "name": e.name,
                 "type": e.data_type.name(), "access": e.access.name(), "pdo": e.pdo_mappable,
@@ -67,7 +74,7 @@ pub async fn list(
                 "default": Value::decode(e.data_type, &e.default).ok().map(|v| values::to_json(&v))}));
         }
     }
-    Ok(Json(json!({"node": node, "objects": out})))
+    out
 }
 
 /// A write outside the EDS's LowLimit/HighLimit, refused before sending.

@@ -112,6 +112,14 @@ impl DescribedApp {
         self.coe.as_ref().map(|c| &c.od)
     }
 
+    /// Runs `f` on the dictionary through the read and write path its CoE
+    /// server takes (the described access words in the current ESM
+    /// state), for a local tool; `None` for a device without CoE.
+    pub fn with_objects<R>(&mut self, f: impl FnOnce(&mut dyn ObjectAccess) -> R) -> Option<R> {
+        let c = self.coe.as_mut()?;
+        Some(f(&mut Access { od: &mut c.od, words: &c.access, esm: self.esm }))
+    }
+
     /// Counters.
     pub fn stats(&self) -> DescribedStats {
         self.stats

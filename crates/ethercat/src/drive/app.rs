@@ -5,7 +5,7 @@ use super::access::DriveAccess;
 use super::image::{Image, al_code};
 use super::sync::SyncParams;
 use drivebus_can::{Device, Duration, Frame, Instant, earliest};
-use drivebus_coe::MailboxServer;
+use drivebus_coe::{MailboxServer, ObjectAccess};
 use drivebus_esc::slave::{
     AlState, AlStatusCode, MailboxOut, ProcessDataSizes, SlaveApp, SyncConfig, SyncMode, SyncSupport,
     Transition,
@@ -152,6 +152,18 @@ impl DriveApp {
         let r = dev.node.with_app(now, &mut dev.app, &mut self.frames, |app, _| {
             app.change_machine(now, change, duration)
         });
+        self.take_frames();
+        r
+    }
+
+    /// Runs `f` on the drive's objects at `now` through the read and write
+    /// path its CoE server takes (access rights, limits, hooks, the
+    /// EtherCAT rules), for a local tool; EMCYs a write causes become CoE
+    /// emergencies as after a mailbox request.
+    pub fn with_objects<R>(&mut self, now: Instant, f: impl FnOnce(&mut dyn ObjectAccess) -> R) -> R {
+        self.run_to(now);
+        let mut access = DriveAccess { dev: &mut self.dev, now, frames: &mut self.frames };
+        let r = f(&mut access);
         self.take_frames();
         r
     }

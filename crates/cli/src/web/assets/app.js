@@ -3,6 +3,7 @@
 const token = new URLSearchParams(location.search).get("token");
 const headers = token ? { "X-Drivebus-Token": token, "Content-Type": "application/json" } : { "Content-Type": "application/json" };
 const $ = (id) => document.getElementById(id);
+const ethercat = document.body.dataset.bus === "ethercat";
 
 async function api(method, path, body) {
   const r = await fetch(path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
@@ -266,6 +267,8 @@ function connect() {
       scopeSubscribed();
     } else if (msg.type === "status") {
       $("dropped").textContent = msg.dropped ? `${msg.dropped} samples dropped` : "";
+    } else if (msg.type === "event" && ethercat) {
+      // ESM events: the line view has its own stream (line.js).
     } else if (msg.type === "event") {
       if (msg.event === "emcy") refreshEmcy();
       // Its own line: a short motion (homing on the spot) may end before
@@ -285,8 +288,31 @@ function subscribe() {
 $("scope-form").onsubmit = (ev) => { ev.preventDefault(); subscribe(); };
 
 $("refresh").onclick = refreshNodes;
-// An EtherCAT line's page shows the line view only (line.js).
-if (document.body.dataset.bus !== "ethercat") {
+// The slaves of an EtherCAT line by position, in the object form: the
+// same object URLs with the position as the node.
+async function refreshSlaves() {
+  try {
+    const { slaves } = await api("GET", "/api/ethercat");
+    const sel = $("sdo-node");
+    const keep = sel.value;
+    sel.innerHTML = "";
+    for (const s of slaves) {
+      const o = document.createElement("option");
+      o.value = s.position;
+      o.textContent = `${s.position}${s.name ? " " + s.name : ""}`;
+      sel.appendChild(o);
+    }
+    if (keep) sel.value = keep;
+  } catch (e) { show($("sdo-out"), e.message, true); }
+}
+// An EtherCAT line's page: the line view (line.js), the object form, the
+// dictionary browser and the scope.
+if (ethercat) {
+  $("sdo-node").previousSibling.textContent = "slave ";
+  refreshSlaves();
+  setInterval(refreshSlaves, 3000);
+  connect();
+} else {
   refreshNodes().then(() => { refreshDrive(); refreshHoming(); });
   refreshEmcy();
   setInterval(refreshNodes, 3000);

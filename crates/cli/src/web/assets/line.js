@@ -1,4 +1,4 @@
-// EtherCAT line view (docs/http-api.md, "EtherCAT line state"): on a page
+// EtherCAT line view (docs/http-api.md, "EtherCAT line"): on a page
 // served by `ethercat serve --http` (<body data-bus="ethercat">) the
 // slaves in line order with their ESM state, AL status and counters,
 // refreshed twice a second and at once on every ESM event of the
@@ -13,7 +13,7 @@
     if (busy) return;
     busy = true;
     try {
-      const r = await fetch("/api/ethercat");
+      const r = await fetch("/api/ethercat" + location.search); // ?token= when required
       if (!r.ok) throw new Error("GET /api/ethercat: HTTP " + r.status);
       const { slaves, line } = await r.json();
       const body = el("line").querySelector("tbody");
