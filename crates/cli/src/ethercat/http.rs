@@ -18,7 +18,7 @@ use drivebus_ethercat::Host;
 use drivebus_ethercat::master::{self, AlState};
 use serde_json::json;
 
-use super::http_objects::{self, Slots};
+use super::http_objects::{self, ObjectSlots};
 use super::http_stream::{self, Subscription};
 use crate::web::Queue;
 use crate::web::error::ApiError;
@@ -35,7 +35,7 @@ pub struct Served {
     /// Time zero of `t` in the stream.
     pub start: Instant,
     /// The slaves' dictionaries as taken once.
-    pub slots: Slots,
+    pub slots: ObjectSlots,
     /// Required on an address other than loopback (the API writes).
     pub token: Option<Arc<str>>,
 }
@@ -65,7 +65,7 @@ pub async fn start(host: Host, addr: &str) -> anyhow::Result<Started> {
         .with_context(|| format!("cannot listen on --http {addr}: is the port free? (port 0 picks one)"))?;
     let local = listener.local_addr()?;
     let token: Option<Arc<str>> = (!local.ip().is_loopback()).then(|| crate::web::new_token().into());
-    let served = Served { host, start: Instant::now(), slots: Slots::default(), token: token.clone() };
+    let served = Served { host, start: Instant::now(), slots: ObjectSlots::default(), token: token.clone() };
     let app = crate::web::page_routes(crate::web::ServedBus::Ethercat)
         .route("/api/ethercat", get(line))
         .route("/api/stream", get(upgrade))

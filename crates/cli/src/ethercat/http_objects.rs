@@ -21,13 +21,14 @@ use serde_json::{Value as Json_, json};
 
 use super::http::Served;
 use crate::dict::Dict;
-use crate::web::api::body;
+use crate::web::api::{TypeQuery, body};
 use crate::web::error::{ApiError, ApiResult};
+use crate::web::objects::Search;
 use crate::web::values;
 
 /// A slave's dictionary as taken once: names, types, access, limits (the
 /// values in it are not read; they age).
-pub struct Slot {
+pub struct ObjectSlot {
     /// The dictionary's description.
     pub od: ObjectDictionary,
     /// Its names, for objects given by name (then CiA 301/402's).
@@ -35,7 +36,7 @@ pub struct Slot {
 }
 
 /// The slots taken so far, by position.
-pub type Slots = Arc<Mutex<HashMap<usize, Arc<Slot>>>>;
+pub type ObjectSlots = Arc<Mutex<HashMap<usize, Arc<ObjectSlot>>>>;
 
 /// An object of a slave that failed: 404 for no such slave or no
 /// dictionary, 409 powered off, the SDO abort as on the CAN side.
@@ -60,18 +61,18 @@ pub fn position(n: &str) -> ApiResult<usize> {
 }
 
 /// The slot of `position`, taken from the slave at first use.
-pub fn slot(host: &Host, slots: &Slots, position: usize) -> ApiResult<Arc<Slot>> {
+pub fn slot(host: &Host, slots: &ObjectSlots, position: usize) -> ApiResult<Arc<ObjectSlot>> {
     if let Some(s) = slots.lock().unwrap_or_else(|e| e.into_inner()).get(&position) {
         return Ok(s.clone());
     }
     let od = objects::dictionary(host, position).map_err(|e| object_error(position, 0, 0, e))?;
     let eds = drivebus_eds::from_od(&od, drivebus_eds::DeviceInfo::default(), 0, false);
-    let s = Arc::new(Slot { od, dict: Dict { eds: Some(eds) } });
+    let s = Arc::new(ObjectSlot { od, dict: Dict { eds: Some(eds) } });
     slots.lock().unwrap_or_else(|e| e.into_inner()).insert(position, s.clone());
     Ok(s)
 }
 
-impl Slot {
+impl ObjectSlot {
     /// The data type of `index:sub`: `ty` when given, else the dictionary's.
     pub fn data_type(&self, index: u16, sub: u8, ty: Option<&str>) -> ApiResult<Option<DataType>> {
         Ok(match ty {
@@ -79,13 +80,6 @@ impl Slot {
             None => self.od.get(index, sub).map(|e| e.data_type),
         })
     }
-}
-
-/// `?type=u16`: read or write as this type.
-#[derive(serde::Deserialize)]
-pub struct TypeQuery {
-    #[serde(rename = "type")]
-    ty: Option<String>,
 }
 
 fn read(s: &Served, n: &str, index: &str, sub: Option<&str>, ty: Option<&str>) -> ApiResult<Json<Json_>> {
@@ -169,12 +163,6 @@ pub async fn sdo_put_object(
     b: Bytes,
 ) -> ApiResult<Json<Json_>> {
     write(&s, &n, &index, None, &b)
-}
-
-/// `?q=`: a part of the name, or a hex index prefix.
-#[derive(serde::Deserialize)]
-pub struct Search {
-    q: Option<String>,
 }
 
 /// `GET /api/nodes/{position}/objects?q=velocity`: the slave's dictionary.

@@ -81,8 +81,9 @@ pub async fn nodes(State(web): State<Arc<Web>>) -> ApiResult<Json<Json_>> {
 /// `?type=u16`: read or write as this type.
 #[derive(serde::Deserialize)]
 pub struct TypeQuery {
+    /// The type name (`u16`, `UNSIGNED16`, ...).
     #[serde(rename = "type")]
-    ty: Option<String>,
+    pub ty: Option<String>,
 }
 
 async fn read(web: &Web, node: u8, index: u16, sub: u8, ty: Option<&str>) -> ApiResult<Json<Json_>> {

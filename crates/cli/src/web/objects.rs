@@ -21,7 +21,8 @@ const MAX_ENTRIES: usize = 2000;
 /// `?q=`: a case-insensitive part of the name, or a hex index prefix.
 #[derive(serde::Deserialize)]
 pub struct Search {
-    q: Option<String>,
+    /// The text searched for.
+    pub q: Option<String>,
 }
 
 fn limit(dt: DataType, b: &Option<Vec<u8>>) -> Json_ {
