@@ -1079,3 +1079,29 @@ async fn drive_status_reports_switch_inputs_and_limits() {
     assert_eq!(s, 200, "{dds6}");
     assert!(dds6["switches"].is_null(), "{dds6}");
 }
+
+/// `GET /drive/homing`: the methods of the drive's manual (neither the
+/// AKD nor the DDS6 lists 60E3h) and 6098h as set now; bad and unknown
+/// nodes refused.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn homing_methods_come_from_the_manual_with_the_current_method() {
+    let ui = Ui::sims();
+    for (node, name) in [(1, "akd"), (2, "dds6")] {
+        let (s, v) = get(&ui, &format!("/api/nodes/{node}/drive/homing")).await;
+        assert_eq!(s, 200, "{v}");
+        let manual = drivebus_personality::Profile::from_name(name).unwrap().info().homing_methods;
+        let methods: Vec<i64> =
+            v["methods"].as_array().unwrap().iter().map(|m| m.as_i64().unwrap()).collect();
+        assert_eq!(methods, manual.iter().map(|&m| i64::from(m)).collect::<Vec<_>>(), "{v}");
+        assert_eq!(v["source"], format!("the {name} manual"), "{v}");
+        let (_, m) = get(&ui, &format!("/api/nodes/{node}/sdo/6098/0")).await;
+        assert_eq!(v["current"], m["value"], "{v} {m}");
+    }
+    // A method set by SDO is what `current` gives next.
+    let (_, v) = get(&ui, "/api/nodes/1/drive/homing").await;
+    let other = v["methods"].as_array().unwrap().iter().find(|m| **m != v["current"]).cloned().unwrap();
+    assert_eq!(put(&ui, "/api/nodes/1/sdo/6098/0", json!({ "value": other })).await.0, 200);
+    assert_eq!(get(&ui, "/api/nodes/1/drive/homing").await.1["current"], other);
+    refused(&get(&ui, "/api/nodes/9/drive/homing").await, 404, "not been seen");
+    refused(&get(&ui, "/api/nodes/200/drive/homing").await, 400, "node");
+}
