@@ -16,7 +16,7 @@ use drivebus_can::LinkState;
 use drivebus_can::timing::{BUS_OFF_RECOVERY_BITS, bits_duration};
 use drivebus_personality::PersonalityDevice;
 use drivebus_personality::build::EdsDevice;
-use drivebus_personality::machine::{Change, MachineError};
+use drivebus_personality::machine::{Change, InForce, MachineError};
 use drivebus_transport::Hub;
 use drivebus_transport::host::{Controller, DeviceHost, spawn};
 
@@ -114,6 +114,14 @@ impl NodeHost {
     /// Hosts a device from a file on `hub`.
     pub fn device(dev: EdsDevice, hub: &Hub) -> NodeHost {
         NodeHost::Device(spawn(Controller::new(dev), hub.attach()))
+    }
+
+    /// What is in force on the node's machine; `None` when the host has stopped.
+    async fn in_force(&self) -> Option<Vec<InForce>> {
+        match self {
+            NodeHost::Drive(h) => h.with(|d, now| d.device.app.machine_in_force(now)).await,
+            NodeHost::Device(h) => h.with(|d, now| d.device.app.machine_in_force(now)).await,
+        }
     }
 
     /// `None` when the host has stopped.
@@ -267,6 +275,15 @@ impl Control {
             .await
             .ok_or_else(|| stopped(node))?
             .map_err(|e| anyhow::Error::new(e).context(format!("node {node}")))
+    }
+
+    /// The machine's faults and input changes in force on `node`, a CAN
+    /// node this server hosts and runs (the machine file's and those made
+    /// through this interface).
+    pub async fn in_force(&self, node: u8) -> anyhow::Result<Vec<InForce>> {
+        let Control::Can { nodes, .. } = self else { bail!("not a CAN server") };
+        let nodes = nodes.lock().await;
+        running(&nodes, node)?.in_force().await.ok_or_else(|| stopped(node))
     }
 
     async fn power(

@@ -959,16 +959,37 @@ async fn machine_inputs_and_faults_of_hosted_drives() {
     );
     refused(&post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "trip"})).await, 400, "fault");
     assert_eq!(inputs().await, before);
+    // Nothing in force yet; the state of a node not hosted is refused.
+    let state = || async { get(&ui, "/api/nodes/5/machine").await };
+    let (s, v) = state().await;
+    assert_eq!((s, &v["faults"], &v["inputs"]), (200, &json!([]), &json!([])), "{v}");
+    refused(&get(&ui, "/api/nodes/9/machine").await, 404, "not a drive this process hosts");
     // An input: generic shows line 3 in 60FDh bit 18.
     let (s, v) = post(&ui, "/api/nodes/5/machine/input", line3).await;
     assert_eq!(s, 200, "{v}");
     wait_for(Duration::from_secs(10), || async { (inputs().await & 1 << 18 != 0).then_some(()) }).await;
+    let v = state().await.1;
+    let held = &v["inputs"][0];
+    assert_eq!(
+        (&held["input"], &held["line"], &held["value"]),
+        (&json!("digital"), &json!(3), &json!(1.0)),
+        "{v}"
+    );
+    assert_eq!(held["remaining_s"], Value::Null, "{v}");
     // A limit switch trips: 60FDh bit 1 (positive limit switch).
-    let trip = json!({"kind": "trip", "switch": "positive_limit"});
+    let trip = json!({"kind": "trip", "switch": "positive_limit", "duration": 600});
     assert_eq!(post(&ui, "/api/nodes/5/machine/fault", trip).await.0, 200);
     wait_for(Duration::from_secs(10), || async { (inputs().await & 1 << 1 != 0).then_some(()) }).await;
+    let v = state().await.1;
+    let fault = &v["faults"][0];
+    assert_eq!((&fault["kind"], &fault["switch"]), (&json!("trip"), &json!("positive_limit")), "{v}");
+    let left = fault["remaining_s"].as_f64().expect("remaining_s");
+    assert!(left > 500.0 && left <= 600.0, "{v}");
     assert_eq!(post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "clear"})).await.0, 200);
     wait_for(Duration::from_secs(10), || async { (inputs().await & 1 << 1 == 0).then_some(()) }).await;
+    // Clear ends the faults; the input stays.
+    let v = state().await.1;
+    assert_eq!((v["faults"].as_array().unwrap().len(), v["inputs"].as_array().unwrap().len()), (0, 1), "{v}");
     // A drive fault: the encoder's EMCY 7305h reaches the history.
     assert_eq!(post(&ui, "/api/nodes/5/machine/fault", json!({"kind": "encoder"})).await.0, 200);
     wait_for(Duration::from_secs(10), || async {

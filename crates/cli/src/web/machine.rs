@@ -1,6 +1,6 @@
 //! Machine inputs and faults of the drives this process hosts (`serve
-//! --drive ... --http`): `POST /api/nodes/{n}/machine/input` and
-//! `/machine/fault`, carried out by the control interface
+//! --drive ... --http`): `GET /api/nodes/{n}/machine` (what is in force),
+//! `POST /api/nodes/{n}/machine/input` and `/machine/fault`, carried out by the control interface
 //! (`crate::control::Control`, as `serve --control` and `drivebus
 //! control`), so they go through the drive's machine schedule.
 
@@ -9,7 +9,7 @@ use std::sync::Arc;
 use axum::Json;
 use axum::body::Bytes;
 use axum::extract::{Path, State};
-use drivebus_personality::machine::{Change, MachineError};
+use drivebus_personality::machine::{Change, InForce, MachineError};
 use serde_json::{Value as Json_, json};
 
 use super::Web;
@@ -109,4 +109,39 @@ pub async fn fault(State(web): State<Arc<Web>>, Path(n): Path<String>, b: Bytes)
         ControlRequest::Fault { node, kind: f.kind.clone(), switch: f.switch.clone(), duration: f.duration };
     run(control, req).await?;
     Ok(Json(json!({"node": node, "kind": f.kind, "switch": f.switch, "duration": f.duration, "set": true})))
+}
+
+/// One change in force as the API gives it: named as in the POST bodies.
+fn in_force_json(f: &InForce) -> Json_ {
+    let timing = |mut j: Json_| {
+        j["active_s"] = json!(f.active);
+        j["remaining_s"] = json!(f.remaining);
+        j
+    };
+    match f.change {
+        Change::Fault(k) => {
+            let (kind, switch) = k.names();
+            timing(json!({"kind": kind, "switch": switch}))
+        }
+        Change::Input(i) => {
+            let (input, line, value) = i.names();
+            timing(json!({"input": input, "line": line, "value": value}))
+        }
+        Change::ClearFaults => Json_::Null,
+    }
+}
+
+/// `GET /api/nodes/{n}/machine`: the machine's faults and input changes
+/// in force now (the machine file's and those made at run time), in the
+/// order they began.
+pub async fn state(State(web): State<Arc<Web>>, Path(n): Path<String>) -> ApiResult<Json<Json_>> {
+    let (node, control) = hosted(&web, &n).await?;
+    let now = control.in_force(node).await.map_err(|e| ApiError::conflict(format!("{e:#}")))?;
+    let (faults, inputs): (Vec<&InForce>, Vec<&InForce>) =
+        now.iter().partition(|f| matches!(f.change, Change::Fault(_)));
+    Ok(Json(json!({
+        "node": node,
+        "faults": faults.into_iter().map(in_force_json).collect::<Vec<_>>(),
+        "inputs": inputs.into_iter().map(in_force_json).collect::<Vec<_>>(),
+    })))
 }

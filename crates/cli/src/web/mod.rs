@@ -261,6 +261,7 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes/{n}/drive/jog", post(jog::jog))
         .route("/api/nodes/{n}/drive/sine", post(sine::sine))
         .route("/api/nodes/{n}/machine/input", post(machine::input))
+        .route("/api/nodes/{n}/machine", get(machine::state))
         .route("/api/nodes/{n}/machine/fault", post(machine::fault))
         .route("/api/emcy", get(api::emcy))
         .route("/api/lss/scan", post(lss::scan))

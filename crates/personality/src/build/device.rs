@@ -98,6 +98,13 @@ impl IoNode {
     }
 }
 
+impl IoNode {
+    /// The input changes in force at `now`.
+    pub fn in_force(&self, now: Instant) -> Vec<crate::machine::InForce> {
+        self.schedule.in_force(now)
+    }
+}
+
 /// The application of a device built from a file.
 pub enum DeviceApp {
     /// A CiA 301 device: the dictionary is all there is.
@@ -107,6 +114,14 @@ pub enum DeviceApp {
 }
 
 impl DeviceApp {
+    /// The input changes in force at `now` (none on a plain device).
+    pub fn machine_in_force(&self, now: Instant) -> Vec<crate::machine::InForce> {
+        match self {
+            DeviceApp::Io(n) => n.in_force(now),
+            DeviceApp::Plain => Vec::new(),
+        }
+    }
+
     /// [`IoNode::change_machine`] on a CiA 401 module; a plain device has
     /// no inputs.
     pub fn change_machine(

@@ -88,6 +88,12 @@ impl Personality {
         s.change(now, change, duration)
     }
 
+    /// The machine's faults and input changes in force at `now` (the
+    /// machine file's and those made at run time).
+    pub fn machine_in_force(&self, now: Instant) -> Vec<crate::machine::InForce> {
+        self.faults.as_ref().map_or_else(Vec::new, |s| s.in_force(now))
+    }
+
     /// The behaviour as its concrete type `T` (e.g.
     /// [`crate::ssd630::Ssd630`] to switch its enable input at
     /// run time); `None` if it is another type or does not expose itself

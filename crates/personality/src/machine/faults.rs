@@ -346,9 +346,117 @@ impl FaultSchedule {
     }
 }
 
+/// A change of the machine in force: a fault, or an input held at a value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InForce {
+    /// The fault ([`Change::Fault`]) or input change ([`Change::Input`]).
+    pub change: Change,
+    /// How long it has been in force \[s\].
+    pub active: f64,
+    /// Seconds left (`None`: until changed again or cleared).
+    pub remaining: Option<f64>,
+}
+
+impl FaultSchedule {
+    /// The faults and input changes in force at `now`, in the order they
+    /// began (a later change of the same input wins): begun, not ended,
+    /// not superseded or cleared. A jump of the master encoder is an
+    /// event, not a state, and is not listed.
+    pub fn in_force(&self, now: Instant) -> Vec<InForce> {
+        let Some(t0) = self.t0 else { return Vec::new() };
+        let t = now.as_nanos().saturating_sub(t0.as_nanos());
+        self.faults
+            .iter()
+            .filter(|(e, p)| {
+                *p != Phase::Over
+                    && e.start_ns() <= t
+                    && e.end_ns().is_none_or(|end| t < end)
+                    && !matches!(e.what, What::Input(Input::MasterPosition(_)))
+            })
+            .map(|(e, _)| InForce {
+                change: match e.what {
+                    What::Fault(k) => Change::Fault(k),
+                    What::Input(i) => Change::Input(i),
+                },
+                active: (t as f64 / 1e9 - e.at).max(0.0),
+                remaining: e.duration.map(|d| (e.at + d - t as f64 / 1e9).max(0.0)),
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_read_back_as_the_same_change() {
+        let switches = [Switch::NegativeLimit, Switch::PositiveLimit, Switch::Home];
+        let mut kinds = vec![
+            FaultKind::Encoder,
+            FaultKind::OverCurrent,
+            FaultKind::OverTemperature,
+            FaultKind::OverVoltage,
+            FaultKind::UnderVoltage,
+        ];
+        kinds.extend(switches.iter().flat_map(|&s| [FaultKind::Trip(s), FaultKind::WireBreak(s)]));
+        for k in kinds {
+            let (kind, switch) = k.names();
+            assert_eq!(Change::fault(kind, switch).unwrap(), Change::Fault(k), "{kind} {switch:?}");
+        }
+        for i in [
+            Input::Digital { line: 16, level: true },
+            Input::Digital { line: 1, level: false },
+            Input::Analog { channel: 4, volts: -2.5 },
+            Input::MasterVelocity(1000.0),
+            Input::MasterPosition(-5.0),
+            Input::MotorTemperature(80.0),
+            Input::Brake(true),
+            Input::Brake(false),
+        ] {
+            let (name, line, value) = i.names();
+            assert_eq!(Change::input(name, line, value).unwrap(), Change::Input(i), "{name}");
+        }
+    }
+
+    #[test]
+    fn in_force_lists_what_began_and_has_not_ended() {
+        let t = |s: f64| Instant::from_nanos((s * 1e9) as u64);
+        let mut s = FaultSchedule::new(
+            vec![Fault { at: 1.0, kind: FaultKind::Encoder, duration: Some(2.0) }],
+            Polarity::default(),
+            Polarity::NormallyOpen,
+        );
+        s.start(t(0.0));
+        // The device polls the schedule after every change (`run`).
+        let at = |s: &mut FaultSchedule, secs: f64, c: Change| {
+            s.change(t(secs), c, None).unwrap();
+            s.run_with(t(secs), |_| ());
+        };
+        assert!(s.in_force(t(0.5)).is_empty(), "the machine file's fault has not begun");
+        let enc = s.in_force(t(1.5));
+        assert_eq!(enc.len(), 1);
+        assert_eq!(enc[0].change, Change::Fault(FaultKind::Encoder));
+        assert!((enc[0].active - 0.5).abs() < 1e-9, "{enc:?}");
+        assert!((enc[0].remaining.unwrap() - 1.5).abs() < 1e-9, "{enc:?}");
+        let d3 = Change::Input(Input::Digital { line: 3, level: true });
+        at(&mut s, 2.0, d3);
+        at(&mut s, 2.0, Change::Input(Input::MasterPosition(100.0)));
+        let now: Vec<Change> = s.in_force(t(2.5)).iter().map(|f| f.change).collect();
+        assert_eq!(now, [Change::Fault(FaultKind::Encoder), d3]);
+        assert_eq!(s.in_force(t(2.5))[1].remaining, None);
+        // The fault's duration ends it; a lasting change of line 3 replaces the first.
+        let d3_low = Change::Input(Input::Digital { line: 3, level: false });
+        at(&mut s, 3.5, d3_low);
+        let now: Vec<Change> = s.in_force(t(3.5)).iter().map(|f| f.change).collect();
+        assert_eq!(now, [d3_low]);
+        // Clear ends faults, not inputs.
+        at(&mut s, 4.0, Change::Fault(FaultKind::OverTemperature));
+        assert_eq!(s.in_force(t(4.2)).len(), 2);
+        at(&mut s, 4.5, Change::ClearFaults);
+        let now: Vec<Change> = s.in_force(t(4.5)).iter().map(|f| f.change).collect();
+        assert_eq!(now, [d3_low]);
+    }
 
     #[test]
     fn changes_are_named_as_in_the_machine_file() {

@@ -304,6 +304,43 @@ impl super::Change {
     }
 }
 
+impl FaultKind {
+    /// The `kind` and `switch` a `[[node.faults]]` entry names this fault
+    /// with (the reverse of [`Change::fault`](super::Change::fault)).
+    pub fn names(self) -> (&'static str, Option<&'static str>) {
+        let switch = |s: Switch| match s {
+            Switch::NegativeLimit => "negative_limit",
+            Switch::PositiveLimit => "positive_limit",
+            Switch::Home => "home_switch",
+        };
+        match self {
+            FaultKind::Trip(s) => ("trip", Some(switch(s))),
+            FaultKind::WireBreak(s) => ("wire_break", Some(switch(s))),
+            FaultKind::Encoder => ("encoder", None),
+            FaultKind::OverCurrent => ("over_current", None),
+            FaultKind::OverTemperature => ("over_temperature", None),
+            FaultKind::OverVoltage => ("over_voltage", None),
+            FaultKind::UnderVoltage => ("under_voltage", None),
+        }
+    }
+}
+
+impl Input {
+    /// The `input`, `line` and `value` a `[[node.inputs]]` entry gives
+    /// this change with (the reverse of [`Change::input`](super::Change::input)).
+    pub fn names(self) -> (&'static str, Option<u8>, f64) {
+        let level = |b: bool| if b { 1.0 } else { 0.0 };
+        match self {
+            Input::Digital { line, level: l } => ("digital", Some(line), level(l)),
+            Input::Analog { channel, volts } => ("analog", Some(channel), volts),
+            Input::MasterVelocity(v) => ("master_velocity", None, v),
+            Input::MasterPosition(v) => ("master_position", None, v),
+            Input::MotorTemperature(v) => ("motor_temperature", None, v),
+            Input::Brake(b) => ("brake", None, level(b)),
+        }
+    }
+}
+
 /// Where each key of a node's table is, to place an error on it.
 #[derive(Debug, Default)]
 struct Spans(BTreeMap<String, Range<usize>>);

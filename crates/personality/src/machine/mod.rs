@@ -25,7 +25,7 @@ pub mod faults;
 pub mod file;
 pub mod io;
 
-pub use faults::{Change, Fault, FaultKind, FaultSchedule, InputBase, Switch};
+pub use faults::{Change, Fault, FaultKind, FaultSchedule, InForce, InputBase, Switch};
 pub use file::{MachineFile, MachineFileError};
 pub use io::{Brake, Input, InputChange, Io, MasterEncoder, Temperature};
 
