@@ -142,6 +142,11 @@ async fn sdo_reads_by_hex_or_name_and_writes_read_back() {
     assert_eq!(s, 200, "{a}");
     assert_eq!(a["type"], "UNSIGNED16");
     assert_eq!(a["name"], "Statusword");
+    assert_eq!(a["unit"], Value::Null, "a word has no unit");
+    let (_, v) = get(&ui, "/api/nodes/1/sdo/606C/0").await;
+    assert_eq!(v["unit"], "velocity units", "{v}");
+    let (_, v) = get(&ui, "/api/nodes/2/sdo/1017/0").await;
+    assert_eq!(v["unit"], "ms", "{v}");
     let (_, b) = get(&ui, "/api/nodes/1/sdo/statusword").await;
     let (_, c) = get(&ui, "/api/nodes/1/sdo/0x6041/00").await;
     assert_eq!(a["value"], b["value"]);

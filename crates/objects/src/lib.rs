@@ -25,6 +25,9 @@ extern crate alloc;
 mod macros;
 mod table;
 mod table402;
+mod units;
+
+pub use units::unit;
 
 use alloc::borrow::Cow;
 use alloc::string::String;

@@ -100,7 +100,8 @@ fn read(s: &Served, n: &str, index: &str, sub: Option<&str>, ty: Option<&str>) -
         None => Json_::Null,
     };
     Ok(Json(json!({"node": p, "index": format!("{index:04X}"), "sub": sub,
-        "name": slot.dict.name(index, sub), "type": dt.map(|d| d.name()), "value": value, "raw": values::hex(&raw)})))
+        "name": slot.dict.name(index, sub), "type": dt.map(|d| d.name()), "value": value,
+        "unit": drivebus_objects::unit(index, sub), "raw": values::hex(&raw)})))
 }
 
 #[derive(serde::Deserialize)]

@@ -85,10 +85,12 @@ async fn objects_by_position() {
     assert_eq!(st, 200, "{v}");
     let o = &v["objects"][0];
     assert_eq!(
-        (o["index"].as_str(), o["type"].as_str(), o["access"].as_str()),
-        (Some("6064"), Some("INTEGER32"), Some("ro")),
+        (o["index"].as_str(), o["type"].as_str(), o["access"].as_str(), o["unit"].as_str()),
+        (Some("6064"), Some("INTEGER32"), Some("ro"), Some("position units")),
         "{v}"
     );
+    let (_, v) = get(&base, "/api/nodes/1/sdo/6064/0").await;
+    assert_eq!(v["unit"], "position units", "{v}");
     task.abort();
 }
 

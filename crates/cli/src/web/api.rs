@@ -105,7 +105,8 @@ async fn read(web: &Web, node: u8, index: u16, sub: u8, ty: Option<&str>) -> Api
         None => Json_::Null,
     };
     Ok(Json(json!({"node": node, "index": format!("{index:04X}"), "sub": sub,
-        "name": web.dict.name(index, sub), "type": dt.map(|d| d.name()), "value": value, "raw": values::hex(&raw)})))
+        "name": web.dict.name(index, sub), "type": dt.map(|d| d.name()), "value": value,
+        "unit": drivebus_objects::unit(index, sub), "raw": values::hex(&raw)})))
 }
 
 /// `GET /api/nodes/{n}/sdo/{index}/{sub}`.

@@ -70,7 +70,8 @@ pub fn entries(od: &ObjectDictionary, q: &str) -> Vec<Json_> {
                 return out;
             }
             out.push(json!({"index": index, "sub": e.sub, "object": o.name, "name": e.name,
-                "type": e.data_type.name(), "access": e.access.name(), "pdo": e.pdo_mappable,
+                "type": e.data_type.name(), "unit": drivebus_objects::unit(o.index, e.sub),
+                "access": e.access.name(), "pdo": e.pdo_mappable,
                 "low": limit(e.data_type, &e.low_limit), "high": limit(e.data_type, &e.high_limit),
                 "default": Value::decode(e.data_type, &e.default).ok().map(|v| values::to_json(&v))}));
         }

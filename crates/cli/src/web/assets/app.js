@@ -86,7 +86,8 @@ $("od-search").onsubmit = async (ev) => {
       const tr = document.createElement("tr");
       Object.assign(tr.dataset, { index: o.index, sub: o.sub });
       const lim = o.low === null && o.high === null ? "–" : `${o.low ?? ""}..${o.high ?? ""}`;
-      for (const c of [o.index, o.sub, o.name === o.object ? o.name : `${o.object} / ${o.name}`, o.type, o.access, lim, o.default ?? "–"]) {
+      const type = o.unit ? `${o.type} [${o.unit}]` : o.type;
+      for (const c of [o.index, o.sub, o.name === o.object ? o.name : `${o.object} / ${o.name}`, type, o.access, lim, o.default ?? "–"]) {
         const td = document.createElement("td"); td.textContent = c; tr.appendChild(td);
       }
       tr.onclick = () => {
