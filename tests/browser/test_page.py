@@ -88,6 +88,10 @@ def test_the_node_table_lists_both_drives(browser, page_url):
     cells = [r.find_elements(By.TAG_NAME, "td")[0].text for r in rows]
     assert cells == ["1", "2"]
     assert "2 node(s)" in text(browser, "conn")
+    # The bus load of the last second: the page's own SDO polls are on the
+    # bus; serve runs unpaced here, so no bitrate and no load.
+    load = wait_for(browser, "the bus load shown", lambda b: "frames/s" in (t := text(b, "bus-load")) and t)
+    assert "load unknown" in load, load
 
 
 def test_enable_and_move_by_clicking_and_the_scope_shows_the_target(browser, page_url):

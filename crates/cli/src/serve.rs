@@ -76,6 +76,7 @@ pub async fn run(g: &Global, a: &ServeArgs) -> anyhow::Result<()> {
                     crate::dict::Dict::default(),
                     profiles,
                     Some(control.clone()),
+                    a.bitrate,
                     addr,
                 )
                 .await?,

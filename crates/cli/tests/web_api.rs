@@ -1131,3 +1131,43 @@ async fn homing_methods_come_from_the_manual_with_the_current_method() {
     refused(&get(&ui, "/api/nodes/9/drive/homing").await, 404, "not been seen");
     refused(&get(&ui, "/api/nodes/200/drive/homing").await, 400, "node");
 }
+
+/// `GET /api/bus`: the frames and bits of the last full second and, with
+/// the bitrate known (`serve --bitrate`), their share of it; without one
+/// (`ui --sim`) no load.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bus_load_of_the_last_second() {
+    let listen = format!("127.0.0.1:{}", common::free_port());
+    let ui = Ui::start(&[
+        "serve",
+        "--listen",
+        &listen,
+        "--bitrate",
+        "500000",
+        "--drive",
+        "generic:5",
+        "--http",
+        "127.0.0.1:0",
+    ]);
+    // Heartbeats every 10 ms: 100 frames of 1 byte per second.
+    assert_eq!(put(&ui, "/api/nodes/5/sdo/1017/0", json!({"value": 10})).await.0, 200);
+    let b = wait_for(Duration::from_secs(15), || async {
+        let (_, b) = get(&ui, "/api/bus").await;
+        b["frames_per_s"].as_f64().is_some_and(|f| f > 80.0).then_some(b)
+    })
+    .await;
+    let (fps, bps, load) =
+        (b["frames_per_s"].as_f64().unwrap(), b["bits_per_s"].as_f64().unwrap(), b["load"].as_f64().unwrap());
+    assert_eq!(b["bitrate"], 500_000, "{b}");
+    assert!(fps < 150.0, "{b}");
+    // A heartbeat is 55 to 65 bits on the wire with stuffing and intermission.
+    assert!(bps > 50.0 * fps && bps < 70.0 * fps, "{b}");
+    assert!((load - bps / 500_000.0).abs() < 1e-9, "{b}");
+    let sims = Ui::sims();
+    let b = wait_for(Duration::from_secs(15), || async {
+        let (_, b) = get(&sims, "/api/bus").await;
+        b["frames_per_s"].as_f64().map(|_| b)
+    })
+    .await;
+    assert_eq!((&b["load"], &b["bitrate"]), (&Value::Null, &Value::Null), "{b}");
+}

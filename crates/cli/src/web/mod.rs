@@ -14,6 +14,7 @@ pub(crate) mod error;
 mod frames;
 mod identify;
 mod jog;
+mod load;
 mod lss;
 mod machine;
 pub(crate) mod objects;
@@ -72,6 +73,10 @@ pub struct Web {
     token: Option<String>,
     /// The machine inputs and faults of the drives `serve` hosts.
     control: Option<Arc<crate::control::Control>>,
+    /// The bus's bitrate when known: the load's denominator.
+    bitrate: Option<u32>,
+    /// Frames and bits per second on the bus.
+    load: load::BusLoad,
 }
 
 impl Web {
@@ -148,6 +153,7 @@ pub async fn start(
     dict: Dict,
     profiles: HashMap<u8, Profile>,
     control: Option<Arc<crate::control::Control>>,
+    bitrate: Option<u32>,
     addr: &str,
 ) -> anyhow::Result<Server> {
     let listener = tokio::net::TcpListener::bind(addr)
@@ -178,7 +184,10 @@ pub async fn start(
         start: std::time::Instant::now(),
         token: token.clone(),
         control,
+        bitrate,
+        load: load::BusLoad::default(),
     });
+    tokio::spawn(load::keep_measuring(web.clone()));
     tokio::spawn(keep_emcy(web.clone()));
     tokio::spawn(identify::keep_identifying(web.clone()));
     let app = router(web);
@@ -264,6 +273,7 @@ fn router(web: Arc<Web>) -> Router {
         .route("/api/nodes/{n}/machine", get(machine::state))
         .route("/api/nodes/{n}/machine/fault", post(machine::fault))
         .route("/api/emcy", get(api::emcy))
+        .route("/api/bus", get(load::bus))
         .route("/api/lss/scan", post(lss::scan))
         .route("/api/lss/inquire", post(lss::inquire))
         .route("/api/lss/configure", post(lss::configure))
@@ -352,7 +362,11 @@ pub async fn run_ui(g: &crate::args::Global, a: &crate::args::UiArgs) -> anyhow:
     let stop = crate::serve::Signals::install()?;
     let conn = crate::conn::Conn::open(g).await?;
     let dict = Dict { eds: crate::eds_cmd::load_global_eds(g)? };
-    let server = start(conn.master.clone(), dict, hosted_profiles(&g.sim)?, None, &a.http).await?;
+    let bitrate = match drivebus_transport::BusUrl::parse(&g.bus) {
+        Ok(drivebus_transport::BusUrl::Slcan { bitrate, .. }) => bitrate,
+        _ => None,
+    };
+    let server = start(conn.master.clone(), dict, hosted_profiles(&g.sim)?, None, bitrate, &a.http).await?;
     let nodes: Vec<String> = conn.master.seen_nodes().iter().map(u8::to_string).collect();
     let seen =
         if nodes.is_empty() { "none seen yet".to_owned() } else { format!("nodes {}", nodes.join(", ")) };

@@ -39,7 +39,22 @@ async function refreshNodes() {
     }
     $("conn").textContent = nodes.length + " node(s)";
   } catch (e) { $("conn").textContent = e.message; }
+  refreshBusLoad();
 }
+
+// The bus load of the last full second (the CAN page only).
+async function refreshBusLoad() {
+  if (document.body.dataset.bus === "ethercat") return;
+  try {
+    const b = await api("GET", "/api/bus");
+    const el = $("bus-load");
+    if (b.frames_per_s === null) { el.textContent = "bus: measuring…"; return; }
+    const load = b.load === null ? "load unknown (bitrate not given)" : `load ${(b.load * 100).toFixed(1)} % of ${b.bitrate / 1000} kbit/s`;
+    el.textContent = `bus: ${Math.round(b.frames_per_s)} frames/s, ${(b.bits_per_s / 1000).toFixed(1)} kbit/s, ${load}`;
+    Object.assign(el.dataset, { framesPerS: b.frames_per_s, load: b.load ?? "" });
+  } catch (e) { /* shown by the overview */ }
+}
+setInterval(refreshBusLoad, 1000);
 
 async function refreshEmcy() {
   try {
