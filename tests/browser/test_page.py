@@ -380,3 +380,35 @@ def test_the_page_buffers_are_bounded(browser, page_url):
     )
     assert kept <= 120000, kept
     wait_for(browser, "the page's drops shown", lambda b: "dropped by the page" in text(b, "page-dropped"))
+
+
+def test_usable_at_1280x720(browser, page_url):
+    """At 1280×720 nothing is wider than the window (no sideways
+    scrolling), and every panel, button and the scope's canvas has room."""
+    browser.set_window_size(1280, 720)
+    try:
+        browser.get(page_url)
+        wait_for(browser, "the node table filled", lambda b: len(b.find_elements(By.CSS_SELECTOR, "#nodes tbody tr")) == 2)
+        inner = browser.execute_script("return window.innerWidth")
+        assert inner <= 1280
+        wide = browser.execute_script("return document.documentElement.scrollWidth")
+        assert wide <= inner, f"the page is {wide} px wide in a {inner} px window"
+        sizes = browser.execute_script(
+            """return [...document.querySelectorAll('body > section, body > main > section')]
+                 .filter(s => getComputedStyle(s).display !== 'none')
+                 .map(s => { const r = s.getBoundingClientRect(); return [s.id, r.left, r.right, r.width]; })"""
+        )
+        assert len(sizes) >= 6, sizes
+        for sid, left, right, width in sizes:
+            assert left >= 0 and right <= inner + 0.5 and width > 200, (sid, left, right, width)
+        cramped = browser.execute_script(
+            """return [...document.querySelectorAll('section button')]
+                 .filter(b => getComputedStyle(b).display !== 'none' && b.offsetParent !== null)
+                 .filter(b => { const r = b.getBoundingClientRect(); return r.width < 16 || r.height < 12 || r.right > window.innerWidth; })
+                 .map(b => b.id || b.textContent)"""
+        )
+        assert not cramped, cramped
+        canvas = browser.execute_script("const c = document.querySelector('#scope-panel canvas').getBoundingClientRect(); return [c.width, c.right]")
+        assert canvas[0] >= 600 and canvas[1] <= inner + 0.5, canvas
+    finally:
+        browser.set_window_size(1280, 1080)
