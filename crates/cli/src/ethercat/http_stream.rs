@@ -21,29 +21,17 @@ use tokio::task::JoinHandle;
 use super::http::Served;
 use super::http_objects::{position, slot};
 use crate::web::Queue;
+use crate::web::stream::Channel;
 use crate::web::values;
 
 /// Raw samples the frame path leaves before the stream decodes them.
 const RAW: usize = 4096;
-/// Shortest polling period a client may ask for.
-const MIN_PERIOD_MS: u64 = 1;
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Request {
     subscribe: Option<Vec<Channel>>,
     ping: Option<Json_>,
-}
-
-#[derive(serde::Deserialize)]
-struct Channel {
-    node: Json_,
-    index: Json_,
-    #[serde(default)]
-    sub: u8,
-    period_ms: Option<u64>,
-    #[serde(rename = "type")]
-    ty: Option<String>,
 }
 
 const SHAPE: &str = r#"{"subscribe": [{"node": 1, "index": "6064", "sub": 0, "period_ms": 10}]}"#;
@@ -106,14 +94,10 @@ pub fn message(s: &Served, queue: &Arc<Queue>, text: &str) -> Result<Option<Subs
 }
 
 fn plan(s: &Served, c: &Channel) -> Result<Plan, String> {
-    let text_of = |v: &Json_| match v {
-        Json_::String(s) => s.clone(),
-        other => other.to_string(),
-    };
-    let p = position(&text_of(&c.node)).map_err(|e| e.message)?;
+    let p = position(&c.node_text()).map_err(|e| e.message)?;
     let slot = slot(&s.host, &s.slots, p).map_err(|e| e.message)?;
-    let (index, sub) = values::object(&slot.dict, &text_of(&c.index), Some(&format!("{:X}", c.sub)))
-        .map_err(|e| e.message)?;
+    let (index, sub) =
+        values::object(&slot.dict, &c.index_text(), Some(&format!("{:X}", c.sub))).map_err(|e| e.message)?;
     let dt = slot.data_type(index, sub, c.ty.as_deref()).map_err(|e| e.message)?.ok_or_else(|| {
         format!(
             "slave {p} has no object {index:04X}h:{sub:02X}h: GET /api/nodes/{p}/objects lists its objects"
@@ -122,8 +106,7 @@ fn plan(s: &Served, c: &Channel) -> Result<Plan, String> {
     // The assignment as it is now (a master may change it in PRE-OP).
     let mapped = objects::with_objects(&s.host, p, |a| objects::in_process_data(a.dictionary(), index, sub))
         .map_err(|e| e.to_string())?;
-    let period = Duration::from_millis(c.period_ms.unwrap_or(100).max(MIN_PERIOD_MS));
-    Ok(Plan { position: p, index, sub, dt, period, mapped })
+    Ok(Plan { position: p, index, sub, dt, period: c.period(), mapped })
 }
 
 fn subscribe(s: &Served, queue: &Arc<Queue>, channels: &[Channel]) -> Result<Subscription, String> {

@@ -20,7 +20,7 @@ mod machine;
 pub(crate) mod objects;
 mod pdo;
 mod sine;
-mod stream;
+pub(crate) mod stream;
 pub(crate) mod values;
 
 use std::collections::{HashMap, VecDeque};

@@ -179,15 +179,45 @@ fn request(
     Ok((channels, frames))
 }
 
+/// One channel of a `{"subscribe": [...]}` message, on both servers'
+/// streams (`ethercat serve --http`'s node is the slave's position).
 #[derive(serde::Deserialize)]
-struct Channel {
+pub(crate) struct Channel {
     node: Json_,
     index: Json_,
+    /// The sub-index.
     #[serde(default)]
-    sub: u8,
+    pub(crate) sub: u8,
     period_ms: Option<u64>,
+    /// The type to decode as, for objects the dictionary does not know.
     #[serde(rename = "type")]
-    ty: Option<String>,
+    pub(crate) ty: Option<String>,
+}
+
+/// A number or a string as the text the API's parsers take.
+fn text_of(v: &Json_) -> String {
+    match v {
+        Json_::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+impl Channel {
+    /// The node as written (`1`, `"1"`).
+    pub(crate) fn node_text(&self) -> String {
+        text_of(&self.node)
+    }
+
+    /// The object as written (`"6064"`, `"position actual value"`, `24676`).
+    pub(crate) fn index_text(&self) -> String {
+        text_of(&self.index)
+    }
+
+    /// How often to poll: `period_ms` (100 ms when not given), at least
+    /// [`MIN_PERIOD_MS`].
+    pub(crate) fn period(&self) -> Duration {
+        Duration::from_millis(self.period_ms.unwrap_or(100).max(MIN_PERIOD_MS))
+    }
 }
 
 /// Starts one polling task per channel of a `{"subscribe": [...]}`
@@ -198,14 +228,10 @@ fn subscribe(
     queue: &Arc<Queue>,
     channels: &[Channel],
 ) -> Result<Vec<JoinHandle<()>>, String> {
-    let text_of = |v: &Json_| match v {
-        Json_::String(s) => s.clone(),
-        other => other.to_string(),
-    };
     let mut plan = Vec::new();
     for c in channels {
-        let node = seen_node(web, &text_of(&c.node)).map_err(|e| e.message)?;
-        let (index, sub) = values::object(&web.dict, &text_of(&c.index), Some(&format!("{:X}", c.sub)))
+        let node = seen_node(web, &c.node_text()).map_err(|e| e.message)?;
+        let (index, sub) = values::object(&web.dict, &c.index_text(), Some(&format!("{:X}", c.sub)))
             .map_err(|e| e.message)?;
         let dt = match &c.ty {
             Some(t) => values::data_type(t).map_err(|e| e.message)?,
@@ -213,8 +239,7 @@ fn subscribe(
                 || format!("the data type of {index:04X}h:{sub:02X}h is unknown: add \"type\": \"i32\" to the channel"),
             )?,
         };
-        let period = Duration::from_millis(c.period_ms.unwrap_or(100).max(MIN_PERIOD_MS));
-        plan.push((node, index, sub, dt, period));
+        plan.push((node, index, sub, dt, c.period()));
     }
     Ok(plan.into_iter().map(|p| tokio::spawn(poll(web.clone(), queue.clone(), p))).collect())
 }
