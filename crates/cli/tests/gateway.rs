@@ -197,19 +197,8 @@ fn the_real_cocomm_if_available() {
 /// unconfigured slave gets the next node-ID and answers SDO under it.
 #[test]
 fn lss_allnodes_numbers_every_unconfigured_slave() {
-    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    let (server, addr) =
-        rt.block_on(drivebus_transport::socketcand::SocketcandServer::bind("127.0.0.1:0", "can0")).unwrap();
-    let unconfigured = |serial| {
-        let mut cfg = drivebus_node::NodeConfig::new(0xFF);
-        cfg.lss = true;
-        cfg.identity = drivebus_node::Identity { vendor_id: 0xABC, product_code: 0x77, revision: 3, serial };
-        drivebus_node::NodeDevice::new(drivebus_node::Node::new(cfg), drivebus_od::NoHooks)
-    };
-    let _hosts = rt.block_on(async {
-        drivebus_transport::host::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub())
-    });
-    let gw = gateway(&format!("socketcand://{addr}/can0"), None);
+    let bus = common::LssBus::start(&[0x20, 0x10]);
+    let gw = gateway(&bus.url, None);
     let mut s = TcpStream::connect(("127.0.0.1", gw.port)).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
     // 25 ms per fastscan step: about 130 steps per slave found.
@@ -231,5 +220,5 @@ fn lss_allnodes_numbers_every_unconfigured_slave() {
     }
     // Nobody is left unconfigured.
     assert_eq!(ask(&mut s, "[3] lss_allnodes 25 30 0"), "# Found 0 nodes, search finished.\n[3] OK\r\n");
-    drop(server);
+    drop(bus);
 }

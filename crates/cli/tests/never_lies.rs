@@ -193,19 +193,8 @@ fn options_that_do_not_apply_are_refused() {
 /// `lss set-node-id 9` with two unconfigured slaves gave both node-ID 9.
 #[test]
 fn lss_refuses_to_configure_two_slaves_at_once() {
-    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
-    let (server, addr) =
-        rt.block_on(drivebus_transport::socketcand::SocketcandServer::bind("127.0.0.1:0", "can0")).unwrap();
-    let unconfigured = |serial| {
-        let mut cfg = drivebus_node::NodeConfig::new(0xFF);
-        cfg.lss = true;
-        cfg.identity = drivebus_node::Identity { vendor_id: 0xABC, product_code: 0x77, revision: 3, serial };
-        drivebus_node::NodeDevice::new(drivebus_node::Node::new(cfg), drivebus_od::NoHooks)
-    };
-    let _hosts = rt.block_on(async {
-        drivebus_transport::host::spawn_on_hub([unconfigured(0x20), unconfigured(0x10)], server.hub())
-    });
-    let u = format!("socketcand://{addr}/can0");
+    let bus = common::LssBus::start(&[0x20, 0x10]);
+    let u = bus.url.clone();
     db(&u, &["lss", "set-node-id", "9"]).failure().stderr(
         contains("more than one unconfigured LSS slave")
             .and(contains("--serial 0x10"))
@@ -247,5 +236,5 @@ fn lss_refuses_to_configure_two_slaves_at_once() {
     db(&u, &["--timeout", "300", "--node", "10", "lss", "set-node-id", "11"])
         .success()
         .stdout(contains("reset-comm"));
-    drop(server);
+    drop(bus);
 }

@@ -152,3 +152,36 @@ pub async fn sdo_write(bus: &mut CanBus, node: u8, index: u16, sub: u8, data: &[
     let d = f.data();
     if d[0] == 0x80 { Err(u32::from_le_bytes([d[4], d[5], d[6], d[7]])) } else { Ok(()) }
 }
+
+/// A socketcand server on 127.0.0.1 whose bus holds unconfigured CiA 301
+/// slaves with LSS (node-ID FFh, vendor ABCh, product 77h, revision 3),
+/// one per serial. The bus lives as long as this value.
+pub struct LssBus {
+    /// `socketcand://127.0.0.1:PORT/can0`.
+    pub url: String,
+    // Dropped in this order: the slaves, the server, then their runtime.
+    _hosts: Vec<drivebus_transport::host::DeviceHost<drivebus_node::NodeDevice<drivebus_od::NoHooks>>>,
+    _server: drivebus_transport::socketcand::SocketcandServer,
+    _rt: tokio::runtime::Runtime,
+}
+
+impl LssBus {
+    /// The bus with one unconfigured slave per serial.
+    pub fn start(serials: &[u32]) -> LssBus {
+        let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+        let (server, addr) = rt
+            .block_on(drivebus_transport::socketcand::SocketcandServer::bind("127.0.0.1:0", "can0"))
+            .unwrap();
+        let unconfigured = |&serial: &u32| {
+            let mut cfg = drivebus_node::NodeConfig::new(0xFF);
+            cfg.lss = true;
+            cfg.identity =
+                drivebus_node::Identity { vendor_id: 0xABC, product_code: 0x77, revision: 3, serial };
+            drivebus_node::NodeDevice::new(drivebus_node::Node::new(cfg), drivebus_od::NoHooks)
+        };
+        let hosts = rt.block_on(async {
+            drivebus_transport::host::spawn_on_hub(serials.iter().map(unconfigured), server.hub())
+        });
+        LssBus { url: format!("socketcand://{addr}/can0"), _hosts: hosts, _server: server, _rt: rt }
+    }
+}
