@@ -15,7 +15,7 @@ use axum::body::Bytes;
 use axum::extract::{Path, Query, State};
 use drivebus_ethercat::Host;
 use drivebus_ethercat::objects::{self, ObjectError};
-use drivebus_master::{DataType, Value};
+use drivebus_master::DataType;
 use drivebus_od::ObjectDictionary;
 use serde_json::{Value as Json_, json};
 
@@ -88,20 +88,7 @@ fn read(s: &Served, n: &str, index: &str, sub: Option<&str>, ty: Option<&str>) -
     let (index, sub) = values::object(&slot.dict, index, sub)?;
     let dt = slot.data_type(index, sub, ty)?;
     let raw = objects::read(&s.host, p, index, sub).map_err(|e| object_error(p, index, sub, e))?;
-    let value = match dt.map(|dt| Value::decode(dt, &raw)) {
-        Some(Ok(v)) => values::to_json(&v),
-        Some(Err(a)) => {
-            return Err(ApiError::bad(format!(
-                "{index:04X}h:{sub:02X}h holds {} bytes, not a {}: {a}; give ?type=",
-                raw.len(),
-                dt.map_or("", |d| d.name())
-            )));
-        }
-        None => Json_::Null,
-    };
-    Ok(Json(json!({"node": p, "index": format!("{index:04X}"), "sub": sub,
-        "name": slot.dict.name(index, sub), "type": dt.map(|d| d.name()), "value": value,
-        "unit": drivebus_objects::unit(index, sub), "raw": values::hex(&raw)})))
+    Ok(Json(values::read_answer(p, (index, sub), slot.dict.name(index, sub), dt, &raw, "holds")?))
 }
 
 #[derive(serde::Deserialize)]

@@ -93,20 +93,7 @@ async fn read(web: &Web, node: u8, index: u16, sub: u8, ty: Option<&str>) -> Api
         None => web.dict.data_type(index, sub).or_else(|| sdo.data_type(index, sub)),
     };
     let raw = sdo.upload(index, sub).await.map_err(|e| ApiError::sdo(node, index, sub, &e))?;
-    let value = match dt.map(|dt| drivebus_master::Value::decode(dt, &raw)) {
-        Some(Ok(v)) => values::to_json(&v),
-        Some(Err(a)) => {
-            return Err(ApiError::bad(format!(
-                "{index:04X}h:{sub:02X}h answered {} bytes, not a {}: {a}; give ?type=",
-                raw.len(),
-                dt.map_or("", |d| d.name())
-            )));
-        }
-        None => Json_::Null,
-    };
-    Ok(Json(json!({"node": node, "index": format!("{index:04X}"), "sub": sub,
-        "name": web.dict.name(index, sub), "type": dt.map(|d| d.name()), "value": value,
-        "unit": drivebus_objects::unit(index, sub), "raw": values::hex(&raw)})))
+    Ok(Json(values::read_answer(node, (index, sub), web.dict.name(index, sub), dt, &raw, "answered")?))
 }
 
 /// `GET /api/nodes/{n}/sdo/{index}/{sub}`.

@@ -93,6 +93,35 @@ pub fn from_json(dt: DataType, v: &serde_json::Value) -> ApiResult<Value> {
     })
 }
 
+/// The answer to an object read, both servers' (`GET .../sdo/...`): the
+/// value decoded as `dt` (null without one) with its name, type, unit and
+/// raw bytes; 400 when the bytes do not fit `dt`. `node` is the CAN
+/// node-ID or the EtherCAT position; `verb` says where the bytes came
+/// from in that error (`answered`, `holds`).
+pub fn read_answer(
+    node: impl serde::Serialize,
+    (index, sub): (u16, u8),
+    name: Option<String>,
+    dt: Option<DataType>,
+    raw: &[u8],
+    verb: &str,
+) -> ApiResult<serde_json::Value> {
+    let value = match dt.map(|dt| Value::decode(dt, raw)) {
+        Some(Ok(v)) => to_json(&v),
+        Some(Err(a)) => {
+            return Err(ApiError::bad(format!(
+                "{index:04X}h:{sub:02X}h {verb} {} bytes, not a {}: {a}; give ?type=",
+                raw.len(),
+                dt.map_or("", |d| d.name())
+            )));
+        }
+        None => serde_json::Value::Null,
+    };
+    Ok(serde_json::json!({"node": node, "index": format!("{index:04X}"), "sub": sub,
+        "name": name, "type": dt.map(|d| d.name()), "value": value,
+        "unit": drivebus_objects::unit(index, sub), "raw": hex(raw)}))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
